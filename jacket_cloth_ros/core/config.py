@@ -1,0 +1,121 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""YAML configuration loading with validation messages that name the bad key."""
+
+import os
+
+import yaml
+
+
+class ConfigError(ValueError):
+    """A configuration file or value is wrong; the message names the file and key."""
+
+
+def config_dir():
+    """The shipped config folder: the installed share/ folder, else the source tree's."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    here = os.path.join(os.path.dirname(package), 'config')     # a source checkout
+    if os.path.isfile(os.path.join(here, 'jacket_rig.yaml')):
+        return here
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        return os.path.join(get_package_share_directory('jacket_cloth_ros'), 'config')
+    except Exception:  # noqa: BLE001 - no ament index: fall through to the clear error below
+        pass
+    raise ConfigError('cannot find the jacket_cloth_ros config folder')
+
+
+def shipped(name):
+    return os.path.join(config_dir(), name)
+
+
+def load_yaml(path):
+    try:
+        with open(path, encoding='utf-8') as f:
+            data = yaml.safe_load(f)
+    except OSError as e:
+        raise ConfigError(f'{path}: cannot read ({e.strerror})') from None
+    except yaml.YAMLError as e:
+        raise ConfigError(f'{path}: not valid YAML ({e})'.replace('\n', ' ')) from None
+    if not isinstance(data, dict):
+        raise ConfigError(f'{path}: expected a mapping at the top level')
+    return data
+
+
+class Section:
+    """Typed access to one mapping of a config file; every error names file and key path."""
+
+    def __init__(self, data, where):
+        if not isinstance(data, dict):
+            raise ConfigError(f'{where}: expected a mapping')
+        self._data = data
+        self._where = where
+        self._used = set()
+
+    def _path(self, key):
+        return f'{self._where}.{key}'
+
+    def has(self, key):
+        return key in self._data
+
+    def section(self, key, default=None):
+        self._used.add(key)
+        if key not in self._data:
+            if default is None:
+                raise ConfigError(f'{self._path(key)}: missing')
+            return Section(default, self._path(key))
+        return Section(self._data[key], self._path(key))
+
+    def sections(self, key):
+        self._used.add(key)
+        items = self._data.get(key, [])
+        if not isinstance(items, list):
+            raise ConfigError(f'{self._path(key)}: expected a list')
+        return [Section(item, f'{self._path(key)}[{i}]') for i, item in enumerate(items)]
+
+    def number(self, key, default=None, lo=None, hi=None):
+        self._used.add(key)
+        v = self._data.get(key, default)
+        if v is None:
+            raise ConfigError(f'{self._path(key)}: missing')
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ConfigError(f'{self._path(key)}: expected a number, got {v!r}')
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            raise ConfigError(f'{self._path(key)}: {v} is outside [{lo}, {hi}]')
+        return float(v)
+
+    def integer(self, key, default=None, lo=None, hi=None):
+        v = self.number(key, default, lo, hi)
+        if v != int(v):
+            raise ConfigError(f'{self._path(key)}: expected a whole number, got {v}')
+        return int(v)
+
+    def vector(self, key, n=3, default=None):
+        self._used.add(key)
+        v = self._data.get(key, default)
+        ok = isinstance(v, (list, tuple)) and len(v) == n and all(
+            isinstance(e, (int, float)) and not isinstance(e, bool) for e in v)
+        if not ok:
+            raise ConfigError(f'{self._path(key)}: expected a list of {n} numbers, got {v!r}')
+        return [float(e) for e in v]
+
+    def text(self, key, default=None, choices=None):
+        self._used.add(key)
+        v = self._data.get(key, default)
+        if not isinstance(v, str) or not v:
+            raise ConfigError(f'{self._path(key)}: expected a non-empty string, got {v!r}')
+        if choices is not None and v not in choices:
+            raise ConfigError(f'{self._path(key)}: {v!r} is not one of {sorted(choices)}')
+        return v
+
+    def texts(self, key, default=None):
+        self._used.add(key)
+        v = self._data.get(key, default)
+        if not isinstance(v, list) or not all(isinstance(e, str) for e in v):
+            raise ConfigError(f'{self._path(key)}: expected a list of strings, got {v!r}')
+        return list(v)
+
+    def reject_unknown(self):
+        """Typos should not be silently ignored: name every key nobody read."""
+        unknown = sorted(set(self._data) - self._used)
+        if unknown:
+            raise ConfigError(f'{self._where}: unknown key(s) {", ".join(unknown)}')

@@ -1,0 +1,60 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""M16: fabric presets, parameter sets of the one cloth system."""
+
+from dataclasses import dataclass, fields, replace
+
+from .config import ConfigError, Section, load_yaml, shipped
+
+
+@dataclass(frozen=True)
+class Fabric:
+    damping: float             # M4: share of velocity lost per step
+    stretch_stiffness: float   # M5: stretch group
+    shear_bend_stiffness: float  # M5: shear/bend group
+    iterations: int            # Gauss-Seidel sweeps per step
+    world_share: float         # M14: share of world motion felt by the cloth
+    wind_scale: float
+    contact_damping: float     # M15: extra damping of vertices touching a collider
+    edge_damping: float        # M13: edge vertices' own parameters
+    edge_world_share: float
+    edge_wind_scale: float
+    edge_max_distance_scale: float
+    hood_damping: float
+
+    def with_values(self, **changes):
+        return replace(self, **changes)
+
+
+_RANGES = {
+    'damping': (0.0, 0.99), 'stretch_stiffness': (0.0, 1.0), 'shear_bend_stiffness': (0.0, 1.0),
+    'iterations': (1, 100), 'world_share': (0.0, 1.0), 'wind_scale': (0.0, 10.0),
+    'contact_damping': (0.0, 0.99), 'edge_damping': (0.0, 0.99), 'edge_world_share': (0.0, 1.0),
+    'edge_wind_scale': (0.0, 10.0), 'edge_max_distance_scale': (0.1, 5.0),
+    'hood_damping': (0.0, 0.99),
+}
+
+
+def load_fabrics(path=None):
+    """All presets of a fabrics YAML file, validated; {name: Fabric}."""
+    path = path or shipped('fabrics.yaml')
+    data = load_yaml(path)
+    out = {}
+    for name in data:
+        sec = Section(data[name], f'{path}: {name}')
+        values = {}
+        for f in fields(Fabric):
+            lo, hi = _RANGES[f.name]
+            if f.name == 'iterations':
+                values[f.name] = sec.integer(f.name, lo=lo, hi=hi)
+            else:
+                values[f.name] = sec.number(f.name, lo=lo, hi=hi)
+        sec.reject_unknown()
+        out[name] = Fabric(**values)
+    return out
+
+
+def load_fabric(name, path=None):
+    presets = load_fabrics(path)
+    if name not in presets:
+        raise ConfigError(f'fabric {name!r} is not a preset (presets: {", ".join(presets)})')
+    return presets[name]

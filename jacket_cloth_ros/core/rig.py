@@ -1,0 +1,199 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The rig: how the jacket cloth, hood and colliders fit a URDF skeleton (config/*.yaml).
+
+Everything is resolved against the skeleton's zero pose once, at load time: rest positions in
+the character's local frame (the URDF root), and for each vertex the link and local offset that
+carry its pinned target (M6) or its reference point (M11).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import ConfigError, Section, load_yaml, shipped
+from .transforms import apply_transform, invert_transform, rpy_matrix
+
+#  Neighbour offsets (row, col) of the two constraint groups (M5).
+STRETCH_OFFSETS = ((0, 1), (1, 0))
+SHEAR_BEND_OFFSETS = ((1, 1), (1, -1), (0, 2), (2, 0))
+
+
+@dataclass
+class Collider:
+    name: str
+    link: int
+    center: np.ndarray      # in the link's frame
+    rotation: np.ndarray    # 3x3, ellipsoid axes in the link's frame
+    radii: np.ndarray
+
+
+@dataclass
+class Hood:
+    link: int
+    pivot: np.ndarray       # bone centre in the link's frame
+    length: float
+    rest_direction: np.ndarray  # unit, in the link's frame
+
+
+def split_ellipsoid(center, rotation, radii, max_ratio=2.0):
+    """M10: replace a badly stretched ellipsoid by overlapping, more uniform pieces.
+
+    Pushing out in ellipsoid space bends the push direction more the more the ellipsoid is
+    stretched, so the longest axis is cut until no piece's ratio exceeds ``max_ratio``.
+    """
+    radii = np.asarray(radii, dtype=float)
+    long_axis = int(np.argmax(radii))
+    longest = radii[long_axis]
+    shortest = np.delete(radii, long_axis).max()
+    pieces = int(np.ceil(longest / (shortest * max_ratio))) if longest > shortest * max_ratio else 1
+    if pieces == 1:
+        return [(np.asarray(center, dtype=float), rotation, radii)]
+    part = radii.copy()
+    part[long_axis] = min(longest, 1.25 * longest / pieces)  # overlap so no seam lets cloth in
+    span = longest - part[long_axis]
+    out = []
+    for k in range(pieces):
+        offset = -span + 2 * span * k / (pieces - 1)
+        out.append((np.asarray(center, dtype=float) + rotation[:, long_axis] * offset,
+                    rotation, part.copy()))
+    return out
+
+
+class Rig:
+    """A validated rig fitted to a skeleton."""
+
+    def __init__(self, data, skeleton, where='rig'):
+        top = Section(data, where)
+        rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+        self.skeleton = skeleton
+        cloth = top.section('cloth')
+        self.cols = cloth.integer('cols', lo=3, hi=64)
+        self.rows = cloth.integer('rows', lo=3, hi=64)
+        shape = cloth.section('shape')
+        shape_link = skeleton.link(shape.text('link'), f'{where}.cloth.shape.link')
+        center = np.array(shape.vector('center'))
+        radii = np.array(shape.vector('radii', 2))
+        if (radii <= 0).any():
+            raise ConfigError(f'{where}.cloth.shape.radii: must be positive')
+        flare = shape.number('flare', 0.0, lo=-0.05, hi=0.1)
+        opening = np.radians(shape.number('opening_deg', 40.0, lo=0.0, hi=180.0))
+        spacing = shape.number('row_spacing', lo=0.005, hi=1.0)
+        shape.reject_unknown()
+        # Column c runs from the left front edge (+y) round the back (-x) to the right front edge.
+        theta = np.linspace(opening / 2, 2 * np.pi - opening / 2, self.cols)
+        pts = np.empty((self.rows, self.cols, 3))
+        for r in range(self.rows):
+            rx, ry = radii + flare * r
+            pts[r, :, 0] = center[0] + rx * np.cos(theta)
+            pts[r, :, 1] = center[1] + ry * np.sin(theta)
+            pts[r, :, 2] = center[2] - spacing * r
+        local = pts.reshape(-1, 3)
+        self.rest = apply_transform(rest[shape_link], local)   # (N,3) in the root frame
+
+        self.pin_link = skeleton.link(cloth.text('pin_link'), f'{where}.cloth.pin_link')
+        self.pin_local = apply_transform(invert_transform(rest[self.pin_link]),
+                                         self.rest[:self.cols])
+
+        bones = cloth.texts('reference_bones')
+        if not bones:
+            raise ConfigError(f'{where}.cloth.reference_bones: needs at least one link')
+        bone_ids = [skeleton.link(b, f'{where}.cloth.reference_bones') for b in bones]
+        self.reference_link = self._nearest_bones(bone_ids, rest)
+        self.reference_local = np.einsum(
+            'nij,nj->ni', np.linalg.inv(rest[self.reference_link])[:, :3, :3], self.rest
+        ) + np.linalg.inv(rest[self.reference_link])[:, :3, 3]
+        md = cloth.section('max_distance')
+        top_d, hem_d = md.number('top', lo=0.0, hi=5.0), md.number('hem', lo=0.0, hi=5.0)
+        md.reject_unknown()
+        row = np.repeat(np.arange(self.rows), self.cols) / (self.rows - 1)
+        self.max_distance = top_d + (hem_d - top_d) * row
+        self.bone_column_step = cloth.integer('bone_column_step', 2, lo=1, hi=self.cols)
+        cloth.reject_unknown()
+
+        hood = top.section('hood')
+        direction = np.array(hood.vector('rest_direction'))
+        if np.linalg.norm(direction) < 1e-9:
+            raise ConfigError(f'{where}.hood.rest_direction: must not be zero')
+        self.hood = Hood(
+            link=skeleton.link(hood.text('link'), f'{where}.hood.link'),
+            pivot=np.array(hood.vector('pivot')),
+            length=hood.number('length', lo=0.01, hi=2.0),
+            rest_direction=direction / np.linalg.norm(direction))
+        hood.reject_unknown()
+
+        self.colliders = []
+        for i, c in enumerate(top.sections('colliders')):
+            link = skeleton.link(c.text('link'), f'{where}.colliders[{i}].link')
+            radii = np.array(c.vector('radii'))
+            if (radii <= 0).any():
+                raise ConfigError(f'{where}.colliders[{i}].radii: must be positive')
+            name = c.text('name', f'collider_{i}')
+            rotation = rpy_matrix(np.radians(c.vector('rpy_deg', 3, [0, 0, 0])))
+            for k, (ctr, rot, rad) in enumerate(split_ellipsoid(c.vector('center'), rotation,
+                                                                radii)):
+                self.colliders.append(Collider(f'{name}_{k}', link, ctr, rot, rad))
+            c.reject_unknown()
+        top.reject_unknown()
+        self._build_topology()
+
+    def _nearest_bones(self, bone_ids, rest):
+        """M11: each vertex's reference point rides on the nearest bone segment."""
+        sk = self.skeleton
+        segments = []
+        for b in bone_ids:
+            start = rest[b][:3, 3]
+            kids = np.nonzero(sk.parent == b)[0]
+            end = rest[kids[0]][:3, 3] if len(kids) else start
+            segments.append((start, end))
+        dist = np.empty((len(self.rest), len(bone_ids)))
+        for k, (a, b) in enumerate(segments):
+            ab = b - a
+            t = np.clip(((self.rest - a) @ ab) / max(ab @ ab, 1e-12), 0.0, 1.0)
+            dist[:, k] = np.linalg.norm(self.rest - (a + t[:, None] * ab), axis=1)
+        return np.array(bone_ids)[np.argmin(dist, axis=1)]
+
+    def _build_topology(self):
+        """Constraints in Gauss-Seidel order (row by row from the top), M5 and M12 lists."""
+        R, C = self.rows, self.cols
+        a, b, group = [], [], []
+        for r in range(R):
+            for c in range(C):
+                for g, offsets in enumerate((STRETCH_OFFSETS, SHEAR_BEND_OFFSETS)):
+                    for dr, dc in offsets:
+                        r2, c2 = r + dr, c + dc
+                        if r2 < R and 0 <= c2 < C:
+                            a.append(r * C + c)
+                            b.append(r2 * C + c2)
+                            group.append(g)
+        self.con_a = np.array(a, dtype=np.int64)
+        self.con_b = np.array(b, dtype=np.int64)
+        self.con_group = np.array(group, dtype=np.int64)   # 0 stretch, 1 shear/bend
+        self.con_rest = np.linalg.norm(self.rest[self.con_a] - self.rest[self.con_b], axis=1)
+        # M12: the vertical stretch constraints, top-down; only the lower end moves.
+        self.vert_b = np.arange(C, R * C, dtype=np.int64)
+        self.vert_a = self.vert_b - C
+        self.vert_rest = np.linalg.norm(self.rest[self.vert_a] - self.rest[self.vert_b], axis=1)
+        self.horiz = (self.con_group == 0) & (self.con_b == self.con_a + 1)
+        # M13: edge vertices have fewer than four stretch constraints (an interior vertex has
+        # four neighbours: left, right, up, down): the hem, the front opening, the top row.
+        count = np.zeros(R * C, dtype=int)
+        stretch = self.con_group == 0
+        np.add.at(count, self.con_a[stretch], 1)
+        np.add.at(count, self.con_b[stretch], 1)
+        self.edge = count < 4
+        self.free = np.ones(R * C, dtype=bool)
+        self.free[:C] = False                              # M6: the pinned top row
+
+    @property
+    def n(self):
+        return self.rows * self.cols
+
+    def bone_vertices(self):
+        """M9: vertices that carry bones (every row but the last, every n-th column)."""
+        cols = list(range(0, self.cols, self.bone_column_step))
+        return [(r, c) for r in range(self.rows - 1) for c in cols]
+
+
+def load_rig(skeleton, path=None):
+    path = path or shipped('jacket_rig.yaml')
+    return Rig(load_yaml(path), skeleton, where=path)

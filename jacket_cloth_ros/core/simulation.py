@@ -1,0 +1,300 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The fixed-step jacket and hood simulation driven by skeleton samples (one door for all).
+
+The node, the offline replay and the lab all call :meth:`JacketSimulation.process` with the
+JointState content and its header stamp, so a recorded session replays exactly as it ran live.
+
+Time: steps sit on a grid of ``1/sim_rate`` (integer nanoseconds) anchored at the first stamp
+(M7); the skeleton is interpolated between samples for the steps in between; at most
+``max_steps_per_input`` steps run per sample so a hitch cannot snowball.
+Space: the cloth lives in the character's local frame (the URDF root) and feels 100% of the
+skeletal motion but only ``world_share`` of the world motion (M14).
+"""
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from . import kernel
+from .inputs import InputParser, InputRejected
+from .transforms import (
+    apply_transform, invert_transform, matrix_to_quat, quat_slerp, quat_to_matrix,
+    rotation_angle)
+
+
+@dataclass(frozen=True)
+class SimParams:
+    sim_rate: float = 120.0            # Hz, M7
+    max_steps_per_input: int = 12
+    gravity: float = 9.81              # m/s^2, along the world frame's -z
+    wind: tuple = (0.0, 0.0, 0.0)      # m/s^2 in the world frame, M4
+    hard_vertical_pass: bool = True    # M12
+    reset_gap: float = 1.0             # s: a longer gap between stamps resets the cloth
+    teleport_distance: float = 1.0     # m of world motion between two samples that is a jump
+    teleport_angle_deg: float = 90.0   # deg of world turn between two samples that is a jump
+
+    def with_values(self, **changes):
+        return replace(self, **changes)
+
+
+@dataclass
+class Bones:
+    """Bone frames: ``parents[i]`` is a skeleton link; poses are relative to that link."""
+
+    names: list
+    parents: list
+    translations: np.ndarray   # (B,3)
+    quaternions: np.ndarray    # (B,4) x, y, z, w
+
+
+@dataclass
+class StepReport:
+    """What one processed sample did, for logging, diagnostics and output."""
+
+    stamp_ns: int
+    accepted: bool = True
+    steps: int = 0
+    skipped_steps: int = 0
+    reset: str = ''                    # why the cloth was reset to the skinned pose, if it was
+    warnings: list = field(default_factory=list)
+    step_cost_ns: int = 0              # wall time of the simulation work for this sample
+    max_penetration: float = 0.0
+    limited_vertices: int = 0          # M11 vertex-steps moved back to their bound
+
+
+class JacketSimulation:
+    """Jacket cloth + hood pendulum for one skeleton and rig."""
+
+    def __init__(self, skeleton, rig, fabric, params=SimParams(), world_joint='world_joint'):
+        self.skeleton = skeleton
+        self.rig = rig
+        self.parser = InputParser(skeleton, world_joint)
+        self.fabric = fabric
+        self.params = params
+        self._apply_fabric()
+        n = rig.n
+        self.x = rig.rest.copy()
+        self.xp = rig.rest.copy()
+        self.contact = np.zeros(n, dtype=np.bool_)
+        self.hood_p = np.zeros(3)
+        self.hood_pp = np.zeros(3)
+        self.links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+        self.last = None          # last accepted Sample
+        self.t_sim = None         # ns of the last step
+        self.root = np.eye(4)     # world pose of the root at the last step
+        self.resets = 0
+        self.steps_total = 0
+        self.overruns = 0
+        self._bone_rc = np.array(rig.bone_vertices(), dtype=int).reshape(-1, 2)
+        self.bone_names = [f'jacket_r{r:02d}_c{c:02d}' for r, c in self._bone_rc] + ['hood']
+        root = skeleton.link_names[0]
+        self.bone_parents = [root] * len(self._bone_rc) + [skeleton.link_names[rig.hood.link]]
+
+    # -- parameters -------------------------------------------------------------------------
+    def set_fabric(self, fabric):
+        """Live change: new parameters act from the next step; the cloth is not reset."""
+        self.fabric = fabric
+        self._apply_fabric()
+
+    def set_params(self, params):
+        self.params = params
+        self._apply_fabric()
+
+    def _apply_fabric(self):
+        f, rig = self.fabric, self.rig
+        edge = rig.edge
+        self.damping = np.where(edge, f.edge_damping, f.damping)                 # M4, M13
+        self.world_share = np.where(edge, f.edge_world_share, f.world_share)     # M14, M13
+        self.wind_scale = np.where(edge, f.edge_wind_scale, f.wind_scale)        # M13
+        self.max_distance = rig.max_distance * np.where(edge, f.edge_max_distance_scale, 1.0)
+        self.stiffness = np.where(rig.con_group == 0, f.stretch_stiffness,
+                                  f.shear_bend_stiffness)                        # M5
+        self.dt_ns = int(round(1e9 / self.params.sim_rate))
+
+    # -- the skinned pose ---------------------------------------------------------------------
+    def reference_points(self, links):
+        """M11: each vertex's rest position carried by its nearest bone."""
+        t = links[self.rig.reference_link]
+        return np.einsum('nij,nj->ni', t[:, :3, :3], self.rig.reference_local) + t[:, :3, 3]
+
+    def _hood_anchor(self, links):
+        t = links[self.rig.hood.link]
+        return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
+
+    def _reset(self, sample, why):
+        self.links = self.skeleton.forward(sample.q)
+        self.x = self.reference_points(self.links)
+        self.x[:self.rig.cols] = apply_transform(self.links[self.rig.pin_link],
+                                                 self.rig.pin_local)
+        self.xp = self.x.copy()
+        self.contact[:] = False
+        anchor, rot = self._hood_anchor(self.links)
+        self.hood_p = anchor + rot @ self.rig.hood.rest_direction * self.rig.hood.length
+        self.hood_pp = self.hood_p.copy()
+        self.root = sample.root
+        self.t_sim = sample.stamp_ns
+        self.last = sample
+        self.resets += 1
+        return why
+
+    # -- one input ----------------------------------------------------------------------------
+    def process(self, stamp_ns, names, positions):
+        """Advance the simulation to ``stamp_ns`` with one JointState's content."""
+        report = StepReport(stamp_ns)
+        started = time.perf_counter_ns()
+        try:
+            self._check_stamp(stamp_ns, report)
+            if report.reset:
+                sample = self.parser.parse(stamp_ns, names, positions)
+                self._reset(sample, report.reset)
+                report.warnings += sample.warnings
+                return report
+            sample = self.parser.parse(stamp_ns, names, positions)
+        except InputRejected as e:
+            report.accepted = False
+            report.warnings.append((e.code, str(e)))
+            return report
+        report.warnings += sample.warnings
+        if self.last is None:
+            report.reset = self._reset(sample, 'first sample')
+        elif self._is_jump(self.last, sample):
+            report.reset = self._reset(sample, 'world jump (teleport or fast turn)')
+        else:
+            self._advance(sample, report)
+        if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
+            report.reset = self._reset(sample, 'non-finite cloth state')
+        report.step_cost_ns = time.perf_counter_ns() - started
+        return report
+
+    def _check_stamp(self, stamp_ns, report):
+        if self.last is None:
+            return
+        gap = (stamp_ns - self.last.stamp_ns) * 1e-9
+        if gap == 0:
+            raise InputRejected('stamp', 'repeated stamp: message dropped')
+        if gap < 0:
+            if -gap > self.params.reset_gap:
+                report.reset = f'stamps jumped back {-gap:.2f} s (source restarted)'
+                return
+            raise InputRejected('stamp', f'stamp went back {-gap * 1e3:.1f} ms: message dropped')
+        if gap > self.params.reset_gap:
+            report.reset = f'gap of {gap:.2f} s between stamps'
+
+    def _is_jump(self, a, b):
+        move = np.linalg.norm(b.root[:3, 3] - a.root[:3, 3])
+        turn = np.degrees(rotation_angle(a.root[:3, :3].T @ b.root[:3, :3]))
+        return move > self.params.teleport_distance or turn > self.params.teleport_angle_deg
+
+    def _advance(self, sample, report):
+        a = self.last
+        n = (sample.stamp_ns - self.t_sim) // self.dt_ns
+        cap = self.params.max_steps_per_input
+        if n > cap:
+            report.skipped_steps = n - cap
+            self.overruns += 1
+            self.t_sim += (n - cap) * self.dt_ns
+            n = cap
+        span = sample.stamp_ns - a.stamp_ns
+        for _ in range(n):
+            self.t_sim += self.dt_ns
+            w = min(1.0, max(0.0, (self.t_sim - a.stamp_ns) / span))
+            q = a.q + w * (sample.q - a.q)
+            rq = quat_slerp(a.root_quat, sample.root_quat, w)
+            root = np.eye(4)
+            root[:3, :3] = quat_to_matrix(rq)
+            root[:3, 3] = a.root[:3, 3] + w * (sample.root[:3, 3] - a.root[:3, 3])
+            self._step(self.skeleton.forward(q), root, report)
+        report.steps = n
+        self.steps_total += n
+        self.last = sample
+
+    def _step(self, links, root, report):
+        p, rig = self.params, self.rig
+        dt = self.dt_ns * 1e-9
+        # M14: the character moved through the world by `delta` (old local -> new local); a
+        # world-space cloth would stay behind by that much. Feel only `world_share` of it.
+        delta = invert_transform(root) @ self.root
+        share = self.world_share[:, None]
+        self.x += share * (apply_transform(delta, self.x) - self.x)
+        self.xp += share * (apply_transform(delta, self.xp) - self.xp)
+        hood_share = self.fabric.world_share
+        self.hood_p += hood_share * (delta[:3, :3] @ self.hood_p + delta[:3, 3] - self.hood_p)
+        self.hood_pp += hood_share * (delta[:3, :3] @ self.hood_pp + delta[:3, 3] - self.hood_pp)
+        self.root = root
+        self.links = links
+        world_to_local = root[:3, :3].T
+        gravity = world_to_local @ np.array([0.0, 0.0, -p.gravity])
+        wind = world_to_local @ np.asarray(p.wind, dtype=float)
+        acc = gravity + self.wind_scale[:, None] * wind
+        # M6: the pinned top row follows its link.
+        top = apply_transform(links[rig.pin_link], rig.pin_local)
+        self.x[:rig.cols] = top
+        self.xp[:rig.cols] = top
+        ref = self.reference_points(links)
+        centers, axes, radii = self.collider_frames(links)
+        deepest, limited = kernel.cloth_step(
+            self.x, self.xp, rig.free, acc, self.damping, self.contact,
+            self.fabric.contact_damping, dt, rig.con_a, rig.con_b, rig.con_rest, self.stiffness,
+            self.fabric.iterations, centers, axes, radii, ref, self.max_distance,
+            rig.vert_a, rig.vert_b, rig.vert_rest, p.hard_vertical_pass)
+        report.max_penetration = max(report.max_penetration, deepest)
+        report.limited_vertices += limited
+        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
+
+    def _hood_step(self, links, acc, dt):
+        """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
+        anchor, _ = self._hood_anchor(links)
+        v = self.hood_p - self.hood_pp
+        self.hood_pp = self.hood_p.copy()
+        self.hood_p = self.hood_p + v * (1.0 - self.fabric.hood_damping) + acc * dt * dt
+        d = self.hood_p - anchor
+        length = np.linalg.norm(d)
+        if length > 1e-9:
+            self.hood_p = anchor + d * (self.rig.hood.length / length)
+
+    def collider_frames(self, links):
+        """Collider centres, axes (columns) and radii in the simulation frame."""
+        cs = self.rig.colliders
+        t = links[[c.link for c in cs]]
+        centers = np.einsum('nij,nj->ni', t[:, :3, :3], np.array([c.center for c in cs]))
+        centers += t[:, :3, 3]
+        axes = t[:, :3, :3] @ np.array([c.rotation for c in cs])
+        return centers, axes, np.array([c.radii for c in cs])
+
+    # -- outputs ------------------------------------------------------------------------------
+    def bones(self):
+        """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
+        C = self.rig.cols
+        g = self.x.reshape(self.rig.rows, C, 3)
+        r, c = self._bone_rc[:, 0], self._bone_rc[:, 1]
+        origin = g[r, c]
+        xa = g[r + 1, c] - origin
+        ya = g[r, np.minimum(c + 1, C - 1)] - g[r, np.maximum(c - 1, 0)]
+        frames = _orthonormal(xa, ya)
+        anchor, link_rot = self._hood_anchor(self.links)
+        hood = _orthonormal((self.hood_p - anchor)[None], link_rot[:, 1][None])[0]
+        hood_link = self.links[self.rig.hood.link]
+        hood_rot = hood_link[:3, :3].T @ hood
+        hood_pos = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
+        rot = np.concatenate([frames, hood_rot[None]])
+        pos = np.concatenate([origin, hood_pos[None]])
+        return Bones(self.bone_names, self.bone_parents, pos, matrix_to_quat(rot))
+
+    def strain(self):
+        """Worst relative stretch of the vertical and horizontal stretch constraints."""
+        rig = self.rig
+        vert = np.linalg.norm(self.x[rig.vert_a] - self.x[rig.vert_b], axis=1) / rig.vert_rest
+        h = rig.horiz
+        horiz = np.linalg.norm(self.x[rig.con_a[h]] - self.x[rig.con_b[h]], axis=1)
+        horiz /= rig.con_rest[h]
+        return float(np.abs(vert - 1).max()), float(np.abs(horiz - 1).max())
+
+
+def _orthonormal(xa, ya):
+    """Rotation matrices with columns x, y, z from rough x and y axes (shear removed)."""
+    x = xa / np.linalg.norm(xa, axis=-1, keepdims=True)
+    z = np.cross(x, ya)
+    z /= np.linalg.norm(z, axis=-1, keepdims=True)
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=-1)

@@ -1,0 +1,122 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The character's skeleton from its URDF, and vectorised forward kinematics.
+
+The URDF is parsed with the ecosystem's parser (urdf_parser_py). Link transforms are computed
+relative to the URDF root link (the character's local space, M14), one batched matrix product
+per tree depth, so the cost grows with the depth of the tree, not its size.
+"""
+
+import io
+import contextlib
+
+import numpy as np
+from urdf_parser_py import urdf
+
+from .config import ConfigError
+from .transforms import make_transform, rotation_about_axes, rpy_matrix
+
+_MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
+
+
+class Skeleton:
+    """Links, joints and forward kinematics of a URDF character."""
+
+    def __init__(self, urdf_xml):
+        if not isinstance(urdf_xml, str) or not urdf_xml.strip():
+            raise ConfigError('URDF: empty robot description')
+        try:
+            # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
+            with contextlib.redirect_stderr(io.StringIO()):
+                robot = urdf.URDF.from_xml_string(urdf_xml)
+            root = robot.get_root()
+        except Exception as e:  # noqa: BLE001 - the parser raises many kinds; all mean "bad URDF"
+            msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise ConfigError(f'URDF: malformed robot description ({msg})') from None
+        self.name = robot.name
+        self.root = root
+        children = {}
+        for j in robot.joints:
+            children.setdefault(j.parent, []).append(j)
+        # Breadth-first order: a link's parent always comes before it.
+        self.link_names = [root]
+        parent, joints = [-1], [None]
+        i = 0
+        while i < len(self.link_names):
+            for j in children.get(self.link_names[i], []):
+                if j.child in self.link_names:
+                    raise ConfigError(f'URDF: link {j.child!r} has two parents')
+                self.link_names.append(j.child)
+                parent.append(i)
+                joints.append(j)
+            i += 1
+        self.link_index = {n: k for k, n in enumerate(self.link_names)}
+        n = len(self.link_names)
+        self.parent = np.array(parent)
+        self.origin = np.tile(np.eye(4), (n, 1, 1))
+        self.axis = np.zeros((n, 3))
+        self.axis[:, 2] = 1.0
+        self.kind = np.full(n, -1)        # -1 fixed, 0 rotation, 1 translation
+        self.var = np.full(n, -1)         # index into joint_names
+        self.mult = np.ones(n)
+        self.offset = np.zeros(n)
+        self.joint_names = []
+        self.joint_of_link = {}
+        mimics = []
+        for k, j in enumerate(joints):
+            if j is None:
+                continue
+            self.joint_of_link[self.link_names[k]] = j.name
+            if j.origin is not None:
+                xyz = j.origin.xyz if j.origin.xyz is not None else [0, 0, 0]
+                rpy = j.origin.rpy if j.origin.rpy is not None else [0, 0, 0]
+                self.origin[k] = make_transform(rpy_matrix(rpy), xyz)
+            if j.type in _MOVABLE:
+                ax = np.array(j.axis if j.axis is not None else [1, 0, 0], dtype=float)
+                if not np.isfinite(ax).all() or np.linalg.norm(ax) < 1e-9:
+                    raise ConfigError(f'URDF: joint {j.name!r} has a zero or invalid axis')
+                self.axis[k] = ax / np.linalg.norm(ax)
+                self.kind[k] = _MOVABLE[j.type]
+                if j.mimic is not None:
+                    mimics.append((k, j))
+                else:
+                    self.var[k] = len(self.joint_names)
+                    self.joint_names.append(j.name)
+        index = {name: v for v, name in enumerate(self.joint_names)}
+        for k, j in mimics:
+            if j.mimic.joint not in index:
+                raise ConfigError(f'URDF: joint {j.name!r} mimics unknown joint {j.mimic.joint!r}')
+            self.var[k] = index[j.mimic.joint]
+            self.mult[k] = j.mimic.multiplier if j.mimic.multiplier is not None else 1.0
+            self.offset[k] = j.mimic.offset if j.mimic.offset is not None else 0.0
+        self.joint_index = index
+        depth = np.zeros(n, dtype=int)
+        for k in range(1, n):
+            depth[k] = depth[self.parent[k]] + 1
+        self.levels = [np.nonzero(depth == d)[0] for d in range(1, depth.max() + 1)]
+        self._rot = np.nonzero(self.kind == 0)[0]
+        self._trans = np.nonzero(self.kind == 1)[0]
+
+    def link(self, name, where='rig'):
+        if name not in self.link_index:
+            raise ConfigError(f'{where}: link {name!r} is not in the URDF '
+                              f'(links: {", ".join(self.link_names)})')
+        return self.link_index[name]
+
+    def forward(self, q):
+        """Link transforms (L,4,4) in the root link's frame for joint values q (J,)."""
+        q = np.asarray(q, dtype=float)
+        n = len(self.link_names)
+        local = self.origin.copy()
+        values = np.where(self.var >= 0, q[np.maximum(self.var, 0)] * self.mult + self.offset, 0)
+        if len(self._rot):
+            motion = rotation_about_axes(self.axis[self._rot], values[self._rot])
+            local[self._rot, :3, :3] = local[self._rot, :3, :3] @ motion
+        if len(self._trans):
+            local[self._trans, :3, 3] += np.einsum(
+                'nij,nj->ni', local[self._trans, :3, :3],
+                self.axis[self._trans] * values[self._trans, None])
+        world = np.empty((n, 4, 4))
+        world[0] = np.eye(4)
+        for level in self.levels:
+            world[level] = world[self.parent[level]] @ local[level]
+        return world

@@ -1,0 +1,111 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Rigid-transform helpers, vectorised. Quaternions are (x, y, z, w) as in ROS messages."""
+
+import numpy as np
+
+
+def rotation_about_axes(axes, angles):
+    """Batched Rodrigues: (N,3) unit axes and (N,) angles to (N,3,3) rotations."""
+    axes = np.asarray(axes, dtype=float)
+    angles = np.asarray(angles, dtype=float)
+    c, s = np.cos(angles), np.sin(angles)
+    x, y, z = axes[:, 0], axes[:, 1], axes[:, 2]
+    t = 1.0 - c
+    r = np.empty((len(angles), 3, 3))
+    r[:, 0, 0] = c + x * x * t
+    r[:, 0, 1] = x * y * t - z * s
+    r[:, 0, 2] = x * z * t + y * s
+    r[:, 1, 0] = y * x * t + z * s
+    r[:, 1, 1] = c + y * y * t
+    r[:, 1, 2] = y * z * t - x * s
+    r[:, 2, 0] = z * x * t - y * s
+    r[:, 2, 1] = z * y * t + x * s
+    r[:, 2, 2] = c + z * z * t
+    return r
+
+
+def rpy_matrix(rpy):
+    """URDF roll-pitch-yaw (fixed axes x, y, z) to a 3x3 rotation."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ])
+
+
+def quat_to_matrix(q):
+    """(...,4) quaternions (x, y, z, w), normalised here, to (...,3,3) rotations."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r = np.empty(q.shape[:-1] + (3, 3))
+    r[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    r[..., 0, 1] = 2 * (x * y - z * w)
+    r[..., 0, 2] = 2 * (x * z + y * w)
+    r[..., 1, 0] = 2 * (x * y + z * w)
+    r[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    r[..., 1, 2] = 2 * (y * z - x * w)
+    r[..., 2, 0] = 2 * (x * z - y * w)
+    r[..., 2, 1] = 2 * (y * z + x * w)
+    r[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return r
+
+
+def matrix_to_quat(r):
+    """(...,3,3) rotations to unit (...,4) quaternions (x, y, z, w) with w >= 0."""
+    r = np.asarray(r, dtype=float)
+    m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
+    # Four candidate magnitudes; take each component's sign from the largest (Shepperd).
+    q = np.stack([
+        np.sqrt(np.maximum(0.0, 1 + m00 - m11 - m22)),
+        np.sqrt(np.maximum(0.0, 1 - m00 + m11 - m22)),
+        np.sqrt(np.maximum(0.0, 1 - m00 - m11 + m22)),
+        np.sqrt(np.maximum(0.0, 1 + m00 + m11 + m22)),
+    ], axis=-1) * 0.5
+    q[..., 0] = np.copysign(q[..., 0], r[..., 2, 1] - r[..., 1, 2])
+    q[..., 1] = np.copysign(q[..., 1], r[..., 0, 2] - r[..., 2, 0])
+    q[..., 2] = np.copysign(q[..., 2], r[..., 1, 0] - r[..., 0, 1])
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def quat_slerp(q0, q1, t):
+    """Spherical interpolation between two unit quaternions (x, y, z, w)."""
+    q0 = np.asarray(q0, dtype=float)
+    q1 = np.asarray(q1, dtype=float)
+    d = float(np.dot(q0, q1))
+    if d < 0.0:
+        q1, d = -q1, -d
+    if d > 0.9995:
+        q = q0 + t * (q1 - q0)
+        return q / np.linalg.norm(q)
+    theta = np.arccos(d)
+    s = np.sin(theta)
+    return (np.sin((1 - t) * theta) * q0 + np.sin(t * theta) * q1) / s
+
+
+def rotation_angle(r):
+    """Angle (rad) of a 3x3 rotation."""
+    return float(np.arccos(np.clip((np.trace(r) - 1.0) * 0.5, -1.0, 1.0)))
+
+
+def make_transform(rotation=None, translation=None):
+    t = np.eye(4)
+    if rotation is not None:
+        t[:3, :3] = rotation
+    if translation is not None:
+        t[:3, 3] = translation
+    return t
+
+
+def invert_transform(t):
+    out = np.eye(4)
+    out[:3, :3] = t[:3, :3].T
+    out[:3, 3] = -t[:3, :3].T @ t[:3, 3]
+    return out
+
+
+def apply_transform(t, points):
+    """Apply a 4x4 transform to (N,3) points."""
+    return points @ t[:3, :3].T + t[:3, 3]

@@ -1,0 +1,30 @@
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'jacket_cloth_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test', 'test.*']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob('config/*')),
+        ('share/' + package_name + '/launch', glob('launch_scripts/*.launch.py')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='jacket_cloth_ros maintainers',
+    maintainer_email='jacket_cloth_ros@example.com',
+    description='Jacket and hood secondary motion (Alan Wake cloth method) for ROS 2.',
+    license='Apache-2.0',
+    extras_require={'test': ['pytest']},
+    entry_points={
+        'console_scripts': [
+            'jacket_cloth_node = jacket_cloth_ros.ros.node:main',
+            'jacket_cloth = jacket_cloth_ros.tools.cli:main',
+        ],
+    },
+)
