@@ -25,7 +25,7 @@ class Fabric:
         return replace(self, **changes)
 
 
-_RANGES = {
+FABRIC_RANGES = {
     'damping': (0.0, 0.99), 'stretch_stiffness': (0.0, 1.0), 'shear_bend_stiffness': (0.0, 1.0),
     'iterations': (1, 100), 'world_share': (0.0, 1.0), 'wind_scale': (0.0, 10.0),
     'contact_damping': (0.0, 0.99), 'edge_damping': (0.0, 0.99), 'edge_world_share': (0.0, 1.0),
@@ -43,7 +43,7 @@ def load_fabrics(path=None):
         sec = Section(data[name], f'{path}: {name}')
         values = {}
         for f in fields(Fabric):
-            lo, hi = _RANGES[f.name]
+            lo, hi = FABRIC_RANGES[f.name]
             if f.name == 'iterations':
                 values[f.name] = sec.integer(f.name, lo=lo, hi=hi)
             else:

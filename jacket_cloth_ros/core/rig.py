@@ -45,11 +45,12 @@ def split_ellipsoid(center, rotation, radii, max_ratio=2.0):
     long_axis = int(np.argmax(radii))
     longest = radii[long_axis]
     shortest = np.delete(radii, long_axis).max()
-    pieces = int(np.ceil(longest / (shortest * max_ratio))) if longest > shortest * max_ratio else 1
-    if pieces == 1:
+    if longest <= shortest * max_ratio:
         return [(np.asarray(center, dtype=float), rotation, radii)]
+    overlap = 1.25       # pieces overlap so that no seam between them lets cloth in
+    pieces = int(np.ceil(overlap * longest / (shortest * max_ratio)))
     part = radii.copy()
-    part[long_axis] = min(longest, 1.25 * longest / pieces)  # overlap so no seam lets cloth in
+    part[long_axis] = overlap * longest / pieces
     span = longest - part[long_axis]
     out = []
     for k in range(pieces):

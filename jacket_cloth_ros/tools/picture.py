@@ -1,0 +1,88 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A filmstrip of a recorded session: skeleton, jacket and hood at chosen moments.
+
+Drawn from what the node published: the cloth mesh and hood from the recorded markers, the
+skeleton from the recorded JointState through the same forward kinematics the node used.
+"""
+
+import matplotlib
+
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from rclpy.serialization import deserialize_message  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
+
+from ..core.inputs import InputParser  # noqa: E402
+from ..recording.reader import read_messages  # noqa: E402
+
+VIEWS = (('side', 0, 'x (m, forward)'), ('front', 1, 'y (m, left)'))
+
+
+def _stamp(msg):
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+def _markers_by_time(messages):
+    out = []
+    for m in messages:
+        if m.type_name.endswith('MarkerArray'):
+            arr = deserialize_message(m.data, MarkerArray)
+            mesh = [k for k in arr.markers if k.ns == 'cloth' and k.id == 0
+                    and k.action == Marker.ADD]
+            hood = [k for k in arr.markers if k.ns == 'hood' and k.id == 0
+                    and k.action == Marker.ADD]
+            if mesh and hood:
+                tri = np.array([[p.x, p.y, p.z] for p in mesh[0].points]).reshape(-1, 3, 3)
+                rod = np.array([[p.x, p.y, p.z] for p in hood[0].points])
+                out.append((m.log_time, tri, rod))
+    return out
+
+
+def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None):
+    """Write a PNG of ``moments`` evenly spaced instants of the session; returns their stamps."""
+    messages, _ = read_messages(mcap_path)
+    frames = _markers_by_time(messages)
+    states = [deserialize_message(m.data, JointState) for m in messages
+              if m.type_name.endswith('JointState')]
+    if not frames or not states:
+        raise ValueError(f'{mcap_path}: no markers or JointState to draw')
+    t0 = _stamp(states[0])
+    picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
+    parser = InputParser(skeleton)
+    fig, axes = plt.subplots(2, moments, figsize=(2.6 * moments, 7.2), squeeze=False)
+    chosen = []
+    for col, k in enumerate(picks):
+        stamp, tri, rod = frames[k]
+        js = min(states, key=lambda s: abs(_stamp(s) - stamp))
+        sample = parser.parse(_stamp(js), js.name, js.position)
+        links = skeleton.forward(sample.q)[:, :3, 3]
+        chosen.append(stamp)
+        for row, (view, axis, xlabel) in enumerate(VIEWS):
+            ax = axes[row][col]
+            for i in range(1, len(links)):
+                p = links[[skeleton.parent[i], i]]
+                ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
+            ax.add_collection(matplotlib.collections.PolyCollection(
+                tri[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
+                edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
+            ax.plot(rod[:, axis], rod[:, 2], color=(0.75, 0.3, 0.1), lw=3)
+            ax.plot(rod[1, axis], rod[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
+            ax.set_xlim(-0.7, 0.7)
+            ax.set_ylim(-1.0, 0.95)
+            ax.set_aspect('equal')
+            ax.grid(alpha=0.3)
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.tick_params(labelsize=7)
+            if col == 0:
+                ax.set_ylabel(f'{view} view: z (m, up)', fontsize=8)
+            if row == 0:
+                name = labels(stamp - t0) if labels else ''
+                ax.set_title(f't = {(stamp - t0) * 1e-9:.1f} s {name}', fontsize=9)
+    fig.suptitle(title or 'jacket (brown) and hood pendulum (orange) on the skeleton, '
+                 'character frame', fontsize=11)
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=110)
+    plt.close(fig)
+    return chosen

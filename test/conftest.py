@@ -1,0 +1,57 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Shared fixtures. DDS traffic stays on this machine and in a domain of this test run."""
+
+import os
+
+import numpy as np
+import pytest
+
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+# A domain of our own so a demo or another test run on the machine does not cross talk.
+DOMAIN_ID = 60 + os.getpid() % 40
+
+from jacket_cloth_ros.core.config import shipped  # noqa: E402
+from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
+from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
+from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams  # noqa: E402
+from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
+from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
+
+
+@pytest.fixture(scope='session')
+def urdf_text():
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        return f.read()
+
+
+@pytest.fixture(scope='session')
+def skeleton(urdf_text):
+    return Skeleton(urdf_text)
+
+
+@pytest.fixture(scope='session')
+def rig(skeleton):
+    return load_rig(skeleton)
+
+
+@pytest.fixture
+def make_sim(skeleton, rig):
+    def make(fabric='tweed_jacket', **params):
+        return JacketSimulation(skeleton, rig, load_fabric(fabric), SimParams(**params))
+    return make
+
+
+def play(sim, clip, rate, duration, start_s=10.0):
+    """Feed a clip to a simulation at ``rate`` Hz; returns the reports."""
+    reports = []
+    for k in range(int(round(duration * rate)) + 1):
+        names, pos = joint_state_content(sim.skeleton.joint_names, clip, k / rate)
+        reports.append(sim.process(int(round((start_s + k / rate) * 1e9)), names, pos))
+    return reports
+
+
+@pytest.fixture
+def rest_input(skeleton):
+    """JointState content of the character standing still at the world origin."""
+    names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+    return names, np.array(pos)

@@ -1,0 +1,87 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The skeleton (URDF, forward kinematics) and the rig's validation, without ROS."""
+
+import numpy as np
+import pytest
+import yaml
+
+from jacket_cloth_ros.core.config import ConfigError, shipped
+from jacket_cloth_ros.core.rig import Rig, split_ellipsoid
+from jacket_cloth_ros.core.skeleton import Skeleton
+
+
+def test_forward_kinematics_of_the_shipped_character(skeleton):
+    q = np.zeros(len(skeleton.joint_names))
+    links = skeleton.forward(q)
+    foot = links[skeleton.link_index['l_foot'], :3, 3]
+    assert foot == pytest.approx([0.0, 0.10, -0.91])
+    # Rolling the left shoulder by +90 deg about x lifts the arm out to the left (+y).
+    q[skeleton.joint_index['l_shoulder_roll']] = np.pi / 2
+    hand = skeleton.forward(q)[skeleton.link_index['l_hand'], :3, 3]
+    shoulder = links[skeleton.link_index['l_shoulder'], :3, 3]
+    assert hand - shoulder == pytest.approx([0.0, 0.56, 0.0], abs=1e-9)
+
+
+def test_prismatic_and_mimic_joints():
+    urdf = '''<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
+      <joint name="slide" type="prismatic"><parent link="a"/><child link="b"/>
+        <axis xyz="0 0 2"/><limit lower="0" upper="1" effort="1" velocity="1"/></joint>
+      <joint name="follow" type="prismatic"><parent link="b"/><child link="c"/>
+        <axis xyz="1 0 0"/><mimic joint="slide" multiplier="2" offset="0.1"/>
+        <limit lower="0" upper="1" effort="1" velocity="1"/></joint></robot>'''
+    sk = Skeleton(urdf)
+    assert sk.joint_names == ['slide']
+    links = sk.forward(np.array([0.5]))
+    assert links[sk.link_index['c'], :3, 3] == pytest.approx([1.1, 0.0, 0.5])
+
+
+@pytest.mark.parametrize('text', ['', '<robot name="x"><link name="a"/>', 'not xml at all',
+                                  '<robot name="x"><joint name="j" type="revolute"/></robot>'])
+def test_malformed_urdf_is_one_clear_error(text):
+    with pytest.raises(ConfigError, match='URDF'):
+        Skeleton(text)
+
+
+def _rig_data():
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        return yaml.safe_load(f)
+
+
+@pytest.mark.parametrize('edit, message', [
+    (lambda d: d['cloth'].update(cols=2), 'cloth.cols'),
+    (lambda d: d['cloth'].update(pin_link='tail'), "link 'tail' is not in the URDF"),
+    (lambda d: d['cloth'].update(colums=9), 'unknown key.*colums'),
+    (lambda d: d['hood'].update(length='long'), 'hood.length'),
+    (lambda d: d['colliders'][1].update(radii=[0.1, 0.1]), r'colliders\[1\].radii'),
+    (lambda d: d.pop('hood'), 'hood: missing'),
+])
+def test_rig_validation_names_the_bad_key(skeleton, edit, message):
+    data = _rig_data()
+    edit(data)
+    with pytest.raises(ConfigError, match=message):
+        Rig(data, skeleton)
+
+
+def test_shipped_rig_topology(rig):
+    # 9x12 grid: horizontal + vertical stretch, two diagonals, two skip-one bends.
+    assert rig.n == 108
+    assert len(rig.con_a) == 8 * 12 + 9 * 11 + 2 * 8 * 11 + 7 * 12 + 9 * 10
+    # M13: edges are the vertices with fewer than four stretch neighbours.
+    grid = rig.edge.reshape(rig.rows, rig.cols)
+    assert grid[0].all() and grid[-1].all() and grid[:, 0].all() and grid[:, -1].all()
+    assert not grid[1:-1, 1:-1].any()
+    assert rig.free.sum() == rig.n - rig.cols
+
+
+def test_stretched_ellipsoids_are_split(rig):
+    pieces = split_ellipsoid([0, 0, 0], np.eye(3), [0.08, 0.08, 0.4])
+    assert len(pieces) >= 3
+    for _, _, radii in pieces:
+        assert radii.max() / radii.min() <= 2.0 + 1e-9
+    # Together the pieces span the original's length, and neighbours overlap.
+    ends = [(c[2] - r[2], c[2] + r[2]) for c, _, r in pieces]
+    assert ends[0][0] == pytest.approx(-0.4) and ends[-1][1] == pytest.approx(0.4)
+    assert all(a[1] > b[0] for a, b in zip(ends, ends[1:]))
+    # The shipped thighs (0.085 x 0.25) are split in two, torso and pelvis are not.
+    names = [c.name for c in rig.colliders]
+    assert names.count('l_thigh_0') == 1 and 'l_thigh_1' in names and 'torso_1' not in names
