@@ -90,6 +90,17 @@ class JacketSimulation:
         self.bone_names = [f'jacket_r{r:02d}_c{c:02d}' for r, c in self._bone_rc] + ['hood']
         root = skeleton.link_names[0]
         self.bone_parents = [root] * len(self._bone_rc) + [skeleton.link_names[rig.hood.link]]
+        self._warm_up()
+
+    def _warm_up(self):
+        """Load (or compile) the kernel now, not on the first input, which would stall it."""
+        x, xp = self.x.copy(), self.xp.copy()
+        centers, axes, radii = self.collider_frames(self.links)
+        rig = self.rig
+        kernel.cloth_step(x, xp, rig.free, np.zeros_like(x), self.damping, self.contact.copy(),
+                          0.0, 1e-3, rig.con_a, rig.con_b, rig.con_rest, self.stiffness, 1,
+                          centers, axes, radii, x.copy(), self.max_distance, rig.vert_a,
+                          rig.vert_b, rig.vert_rest, True)
 
     # -- parameters -------------------------------------------------------------------------
     def set_fabric(self, fabric):

@@ -1,0 +1,181 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The fixed-step simulation without ROS: stepping, features, bad input, determinism."""
+
+import numpy as np
+import pytest
+from conftest import play
+
+from jacket_cloth_ros.core.transforms import quat_to_matrix
+from jacket_cloth_ros.motion.clips import joint_state_content
+
+
+def test_fixed_step_interpolates_and_caps_steps(make_sim, rest_input):
+    sim = make_sim(sim_rate=120.0, max_steps_per_input=12)
+    names, pos = rest_input
+    assert sim.process(1_000_000_000, names, pos).reset == 'first sample'
+    # 1/30 s of input at 120 Hz is four steps.
+    assert sim.process(1_000_000_000 + 33_333_334, names, pos).steps == 4
+    # A 0.5 s hitch would be 60 steps: capped at 12, the rest skipped, not queued.
+    r = sim.process(1_533_333_334, names, pos)
+    assert (r.steps, r.skipped_steps) == (12, 48)
+    assert sim.overruns == 1
+
+
+def test_same_motion_at_30_60_120_hz_input_agrees_within_1cm(make_sim):
+    finals = []
+    for rate in (30, 60, 120):
+        sim = make_sim()
+        play(sim, 'walk', rate, 2.0)
+        finals.append(sim.x.copy())
+    for other in finals[1:]:
+        assert np.abs(other - finals[0]).max() < 0.01
+
+
+def test_m6_top_row_follows_its_link_and_m12_vertical_lengths_exact(make_sim, rig):
+    sim = make_sim()
+    play(sim, 'run', 60, 1.5)
+    pin = sim.links[rig.pin_link]
+    assert sim.x[:rig.cols] == pytest.approx(rig.pin_local @ pin[:3, :3].T + pin[:3, 3])
+    vert = np.linalg.norm(sim.x[rig.vert_a] - sim.x[rig.vert_b], axis=1)
+    assert vert == pytest.approx(rig.vert_rest, abs=1e-12)
+
+
+def test_without_m12_the_iterative_solve_leaves_vertical_stretch(make_sim, rig):
+    sim = make_sim(hard_vertical_pass=False)
+    play(sim, 'run', 60, 1.5)
+    vert = np.linalg.norm(sim.x[rig.vert_a] - sim.x[rig.vert_b], axis=1)
+    assert np.abs(vert / rig.vert_rest - 1).max() > 1e-3
+
+
+def test_m8_hood_small_amplitude_period(make_sim, rig, rest_input):
+    """The one-particle pendulum swings with period 2 pi sqrt(L/g) within 1%."""
+    sim = make_sim(sim_rate=1000.0, max_steps_per_input=100)
+    sim.set_fabric(sim.fabric.with_values(hood_damping=0.0))
+    names, pos = rest_input
+    sim.process(0, names, pos)
+    anchor = sim.links[rig.hood.link][:3, :3] @ rig.hood.pivot + sim.links[rig.hood.link][:3, 3]
+    # Start 3 degrees off the vertical, at rest.
+    a = np.radians(3.0)
+    sim.hood_p = anchor + rig.hood.length * np.array([-np.sin(a), 0.0, -np.cos(a)])
+    sim.hood_pp = sim.hood_p.copy()
+    xs, ts = [], []
+    for k in range(1, 3001):
+        sim.process(k * 1_000_000, names, pos)
+        xs.append(sim.hood_p[0] - anchor[0])
+        ts.append(k * 1e-3)
+    xs = np.array(xs)
+    up = np.nonzero((xs[:-1] < 0) & (xs[1:] >= 0))[0]
+    crossings = [ts[i] + (ts[i + 1] - ts[i]) * -xs[i] / (xs[i + 1] - xs[i]) for i in up]
+    period = np.mean(np.diff(crossings))
+    assert period == pytest.approx(2 * np.pi * np.sqrt(rig.hood.length / 9.81), rel=0.01)
+
+
+def test_bones_are_orthonormal_right_handed_and_on_their_vertices(make_sim, rig):
+    sim = make_sim()
+    play(sim, 'dodge', 60, 1.0)
+    bones = sim.bones()
+    assert len(bones.names) == len(rig.bone_vertices()) + 1
+    assert np.allclose(np.linalg.norm(bones.quaternions, axis=1), 1.0)
+    rot = quat_to_matrix(bones.quaternions)
+    assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-9)
+    assert np.allclose(np.linalg.det(rot), 1.0)
+    g = sim.x.reshape(rig.rows, rig.cols, 3)
+    for k, (r, c) in enumerate(rig.bone_vertices()):
+        assert bones.translations[k] == pytest.approx(g[r, c])
+        down = g[r + 1, c] - g[r, c]
+        assert rot[k][:, 0] == pytest.approx(down / np.linalg.norm(down))   # M9: x down
+
+
+@pytest.mark.parametrize('names, positions, code', [
+    ([], [], 'empty'),
+    (['l_knee', 'r_knee'], [0.1], 'length'),
+    (['l_knee'], [float('nan')], 'nonfinite'),
+    (['l_knee'], [float('inf')], 'nonfinite'),
+])
+def test_unusable_input_is_dropped_and_changes_nothing(make_sim, rest_input, names, positions,
+                                                       code):
+    sim = make_sim()
+    n, p = rest_input
+    sim.process(1_000_000_000, n, p)
+    sim.process(1_016_000_000, n, p)
+    before = (sim.x.copy(), sim.xp.copy(), sim.hood_p.copy(), sim.last, sim.t_sim)
+    r = sim.process(1_032_000_000, names, positions)
+    assert not r.accepted and r.warnings[0][0] == code
+    assert np.array_equal(sim.x, before[0]) and np.array_equal(sim.xp, before[1])
+    assert sim.last is before[3] and sim.t_sim == before[4]
+
+
+def test_stamps_backwards_or_repeated_are_dropped_a_long_gap_resets(make_sim, rest_input):
+    sim = make_sim(reset_gap=1.0)
+    n, p = rest_input
+    sim.process(5_000_000_000, n, p)
+    sim.process(5_100_000_000, n, p)
+    assert not sim.process(5_100_000_000, n, p).accepted           # repeated
+    assert not sim.process(5_050_000_000, n, p).accepted           # back 50 ms
+    assert sim.process(8_000_000_000, n, p).reset.startswith('gap')  # 2.9 s gap
+    assert sim.process(1_000_000_000, n, p).reset.startswith('stamps jumped back')
+    assert sim.resets == 3
+
+
+def test_unknown_and_missing_joints_warn_but_keep_the_sample(make_sim, skeleton):
+    sim = make_sim()
+    r = sim.process(1_000_000_000, ['l_knee', 'tail'], [0.3, 1.0])
+    assert r.accepted
+    codes = {c for c, _ in r.warnings}
+    assert codes == {'unknown', 'missing'}
+    assert sim.last.q[skeleton.joint_index['l_knee']] == 0.3
+
+
+def test_teleport_resets_to_the_skinned_pose_instead_of_exploding(make_sim):
+    sim = make_sim()
+    reports = play(sim, 'teleport', 60, 3.0)
+    resets = [r.reset for r in reports if r.reset]
+    assert resets == ['first sample', 'world jump (teleport or fast turn)']
+    assert np.isfinite(sim.x).all()
+    vert, horiz = sim.strain()
+    assert vert < 1e-9 and horiz < 0.05
+
+
+def test_m14_world_motion_is_felt_by_share_local_motion_fully(make_sim, skeleton, rig):
+    """A sudden world move moves the cloth about `share` times as much as world space does.
+
+    The move is 4 cm: at 1 m the full world-space response saturates (the hem cannot trail
+    further than the jacket is long: M12 keeps every column at its rest length), so the ratio
+    is measured where the response is still linear.
+    """
+    def response(share):
+        sim = make_sim(teleport_distance=5.0)
+        sim.set_fabric(sim.fabric.with_values(world_share=share, edge_world_share=share))
+        sim.max_distance[:] = 10.0     # measure M14 alone, not the M11 clamp
+        names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+        pos = np.array(pos)
+        sim.process(1_000_000_000, names, pos)
+        moved = pos.copy()
+        moved[names.index('world_joint/trans_x')] += 0.04
+        sim.process(1_000_000_000 + 8_333_333, names, moved)   # one step
+        # The hem at the back trails behind (-x), away from the body: no collider in the way.
+        back_hem = (rig.rows - 1) * rig.cols + np.arange(2, rig.cols - 2)
+        lag = sim.x - sim.reference_points(sim.links)
+        return -lag[back_hem, 0].mean()
+    full = response(1.0)
+    assert full > 0.02
+    for share in (0.1, 0.3):
+        assert response(share) == pytest.approx(share * full, rel=0.15)
+
+
+def test_live_fabric_change_does_not_reset(make_sim):
+    sim = make_sim()
+    play(sim, 'walk', 60, 0.5)
+    x = sim.x.copy()
+    sim.set_fabric(sim.fabric.with_values(damping=0.2, iterations=3))
+    assert np.array_equal(sim.x, x) and sim.resets == 1
+
+
+def test_same_input_gives_bit_identical_bones(make_sim):
+    runs = []
+    for _ in range(2):
+        sim = make_sim()
+        play(sim, 'showcase', 60, 6.0)
+        b = sim.bones()
+        runs.append(np.concatenate([b.translations.ravel(), b.quaternions.ravel()]))
+    assert runs[0].tobytes() == runs[1].tobytes()
