@@ -3,7 +3,6 @@
 
 from dataclasses import dataclass
 
-from mcap.exceptions import McapError
 from mcap.reader import NonSeekingReader, make_reader
 
 
@@ -36,13 +35,14 @@ def read_messages(path, topics=None):
                 out.append(RecordedMessage(channel.topic, schema.name if schema else '',
                                            message.log_time, message.data))
             return out, True
-        except (McapError, EOFError, ValueError, Exception):  # noqa: B014 - truncated tail
+        except Exception:  # noqa: BLE001 - no summary or index (cut short): stream it below
             pass
         # No usable summary (killed writer): stream the records up to the last readable chunk.
         f.seek(0)
         out = []
+        stream = NonSeekingReader(f).iter_messages(log_time_order=False)
         try:
-            for schema, channel, message in NonSeekingReader(f).iter_messages():
+            for schema, channel, message in stream:
                 if topics is None or channel.topic in topics:
                     out.append(RecordedMessage(channel.topic, schema.name if schema else '',
                                                message.log_time, message.data))

@@ -1,0 +1,230 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The node over real DDS, in-process: a context and domain of its own, localhost discovery."""
+
+import math
+import os
+import time
+
+import pytest
+import rclpy
+from conftest import DOMAIN_ID
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
+
+from jacket_cloth_ros.core.config import ConfigError
+from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.ros.node import JacketClothNode
+
+
+class Harness:
+    def __init__(self, **params):
+        self.ctx = Context()
+        rclpy.init(context=self.ctx, domain_id=DOMAIN_ID)
+        overrides = [Parameter(k, value=v) for k, v in params.items()]
+        self.node = JacketClothNode(context=self.ctx, parameter_overrides=overrides)
+        self.peer = rclpy.create_node('jacket_test_peer', context=self.ctx)
+        self.pub = self.peer.create_publisher(JointState, 'joint_states', 10)
+        self.tf, self.markers = [], []
+        self.peer.create_subscription(TFMessage, '/tf', self.tf.append, 100)
+        self.peer.create_subscription(MarkerArray, '/jacket_cloth_node/markers',
+                                      self.markers.append, 10)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+        self.ex.add_node(self.peer)
+        self.spin_until(lambda: self.node.sim is not None and
+                        self.pub.get_subscription_count() > 0)
+
+    def spin_until(self, predicate, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            assert time.monotonic() < deadline, 'timed out'
+            self.ex.spin_once(timeout_sec=0.02)
+
+    def send(self, names, positions, stamp_ns):
+        msg = JointState(name=list(names), position=[float(p) for p in positions])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+        self.pub.publish(msg)
+
+    def send_clip(self, clip, rate, duration, start_s=100.0):
+        sk = self.node.sim.skeleton
+        n = int(duration * rate)
+        for k in range(n):
+            names, pos = joint_state_content(sk.joint_names, clip, k / rate)
+            before = self.node.inputs
+            self.send(names, pos, int((start_s + k / rate) * 1e9))
+            # The node's subscription is best effort (like robot_state_publisher's): pace the
+            # stream so that no message is dropped from its queue.
+            self.spin_until(lambda: self.node.inputs > before)
+        return n
+
+    def close(self):
+        self.ex.shutdown()
+        self.node.close()
+        self.node.destroy_node()
+        self.peer.destroy_node()
+        rclpy.shutdown(context=self.ctx)
+
+
+@pytest.fixture
+def harness(request):
+    made = []
+
+    def make(**params):
+        made.append(Harness(**params))
+        return made[-1]
+    yield make
+    for h in made:
+        h.close()
+
+
+def _all_finite(tf):
+    return all(math.isfinite(v) for t in tf.transforms for v in (
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z,
+        t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z,
+        t.transform.rotation.w))
+
+
+def test_joint_states_in_bones_on_tf_and_markers_out(harness):
+    h = harness(frame_prefix='cloth/')
+    sent = h.send_clip('walk', 60, 1.0)
+    h.spin_until(lambda: len(h.tf) >= sent - 2 and len(h.markers) >= 10)
+    links = set(h.node.sim.skeleton.link_names)
+    last = h.tf[-1]
+    assert len(last.transforms) == len(h.node.sim.bone_names)
+    for t in last.transforms:
+        assert t.header.frame_id in links                 # child of an existing link
+        assert t.child_frame_id.startswith('cloth/') and t.child_frame_id not in links
+        q = t.transform.rotation
+        assert abs(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 - 1) < 1e-9
+    assert all(_all_finite(tf) for tf in h.tf)
+    # One /tf per input, stamped with that input's stamp.
+    stamps = [tf.transforms[0].header.stamp.sec * 10 ** 9 + tf.transforms[0].header.stamp.nanosec
+              for tf in h.tf]
+    assert stamps == sorted(stamps) and stamps[0] == 100 * 10 ** 9
+    # Markers at about 30 Hz of a 60 Hz input, DELETEALL only on the first (a reset).
+    assert len(h.markers) <= sent // 2 + 2
+    first, later = h.markers[0].markers, h.markers[-1].markers
+    assert [m.ns for m in first if m.action == Marker.DELETEALL] == ['cloth', 'colliders', 'hood']
+    assert not any(m.action == Marker.DELETEALL for m in later)
+    mesh = [m for m in later if m.ns == 'cloth' and m.id == 0][0]
+    assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0 and mesh.color.a > 0
+
+
+BAD_INPUTS = [
+    ('nan', ['l_knee'], [float('nan')]),
+    ('inf', ['l_knee', 'r_knee'], [0.1, float('inf')]),
+    ('unknown names', ['tail', 'wing'], [0.1, 0.2]),
+    ('length mismatch', ['l_knee', 'r_knee'], [0.1]),
+    ('empty', [], []),
+]
+
+
+def test_bad_input_never_reaches_tf_and_the_node_keeps_running(harness):
+    h = harness()
+    sk = h.node.sim.skeleton
+    names, pos = joint_state_content(sk.joint_names, 'idle', 0.0)
+    stamp = 200 * 10 ** 9
+
+    def send(n, p, t):
+        """Send one message, wait until the node took it; True if it was dropped."""
+        inputs, dropped = h.node.inputs, h.node.dropped
+        h.send(n, p, t)
+        h.spin_until(lambda: h.node.inputs > inputs)
+        return h.node.dropped > dropped
+
+    assert not send(names, pos, stamp)
+    for k, (label, n, p) in enumerate(BAD_INPUTS):
+        assert send(n, p, stamp + (k + 1) * 10 ** 7) == (label != 'unknown names'), label
+    last = stamp + 3 * 10 ** 7                     # the accepted 'unknown names' message
+    assert send(names, pos, last)                  # repeated stamp
+    assert send(names, pos, last - 5 * 10 ** 6)    # backwards
+    assert not send(names, pos, last + 10 ** 8)
+    h.spin_until(lambda: len(h.tf) == 3)
+    assert all(_all_finite(tf) for tf in h.tf)
+
+
+def test_parameters_validated_and_applied_live_without_reset(harness):
+    h = harness()
+    h.send_clip('walk', 60, 0.5)
+    h.spin_until(lambda: h.node.sim.steps_total > 20)
+    resets = h.node.sim.resets
+    ok = h.node.set_parameters([Parameter('fabric.iterations', value=4),
+                                Parameter('wind', value=[1.0, 0.0, 0.0])])
+    assert all(r.successful for r in ok)
+    assert h.node.sim.fabric.iterations == 4 and h.node.sim.params.wind == (1.0, 0.0, 0.0)
+    bad = h.node.set_parameters([Parameter('sim_rate', value=5000.0)])[0]
+    assert not bad.successful and h.node.sim.params.sim_rate == 120.0
+    bad = h.node.set_parameters([Parameter('wind', value=[1.0, 2.0])])[0]
+    assert not bad.successful and 'wind' in bad.reason
+    assert h.node.sim.resets == resets
+
+
+def test_unwritable_record_path_keeps_the_node_running(harness, tmp_path):
+    h = harness(record=str(tmp_path / 'no' / 'such' / 'folder' / 'x.mcap'))
+    assert h.node.recorder is None
+    h.send_clip('idle', 60, 0.2)
+    h.spin_until(lambda: len(h.tf) > 5)
+
+
+def test_malformed_urdf_parameter_is_a_clear_error_at_start():
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    try:
+        with pytest.raises(ConfigError, match='URDF'):
+            JacketClothNode(context=ctx, parameter_overrides=[
+                Parameter('robot_description', value='<robot name="x"><link')])
+    finally:
+        rclpy.shutdown(context=ctx)
+
+
+def test_robot_description_from_the_latched_topic(harness, urdf_text):
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    talker = rclpy.create_node('description_talker', context=ctx)
+    pub = talker.create_publisher(String, '/robot_description',
+                                  QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    renamed = urdf_text.replace('jacket_character', 'from_topic')
+    pub.publish(String(data=renamed))
+    try:
+        h = harness(robot_description_timeout=20.0)
+        assert h.node.sim.skeleton.name == 'from_topic'
+    finally:
+        talker.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
+    from mcap.reader import make_reader
+    from rclpy.serialization import deserialize_message
+    path = tmp_path / 'session.mcap'
+    h = harness(record=str(path))
+    sent = h.send_clip('walk', 60, 1.0)
+    h.spin_until(lambda: h.node.inputs == sent)
+    h.node.close()
+    with open(path, 'rb') as f:
+        reader = make_reader(f)
+        header, summary = reader.get_header(), reader.get_summary()
+        assert header.profile == 'ros2'
+        assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
+        topics = {c.topic: c for c in summary.channels.values()}
+        assert set(topics) == {'/joint_states', '/tf', '/jacket_cloth_node/markers',
+                               '/diagnostics'}
+        assert all(c.message_encoding == 'cdr' and 'reliability' in
+                   c.metadata['offered_qos_profiles'] for c in topics.values())
+        counts = summary.statistics.channel_message_counts
+        by_topic = {topics_id.topic: counts[cid] for cid, topics_id in summary.channels.items()}
+        assert by_topic['/joint_states'] == sent and by_topic['/tf'] == sent
+        assert 'rosbag2' in {m.name for m in reader.iter_metadata()}
+        types = {'/tf': TFMessage, '/joint_states': JointState}
+        for schema, channel, message in reader.iter_messages(topics=list(types)):
+            msg = deserialize_message(message.data, types[channel.topic])
+            stamp = msg.header.stamp if channel.topic == '/joint_states' else \
+                msg.transforms[0].header.stamp
+            assert message.log_time == stamp.sec * 10 ** 9 + stamp.nanosec
+    assert os.path.getsize(path) > 10_000

@@ -1,0 +1,76 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The package as colcon installs it, and `ros2 run` resolution as ros2cli does it."""
+
+import ast
+import os
+import subprocess
+import sys
+from glob import glob
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture(scope='module')
+def installed(tmp_path_factory):
+    """`setup.py install` the way colcon's ament_python build calls it, into a fresh prefix."""
+    prefix = tmp_path_factory.mktemp('install')
+    build = tmp_path_factory.mktemp('build')
+    subprocess.run(
+        [sys.executable, 'setup.py', '-q', 'build', '--build-base', str(build), 'install',
+         '--prefix', str(prefix), '--record', str(build / 'files.txt'),
+         '--single-version-externally-managed'],
+        cwd=ROOT, check=True, capture_output=True)
+    return prefix
+
+
+def _executables(prefix, package):
+    """ros2cli's ros2pkg.api.get_executable_paths: files in <prefix>/lib/<package>."""
+    folder = os.path.join(prefix, 'lib', package)
+    return sorted(f for f in os.listdir(folder)
+                  if os.access(os.path.join(folder, f), os.X_OK)
+                  and os.path.isfile(os.path.join(folder, f)))
+
+
+def test_ros2_run_finds_the_node_through_the_ament_index(installed):
+    from ament_index_python.packages import get_package_prefix, get_package_share_directory
+    env_before = os.environ.get('AMENT_PREFIX_PATH')
+    os.environ['AMENT_PREFIX_PATH'] = str(installed)
+    try:
+        prefix = get_package_prefix('jacket_cloth_ros')
+        share = get_package_share_directory('jacket_cloth_ros')
+    finally:
+        if env_before is None:
+            del os.environ['AMENT_PREFIX_PATH']
+        else:
+            os.environ['AMENT_PREFIX_PATH'] = env_before
+    assert prefix == str(installed)
+    assert _executables(prefix, 'jacket_cloth_ros') == ['jacket_cloth', 'jacket_cloth_node']
+    for name in ('package.xml', 'config/character.urdf', 'config/jacket_rig.yaml',
+                 'config/fabrics.yaml', 'config/node_params.yaml',
+                 'launch/jacket_cloth.launch.py'):
+        assert os.path.isfile(os.path.join(share, name)), name
+    # The installed script runs the installed code (what `ros2 run ... --help` would do).
+    site = glob(os.path.join(str(installed), 'lib', 'python3*', 'site-packages'))[0]
+    env = dict(os.environ, PYTHONPATH=site, AMENT_PREFIX_PATH=str(installed))
+    out = subprocess.run([os.path.join(prefix, 'lib', 'jacket_cloth_ros', 'jacket_cloth_node'),
+                          '--help'], env=env, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and 'joint_states' in out.stdout
+
+
+def test_package_xml_is_format_3_ament_python():
+    from catkin_pkg.package import parse_package
+    pkg = parse_package(ROOT)
+    assert pkg.package_format == 3 and pkg.name == 'jacket_cloth_ros'
+    assert pkg.get_build_type() == 'ament_python'
+    deps = {d.name for d in pkg.exec_depends}
+    assert {'rclpy', 'sensor_msgs', 'tf2_msgs', 'visualization_msgs', 'diagnostic_msgs',
+            'urdfdom_py'} <= deps
+
+
+def test_launch_file_is_valid_python_with_a_launch_description():
+    with open(os.path.join(ROOT, 'launch_scripts', 'jacket_cloth.launch.py')) as f:
+        tree = ast.parse(f.read())
+    assert 'generate_launch_description' in {n.name for n in tree.body
+                                             if isinstance(n, ast.FunctionDef)}

@@ -1,0 +1,92 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The jacket_cloth command, clips, and recordings that survive Ctrl-C, SIGTERM and a kill."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from conftest import DOMAIN_ID
+
+from jacket_cloth_ros.motion.clips import ALL_CLIPS, clip_length, pose
+from jacket_cloth_ros.recording.reader import RecordingError, read_messages
+from jacket_cloth_ros.tools.cli import main
+
+
+def test_every_clip_is_continuous(skeleton):
+    for clip in ALL_CLIPS:
+        prev, jumps = None, 0
+        for t in np.arange(0, clip_length(clip), 1 / 240):
+            q, root = pose(clip, t)
+            assert set(q) <= set(skeleton.joint_names)
+            now = np.array(list(root[:3]))
+            if prev is not None and np.linalg.norm(now - prev) > 0.1:
+                jumps += 1
+            prev = now
+        assert jumps == (1 if clip in ('teleport', 'showcase') else 0), clip   # the 10 m jump
+
+
+def test_motion_to_file_then_errors_are_one_line(tmp_path, capsys):
+    out = tmp_path / 'walk.mcap'
+    assert main(['motion', '--clip', 'walk', '--rate', '30', '-o', str(out)]) == 0
+    msgs, complete = read_messages(str(out))
+    assert complete and len(msgs) == 4 * 30 + 1
+    assert {m.topic for m in msgs} == {'/joint_states'}
+    capsys.readouterr()
+    assert main(['motion', '--clip', 'walk', '-o', str(out)]) == 1       # exists, no --force
+    assert main(['picture', str(out), '-o', str(tmp_path / 'p.png')]) == 1  # no markers in it
+    (tmp_path / 'junk.mcap').write_bytes(b'hello')
+    assert main(['picture', str(tmp_path / 'junk.mcap'), '-o', str(tmp_path / 'q.png')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and 'exists' in err[0] and 'not an MCAP' in err[2]
+    assert 'Traceback' not in ''.join(err)
+
+
+def test_reading_a_non_mcap_file_is_a_recording_error(tmp_path):
+    p = tmp_path / 'x.mcap'
+    p.write_bytes(b'\0' * 100)
+    with pytest.raises(RecordingError, match='not an MCAP'):
+        read_messages(str(p))
+
+
+def _run_node_and_motion(tmp_path, stop):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 1))
+    path = tmp_path / 'live.mcap'
+    node = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+                             '-p', f'record:={path}'], env=env, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        motion = subprocess.run(
+            [sys.executable, '-m', 'jacket_cloth_ros', 'motion', '--clip', 'walk', '--rate',
+             '60', '--duration', '3', '--wait', '2'], env=env, capture_output=True, timeout=60)
+        assert motion.returncode == 0, motion.stderr
+        time.sleep(0.5)
+        node.send_signal(stop)
+        node.wait(timeout=20)
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.wait()
+    return path, node
+
+
+@pytest.mark.parametrize('stop', [signal.SIGINT, signal.SIGTERM])
+def test_recording_is_complete_after_a_normal_shutdown(tmp_path, stop):
+    path, node = _run_node_and_motion(tmp_path, stop)
+    msgs, complete = read_messages(str(path))
+    assert complete
+    topics = {m.topic for m in msgs}
+    assert {'/joint_states', '/tf', '/jacket_cloth_node/markers', '/diagnostics'} <= topics
+    inputs = sum(m.topic == '/joint_states' for m in msgs)
+    assert inputs > 150 and sum(m.topic == '/tf' for m in msgs) == inputs
+
+
+def test_recording_is_readable_after_a_kill(tmp_path):
+    path, node = _run_node_and_motion(tmp_path, signal.SIGKILL)
+    msgs, complete = read_messages(str(path))
+    assert not complete
+    # Chunks are flushed about every second of stamps: most of the 3 s survive.
+    assert sum(m.topic == '/tf' for m in msgs) >= 60
