@@ -36,7 +36,7 @@ ifeq ($(SETUP),wheels)
 	    -DCMAKE_PREFIX_PATH=$(abspath $(VENV)) -DCMAKE_INSTALL_PREFIX=$(abspath $(VENV)) \
 	    -DPython3_EXECUTABLE=$(abspath $(PY)) -DBUILD_TESTING=OFF > cmake.log \
 	    && PATH=$(abspath $(VENV))/bin:$$PATH $(MAKE) -j2 install > build.log \
-	    || (tail -40 cmake.log build.log; exit 1)
+	    || (tail -n 40 cmake.log build.log; exit 1)
 else
 	test -x $(PY) || python3 -m venv --system-site-packages $(VENV)
 	$(PY) -c "import rclpy, tf2_msgs, sensor_msgs, visualization_msgs, diagnostic_msgs" \

@@ -175,7 +175,8 @@ def build_parser():
     m.set_defaults(func=cmd_motion)
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
     d.add_argument('--out', default='out/demo')
-    d.add_argument('--domain-id', type=int, default=77)
+    d.add_argument('--domain-id', type=int, default=42,
+                   help='ROS_DOMAIN_ID if not set (tests use 60-100)')
     d.set_defaults(func=cmd_demo)
     f = sub.add_parser('picture', help='filmstrip PNG of a recorded session')
     f.add_argument('input')
