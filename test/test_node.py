@@ -108,7 +108,7 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
               for tf in h.tf]
     assert stamps == sorted(stamps) and stamps[0] == 100 * 10 ** 9
     # Markers at about 30 Hz of a 60 Hz input, DELETEALL only on the first (a reset).
-    assert len(h.markers) <= sent // 2 + 2
+    assert sent // 2 - 2 <= len(h.markers) <= sent // 2 + 2
     first, later = h.markers[0].markers, h.markers[-1].markers
     assert [m.ns for m in first if m.action == Marker.DELETEALL] == ['cloth', 'colliders', 'hood']
     assert not any(m.action == Marker.DELETEALL for m in later)

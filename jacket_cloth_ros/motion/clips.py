@@ -89,6 +89,9 @@ CLIPS = {  # name: (pose function of local time, length in s for sequences)
     'jump': (_jump, 1.6), 'arms_up': (_arms_up, 2.5), 'turn': (_turn, 1.6),
     'teleport': (_teleport, 3.0),
 }
+# The moment of each clip worth a picture (s into the clip).
+HIGHLIGHT = {'idle': 1.5, 'walk': 2.2, 'run': 1.6, 'dodge': 0.55, 'jump': 0.65, 'arms_up': 2.0,
+             'turn': 0.75, 'teleport': 1.7}
 SHOWCASE = ('idle', 'walk', 'run', 'dodge', 'jump', 'arms_up', 'turn', 'walk', 'teleport')
 ALL_CLIPS = tuple(CLIPS) + ('showcase',)
 
@@ -138,3 +141,12 @@ def joint_state_content(joint_names, name, t, world_joint='world_joint'):
     q, root = pose(name, t)
     names = list(joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
+
+
+def showcase_highlights():
+    """(time in the showcase, segment name) of each segment's highlight."""
+    out, start = [], 0.0
+    for seg in SHOWCASE:
+        out.append((start + HIGHLIGHT[seg], seg))
+        start += CLIPS[seg][1]
+    return out

@@ -12,7 +12,8 @@ import sys
 import time
 
 from ..core.config import ConfigError, shipped
-from ..motion.clips import ALL_CLIPS, clip_length, joint_state_content, segment_at
+from ..motion.clips import (
+    ALL_CLIPS, clip_length, joint_state_content, segment_at, showcase_highlights)
 
 
 class ToolError(Exception):
@@ -151,7 +152,8 @@ def cmd_demo(args):
     if not os.path.exists(session):
         raise ToolError('the node wrote no recording')
     skeleton, _ = _skeleton()
-    render_filmstrip(session, picture, skeleton, moments=8,
+    highlights = [h for h in showcase_highlights() if h[1] != 'idle']
+    render_filmstrip(session, picture, skeleton, times=[t for t, _ in highlights],
                      labels=lambda dt: segment_at('showcase', dt * 1e-9)[0])
     print(f'demo: session recording  {os.path.abspath(session)}')
     print(f'demo: picture            {os.path.abspath(picture)}')

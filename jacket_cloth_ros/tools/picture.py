@@ -40,8 +40,10 @@ def _markers_by_time(messages):
     return out
 
 
-def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None):
-    """Write a PNG of ``moments`` evenly spaced instants of the session; returns their stamps."""
+def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None,
+                     times=None):
+    """Write a PNG of the session at ``times`` (s from its start) or at ``moments`` evenly
+    spaced instants; returns the stamps drawn."""
     messages, _ = read_messages(mcap_path)
     frames = _markers_by_time(messages)
     states = [deserialize_message(m.data, JointState) for m in messages
@@ -49,7 +51,12 @@ def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, titl
     if not frames or not states:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
     t0 = _stamp(states[0])
-    picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
+    if times is None:
+        picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
+    else:
+        stamps = np.array([f[0] for f in frames])
+        picks = [int(np.argmin(np.abs(stamps - (t0 + t * 1e9)))) for t in times]
+    moments = len(picks)
     parser = InputParser(skeleton)
     fig, axes = plt.subplots(2, moments, figsize=(2.6 * moments, 7.2), squeeze=False)
     chosen = []
@@ -70,7 +77,7 @@ def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, titl
             ax.plot(rod[:, axis], rod[:, 2], color=(0.75, 0.3, 0.1), lw=3)
             ax.plot(rod[1, axis], rod[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
             ax.set_xlim(-0.7, 0.7)
-            ax.set_ylim(-1.0, 0.95)
+            ax.set_ylim(-1.0, 1.3)
             ax.set_aspect('equal')
             ax.grid(alpha=0.3)
             ax.set_xlabel(xlabel, fontsize=8)
