@@ -18,6 +18,11 @@ class RecordedMessage:
     data: bytes
 
 
+def _recorded(schema, channel, message):
+    return RecordedMessage(channel.topic, schema.name if schema else '', message.log_time,
+                           message.data)
+
+
 def read_messages(path, topics=None):
     """All messages (optionally of some topics) in file order; (messages, complete)."""
     try:
@@ -31,9 +36,8 @@ def read_messages(path, topics=None):
             raise RecordingError(f'{path}: not an MCAP file')
         f.seek(0)
         try:
-            for schema, channel, message in make_reader(f).iter_messages(topics=topics):
-                out.append(RecordedMessage(channel.topic, schema.name if schema else '',
-                                           message.log_time, message.data))
+            for record in make_reader(f).iter_messages(topics=topics):
+                out.append(_recorded(*record))
             return out, True
         except Exception:  # noqa: BLE001 - no summary or index (cut short): stream it below
             pass
@@ -42,10 +46,9 @@ def read_messages(path, topics=None):
         out = []
         stream = NonSeekingReader(f).iter_messages(log_time_order=False)
         try:
-            for schema, channel, message in stream:
-                if topics is None or channel.topic in topics:
-                    out.append(RecordedMessage(channel.topic, schema.name if schema else '',
-                                               message.log_time, message.data))
+            for record in stream:
+                if topics is None or record[1].topic in topics:
+                    out.append(_recorded(*record))
         except Exception:  # noqa: BLE001 - everything after the cut is unreadable by design
             return out, False
         return out, True
