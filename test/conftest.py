@@ -41,13 +41,16 @@ def make_sim(skeleton, rig):
     return make
 
 
-def play(sim, clip, rate, duration, start_s=10.0):
-    """Feed a clip to a simulation at ``rate`` Hz; returns the reports."""
-    reports = []
+def stepwise(sim, clip, rate, duration, start_s=10.0):
+    """Feed a clip to a simulation at ``rate`` Hz, yielding each input's report."""
     for k in range(int(round(duration * rate)) + 1):
         names, pos = joint_state_content(sim.skeleton.joint_names, clip, k / rate)
-        reports.append(sim.process(int(round((start_s + k / rate) * 1e9)), names, pos))
-    return reports
+        yield sim.process(int(round((start_s + k / rate) * 1e9)), names, pos)
+
+
+def play(sim, clip, rate, duration, start_s=10.0):
+    """Feed a whole clip; returns the reports."""
+    return list(stepwise(sim, clip, rate, duration, start_s))
 
 
 @pytest.fixture

@@ -3,7 +3,7 @@
 
 import numpy as np
 import pytest
-from conftest import play
+from conftest import play, stepwise
 
 from jacket_cloth_ros.core.transforms import quat_to_matrix
 from jacket_cloth_ros.motion.clips import joint_state_content
@@ -179,3 +179,38 @@ def test_same_input_gives_bit_identical_bones(make_sim):
         b = sim.bones()
         runs.append(np.concatenate([b.translations.ravel(), b.quaternions.ravel()]))
     assert runs[0].tobytes() == runs[1].tobytes()
+
+
+def test_m11_no_vertex_beyond_its_bound(make_sim, rig):
+    sim = make_sim(hard_vertical_pass=False)     # M12 runs after M11 and may move vertices
+    for _ in stepwise(sim, 'run', 60, 2.0):
+        ref = sim.reference_points(sim.links)
+        dist = np.linalg.norm(sim.x - ref, axis=1)
+        assert (dist[rig.free] <= sim.max_distance[rig.free] + 1e-9).all()
+    assert sum(r.limited_vertices for r in play(sim, 'dodge', 60, 1.0)) > 0
+
+
+def test_m15_contact_vertices_lose_more_velocity():
+    from jacket_cloth_ros.core import kernel
+    x = np.zeros((2, 3))
+    xp = np.array([[-0.01, 0.0, 0.0], [-0.01, 0.0, 0.0]])
+    free = np.array([True, True])
+    contact = np.array([True, False])
+    kernel.integrate(x, xp, free, np.zeros((2, 3)), np.full(2, 0.02), contact, 0.5, 0.01)
+    speed = np.abs(x - xp)[:, 0]
+    assert speed[0] == pytest.approx(0.01 * (1 - 0.52))
+    assert speed[1] == pytest.approx(0.01 * (1 - 0.02))
+
+
+def test_m16_presets_are_parameter_sets_that_move_differently(make_sim, rig):
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    assert set(load_fabrics()) == {'tweed_jacket', 'down_jacket', 'veil'}
+    motion = {}
+    for fabric in ('tweed_jacket', 'down_jacket'):
+        sim = make_sim(fabric)
+        hem = []
+        for _ in stepwise(sim, 'dodge', 60, 1.6):
+            hem.append(sim.x[-rig.cols:].copy())
+        motion[fabric] = np.abs(np.diff(np.array(hem), axis=0)).sum()
+    # The down jacket is damped more: its hem travels less through the same dodge.
+    assert motion['down_jacket'] < motion['tweed_jacket']
