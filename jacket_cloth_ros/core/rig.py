@@ -100,9 +100,9 @@ class Rig:
             raise ConfigError(f'{where}.cloth.reference_bones: needs at least one link')
         bone_ids = [skeleton.link(b, f'{where}.cloth.reference_bones') for b in bones]
         self.reference_link = self._nearest_bones(bone_ids, rest)
-        self.reference_local = np.einsum(
-            'nij,nj->ni', np.linalg.inv(rest[self.reference_link])[:, :3, :3], self.rest
-        ) + np.linalg.inv(rest[self.reference_link])[:, :3, 3]
+        to_bone = np.linalg.inv(rest[self.reference_link])
+        self.reference_local = np.einsum('nij,nj->ni', to_bone[:, :3, :3], self.rest)
+        self.reference_local += to_bone[:, :3, 3]
         md = cloth.section('max_distance')
         top_d, hem_d = md.number('top', lo=0.0, hi=5.0), md.number('hem', lo=0.0, hi=5.0)
         md.reject_unknown()
@@ -134,6 +134,11 @@ class Rig:
                                                                 radii)):
                 self.colliders.append(Collider(f'{name}_{k}', link, ctr, rot, rad))
             c.reject_unknown()
+        # The same colliders as arrays, for the per-step transform.
+        self.collider_links = np.array([c.link for c in self.colliders], dtype=int)
+        self.collider_centers = np.array([c.center for c in self.colliders]).reshape(-1, 3)
+        self.collider_rotations = np.array([c.rotation for c in self.colliders]).reshape(-1, 3, 3)
+        self.collider_radii = np.array([c.radii for c in self.colliders]).reshape(-1, 3)
         top.reject_unknown()
         self._build_topology()
 

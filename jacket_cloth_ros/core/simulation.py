@@ -94,13 +94,10 @@ class JacketSimulation:
 
     def _warm_up(self):
         """Load (or compile) the kernel now, not on the first input, which would stall it."""
-        x, xp = self.x.copy(), self.xp.copy()
-        centers, axes, radii = self.collider_frames(self.links)
-        rig = self.rig
-        kernel.cloth_step(x, xp, rig.free, np.zeros_like(x), self.damping, self.contact.copy(),
-                          0.0, 1e-3, rig.con_a, rig.con_b, rig.con_rest, self.stiffness, 1,
-                          centers, axes, radii, x.copy(), self.max_distance, rig.vert_a,
-                          rig.vert_b, rig.vert_rest, True)
+        saved = (self.x.copy(), self.xp.copy(), self.contact.copy(), self.hood_p.copy(),
+                 self.hood_pp.copy())
+        self._step(self.links, self.root, StepReport(0))
+        self.x, self.xp, self.contact, self.hood_p, self.hood_pp = saved
 
     # -- parameters -------------------------------------------------------------------------
     def set_fabric(self, fabric):
@@ -129,25 +126,29 @@ class JacketSimulation:
         t = links[self.rig.reference_link]
         return np.einsum('nij,nj->ni', t[:, :3, :3], self.rig.reference_local) + t[:, :3, 3]
 
-    def _hood_anchor(self, links):
+    def pinned_points(self, links):
+        """M6: where the top row is, carried by its link."""
+        return apply_transform(links[self.rig.pin_link], self.rig.pin_local)
+
+    def hood_anchor(self, links):
+        """The hood bone's centre and its link's rotation, in the simulation frame."""
         t = links[self.rig.hood.link]
         return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
 
-    def _reset(self, sample, why):
+    def _reset(self, sample):
+        """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
         self.x = self.reference_points(self.links)
-        self.x[:self.rig.cols] = apply_transform(self.links[self.rig.pin_link],
-                                                 self.rig.pin_local)
+        self.x[:self.rig.cols] = self.pinned_points(self.links)
         self.xp = self.x.copy()
         self.contact[:] = False
-        anchor, rot = self._hood_anchor(self.links)
+        anchor, rot = self.hood_anchor(self.links)
         self.hood_p = anchor + rot @ self.rig.hood.rest_direction * self.rig.hood.length
         self.hood_pp = self.hood_p.copy()
         self.root = sample.root
         self.t_sim = sample.stamp_ns
         self.last = sample
         self.resets += 1
-        return why
 
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns, names, positions):
@@ -156,25 +157,23 @@ class JacketSimulation:
         started = time.perf_counter_ns()
         try:
             self._check_stamp(stamp_ns, report)
-            if report.reset:
-                sample = self.parser.parse(stamp_ns, names, positions)
-                self._reset(sample, report.reset)
-                report.warnings += sample.warnings
-                return report
             sample = self.parser.parse(stamp_ns, names, positions)
         except InputRejected as e:
             report.accepted = False
             report.warnings.append((e.code, str(e)))
             return report
         report.warnings += sample.warnings
-        if self.last is None:
-            report.reset = self._reset(sample, 'first sample')
-        elif self._is_jump(self.last, sample):
-            report.reset = self._reset(sample, 'world jump (teleport or fast turn)')
+        if not report.reset and self.last is None:
+            report.reset = 'first sample'
+        elif not report.reset and self._is_jump(self.last, sample):
+            report.reset = 'world jump (teleport or fast turn)'
+        if report.reset:
+            self._reset(sample)
         else:
             self._advance(sample, report)
         if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
-            report.reset = self._reset(sample, 'non-finite cloth state')
+            report.reset = 'non-finite cloth state'
+            self._reset(sample)
         report.step_cost_ns = time.perf_counter_ns() - started
         return report
 
@@ -227,11 +226,10 @@ class JacketSimulation:
         # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         delta = invert_transform(root) @ self.root
         share = self.world_share[:, None]
-        self.x += share * (apply_transform(delta, self.x) - self.x)
-        self.xp += share * (apply_transform(delta, self.xp) - self.xp)
-        hood_share = self.fabric.world_share
-        self.hood_p += hood_share * (delta[:3, :3] @ self.hood_p + delta[:3, 3] - self.hood_p)
-        self.hood_pp += hood_share * (delta[:3, :3] @ self.hood_pp + delta[:3, 3] - self.hood_pp)
+        for points, s in ((self.x, share), (self.xp, share),
+                          (self.hood_p[None], self.fabric.world_share),
+                          (self.hood_pp[None], self.fabric.world_share)):
+            points += s * (apply_transform(delta, points) - points)
         self.root = root
         self.links = links
         world_to_local = root[:3, :3].T
@@ -239,7 +237,7 @@ class JacketSimulation:
         wind = world_to_local @ np.asarray(p.wind, dtype=float)
         acc = gravity + self.wind_scale[:, None] * wind
         # M6: the pinned top row follows its link.
-        top = apply_transform(links[rig.pin_link], rig.pin_local)
+        top = self.pinned_points(links)
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
         ref = self.reference_points(links)
@@ -255,7 +253,7 @@ class JacketSimulation:
 
     def _hood_step(self, links, acc, dt):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
-        anchor, _ = self._hood_anchor(links)
+        anchor, _ = self.hood_anchor(links)
         v = self.hood_p - self.hood_pp
         self.hood_pp = self.hood_p.copy()
         self.hood_p = self.hood_p + v * (1.0 - self.fabric.hood_damping) + acc * dt * dt
@@ -266,12 +264,10 @@ class JacketSimulation:
 
     def collider_frames(self, links):
         """Collider centres, axes (columns) and radii in the simulation frame."""
-        cs = self.rig.colliders
-        t = links[[c.link for c in cs]]
-        centers = np.einsum('nij,nj->ni', t[:, :3, :3], np.array([c.center for c in cs]))
-        centers += t[:, :3, 3]
-        axes = t[:, :3, :3] @ np.array([c.rotation for c in cs])
-        return centers, axes, np.array([c.radii for c in cs])
+        rig = self.rig
+        t = links[rig.collider_links]
+        centers = np.einsum('nij,nj->ni', t[:, :3, :3], rig.collider_centers) + t[:, :3, 3]
+        return centers, t[:, :3, :3] @ rig.collider_rotations, rig.collider_radii
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):
@@ -283,7 +279,7 @@ class JacketSimulation:
         xa = g[r + 1, c] - origin
         ya = g[r, np.minimum(c + 1, C - 1)] - g[r, np.maximum(c - 1, 0)]
         frames = _orthonormal(xa, ya)
-        anchor, link_rot = self._hood_anchor(self.links)
+        anchor, link_rot = self.hood_anchor(self.links)
         hood = _orthonormal((self.hood_p - anchor)[None], link_rot[:, 1][None])[0]
         hood_link = self.links[self.rig.hood.link]
         hood_rot = hood_link[:3, :3].T @ hood

@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Building /tf, marker and diagnostic messages from the simulation's state."""
 
+import functools
+
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -54,6 +56,7 @@ def _marker(ns, mid, kind, frame, stamp):
     return m
 
 
+@functools.lru_cache(maxsize=8)
 def grid_triangles(rows, cols):
     """Vertex indices of the cloth mesh: two triangles per grid quad."""
     tri = []
@@ -64,6 +67,7 @@ def grid_triangles(rows, cols):
     return np.array(tri)
 
 
+@functools.lru_cache(maxsize=8)
 def grid_lines(rows, cols):
     lines = []
     for r in range(rows):
@@ -104,7 +108,7 @@ def marker_array(sim, stamp_ns, frame, reset=False):
         m.scale.x, m.scale.y, m.scale.z = (2 * radii[k]).tolist()
         m.color = GHOST
         out.markers.append(m)
-    anchor = sim.links[rig.hood.link][:3, :3] @ rig.hood.pivot + sim.links[rig.hood.link][:3, 3]
+    anchor, _ = sim.hood_anchor(sim.links)
     rod = _marker('hood', 0, Marker.LINE_LIST, frame, stamp)
     rod.scale.x = 0.01
     rod.color = HOOD

@@ -78,6 +78,11 @@ class JacketClothNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_subscription(JointState, 'joint_states', self._on_joint_state,
                                  qos_profile_sensor_data, raw=True)
+        # Recorded under the names the topics have in the graph (resolved once).
+        self._recorded_topics = {'joint_states': self.resolve_topic_name('joint_states'),
+                                 'markers': self.marker_pub.topic_name,
+                                 '/tf': '/tf', '/diagnostics': '/diagnostics'}
+        self._cache_output_parameters()
         self._open_recorder(self._p('record'))
         urdf = self._p('robot_description')
         if urdf:
@@ -91,6 +96,12 @@ class JacketClothNode(Node):
     # -- model --------------------------------------------------------------------------------
     def _p(self, name):
         return self.get_parameter(name).value
+
+    def _cache_output_parameters(self):
+        """Read on every input: keep them in attributes, not in parameter look-ups."""
+        self._frame_prefix = self._p('frame_prefix')
+        self._markers_rate = self._p('markers_rate')
+        self._diagnostics_rate = self._p('diagnostics_rate')
 
     def _on_description(self, msg):
         if self.sim is None:
@@ -151,6 +162,7 @@ class JacketClothNode(Node):
     def _apply_parameters(self, params):
         """Valid changes act from the next step; the cloth is never reset by them."""
         names = {p.name for p in params}
+        self._cache_output_parameters()
         if 'record' in names:
             self._open_recorder(self._p('record'))
         if self.sim is None:
@@ -173,25 +185,18 @@ class JacketClothNode(Node):
         try:
             self.recorder = SessionRecorder(path)
             for topic, (kind, qos) in RECORDED.items():
-                self.recorder.add_topic(self._recorded_name(topic), kind, qos)
+                self.recorder.add_topic(self._recorded_topics[topic], kind, qos)
             self.get_logger().info(f'recording the session to {path}')
         except OSError as e:
             self.recorder = None
             self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
                                     'recording')
 
-    def _recorded_name(self, topic):
-        if topic == 'markers':
-            return self.marker_pub.topic_name
-        if topic == 'joint_states':
-            return self.resolve_topic_name('joint_states')
-        return topic
-
     def _record(self, topic, data, stamp_ns):
         if self.recorder is None:
             return
         try:
-            self.recorder.write(self._recorded_name(topic), data, stamp_ns)
+            self.recorder.write(self._recorded_topics[topic], data, stamp_ns)
         except (OSError, ValueError) as e:
             self.get_logger().error(f'recording stopped: {e}')
             self.recorder = None
@@ -240,10 +245,10 @@ class JacketClothNode(Node):
         if not (np.isfinite(bones.translations).all() and np.isfinite(bones.quaternions).all()):
             self._warn('nan', 'non-finite bone pose: nothing published')
             return
-        tf = messages.tf_message(bones, stamp_ns, self._p('frame_prefix'))
+        tf = messages.tf_message(bones, stamp_ns, self._frame_prefix)
         self.tf_pub.publish(tf)
         self._record('/tf', serialize_message(tf), stamp_ns)
-        rate = self._p('markers_rate')
+        rate = self._markers_rate
         if rate > 0 and self._due(self._last_marker, stamp_ns, rate):
             self._last_marker = stamp_ns
             markers = messages.marker_array(self.sim, stamp_ns, self.sim.skeleton.link_names[0],
@@ -251,7 +256,7 @@ class JacketClothNode(Node):
             self._marker_reset = False
             self.marker_pub.publish(markers)
             self._record('markers', serialize_message(markers), stamp_ns)
-        if self._due(self._last_diag, stamp_ns, self._p('diagnostics_rate')):
+        if self._due(self._last_diag, stamp_ns, self._diagnostics_rate):
             self._last_diag = stamp_ns
             diag = self._diagnostics(stamp_ns)
             self.diag_pub.publish(diag)

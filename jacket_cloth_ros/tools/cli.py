@@ -126,13 +126,12 @@ def cmd_demo(args):
     for path in (session, picture):
         if os.path.exists(path):
             os.remove(path)
-    env = dict(os.environ)
-    env.setdefault('ROS_DOMAIN_ID', str(args.domain_id))
-    env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    os.environ.update({k: env[k] for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')})
+    # The node (a child) and the motion source (this process) meet in one local domain.
+    os.environ.setdefault('ROS_DOMAIN_ID', str(args.domain_id))
+    os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     node = subprocess.Popen(
         [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
-         '-p', f'record:={session}'], env=env)
+         '-p', f'record:={session}'])
     try:
         time.sleep(2.0)
         if node.poll() is not None:
