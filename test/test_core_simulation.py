@@ -35,13 +35,21 @@ def test_m6_top_row_follows_its_link_and_m12_vertical_lengths_exact(make_sim, ri
     sim = make_sim()
     play(sim, 'run', 60, 1.5)
     pin = sim.links[rig.pin_link]
-    assert sim.x[:rig.cols] == pytest.approx(rig.pin_local @ pin[:3, :3].T + pin[:3, 3])
+    carried = rig.pin_local @ pin[:3, :3].T + pin[:3, 3]
+    # The top row follows its link, blended by weight with the M2 bones below the shoulder
+    # pads: most near the shoulders, least at the middle of the back.
+    w = rig.pin_weight
+    assert w[rig.cols // 2] == w.min() and w.max() <= 1.0 and w.min() < w.max()
+    below = sim.layer.below[rig.pin_below]
+    by_below = np.einsum('nij,nj->ni', below[:, :3, :3], rig.pin_below_local) + below[:, :3, 3]
+    w = rig.pin_weight[:, None]
+    assert sim.x[:rig.cols] == pytest.approx((1 - w) * carried + w * by_below, abs=1e-12)
     vert = np.linalg.norm(sim.x[rig.vert_a] - sim.x[rig.vert_b], axis=1)
     assert vert == pytest.approx(rig.vert_rest, abs=1e-12)
 
 
 def test_without_m12_the_iterative_solve_leaves_vertical_stretch(make_sim, rig):
-    sim = make_sim(hard_vertical_pass=False)
+    sim = make_sim(stretch_limit='none')
     play(sim, 'run', 60, 1.5)
     vert = np.linalg.norm(sim.x[rig.vert_a] - sim.x[rig.vert_b], axis=1)
     assert np.abs(vert / rig.vert_rest - 1).max() > 1e-3
@@ -74,7 +82,8 @@ def test_bones_are_orthonormal_right_handed_and_on_their_vertices(make_sim, rig)
     sim = make_sim()
     play(sim, 'dodge', 60, 1.0)
     bones = sim.bones()
-    assert len(bones.names) == len(rig.bone_vertices()) + 1
+    # M9 cloth bones, the M8 hood bone, the M1 sleeve and M2 upper-jacket bones.
+    assert len(bones.names) == len(rig.bone_vertices()) + 1 + len(rig.layer.names)
     assert np.allclose(np.linalg.norm(bones.quaternions, axis=1), 1.0)
     rot = quat_to_matrix(bones.quaternions)
     assert np.allclose(rot @ rot.transpose(0, 2, 1), np.eye(3), atol=1e-9)
@@ -130,7 +139,8 @@ def test_teleport_resets_to_the_skinned_pose_instead_of_exploding(make_sim):
     sim = make_sim()
     reports = play(sim, 'teleport', 60, 3.0)
     resets = [r.reset for r in reports if r.reset]
-    assert resets == ['first sample', 'world jump (teleport or fast turn)']
+    assert resets[0] == 'first sample' and resets[1].startswith('teleport: moved 10.')
+    assert len(resets) == 2
     assert np.isfinite(sim.x).all()
     vert, horiz = sim.strain()
     assert vert < 1e-9 and horiz < 0.05
@@ -182,7 +192,7 @@ def test_same_input_gives_bit_identical_bones(make_sim):
 
 
 def test_m11_no_vertex_beyond_its_bound(make_sim, rig):
-    sim = make_sim(hard_vertical_pass=False)     # M12 runs after M11 and may move vertices
+    sim = make_sim(stretch_limit='none')     # M12 runs after M11 and may move vertices
     for _ in stepwise(sim, 'run', 60, 2.0):
         ref = sim.reference_points(sim.links)
         dist = np.linalg.norm(sim.x - ref, axis=1)

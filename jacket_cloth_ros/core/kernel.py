@@ -5,8 +5,8 @@ Measured before this was written (issue 3): per-constraint numpy work is dominat
 overhead at these grid sizes (about 50x slower than C for a 9x12 step); a numba kernel runs the
 same scalar loop as the C yardstick does. Order within a step, as in the article and the
 yardstick: Verlet (M4) with per-vertex damping (M13, M15), Gauss-Seidel sweeps over both
-constraint groups (M5), ellipsoid push-out in ellipsoid space (M10), maximum distance (M11), and
-the top-down hard vertical pass (M12).
+constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out in ellipsoid space
+(M10) plus capsules and planes, maximum distance (M11), and the top-down hard vertical pass (M12).
 """
 
 import numpy as np
@@ -56,11 +56,73 @@ def relax(x, free, ca, cb, rest, stiffness, iterations):
 
 
 @njit(cache=True)
-def collide(x, free, centers, axes, radii, contact):
-    """M10: push particles out of ellipsoids, in the space where each is a unit sphere.
+def _push_ellipsoid(x, i, center, axes, radii):
+    """Push vertex i out of one ellipsoid, tested where it is a unit sphere. Returns depth."""
+    p0 = x[i, 0] - center[0]
+    p1 = x[i, 1] - center[1]
+    p2 = x[i, 2] - center[2]
+    q0 = (axes[0, 0] * p0 + axes[1, 0] * p1 + axes[2, 0] * p2) / radii[0]
+    q1 = (axes[0, 1] * p0 + axes[1, 1] * p1 + axes[2, 1] * p2) / radii[1]
+    q2 = (axes[0, 2] * p0 + axes[1, 2] * p1 + axes[2, 2] * p2) / radii[2]
+    r2 = q0 * q0 + q1 * q1 + q2 * q2
+    if r2 >= 1.0 or r2 < 1e-12:
+        return -1.0
+    g = 1.0 / np.sqrt(r2)
+    s0 = q0 * g * radii[0]
+    s1 = q1 * g * radii[1]
+    s2 = q2 * g * radii[2]
+    n0 = axes[0, 0] * s0 + axes[0, 1] * s1 + axes[0, 2] * s2 + center[0]
+    n1 = axes[1, 0] * s0 + axes[1, 1] * s1 + axes[1, 2] * s2 + center[1]
+    n2 = axes[2, 0] * s0 + axes[2, 1] * s1 + axes[2, 2] * s2 + center[2]
+    depth = np.sqrt((n0 - x[i, 0]) ** 2 + (n1 - x[i, 1]) ** 2 + (n2 - x[i, 2]) ** 2)
+    x[i, 0] = n0
+    x[i, 1] = n1
+    x[i, 2] = n2
+    return depth
 
-    ``axes[e]`` holds the ellipsoid's axes as columns, in the simulation frame. Marks contact for
-    M15. Returns the deepest penetration found (metres, in the simulation frame).
+
+@njit(cache=True)
+def _push_capsule(x, i, a, b, radius):
+    """Push vertex i out of a capsule (segment a-b swept by a sphere). Returns depth."""
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    ap0, ap1, ap2 = x[i, 0] - a[0], x[i, 1] - a[1], x[i, 2] - a[2]
+    len2 = ab0 * ab0 + ab1 * ab1 + ab2 * ab2
+    t = 0.0
+    if len2 > 1e-12:
+        t = (ap0 * ab0 + ap1 * ab1 + ap2 * ab2) / len2
+        t = min(1.0, max(0.0, t))
+    d0, d1, d2 = ap0 - t * ab0, ap1 - t * ab1, ap2 - t * ab2
+    dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if dist >= radius or dist < 1e-12:
+        return -1.0
+    g = radius / dist
+    x[i, 0] = a[0] + t * ab0 + d0 * g
+    x[i, 1] = a[1] + t * ab1 + d1 * g
+    x[i, 2] = a[2] + t * ab2 + d2 * g
+    return radius - dist
+
+
+@njit(cache=True)
+def _push_plane(x, i, point, normal):
+    """Keep vertex i on the positive side of a plane (unit normal). Returns depth."""
+    h = ((x[i, 0] - point[0]) * normal[0] + (x[i, 1] - point[1]) * normal[1]
+         + (x[i, 2] - point[2]) * normal[2])
+    if h >= 0.0:
+        return -1.0
+    x[i, 0] -= h * normal[0]
+    x[i, 1] -= h * normal[1]
+    x[i, 2] -= h * normal[2]
+    return -h
+
+
+@njit(cache=True)
+def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, contact):
+    """M10 and beyond: push particles out of ellipsoids, capsules and planes.
+
+    Ellipsoids are tested in the space where each is a unit sphere (``axes[e]`` holds its axes
+    as columns, in the simulation frame). Capsules and planes are the primitives the best
+    secondary-motion systems add (limbs, the floor). Marks contact for M15. Returns the deepest
+    penetration found (metres, in the simulation frame).
     """
     deepest = 0.0
     for i in range(x.shape[0]):
@@ -68,29 +130,20 @@ def collide(x, free, centers, axes, radii, contact):
             continue
         touching = False
         for e in range(centers.shape[0]):
-            p0 = x[i, 0] - centers[e, 0]
-            p1 = x[i, 1] - centers[e, 1]
-            p2 = x[i, 2] - centers[e, 2]
-            q0 = (axes[e, 0, 0] * p0 + axes[e, 1, 0] * p1 + axes[e, 2, 0] * p2) / radii[e, 0]
-            q1 = (axes[e, 0, 1] * p0 + axes[e, 1, 1] * p1 + axes[e, 2, 1] * p2) / radii[e, 1]
-            q2 = (axes[e, 0, 2] * p0 + axes[e, 1, 2] * p1 + axes[e, 2, 2] * p2) / radii[e, 2]
-            r2 = q0 * q0 + q1 * q1 + q2 * q2
-            if r2 >= 1.0 or r2 < 1e-12:
-                continue
-            touching = True
-            g = 1.0 / np.sqrt(r2)
-            s0 = q0 * g * radii[e, 0]
-            s1 = q1 * g * radii[e, 1]
-            s2 = q2 * g * radii[e, 2]
-            n0 = axes[e, 0, 0] * s0 + axes[e, 0, 1] * s1 + axes[e, 0, 2] * s2 + centers[e, 0]
-            n1 = axes[e, 1, 0] * s0 + axes[e, 1, 1] * s1 + axes[e, 1, 2] * s2 + centers[e, 1]
-            n2 = axes[e, 2, 0] * s0 + axes[e, 2, 1] * s1 + axes[e, 2, 2] * s2 + centers[e, 2]
-            depth = np.sqrt((n0 - x[i, 0]) ** 2 + (n1 - x[i, 1]) ** 2 + (n2 - x[i, 2]) ** 2)
-            if depth > deepest:
-                deepest = depth
-            x[i, 0] = n0
-            x[i, 1] = n1
-            x[i, 2] = n2
+            depth = _push_ellipsoid(x, i, centers[e], axes[e], radii[e])
+            if depth >= 0.0:
+                touching = True
+                deepest = max(deepest, depth)
+        for k in range(cap_a.shape[0]):
+            depth = _push_capsule(x, i, cap_a[k], cap_b[k], cap_r[k])
+            if depth >= 0.0:
+                touching = True
+                deepest = max(deepest, depth)
+        for k in range(plane_p.shape[0]):
+            depth = _push_plane(x, i, plane_p[k], plane_n[k])
+            if depth >= 0.0:
+                touching = True
+                deepest = max(deepest, depth)
         contact[i] = touching
     return deepest
 
@@ -132,15 +185,47 @@ def hard_vertical_pass(x, upper, lower, rest):
 
 
 @njit(cache=True)
+def tethers(x, free, anchor, length):
+    """Long-range attachments: no vertex further from its pinned anchor than its tether.
+
+    The alternative to M12 that NvCloth and Chaos Cloth use: unilateral, so the cloth may
+    bunch up but never stretch beyond the tether. Returns the number of vertices pulled back.
+    """
+    moved = 0
+    for i in range(x.shape[0]):
+        if not free[i]:
+            continue
+        a = anchor[i]
+        d0 = x[i, 0] - x[a, 0]
+        d1 = x[i, 1] - x[a, 1]
+        d2 = x[i, 2] - x[a, 2]
+        dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if dist > length[i]:
+            g = length[i] / dist
+            x[i, 0] = x[a, 0] + d0 * g
+            x[i, 1] = x[a, 1] + d1 * g
+            x[i, 2] = x[a, 2] + d2 * g
+            moved += 1
+    return moved
+
+
+# How the vertical stretch left by the iterative solve is removed (SimParams.stretch_limit).
+LIMIT_NONE, LIMIT_HARD_PASS, LIMIT_TETHERS = 0, 1, 2
+
+
+@njit(cache=True)
 def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
                ca, cb, rest, stiffness, iterations,
-               centers, axes, radii, ref, max_distance,
-               upper, lower, vrest, hard_pass):
+               centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
+               ref, max_distance, limit_mode, upper, lower, vrest, anchor, tether):
     """One fixed step of the jacket cloth. Returns (deepest push-out, vertices limited by M11)."""
     integrate(x, xp, free, acc, damping, contact, contact_damping, dt)
     relax(x, free, ca, cb, rest, stiffness, iterations)
-    deepest = collide(x, free, centers, axes, radii, contact)
+    if limit_mode == LIMIT_TETHERS:
+        tethers(x, free, anchor, tether)
+    deepest = collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
+                      contact)
     limited = limit_distance(x, free, ref, max_distance)
-    if hard_pass:
+    if limit_mode == LIMIT_HARD_PASS:
         hard_vertical_pass(x, upper, lower, vrest)
     return deepest, limited

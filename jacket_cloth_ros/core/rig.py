@@ -10,8 +10,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .bone_layer import BoneLayer
 from .config import ConfigError, Section, load_yaml, shipped
 from .transforms import apply_transform, invert_transform, rpy_matrix
+
+WORLD = -1          # the link index of colliders fixed in the world (a floor)
 
 #  Neighbour offsets (row, col) of the two constraint groups (M5).
 STRETCH_OFFSETS = ((0, 1), (1, 0))
@@ -25,6 +28,23 @@ class Collider:
     center: np.ndarray      # in the link's frame
     rotation: np.ndarray    # 3x3, ellipsoid axes in the link's frame
     radii: np.ndarray
+
+
+@dataclass
+class Capsule:
+    name: str
+    link: int
+    a: np.ndarray           # segment ends in the link's frame
+    b: np.ndarray
+    radius: float
+
+
+@dataclass
+class Plane:
+    name: str
+    link: int               # WORLD for a plane fixed in the world (the floor)
+    point: np.ndarray
+    normal: np.ndarray      # unit; the cloth stays on this side
 
 
 @dataclass
@@ -122,25 +142,74 @@ class Rig:
             rest_direction=direction / np.linalg.norm(direction))
         hood.reject_unknown()
 
-        self.colliders = []
+        self._load_colliders(top, skeleton, where)
+        layer = top.section('jacket_bones') if top.has('jacket_bones') else None
+        self.layer = BoneLayer(layer, skeleton, rest, f'{where}.jacket_bones') if layer else None
+        self._skin_top_row(rest)
+        top.reject_unknown()
+        self._build_topology()
+
+    def _load_colliders(self, top, skeleton, where):
+        """M10 ellipsoids (split when stretched), capsules and planes, each riding on a link."""
+        self.colliders, self.capsules, self.planes = [], [], []
         for i, c in enumerate(top.sections('colliders')):
-            link = skeleton.link(c.text('link'), f'{where}.colliders[{i}].link')
-            radii = np.array(c.vector('radii'))
-            if (radii <= 0).any():
-                raise ConfigError(f'{where}.colliders[{i}].radii: must be positive')
+            key = f'{where}.colliders[{i}]'
+            kind = c.text('type', 'ellipsoid', choices=('ellipsoid', 'capsule', 'plane'))
             name = c.text('name', f'collider_{i}')
-            rotation = rpy_matrix(np.radians(c.vector('rpy_deg', 3, [0, 0, 0])))
-            for k, (ctr, rot, rad) in enumerate(split_ellipsoid(c.vector('center'), rotation,
-                                                                radii)):
-                self.colliders.append(Collider(f'{name}_{k}', link, ctr, rot, rad))
+            link_name = c.text('link')
+            if kind == 'plane' and link_name == 'world':
+                link = WORLD
+            else:
+                link = skeleton.link(link_name, f'{key}.link')
+            if kind == 'ellipsoid':
+                radii = np.array(c.vector('radii'))
+                if (radii <= 0).any():
+                    raise ConfigError(f'{key}.radii: must be positive')
+                rotation = rpy_matrix(np.radians(c.vector('rpy_deg', 3, [0, 0, 0])))
+                for k, (ctr, rot, rad) in enumerate(split_ellipsoid(c.vector('center'),
+                                                                    rotation, radii)):
+                    self.colliders.append(Collider(f'{name}_{k}', link, ctr, rot, rad))
+            elif kind == 'capsule':
+                self.capsules.append(Capsule(name, link, np.array(c.vector('a')),
+                                             np.array(c.vector('b')),
+                                             c.number('radius', lo=1e-3, hi=5.0)))
+            else:
+                normal = np.array(c.vector('normal'))
+                if np.linalg.norm(normal) < 1e-9:
+                    raise ConfigError(f'{key}.normal: must not be zero')
+                self.planes.append(Plane(name, link, np.array(c.vector('point')),
+                                         normal / np.linalg.norm(normal)))
             c.reject_unknown()
         # The same colliders as arrays, for the per-step transform.
         self.collider_links = np.array([c.link for c in self.colliders], dtype=int)
         self.collider_centers = np.array([c.center for c in self.colliders]).reshape(-1, 3)
         self.collider_rotations = np.array([c.rotation for c in self.colliders]).reshape(-1, 3, 3)
         self.collider_radii = np.array([c.radii for c in self.colliders]).reshape(-1, 3)
-        top.reject_unknown()
-        self._build_topology()
+        self.capsule_links = np.array([c.link for c in self.capsules], dtype=int)
+        self.capsule_ends = np.array([[c.a, c.b] for c in self.capsules]).reshape(-1, 2, 3)
+        self.capsule_radii = np.array([c.radius for c in self.capsules], dtype=float)
+
+    def _skin_top_row(self, rest):
+        """M6 + M2: the pinned top row follows its link and, near the shoulders, the bones
+        below the shoulder pads (weight falls off linearly to zero at ``skin_radius``)."""
+        top = self.rest[:self.cols]
+        self.pin_weight = np.zeros(self.cols)
+        self.pin_below = np.zeros(self.cols, dtype=int)
+        self.pin_below_local = np.zeros((self.cols, 3))
+        if self.layer is None or self.layer.skin_radius <= 0:
+            return
+        below = self.layer.solve(rest).below
+        dist = np.empty((self.cols, len(below)))
+        for k, (frame, pad) in enumerate(zip(below, self.layer.pads)):
+            a = frame[:3, 3]
+            ab = frame[:3, 0] * pad.below_length
+            t = np.clip((top - a) @ ab / (ab @ ab), 0.0, 1.0)
+            dist[:, k] = np.linalg.norm(top - (a + t[:, None] * ab), axis=1)
+        self.pin_below = np.argmin(dist, axis=1)
+        self.pin_weight = np.clip(1.0 - dist.min(axis=1) / self.layer.skin_radius, 0.0, 1.0)
+        for i in range(self.cols):
+            frame = below[self.pin_below[i]]
+            self.pin_below_local[i] = frame[:3, :3].T @ (top[i] - frame[:3, 3])
 
     def _nearest_bones(self, bone_ids, rest):
         """M11: each vertex's reference point rides on the nearest bone segment."""
@@ -189,6 +258,10 @@ class Rig:
         self.edge = count < 4
         self.free = np.ones(R * C, dtype=bool)
         self.free[:C] = False                              # M6: the pinned top row
+        # Long-range attachments: each vertex is tied to the nearest pinned vertex at rest.
+        to_top = np.linalg.norm(self.rest[:, None] - self.rest[None, :C], axis=2)
+        self.tether_anchor = np.argmin(to_top, axis=1).astype(np.int64)
+        self.tether_length = to_top.min(axis=1)
 
     @property
     def n(self):

@@ -23,19 +23,41 @@ from .transforms import (
     rotation_angle)
 
 
+STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
+                  'tethers': kernel.LIMIT_TETHERS}
+
+
 @dataclass(frozen=True)
 class SimParams:
     sim_rate: float = 120.0            # Hz, M7
     max_steps_per_input: int = 12
     gravity: float = 9.81              # m/s^2, along the world frame's -z
     wind: tuple = (0.0, 0.0, 0.0)      # m/s^2 in the world frame, M4
-    hard_vertical_pass: bool = True    # M12
+    wind_gust: float = 0.0             # relative amplitude of the wind's variation over time
+    wind_gust_period: float = 3.0      # s, of the slowest gust component
+    stretch_limit: str = 'hard_pass'   # M12 'hard_pass', 'tethers' (long-range attachments), 'none'
     reset_gap: float = 1.0             # s: a longer gap between stamps resets the cloth
     teleport_distance: float = 1.0     # m of world motion between two samples that is a jump
     teleport_angle_deg: float = 90.0   # deg of world turn between two samples that is a jump
 
+    def __post_init__(self):
+        if self.stretch_limit not in STRETCH_LIMITS:
+            raise ValueError(f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}, '
+                             f'not {self.stretch_limit!r}')
+
     def with_values(self, **changes):
         return replace(self, **changes)
+
+    def wind_at(self, t_ns):
+        """Wind at a step's time: the set vector, varied by two slow incommensurate gusts.
+
+        A function of the step's stamp only, so a replay sees exactly the live wind.
+        """
+        if self.wind_gust == 0.0:
+            return np.asarray(self.wind, dtype=float)
+        phase = 2 * np.pi * (t_ns * 1e-9) / self.wind_gust_period
+        gust = 0.6 * np.sin(phase) + 0.4 * np.sin(2.7 * phase + 1.3)
+        return np.asarray(self.wind, dtype=float) * (1.0 + self.wind_gust * gust)
 
 
 @dataclass
@@ -46,6 +68,20 @@ class Bones:
     parents: list
     translations: np.ndarray   # (B,3)
     quaternions: np.ndarray    # (B,4) x, y, z, w
+
+
+@dataclass
+class Colliders:
+    """All colliders in the simulation frame at one step."""
+
+    centers: np.ndarray          # ellipsoids (M10): (E,3) centres, (E,3,3) axes, (E,3) radii
+    axes: np.ndarray
+    radii: np.ndarray
+    capsule_a: np.ndarray        # capsules: (K,3) segment ends, (K,) radii
+    capsule_b: np.ndarray
+    capsule_radii: np.ndarray
+    plane_points: np.ndarray     # planes: (P,3) a point and the unit normal
+    plane_normals: np.ndarray
 
 
 @dataclass
@@ -87,9 +123,15 @@ class JacketSimulation:
         self.steps_total = 0
         self.overruns = 0
         self._bone_rc = np.array(rig.bone_vertices(), dtype=int).reshape(-1, 2)
-        self.bone_names = [f'jacket_r{r:02d}_c{c:02d}' for r, c in self._bone_rc] + ['hood']
+        self.layer = rig.layer.solve(self.links) if rig.layer else None
+        layer_names = rig.layer.names if rig.layer else []
+        layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
         root = skeleton.link_names[0]
-        self.bone_parents = [root] * len(self._bone_rc) + [skeleton.link_names[rig.hood.link]]
+        # M9 cloth bones, M8 hood bone, M1/M2 layer bones: every bone of the rig.
+        self.bone_names = ([f'jacket_r{r:02d}_c{c:02d}' for r, c in self._bone_rc] + ['hood']
+                           + layer_names)
+        self.bone_parents = ([root] * len(self._bone_rc) + [skeleton.link_names[rig.hood.link]]
+                             + layer_parents)
         self._warm_up()
 
     def _warm_up(self):
@@ -126,9 +168,21 @@ class JacketSimulation:
         t = links[self.rig.reference_link]
         return np.einsum('nij,nj->ni', t[:, :3, :3], self.rig.reference_local) + t[:, :3, 3]
 
-    def pinned_points(self, links):
-        """M6: where the top row is, carried by its link."""
-        return apply_transform(links[self.rig.pin_link], self.rig.pin_local)
+    def pinned_points(self, links, layer=None):
+        """M6: where the top row is: carried by its link, and near the shoulders by the M2
+        bones below the shoulder pads (``layer`` is that pose, solved for ``links``)."""
+        rig = self.rig
+        top = apply_transform(links[rig.pin_link], rig.pin_local)
+        if layer is None:
+            return top
+        frames = layer.below[rig.pin_below]
+        below = np.einsum('nij,nj->ni', frames[:, :3, :3], rig.pin_below_local)
+        below += frames[:, :3, 3]
+        w = rig.pin_weight[:, None]
+        return (1.0 - w) * top + w * below
+
+    def _solve_layer(self, links):
+        return self.rig.layer.solve(links) if self.rig.layer else None
 
     def hood_anchor(self, links):
         """The hood bone's centre and its link's rotation, in the simulation frame."""
@@ -138,8 +192,9 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
+        self.layer = self._solve_layer(self.links)
         self.x = self.reference_points(self.links)
-        self.x[:self.rig.cols] = self.pinned_points(self.links)
+        self.x[:self.rig.cols] = self.pinned_points(self.links, self.layer)
         self.xp = self.x.copy()
         self.contact[:] = False
         anchor, rot = self.hood_anchor(self.links)
@@ -165,8 +220,8 @@ class JacketSimulation:
         report.warnings += sample.warnings
         if not report.reset and self.last is None:
             report.reset = 'first sample'
-        elif not report.reset and self._is_jump(self.last, sample):
-            report.reset = 'world jump (teleport or fast turn)'
+        elif not report.reset:
+            report.reset = self._jump(self.last, sample)
         if report.reset:
             self._reset(sample)
         else:
@@ -191,10 +246,15 @@ class JacketSimulation:
         if gap > self.params.reset_gap:
             report.reset = f'gap of {gap:.2f} s between stamps'
 
-    def _is_jump(self, a, b):
+    def _jump(self, a, b):
+        """Why the world move from sample a to b is too big to simulate through, or ''."""
         move = np.linalg.norm(b.root[:3, 3] - a.root[:3, 3])
+        if move > self.params.teleport_distance:
+            return f'teleport: moved {move:.2f} m between two inputs'
         turn = np.degrees(rotation_angle(a.root[:3, :3].T @ b.root[:3, :3]))
-        return move > self.params.teleport_distance or turn > self.params.teleport_angle_deg
+        if turn > self.params.teleport_angle_deg:
+            return f'fast turn: turned {turn:.0f} deg between two inputs'
+        return ''
 
     def _advance(self, sample, report):
         a = self.last
@@ -234,19 +294,22 @@ class JacketSimulation:
         self.links = links
         world_to_local = root[:3, :3].T
         gravity = world_to_local @ np.array([0.0, 0.0, -p.gravity])
-        wind = world_to_local @ np.asarray(p.wind, dtype=float)
+        wind = world_to_local @ p.wind_at(self.t_sim or 0)
         acc = gravity + self.wind_scale[:, None] * wind
-        # M6: the pinned top row follows its link.
-        top = self.pinned_points(links)
+        # M2 then M6: the upper jacket is solved, the pinned top row follows it.
+        self.layer = self._solve_layer(links)
+        top = self.pinned_points(links, self.layer)
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
         ref = self.reference_points(links)
-        centers, axes, radii = self.collider_frames(links)
+        c = self.collider_frames(links, root)
         deepest, limited = kernel.cloth_step(
             self.x, self.xp, rig.free, acc, self.damping, self.contact,
             self.fabric.contact_damping, dt, rig.con_a, rig.con_b, rig.con_rest, self.stiffness,
-            self.fabric.iterations, centers, axes, radii, ref, self.max_distance,
-            rig.vert_a, rig.vert_b, rig.vert_rest, p.hard_vertical_pass)
+            self.fabric.iterations, c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b,
+            c.capsule_radii, c.plane_points, c.plane_normals, ref, self.max_distance,
+            STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
+            rig.tether_anchor, rig.tether_length)
         report.max_penetration = max(report.max_penetration, deepest)
         report.limited_vertices += limited
         self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
@@ -262,12 +325,27 @@ class JacketSimulation:
         if length > 1e-9:
             self.hood_p = anchor + d * (self.rig.hood.length / length)
 
-    def collider_frames(self, links):
-        """Collider centres, axes (columns) and radii in the simulation frame."""
+    def collider_frames(self, links, root=None):
+        """Every collider in the simulation frame, for the kernel and the markers.
+
+        Planes fixed in the world (the floor) need the root's world pose ``root``.
+        """
         rig = self.rig
         t = links[rig.collider_links]
         centers = np.einsum('nij,nj->ni', t[:, :3, :3], rig.collider_centers) + t[:, :3, 3]
-        return centers, t[:, :3, :3] @ rig.collider_rotations, rig.collider_radii
+        tc = links[rig.capsule_links]
+        ends = np.einsum('nij,nkj->nki', tc[:, :3, :3], rig.capsule_ends) + tc[:, None, :3, 3]
+        root = self.root if root is None else root
+        to_local = invert_transform(root)
+        points, normals = [], []
+        for plane in rig.planes:
+            frame = to_local if plane.link < 0 else links[plane.link]
+            points.append(frame[:3, :3] @ plane.point + frame[:3, 3])
+            normals.append(frame[:3, :3] @ plane.normal)
+        return Colliders(centers, t[:, :3, :3] @ rig.collider_rotations, rig.collider_radii,
+                         np.ascontiguousarray(ends[:, 0]), np.ascontiguousarray(ends[:, 1]),
+                         rig.capsule_radii, np.array(points).reshape(-1, 3),
+                         np.array(normals).reshape(-1, 3))
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):
@@ -284,15 +362,25 @@ class JacketSimulation:
         hood_link = self.links[self.rig.hood.link]
         hood_rot = hood_link[:3, :3].T @ hood
         hood_pos = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
-        rot = np.concatenate([frames, hood_rot[None]])
-        pos = np.concatenate([origin, hood_pos[None]])
-        return Bones(self.bone_names, self.bone_parents, pos, matrix_to_quat(rot))
+        rot = [frames, hood_rot[None]]
+        pos = [origin, hood_pos[None]]
+        if self.layer is not None:
+            # M1/M2 layer bones relative to their parent links.
+            parent = self.links[np.array(self.layer.parents)]
+            pr = np.transpose(parent[:, :3, :3], (0, 2, 1))
+            rot.append(pr @ self.layer.rotations)
+            pos.append(np.einsum('nij,nj->ni', pr, self.layer.positions - parent[:, :3, 3]))
+        return Bones(self.bone_names, self.bone_parents, np.concatenate(pos),
+                     matrix_to_quat(np.concatenate(rot)))
 
     def strain(self):
-        """Worst relative stretch of the vertical and horizontal stretch constraints."""
+        """Worst relative stretch of the simulated vertical and horizontal stretch constraints.
+
+        The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.
+        """
         rig = self.rig
         vert = np.linalg.norm(self.x[rig.vert_a] - self.x[rig.vert_b], axis=1) / rig.vert_rest
-        h = rig.horiz
+        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
         horiz = np.linalg.norm(self.x[rig.con_a[h]] - self.x[rig.con_b[h]], axis=1)
         horiz /= rig.con_rest[h]
         return float(np.abs(vert - 1).max()), float(np.abs(horiz - 1).max())

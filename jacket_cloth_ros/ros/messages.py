@@ -13,7 +13,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from ..core.transforms import matrix_to_quat
 
-MARKER_NAMESPACES = ('cloth', 'colliders', 'hood')
+MARKER_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
 TWEED = ColorRGBA(r=0.42, g=0.33, b=0.24, a=0.9)
 SEAM = ColorRGBA(r=0.2, g=0.15, b=0.1, a=1.0)
 GHOST = ColorRGBA(r=0.4, g=0.6, b=0.9, a=0.25)
@@ -80,6 +80,24 @@ def grid_lines(rows, cols):
     return np.array(lines)
 
 
+def _place(m, position, quat):
+    m.pose.position.x, m.pose.position.y, m.pose.position.z = np.asarray(position).tolist()
+    o = m.pose.orientation
+    o.x, o.y, o.z, o.w = np.asarray(quat, dtype=float).tolist()
+
+
+def _z_to(direction):
+    """Quaternion (x, y, z, w) turning +z onto the unit ``direction``."""
+    z = np.array([0.0, 0.0, 1.0])
+    axis = np.cross(z, direction)
+    s, c = np.linalg.norm(axis), float(z @ direction)
+    if s < 1e-9:
+        return (1.0, 0.0, 0.0, 0.0) if c < 0 else (0.0, 0.0, 0.0, 1.0)
+    half = np.arctan2(s, c) / 2
+    v = axis / s * np.sin(half)
+    return (v[0], v[1], v[2], np.cos(half))
+
+
 def marker_array(sim, stamp_ns, frame, reset=False):
     """Cloth mesh and seams, colliders, hood pendulum; DELETEALL per namespace after a reset."""
     stamp = stamp_msg(stamp_ns)
@@ -98,16 +116,50 @@ def marker_array(sim, stamp_ns, frame, reset=False):
     seams.color = SEAM
     seams.points = _points(sim.x[grid_lines(rig.rows, rig.cols)])
     out.markers += [mesh, seams]
-    centers, axes, radii = sim.collider_frames(sim.links)
-    quats = matrix_to_quat(axes)
-    for k in range(len(centers)):
+    c = sim.collider_frames(sim.links)
+    quats = matrix_to_quat(c.axes)
+    for k in range(len(c.centers)):
         m = _marker('colliders', k, Marker.SPHERE, frame, stamp)
-        m.pose.position.x, m.pose.position.y, m.pose.position.z = centers[k].tolist()
-        o = m.pose.orientation
-        o.x, o.y, o.z, o.w = quats[k].tolist()
-        m.scale.x, m.scale.y, m.scale.z = (2 * radii[k]).tolist()
+        _place(m, c.centers[k], quats[k])
+        m.scale.x, m.scale.y, m.scale.z = (2 * c.radii[k]).tolist()
         m.color = GHOST
         out.markers.append(m)
+    mid = len(c.centers)
+    for a, b, r in zip(c.capsule_a, c.capsule_b, c.capsule_radii):
+        # A capsule drawn as its cylinder and two end spheres.
+        axis = b - a
+        length = float(np.linalg.norm(axis))
+        body = _marker('colliders', mid, Marker.CYLINDER, frame, stamp)
+        _place(body, (a + b) / 2, _z_to(axis / max(length, 1e-9)))
+        body.scale.x = body.scale.y = 2 * float(r)
+        body.scale.z = length
+        body.color = GHOST
+        out.markers.append(body)
+        for k, end in enumerate((a, b)):
+            cap = _marker('colliders', mid + 1 + k, Marker.SPHERE, frame, stamp)
+            _place(cap, end, (0.0, 0.0, 0.0, 1.0))
+            cap.scale.x = cap.scale.y = cap.scale.z = 2 * float(r)
+            cap.color = GHOST
+            out.markers.append(cap)
+        mid += 3
+    for p, n in zip(c.plane_points, c.plane_normals):
+        # A plane drawn as a thin 2 m square around the point nearest the character.
+        centre = (p @ n) * n       # the plane's point below the character's root
+        tile = _marker('colliders', mid, Marker.CUBE, frame, stamp)
+        _place(tile, centre, _z_to(n))
+        tile.scale.x = tile.scale.y = 2.0
+        tile.scale.z = 0.002
+        tile.color = GHOST
+        out.markers.append(tile)
+        mid += 1
+    if sim.layer is not None:
+        # M1/M2 layer bones as segments along their x axes.
+        ends = sim.layer.positions + sim.layer.rotations[:, :, 0] * sim.layer.lengths[:, None]
+        bones = _marker('jacket_bones', 0, Marker.LINE_LIST, frame, stamp)
+        bones.scale.x = 0.012
+        bones.color = SEAM
+        bones.points = _points(np.stack([sim.layer.positions, ends], axis=1).reshape(-1, 3))
+        out.markers.append(bones)
     anchor, _ = sim.hood_anchor(sim.links)
     rod = _marker('hood', 0, Marker.LINE_LIST, frame, stamp)
     rod.scale.x = 0.01

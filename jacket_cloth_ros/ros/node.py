@@ -33,8 +33,9 @@ TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'hard_vertical_pass',
-            'reset_gap', 'teleport_distance', 'teleport_angle_deg')
+SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
+            'wind_gust_period', 'stretch_limit', 'reset_gap', 'teleport_distance',
+            'teleport_angle_deg')
 # Topics as recorded: (type, offered QoS as rosbag2 writes it).
 RECORDED = {
     'joint_states': ('sensor_msgs/msg/JointState', qos_profile_yaml(reliable=False)),
