@@ -11,7 +11,8 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', glob('config/*')),
+        ('share/' + package_name + '/config', glob('config/*.*')),
+        ('share/' + package_name + '/config/examples', glob('config/examples/*')),
         ('share/' + package_name + '/launch', glob('launch_scripts/*.launch.py')),
     ],
     install_requires=['setuptools'],

@@ -165,7 +165,7 @@ def test_m14_world_motion_is_felt_by_share_local_motion_fully(make_sim, skeleton
         sim.process(1_000_000_000 + 8_333_333, names, moved)   # one step
         # The hem at the back trails behind (-x), away from the body: no collider in the way.
         back_hem = (rig.rows - 1) * rig.cols + np.arange(2, rig.cols - 2)
-        lag = sim.x - sim.reference_points(sim.links)
+        lag = sim.x - sim.reference_points(sim.links, sim.layer)
         return -lag[back_hem, 0].mean()
     full = response(1.0)
     assert full > 0.02
@@ -194,7 +194,7 @@ def test_same_input_gives_bit_identical_bones(make_sim):
 def test_m11_no_vertex_beyond_its_bound(make_sim, rig):
     sim = make_sim(stretch_limit='none')     # M12 runs after M11 and may move vertices
     for _ in stepwise(sim, 'run', 60, 2.0):
-        ref = sim.reference_points(sim.links)
+        ref = sim.reference_points(sim.links, sim.layer)
         dist = np.linalg.norm(sim.x - ref, axis=1)
         assert (dist[rig.free] <= sim.max_distance[rig.free] + 1e-9).all()
     assert sum(r.limited_vertices for r in play(sim, 'dodge', 60, 1.0)) > 0

@@ -12,6 +12,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile
+from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
@@ -96,7 +97,13 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     h.spin_until(lambda: len(h.tf) >= sent - 2 and len(h.markers) >= 10)
     links = set(h.node.sim.skeleton.link_names)
     last = h.tf[-1]
-    assert len(last.transforms) == len(h.node.sim.bone_names)
+    # Every bone of the rig: M9 cloth bones, the M8 hood, the M1 sleeves, the M2 upper jacket.
+    rig = h.node.sim.rig
+    expected = ([f'cloth/jacket_r{r:02d}_c{c:02d}' for r, c in rig.bone_vertices()]
+                + ['cloth/hood'] + ['cloth/' + n for n in rig.layer.names])
+    assert [t.child_frame_id for t in last.transforms] == expected
+    assert {'cloth/jacket_l_upper_arm_twist', 'cloth/jacket_shoulder_pad_right',
+            'cloth/jacket_chest_left'} <= set(expected)
     for t in last.transforms:
         assert t.header.frame_id in links                 # child of an existing link
         assert t.child_frame_id.startswith('cloth/') and t.child_frame_id not in links
@@ -110,7 +117,8 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     # Markers at about 30 Hz of a 60 Hz input, DELETEALL only on the first (a reset).
     assert sent // 2 - 2 <= len(h.markers) <= sent // 2 + 2
     first, later = h.markers[0].markers, h.markers[-1].markers
-    assert [m.ns for m in first if m.action == Marker.DELETEALL] == ['cloth', 'colliders', 'hood']
+    assert [m.ns for m in first if m.action == Marker.DELETEALL] == [
+        'cloth', 'colliders', 'hood', 'jacket_bones']
     assert not any(m.action == Marker.DELETEALL for m in later)
     mesh = [m for m in later if m.ns == 'cloth' and m.id == 0][0]
     assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0 and mesh.color.a > 0
@@ -162,7 +170,29 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert not bad.successful and h.node.sim.params.sim_rate == 120.0
     bad = h.node.set_parameters([Parameter('wind', value=[1.0, 2.0])])[0]
     assert not bad.successful and 'wind' in bad.reason
+    bad = h.node.set_parameters([Parameter('stretch_limit', value='glue')])[0]
+    assert not bad.successful and 'hard_pass' in bad.reason
+    ok = h.node.set_parameters([Parameter('stretch_limit', value='tethers'),
+                                Parameter('wind_gust', value=0.5)])
+    assert all(r.successful for r in ok) and h.node.sim.params.stretch_limit == 'tethers'
     assert h.node.sim.resets == resets
+
+
+def test_wind_set_live_on_its_topic(harness):
+    h = harness()
+    h.send_clip('idle', 60, 0.3)
+    pub = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', 10)
+    h.spin_until(lambda: pub.get_subscription_count() > 0)
+    resets = h.node.sim.resets
+    msg = Vector3Stamped()
+    msg.vector.x, msg.vector.y = 3.0, -1.0
+    pub.publish(msg)
+    h.spin_until(lambda: h.node.sim.params.wind == (3.0, -1.0, 0.0))
+    assert list(h.node.get_parameter('wind').value) == [3.0, -1.0, 0.0]
+    msg.vector.z = float('nan')
+    pub.publish(msg)
+    h.spin_until(lambda: 'wind' in h.node._log_times)       # one warning line, nothing applied
+    assert h.node.sim.params.wind == (3.0, -1.0, 0.0) and h.node.sim.resets == resets
 
 
 def test_unwritable_record_path_keeps_the_node_running(harness, tmp_path):
@@ -214,11 +244,11 @@ def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
         assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
         topics = {c.topic: c for c in summary.channels.values()}
         assert set(topics) == {'/joint_states', '/tf', '/jacket_cloth_node/markers',
-                               '/diagnostics'}
+                               '/diagnostics', '/jacket_cloth_node/wind'}
         assert all(c.message_encoding == 'cdr' and 'reliability' in
                    c.metadata['offered_qos_profiles'] for c in topics.values())
         counts = summary.statistics.channel_message_counts
-        by_topic = {topics_id.topic: counts[cid] for cid, topics_id in summary.channels.items()}
+        by_topic = {topics_id.topic: counts.get(cid, 0) for cid, topics_id in summary.channels.items()}
         assert by_topic['/joint_states'] == sent and by_topic['/tf'] == sent
         assert 'rosbag2' in {m.name for m in reader.iter_metadata()}
         types = {'/tf': TFMessage, '/joint_states': JointState}

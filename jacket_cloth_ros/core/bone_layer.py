@@ -56,7 +56,7 @@ class LayerPose:
     rotations: np.ndarray   # (B,3,3)
     positions: np.ndarray   # (B,3)
     lengths: np.ndarray     # (B,) for drawing
-    below: np.ndarray       # (2,4,4) left and right bones below the pads
+    below: np.ndarray       # (2,4,4) left and right bones below the pads, (0,4,4) if none
 
 
 def twist_angle(rotation, axis):
@@ -103,13 +103,25 @@ class BoneLayer:
                 s.text('name', 'jacket_' + skeleton.link_names[link]), link, end,
                 s.number('twist_share', 0.5, lo=0.0, hi=1.0), offset / length, length))
             s.reject_unknown()
-        upper = section.section('upper')
-        self.upper_link = skeleton.link(upper.text('link'), f'{where}.upper.link')
-        pads = upper.section('shoulder_pads')
         self.pads = []
+        self.upper_link = None
+        self.skin_radius = 0.0
+        if section.has('upper'):
+            self._load_upper(section.section('upper'), skeleton, f'{where}.upper')
+        section.reject_unknown()
+        self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
+                      + [p.name for p in self.pads] + [p.below_name for p in self.pads])
+        self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
+        self._rest_gap = None
+        if self.pads:
+            self._rest_gap = self._pad_ends(rest)[2]
+
+    def _load_upper(self, upper, skeleton, where):
+        self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
+        pads = upper.section('shoulder_pads')
         for side in ('left', 'right'):
             p = pads.section(side)
-            key = f'{where}.upper.shoulder_pads.{side}'
+            key = f'{where}.shoulder_pads.{side}'
             self.pads.append(ShoulderPad(
                 p.text('name', f'jacket_shoulder_pad_{side}'),
                 p.text('below_name', f'jacket_chest_{side}'),
@@ -122,12 +134,6 @@ class BoneLayer:
         pads.reject_unknown()
         self.skin_radius = upper.number('skin_radius', 0.2, lo=0.0, hi=2.0)
         upper.reject_unknown()
-        section.reject_unknown()
-        self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
-                      + [p.name for p in self.pads] + [p.below_name for p in self.pads])
-        self.parents = ([s.link for s in self.sleeves] * 2 + [self.upper_link] * 4)
-        self._rest_gap = None
-        self._rest_gap = self._pad_ends(rest)[2]
 
     def _pad_ends(self, links):
         torso = links[self.upper_link]
@@ -154,23 +160,23 @@ class BoneLayer:
             rot.append(t[:3, :3] @ axis_angle(s.axis, s.twist_share * twist))
             pos.append(t[:3, :3] @ (s.axis * s.length / 2) + t[:3, 3])
             lengths.append(s.length / 2)
-        frames, ends, gap = self._pad_ends(links)
-        for (pivot, frame), p in zip(frames, self.pads):
-            rot.append(frame)
-            pos.append(pivot)
-            lengths.append(p.length)
-        # Left/right position constraint: each bone below moves half the error.
-        if self._rest_gap is not None and gap > 1e-9:
-            d = ends[1] - ends[0]
-            corr = 0.5 * (gap - self._rest_gap) / gap * d
-            ends = [ends[0] + corr, ends[1] - corr]
-        down = links[self.upper_link][:3, :3] @ DOWN
-        below = np.tile(np.eye(4), (2, 1, 1))
-        for k, p in enumerate(self.pads):
-            rot.append(down)
-            pos.append(ends[k])
-            lengths.append(p.below_length)
-            below[k, :3, :3] = down
-            below[k, :3, 3] = ends[k]
-        return LayerPose(self.names, self.parents, np.array(rot), np.array(pos),
-                         np.array(lengths), below)
+        below = np.tile(np.eye(4), (len(self.pads), 1, 1))
+        if self.pads:
+            frames, ends, gap = self._pad_ends(links)
+            for (pivot, frame), p in zip(frames, self.pads):
+                rot.append(frame)
+                pos.append(pivot)
+                lengths.append(p.length)
+            # Left/right position constraint: each bone below moves half the error.
+            if self._rest_gap is not None and gap > 1e-9:
+                corr = 0.5 * (gap - self._rest_gap) / gap * (ends[1] - ends[0])
+                ends = [ends[0] + corr, ends[1] - corr]
+            down = links[self.upper_link][:3, :3] @ DOWN
+            for k, p in enumerate(self.pads):
+                rot.append(down)
+                pos.append(ends[k])
+                lengths.append(p.below_length)
+                below[k, :3, :3] = down
+                below[k, :3, 3] = ends[k]
+        return LayerPose(self.names, self.parents, np.array(rot).reshape(-1, 3, 3),
+                         np.array(pos).reshape(-1, 3), np.array(lengths), below)

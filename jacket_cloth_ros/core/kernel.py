@@ -115,6 +115,9 @@ def _push_plane(x, i, point, normal):
     return -h
 
 
+MAX_COLLISION_PASSES = 4
+
+
 @njit(cache=True)
 def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, contact):
     """M10 and beyond: push particles out of ellipsoids, capsules and planes.
@@ -129,21 +132,28 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
         if not free[i]:
             continue
         touching = False
-        for e in range(centers.shape[0]):
-            depth = _push_ellipsoid(x, i, centers[e], axes[e], radii[e])
-            if depth >= 0.0:
-                touching = True
-                deepest = max(deepest, depth)
-        for k in range(cap_a.shape[0]):
-            depth = _push_capsule(x, i, cap_a[k], cap_b[k], cap_r[k])
-            if depth >= 0.0:
-                touching = True
-                deepest = max(deepest, depth)
-        for k in range(plane_p.shape[0]):
-            depth = _push_plane(x, i, plane_p[k], plane_n[k])
-            if depth >= 0.0:
-                touching = True
-                deepest = max(deepest, depth)
+        # Pushed out of one piece of a split ellipsoid, a particle can land in its overlapping
+        # neighbour: test again until a pass moves nothing (bounded: corners may not settle).
+        for _ in range(MAX_COLLISION_PASSES):
+            pushed = False
+            for e in range(centers.shape[0]):
+                depth = _push_ellipsoid(x, i, centers[e], axes[e], radii[e])
+                if depth >= 0.0:
+                    pushed = True
+                    deepest = max(deepest, depth)
+            for k in range(cap_a.shape[0]):
+                depth = _push_capsule(x, i, cap_a[k], cap_b[k], cap_r[k])
+                if depth >= 0.0:
+                    pushed = True
+                    deepest = max(deepest, depth)
+            for k in range(plane_p.shape[0]):
+                depth = _push_plane(x, i, plane_p[k], plane_n[k])
+                if depth >= 0.0:
+                    pushed = True
+                    deepest = max(deepest, depth)
+            if not pushed:
+                break
+            touching = True
         contact[i] = touching
     return deepest
 

@@ -196,7 +196,7 @@ class Rig:
         self.pin_weight = np.zeros(self.cols)
         self.pin_below = np.zeros(self.cols, dtype=int)
         self.pin_below_local = np.zeros((self.cols, 3))
-        if self.layer is None or self.layer.skin_radius <= 0:
+        if self.layer is None or not self.layer.pads or self.layer.skin_radius <= 0:
             return
         below = self.layer.solve(rest).below
         dist = np.empty((self.cols, len(below)))

@@ -163,17 +163,27 @@ class JacketSimulation:
         self.dt_ns = int(round(1e9 / self.params.sim_rate))
 
     # -- the skinned pose ---------------------------------------------------------------------
-    def reference_points(self, links):
-        """M11: each vertex's rest position carried by its nearest bone."""
-        t = links[self.rig.reference_link]
-        return np.einsum('nij,nj->ni', t[:, :3, :3], self.rig.reference_local) + t[:, :3, 3]
+    def reference_points(self, links, layer=None):
+        """M11: each vertex's rest position carried by its nearest bone.
+
+        With the M2 upper jacket, a column hangs from a top vertex that the shoulder pads may
+        lift; the column's reference points are lifted with it, or M11 would pull the cloth
+        away from its own pinned row.
+        """
+        rig = self.rig
+        t = links[rig.reference_link]
+        ref = np.einsum('nij,nj->ni', t[:, :3, :3], rig.reference_local) + t[:, :3, 3]
+        if layer is not None and len(layer.below):
+            lift = self.pinned_points(links, layer) - self.pinned_points(links)
+            ref += np.tile(lift, (rig.rows, 1))
+        return ref
 
     def pinned_points(self, links, layer=None):
         """M6: where the top row is: carried by its link, and near the shoulders by the M2
         bones below the shoulder pads (``layer`` is that pose, solved for ``links``)."""
         rig = self.rig
         top = apply_transform(links[rig.pin_link], rig.pin_local)
-        if layer is None:
+        if layer is None or not len(layer.below):
             return top
         frames = layer.below[rig.pin_below]
         below = np.einsum('nij,nj->ni', frames[:, :3, :3], rig.pin_below_local)
@@ -193,7 +203,7 @@ class JacketSimulation:
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
         self.layer = self._solve_layer(self.links)
-        self.x = self.reference_points(self.links)
+        self.x = self.reference_points(self.links, self.layer)
         self.x[:self.rig.cols] = self.pinned_points(self.links, self.layer)
         self.xp = self.x.copy()
         self.contact[:] = False
@@ -301,7 +311,7 @@ class JacketSimulation:
         top = self.pinned_points(links, self.layer)
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
-        ref = self.reference_points(links)
+        ref = self.reference_points(links, self.layer)
         c = self.collider_frames(links, root)
         deepest, limited = kernel.cloth_step(
             self.x, self.xp, rig.free, acc, self.damping, self.contact,

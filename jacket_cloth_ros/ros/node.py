@@ -17,13 +17,14 @@ from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Vector3Stamped
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
-from ..core.simulation import JacketSimulation, SimParams
+from ..core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
 from ..core.skeleton import Skeleton
 from ..recording.writer import SessionRecorder, qos_profile_yaml
 from . import messages
@@ -39,6 +40,7 @@ SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
 # Topics as recorded: (type, offered QoS as rosbag2 writes it).
 RECORDED = {
     'joint_states': ('sensor_msgs/msg/JointState', qos_profile_yaml(reliable=False)),
+    'wind': ('geometry_msgs/msg/Vector3Stamped', qos_profile_yaml()),
     '/tf': ('tf2_msgs/msg/TFMessage', qos_profile_yaml(depth=100)),
     'markers': ('visualization_msgs/msg/MarkerArray', qos_profile_yaml()),
     '/diagnostics': ('diagnostic_msgs/msg/DiagnosticArray', qos_profile_yaml()),
@@ -79,8 +81,10 @@ class JacketClothNode(Node):
         self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.create_subscription(JointState, 'joint_states', self._on_joint_state,
                                  qos_profile_sensor_data, raw=True)
+        self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True)
         # Recorded under the names the topics have in the graph (resolved once).
         self._recorded_topics = {'joint_states': self.resolve_topic_name('joint_states'),
+                                 'wind': self.resolve_topic_name('~/wind'),
                                  'markers': self.marker_pub.topic_name,
                                  '/tf': '/tf', '/diagnostics': '/diagnostics'}
         self._cache_output_parameters()
@@ -153,6 +157,10 @@ class JacketClothNode(Node):
                         or not np.isfinite(v).all()):
                     return SetParametersResult(successful=False,
                                                reason='wind must be 3 finite numbers [x, y, z]')
+            if p.name == 'stretch_limit' and p.value not in STRETCH_LIMITS:
+                return SetParametersResult(
+                    successful=False,
+                    reason=f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}')
             if p.name in ('frame_prefix',) and p.value.startswith('/'):
                 return SetParametersResult(successful=False,
                                            reason='frame ids must not start with "/"')
@@ -214,6 +222,20 @@ class JacketClothNode(Node):
         if now - self._log_times.get(code, -1e9) >= period:
             self._log_times[code] = now
             self.get_logger().warning(text)
+
+    def _on_wind(self, raw):
+        """~/wind sets the wind live, through the ``wind`` parameter (one path, validated).
+
+        Recorded at the stamp of the last JointState, so a replay applies it at the same step.
+        """
+        msg = deserialize_message(raw, Vector3Stamped)
+        v = [msg.vector.x, msg.vector.y, msg.vector.z]
+        result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
+        if not result.successful:
+            self._warn('wind', f'~/wind rejected: {result.reason}')
+            return
+        header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self._record('wind', raw, self.sim.last.stamp_ns if self.sim and self.sim.last else header)
 
     def _on_joint_state(self, raw):
         msg = deserialize_message(raw, JointState)
