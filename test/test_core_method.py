@@ -218,7 +218,8 @@ def test_example_rig_uses_capsules_and_the_floor_and_runs_on_another_skeleton():
 def test_m13_edge_vertices_get_their_own_parameters(make_sim, rig):
     sim = make_sim()
     f = sim.fabric
-    edge, inner = rig.edge, ~rig.edge
+    plain = (rig.region_scale['damping_scale'] == 1) & (rig.region_scale['wind_scale'] == 1)
+    edge, inner = rig.edge & plain, ~rig.edge & plain     # outside the rig's regions
     assert (sim.damping[edge] == f.edge_damping).all() and (sim.damping[inner] == f.damping).all()
     assert (sim.world_share[edge] == f.edge_world_share).all()
     assert (sim.wind_scale[edge] == f.edge_wind_scale).all()
@@ -254,18 +255,20 @@ def test_tethers_keep_every_vertex_within_reach_of_its_pinned_anchor(make_sim, r
     pulled = kernel.tethers(x, rig.free, rig.tether_anchor, rig.tether_length)
     d = np.linalg.norm(x - x[rig.tether_anchor], axis=1)
     assert pulled > 20 and (d <= rig.tether_length + 1e-12).all()
-    # In a step, collisions and M11 act after the tethers: the hem still stretches far less.
-    worst = {}
+    # In a step, collisions and M11 act after the tethers and may pull a vertex out again for
+    # that step; over a run the hem's overstretch beyond its tethers all but vanishes.
+    over = {}
     for limit in ('none', 'tethers'):
         sim = make_sim(stretch_limit=limit)
-        stretch = 0.0
+        hem_over = []
         for k, _ in enumerate(stepwise(sim, 'run', 60, 1.5)):
             d = np.linalg.norm(sim.x - sim.x[rig.tether_anchor], axis=1)
             hem = d[-rig.cols:] / rig.tether_length[-rig.cols:] - 1.0
-            stretch = max(stretch, hem.max()) if k else 0.0
-        worst[limit] = stretch
-    assert worst['none'] > 0.03
-    assert worst['tethers'] < 0.6 * worst['none']
+            if k:                                 # not the reset pose of the first sample
+                hem_over.append(np.maximum(hem, 0.0).mean())
+        over[limit] = np.mean(hem_over)
+    assert over['none'] > 1e-3
+    assert over['tethers'] < 0.1 * over['none']
 
 
 def test_wind_varies_over_time_deterministically():
@@ -293,3 +296,16 @@ def test_fast_turn_resets_to_the_skinned_pose(make_sim, skeleton):
     assert sim.x == pytest.approx(
         np.vstack([sim.pinned_points(sim.links, sim.layer),
                    sim.reference_points(sim.links, sim.layer)[sim.rig.cols:]]))
+
+
+def test_rig_regions_scale_the_fabric_where_they_lie(make_sim, rig):
+    sim = make_sim()
+    f = sim.fabric
+    vent = np.zeros((rig.rows, rig.cols), dtype=bool)
+    vent[8:12, 3:6] = True
+    vent = vent.ravel()
+    inner = ~rig.edge
+    assert sim.wind_scale[vent & inner] == pytest.approx(1.4 * f.wind_scale)
+    assert sim.damping[vent & inner] == pytest.approx(0.8 * f.damping)
+    assert sim.damping[~vent & inner] == pytest.approx(f.damping)
+    assert sim.wind_scale[vent & rig.edge] == pytest.approx(1.4 * f.edge_wind_scale)

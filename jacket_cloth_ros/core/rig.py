@@ -15,6 +15,7 @@ from .config import ConfigError, Section, load_yaml, shipped
 from .transforms import apply_transform, invert_transform, rpy_matrix
 
 WORLD = -1          # the link index of colliders fixed in the world (a floor)
+REGION_SCALES = ('damping_scale', 'wind_scale', 'world_share_scale', 'max_distance_scale')
 
 #  Neighbour offsets (row, col) of the two constraint groups (M5).
 STRETCH_OFFSETS = ((0, 1), (1, 0))
@@ -129,6 +130,7 @@ class Rig:
         row = np.repeat(np.arange(self.rows), self.cols) / (self.rows - 1)
         self.max_distance = top_d + (hem_d - top_d) * row
         self.bone_column_step = cloth.integer('bone_column_step', 2, lo=1, hi=self.cols)
+        self._load_regions(cloth, f'{where}.cloth')
         cloth.reject_unknown()
 
         hood = top.section('hood')
@@ -148,6 +150,27 @@ class Rig:
         self._skin_top_row(rest)
         top.reject_unknown()
         self._build_topology()
+
+    def _load_regions(self, cloth, where):
+        """Per-region multipliers of the fabric's damping, wind, world share and M11 bound.
+
+        A region is a block of rows and columns (inclusive ranges); later regions multiply
+        onto earlier ones. Edges (M13) keep their own values, which the regions then scale.
+        """
+        self.region_scale = {k: np.ones(self.rows * self.cols) for k in REGION_SCALES}
+        grid_r, grid_c = np.divmod(np.arange(self.rows * self.cols), self.cols)
+        for i, r in enumerate(cloth.sections('regions')):
+            key = f'{where}.regions[{i}]'
+            r.text('name', f'region_{i}')
+            r0, r1 = r.vector('rows', 2)
+            c0, c1 = r.vector('cols', 2)
+            if not (0 <= r0 <= r1 < self.rows and 0 <= c0 <= c1 < self.cols):
+                raise ConfigError(f'{key}: rows/cols must be ranges inside the '
+                                  f'{self.rows}x{self.cols} grid')
+            inside = (grid_r >= r0) & (grid_r <= r1) & (grid_c >= c0) & (grid_c <= c1)
+            for k in REGION_SCALES:
+                self.region_scale[k][inside] *= r.number(k, 1.0, lo=0.0, hi=10.0)
+            r.reject_unknown()
 
     def _load_colliders(self, top, skeleton, where):
         """M10 ellipsoids (split when stretched), capsules and planes, each riding on a link."""

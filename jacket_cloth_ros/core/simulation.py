@@ -153,11 +153,15 @@ class JacketSimulation:
 
     def _apply_fabric(self):
         f, rig = self.fabric, self.rig
-        edge = rig.edge
-        self.damping = np.where(edge, f.edge_damping, f.damping)                 # M4, M13
-        self.world_share = np.where(edge, f.edge_world_share, f.world_share)     # M14, M13
-        self.wind_scale = np.where(edge, f.edge_wind_scale, f.wind_scale)        # M13
-        self.max_distance = rig.max_distance * np.where(edge, f.edge_max_distance_scale, 1.0)
+        edge, region = rig.edge, rig.region_scale          # M13 edges, then the rig's regions
+        self.damping = np.minimum(1.0, np.where(edge, f.edge_damping, f.damping)
+                                  * region['damping_scale'])                     # M4, M13
+        self.world_share = np.minimum(1.0, np.where(edge, f.edge_world_share, f.world_share)
+                                      * region['world_share_scale'])             # M14, M13
+        self.wind_scale = (np.where(edge, f.edge_wind_scale, f.wind_scale)
+                           * region['wind_scale'])                               # M13
+        self.max_distance = (rig.max_distance * np.where(edge, f.edge_max_distance_scale, 1.0)
+                             * region['max_distance_scale'])                     # M11, M13
         self.stiffness = np.where(rig.con_group == 0, f.stretch_stiffness,
                                   f.shear_bend_stiffness)                        # M5
         self.dt_ns = int(round(1e9 / self.params.sim_rate))
