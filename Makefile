@@ -20,7 +20,7 @@ else
   SETUP := system
 endif
 
-.PHONY: all setup demo test clean-venv
+.PHONY: all setup demo test bench-kernel clean-venv
 all: test
 
 setup: $(READY)
@@ -51,6 +51,10 @@ demo: $(READY)
 
 test: $(READY)
 	$(PY) -m pytest -q test
+
+# Why the cloth step is compiled: the same step in numpy, and the C yardstick if it is here.
+bench-kernel: $(READY)
+	$(PY) benchmarks/kernel_choice.py
 
 clean-venv:
 	rm -rf $(VENV)

@@ -56,24 +56,27 @@ def relax(x, free, ca, cb, rest, stiffness, iterations):
 
 
 @njit(cache=True)
-def _push_ellipsoid(x, i, center, axes, radii):
-    """Push vertex i out of one ellipsoid, tested where it is a unit sphere. Returns depth."""
-    p0 = x[i, 0] - center[0]
-    p1 = x[i, 1] - center[1]
-    p2 = x[i, 2] - center[2]
-    q0 = (axes[0, 0] * p0 + axes[1, 0] * p1 + axes[2, 0] * p2) / radii[0]
-    q1 = (axes[0, 1] * p0 + axes[1, 1] * p1 + axes[2, 1] * p2) / radii[1]
-    q2 = (axes[0, 2] * p0 + axes[1, 2] * p1 + axes[2, 2] * p2) / radii[2]
+def _push_ellipsoid(x, i, centers, axes, radii, e):
+    """Push vertex i out of ellipsoid e, tested where it is a unit sphere. Returns depth."""
+    p0 = x[i, 0] - centers[e, 0]
+    p1 = x[i, 1] - centers[e, 1]
+    p2 = x[i, 2] - centers[e, 2]
+    reach = max(radii[e, 0], max(radii[e, 1], radii[e, 2]))
+    if p0 * p0 + p1 * p1 + p2 * p2 >= reach * reach:     # outside the bounding sphere
+        return -1.0
+    q0 = (axes[e, 0, 0] * p0 + axes[e, 1, 0] * p1 + axes[e, 2, 0] * p2) / radii[e, 0]
+    q1 = (axes[e, 0, 1] * p0 + axes[e, 1, 1] * p1 + axes[e, 2, 1] * p2) / radii[e, 1]
+    q2 = (axes[e, 0, 2] * p0 + axes[e, 1, 2] * p1 + axes[e, 2, 2] * p2) / radii[e, 2]
     r2 = q0 * q0 + q1 * q1 + q2 * q2
     if r2 >= 1.0 or r2 < 1e-12:
         return -1.0
     g = 1.0 / np.sqrt(r2)
-    s0 = q0 * g * radii[0]
-    s1 = q1 * g * radii[1]
-    s2 = q2 * g * radii[2]
-    n0 = axes[0, 0] * s0 + axes[0, 1] * s1 + axes[0, 2] * s2 + center[0]
-    n1 = axes[1, 0] * s0 + axes[1, 1] * s1 + axes[1, 2] * s2 + center[1]
-    n2 = axes[2, 0] * s0 + axes[2, 1] * s1 + axes[2, 2] * s2 + center[2]
+    s0 = q0 * g * radii[e, 0]
+    s1 = q1 * g * radii[e, 1]
+    s2 = q2 * g * radii[e, 2]
+    n0 = axes[e, 0, 0] * s0 + axes[e, 0, 1] * s1 + axes[e, 0, 2] * s2 + centers[e, 0]
+    n1 = axes[e, 1, 0] * s0 + axes[e, 1, 1] * s1 + axes[e, 1, 2] * s2 + centers[e, 1]
+    n2 = axes[e, 2, 0] * s0 + axes[e, 2, 1] * s1 + axes[e, 2, 2] * s2 + centers[e, 2]
     depth = np.sqrt((n0 - x[i, 0]) ** 2 + (n1 - x[i, 1]) ** 2 + (n2 - x[i, 2]) ** 2)
     x[i, 0] = n0
     x[i, 1] = n1
@@ -82,10 +85,10 @@ def _push_ellipsoid(x, i, center, axes, radii):
 
 
 @njit(cache=True)
-def _push_capsule(x, i, a, b, radius):
-    """Push vertex i out of a capsule (segment a-b swept by a sphere). Returns depth."""
-    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    ap0, ap1, ap2 = x[i, 0] - a[0], x[i, 1] - a[1], x[i, 2] - a[2]
+def _push_capsule(x, i, cap_a, cap_b, cap_r, k):
+    """Push vertex i out of capsule k (segment a-b swept by a sphere). Returns depth."""
+    ab0, ab1, ab2 = cap_b[k, 0] - cap_a[k, 0], cap_b[k, 1] - cap_a[k, 1], cap_b[k, 2] - cap_a[k, 2]
+    ap0, ap1, ap2 = x[i, 0] - cap_a[k, 0], x[i, 1] - cap_a[k, 1], x[i, 2] - cap_a[k, 2]
     len2 = ab0 * ab0 + ab1 * ab1 + ab2 * ab2
     t = 0.0
     if len2 > 1e-12:
@@ -93,25 +96,26 @@ def _push_capsule(x, i, a, b, radius):
         t = min(1.0, max(0.0, t))
     d0, d1, d2 = ap0 - t * ab0, ap1 - t * ab1, ap2 - t * ab2
     dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    radius = cap_r[k]
     if dist >= radius or dist < 1e-12:
         return -1.0
     g = radius / dist
-    x[i, 0] = a[0] + t * ab0 + d0 * g
-    x[i, 1] = a[1] + t * ab1 + d1 * g
-    x[i, 2] = a[2] + t * ab2 + d2 * g
+    x[i, 0] = cap_a[k, 0] + t * ab0 + d0 * g
+    x[i, 1] = cap_a[k, 1] + t * ab1 + d1 * g
+    x[i, 2] = cap_a[k, 2] + t * ab2 + d2 * g
     return radius - dist
 
 
 @njit(cache=True)
-def _push_plane(x, i, point, normal):
-    """Keep vertex i on the positive side of a plane (unit normal). Returns depth."""
-    h = ((x[i, 0] - point[0]) * normal[0] + (x[i, 1] - point[1]) * normal[1]
-         + (x[i, 2] - point[2]) * normal[2])
+def _push_plane(x, i, plane_p, plane_n, k):
+    """Keep vertex i on the positive side of plane k (unit normal). Returns depth."""
+    h = ((x[i, 0] - plane_p[k, 0]) * plane_n[k, 0] + (x[i, 1] - plane_p[k, 1]) * plane_n[k, 1]
+         + (x[i, 2] - plane_p[k, 2]) * plane_n[k, 2])
     if h >= 0.0:
         return -1.0
-    x[i, 0] -= h * normal[0]
-    x[i, 1] -= h * normal[1]
-    x[i, 2] -= h * normal[2]
+    x[i, 0] -= h * plane_n[k, 0]
+    x[i, 1] -= h * plane_n[k, 1]
+    x[i, 2] -= h * plane_n[k, 2]
     return -h
 
 
@@ -137,17 +141,17 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
         for _ in range(MAX_COLLISION_PASSES):
             pushed = False
             for e in range(centers.shape[0]):
-                depth = _push_ellipsoid(x, i, centers[e], axes[e], radii[e])
+                depth = _push_ellipsoid(x, i, centers, axes, radii, e)
                 if depth >= 0.0:
                     pushed = True
                     deepest = max(deepest, depth)
             for k in range(cap_a.shape[0]):
-                depth = _push_capsule(x, i, cap_a[k], cap_b[k], cap_r[k])
+                depth = _push_capsule(x, i, cap_a, cap_b, cap_r, k)
                 if depth >= 0.0:
                     pushed = True
                     deepest = max(deepest, depth)
             for k in range(plane_p.shape[0]):
-                depth = _push_plane(x, i, plane_p[k], plane_n[k])
+                depth = _push_plane(x, i, plane_p, plane_n, k)
                 if depth >= 0.0:
                     pushed = True
                     deepest = max(deepest, depth)

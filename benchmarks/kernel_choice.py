@@ -1,0 +1,167 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Why the cloth step is a numba kernel: the same step in numpy, timed against it.
+
+    make bench-kernel            (or: python benchmarks/kernel_choice.py [--steps N])
+
+Feeds the shipped rig through the showcase clip and, at every step, runs one cloth step three
+ways on the same state: the numba kernel (what ships), a numpy port that relaxes the
+constraints colour by colour (no two constraints of a colour share a vertex, so each colour is
+one vectorised update), and, when ../shared/limit/cloth_ref.c exists, the C yardstick's own
+figure. Prints the median cost of each per step, their ratios, and how far the numpy port's
+result lies from the kernel's (the colour order is not the kernel's Gauss-Seidel order).
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from jacket_cloth_ros.core import kernel  # noqa: E402
+from jacket_cloth_ros.core.config import shipped  # noqa: E402
+from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
+from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
+from jacket_cloth_ros.core.simulation import JacketSimulation  # noqa: E402
+from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
+from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
+
+LIMIT_SOURCE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                            '..', 'shared', 'limit', 'cloth_ref.c')
+
+
+def colours(ca, cb, n):
+    """Greedy colouring of constraints, in Gauss-Seidel order: index arrays per colour."""
+    used = [set() for _ in range(n)]
+    colour_of = []
+    for a, b in zip(ca, cb):
+        c = 0
+        while c in used[a] or c in used[b]:
+            c += 1
+        used[a].add(c)
+        used[b].add(c)
+        colour_of.append(c)
+    colour_of = np.array(colour_of)
+    return [np.nonzero(colour_of == c)[0] for c in range(colour_of.max() + 1)]
+
+
+def numpy_step(x, xp, free, acc, damping, contact, contact_damping, dt, ca, cb, rest, stiffness,
+               iterations, groups, centers, axes, radii, ref, max_distance, rows_of_vertical):
+    """The kernel's step (Verlet, relax, ellipsoids, M11, M12) in vectorised numpy.
+
+    Ellipsoids only: the shipped rig's floor plane is never reached in the showcase clip.
+    """
+    f = free[:, None]
+    d = np.minimum(1.0, damping + np.where(contact, contact_damping, 0.0))[:, None]
+    v = x - xp
+    xp[:] = np.where(f, x, xp)
+    x[:] = np.where(f, x + v * (1 - d) + acc * dt * dt, x)
+    wa, wb = free[ca].astype(float), free[cb].astype(float)
+    share = 1.0 / np.maximum(wa + wb, 1.0)
+    for _ in range(iterations):
+        for g in groups:                         # about 10 numpy calls per colour
+            a, b = ca[g], cb[g]
+            delta = x[b] - x[a]
+            length = np.linalg.norm(delta, axis=1)
+            k = stiffness[g] * (length - rest[g]) / np.maximum(length, 1e-9) * share[g]
+            x[a] += (wa[g] * k)[:, None] * delta
+            x[b] -= (wb[g] * k)[:, None] * delta
+    contact[:] = False
+    for e in range(len(centers)):
+        q = ((x - centers[e]) @ axes[e]) / radii[e]
+        r2 = (q * q).sum(axis=1)
+        hit = free & (r2 < 1.0) & (r2 > 1e-12)
+        surface = (q[hit] / np.sqrt(r2[hit])[:, None]) * radii[e]
+        x[hit] = surface @ axes[e].T + centers[e]
+        contact |= hit
+    off = x - ref
+    dist = np.linalg.norm(off, axis=1)
+    far = free & (dist > max_distance)
+    x[far] = ref[far] + off[far] * (max_distance[far] / dist[far])[:, None]
+    for upper, lower, vrest in rows_of_vertical:
+        delta = x[upper] - x[lower]
+        length = np.linalg.norm(delta, axis=1)
+        x[lower] += delta * ((length - vrest) / np.maximum(length, 1e-9))[:, None]
+
+
+def run(steps):
+    with open(shipped('character.urdf'), encoding='utf-8') as fh:
+        skeleton = Skeleton(fh.read())
+    rig = load_rig(skeleton)
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    groups = colours(rig.con_a, rig.con_b, rig.n)
+    C = rig.cols
+    rows_of_vertical = [(rig.vert_a[r * C:(r + 1) * C], rig.vert_b[r * C:(r + 1) * C],
+                         rig.vert_rest[r * C:(r + 1) * C]) for r in range(rig.rows - 1)]
+    captured = []
+    real_step = kernel.cloth_step
+
+    def capture(*args):                         # record each step's inputs as the sim made them
+        captured.append([a.copy() if isinstance(a, np.ndarray) else a for a in args])
+        return real_step(*args)
+    kernel.cloth_step = capture
+    try:
+        rate = 60
+        for k in range(int(steps / 2) + 1):
+            names, pos = joint_state_content(skeleton.joint_names, 'showcase', k / rate)
+            sim.process(int((10 + k / rate) * 1e9), names, pos)
+    finally:
+        kernel.cloth_step = real_step
+    captured = captured[1:steps + 1]            # the first is the warm-up step
+    numba_ns, numpy_ns, diff = [], [], []
+    for args in captured:
+        a = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
+        t0 = time.perf_counter_ns()
+        real_step(*a)
+        numba_ns.append(time.perf_counter_ns() - t0)
+        b = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
+        (x, xp, free, acc, damping, contact, cdamp, dt, ca, cb, rest, stiff, it, centers, axes,
+         radii, _, _, _, _, _, ref, maxd, *_) = b
+        t0 = time.perf_counter_ns()
+        numpy_step(x, xp, free, acc, damping, contact, cdamp, dt, ca, cb, rest, stiff, it,
+                   groups, centers, axes, radii, ref, maxd, rows_of_vertical)
+        numpy_ns.append(time.perf_counter_ns() - t0)
+        diff.append(np.abs(x - a[0]).max())
+    return rig, len(groups), np.median(numba_ns), np.median(numpy_ns), np.array(diff)
+
+
+def limit_ns(rig):
+    """The C yardstick's median step for the same grid, or None if it is not on this machine."""
+    if not os.path.isfile(LIMIT_SOURCE):
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = os.path.join(tmp, 'cloth_ref')
+        subprocess.run(['cc', '-O3', '-march=native', '-o', exe, LIMIT_SOURCE, '-lm'],
+                       check=True)
+        out = subprocess.run([exe, str(rig.cols), str(rig.rows), '8'], check=True,
+                             capture_output=True, text=True).stdout
+    return float(json.loads(out)['step_ns_median'])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--steps', type=int, default=600, help='steps of the showcase clip')
+    args = parser.parse_args()
+    rig, n_colours, numba_med, numpy_med, diff = run(args.steps)
+    print(f'grid {rig.cols}x{rig.rows}, {len(rig.con_a)} constraints in {n_colours} colours, '
+          f'{len(rig.colliders)} ellipsoids, {args.steps} steps of the showcase clip')
+    print(f'numba kernel : median {numba_med / 1e3:8.1f} us/step')
+    print(f'numpy colours: median {numpy_med / 1e3:8.1f} us/step  = {numpy_med / numba_med:5.1f}x '
+          f'the kernel')
+    print(f'numpy vs kernel after one step: max |dx| median {np.median(diff) * 1e3:.3f} mm, '
+          f'worst {diff.max() * 1e3:.3f} mm (colour order differs from Gauss-Seidel order)')
+    ref = limit_ns(rig)
+    if ref is None:
+        print('C yardstick: ../shared/limit/cloth_ref.c not here; no limit ratio')
+    else:
+        print(f'C yardstick  : median {ref / 1e3:8.1f} us/step; kernel = {numba_med / ref:.2f}x, '
+              f'numpy = {numpy_med / ref:.1f}x the limit')
+
+
+if __name__ == '__main__':
+    main()
