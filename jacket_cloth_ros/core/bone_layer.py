@@ -55,7 +55,7 @@ class LayerPose:
     parents: list           # skeleton link index of each bone's parent frame
     rotations: np.ndarray   # (B,3,3)
     positions: np.ndarray   # (B,3)
-    lengths: np.ndarray     # (B,) for drawing
+    tips: np.ndarray        # (B,3) where each bone ends, for drawing
     below: np.ndarray       # (2,4,4) left and right bones below the pads, (0,4,4) if none
 
 
@@ -148,25 +148,25 @@ class BoneLayer:
 
     def solve(self, links):
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below)."""
-        rot, pos, lengths = [], [], []
+        rot, pos, tips = [], [], []
         for s in self.sleeves:
             t = links[s.link]
             rot.append(t[:3, :3])
             pos.append(t[:3, 3])
-            lengths.append(s.length)
+            tips.append(links[s.end_link][:3, 3])
         for s in self.sleeves:
             t, end = links[s.link], links[s.end_link]
             twist = twist_angle(t[:3, :3].T @ end[:3, :3], s.axis)
             rot.append(t[:3, :3] @ axis_angle(s.axis, s.twist_share * twist))
             pos.append(t[:3, :3] @ (s.axis * s.length / 2) + t[:3, 3])
-            lengths.append(s.length / 2)
+            tips.append(end[:3, 3])
         below = np.tile(np.eye(4), (len(self.pads), 1, 1))
         if self.pads:
             frames, ends, gap = self._pad_ends(links)
-            for (pivot, frame), p in zip(frames, self.pads):
+            for (pivot, frame), end in zip(frames, ends):
                 rot.append(frame)
                 pos.append(pivot)
-                lengths.append(p.length)
+                tips.append(end)
             # Left/right position constraint: each bone below moves half the error.
             if self._rest_gap is not None and gap > 1e-9:
                 corr = 0.5 * (gap - self._rest_gap) / gap * (ends[1] - ends[0])
@@ -175,8 +175,8 @@ class BoneLayer:
             for k, p in enumerate(self.pads):
                 rot.append(down)
                 pos.append(ends[k])
-                lengths.append(p.below_length)
+                tips.append(ends[k] + down[:, 0] * p.below_length)
                 below[k, :3, :3] = down
                 below[k, :3, 3] = ends[k]
         return LayerPose(self.names, self.parents, np.array(rot).reshape(-1, 3, 3),
-                         np.array(pos).reshape(-1, 3), np.array(lengths), below)
+                         np.array(pos).reshape(-1, 3), np.array(tips).reshape(-1, 3), below)

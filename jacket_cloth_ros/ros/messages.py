@@ -153,12 +153,11 @@ def marker_array(sim, stamp_ns, frame, reset=False):
         out.markers.append(tile)
         mid += 1
     if sim.layer is not None:
-        # M1/M2 layer bones as segments along their x axes.
-        ends = sim.layer.positions + sim.layer.rotations[:, :, 0] * sim.layer.lengths[:, None]
+        # M1/M2 layer bones as segments from their pivots to their tips.
         bones = _marker('jacket_bones', 0, Marker.LINE_LIST, frame, stamp)
         bones.scale.x = 0.012
         bones.color = SEAM
-        bones.points = _points(np.stack([sim.layer.positions, ends], axis=1).reshape(-1, 3))
+        bones.points = _points(np.stack([sim.layer.positions, sim.layer.tips], axis=1).reshape(-1, 3))
         out.markers.append(bones)
     anchor, _ = sim.hood_anchor(sim.links)
     rod = _marker('hood', 0, Marker.LINE_LIST, frame, stamp)

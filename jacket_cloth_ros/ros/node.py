@@ -79,8 +79,6 @@ class JacketClothNode(Node):
         self.tf_pub = self.create_publisher(TFMessage, '/tf', TF_QOS)
         self.marker_pub = self.create_publisher(MarkerArray, '~/markers', 10)
         self.diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state,
-                                 qos_profile_sensor_data, raw=True)
         self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True)
         # Recorded under the names the topics have in the graph (resolved once).
         self._recorded_topics = {'joint_states': self.resolve_topic_name('joint_states'),
@@ -133,6 +131,9 @@ class JacketClothNode(Node):
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: change frame_prefix')
         self.sim = sim
+        # Subscribed only now: a publisher that waits for us knows we can simulate.
+        self.create_subscription(JointState, 'joint_states', self._on_joint_state,
+                                 qos_profile_sensor_data, raw=True)
         self.get_logger().info(
             f'character {skeleton.name!r} from {source}: {len(skeleton.joint_names)} joints, '
             f'cloth {rig.cols}x{rig.rows}, {len(sim.bone_names)} bones under '
@@ -242,10 +243,6 @@ class JacketClothNode(Node):
         stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         self.inputs += 1
         self._record('joint_states', raw, stamp_ns)
-        if self.sim is None:
-            self.dropped += 1
-            self._warn('model', 'no character model yet: JointState dropped')
-            return
         report = self.sim.process(stamp_ns, msg.name, msg.position)
         for code, text in report.warnings:
             self._warn(code, text)

@@ -12,6 +12,7 @@ import sys
 import time
 
 from ..core.config import ConfigError, shipped
+from ..core.rig import load_rig
 from ..motion.clips import (
     ALL_CLIPS, clip_length, joint_state_content, segment_at, showcase_highlights)
 
@@ -68,7 +69,12 @@ def cmd_motion(args):
         desc = node.create_publisher(String, '/robot_description', latched)
         with open(urdf_path, encoding='utf-8') as f:
             desc.publish(String(data=f.read()))
-        time.sleep(args.wait)   # let subscribers discover us before the clip starts
+        # The node subscribes once its character is loaded: wait for it (up to --wait s), so
+        # the clip's first message is not lost, then give discovery a moment to settle.
+        deadline = time.monotonic() + args.wait
+        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(min(0.3, args.wait))
         start = node.get_clock().now().nanoseconds
         wall0 = time.monotonic()
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration, start,
@@ -112,7 +118,8 @@ def cmd_picture(args):
     from ..tools.picture import render_filmstrip
     skeleton, _ = _skeleton(args.urdf)
     _check_output(args.output, args.force)
-    render_filmstrip(args.input, args.output, skeleton, moments=args.moments)
+    rig = load_rig(skeleton, args.rig)
+    render_filmstrip(args.input, args.output, skeleton, moments=args.moments, rig=rig)
     print(args.output)
     return 0
 
@@ -137,7 +144,7 @@ def cmd_demo(args):
         if node.poll() is not None:
             raise ToolError(f'jacket_cloth_node exited early with code {node.returncode}')
         motion = argparse.Namespace(clip='showcase', rate=60.0, duration=None, urdf=None,
-                                    output=None, best_effort=False, wait=1.0,
+                                    output=None, best_effort=False, wait=30.0,
                                     world_joint='world_joint', force=False)
         print(f'demo: playing the showcase clip ({clip_length("showcase"):.0f} s) live ...')
         cmd_motion(motion)
@@ -153,7 +160,8 @@ def cmd_demo(args):
     skeleton, _ = _skeleton()
     highlights = [h for h in showcase_highlights() if h[1] != 'idle']
     render_filmstrip(session, picture, skeleton, times=[t for t, _ in highlights],
-                     labels=lambda dt: segment_at('showcase', dt * 1e-9)[0])
+                     labels=lambda dt: segment_at('showcase', dt * 1e-9)[0],
+                     rig=load_rig(skeleton))
     print(f'demo: session recording  {os.path.abspath(session)}')
     print(f'demo: picture            {os.path.abspath(picture)}')
     return 0
@@ -171,7 +179,8 @@ def build_parser():
     m.add_argument('--urdf', default=None, help='the character (default: shipped)')
     m.add_argument('--world-joint', default='world_joint')
     m.add_argument('--best-effort', action='store_true', help='publish best effort')
-    m.add_argument('--wait', type=float, default=1.0, help='s to wait for subscribers')
+    m.add_argument('--wait', type=float, default=1.0,
+                   help='s to wait for a joint_states subscriber before the clip starts')
     m.add_argument('--force', action='store_true', help='overwrite the output file')
     m.set_defaults(func=cmd_motion)
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
@@ -184,6 +193,7 @@ def build_parser():
     f.add_argument('-o', '--output', required=True)
     f.add_argument('--moments', type=int, default=6)
     f.add_argument('--urdf', default=None)
+    f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
     f.add_argument('--force', action='store_true')
     f.set_defaults(func=cmd_picture)
     return p
