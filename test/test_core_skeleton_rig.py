@@ -54,6 +54,17 @@ def _rig_data():
     (lambda d: d['hood'].update(length='long'), 'hood.length'),
     (lambda d: d['colliders'][1].update(radii=[0.1, 0.1]), r'colliders\[1\].radii'),
     (lambda d: d.pop('hood'), 'hood: missing'),
+    (lambda d: d['colliders'][0].update(type='box'), r"colliders\[0\].type: 'box' is not one of"),
+    (lambda d: d['colliders'][4].update(normal=[0, 0, 0]), r'colliders\[4\].normal'),
+    (lambda d: d['colliders'].append({'type': 'capsule', 'link': 'spine', 'a': [0, 0, 0],
+                                      'b': [0, 0, 1]}), r'colliders\[5\].radius: missing'),
+    (lambda d: d['cloth']['regions'][0].update(rows=[8, 12]), r'regions\[0\]: rows/cols'),
+    (lambda d: d['jacket_bones']['sleeves'][0].update(end_link='tail'),
+     r"sleeves\[0\].end_link: link 'tail'"),
+    (lambda d: d['jacket_bones']['upper']['shoulder_pads'].pop('right'),
+     'shoulder_pads.right: missing'),
+    (lambda d: d['jacket_bones']['upper']['shoulder_pads']['left'].update(aim_link='wing'),
+     "shoulder_pads.left.aim_link: link 'wing'"),
 ])
 def test_rig_validation_names_the_bad_key(skeleton, edit, message):
     data = _rig_data()
