@@ -141,10 +141,10 @@ def test_bad_input_never_reaches_tf_and_the_node_keeps_running(harness):
 
     def send(n, p, t):
         """Send one message, wait until the node took it; True if it was dropped."""
-        inputs, dropped = h.node.inputs, h.node.dropped
+        inputs, dropped = h.node.inputs, h.node.pipeline.dropped
         h.send(n, p, t)
         h.spin_until(lambda: h.node.inputs > inputs)
-        return h.node.dropped > dropped
+        return h.node.pipeline.dropped > dropped
 
     assert not send(names, pos, stamp)
     for k, (label, n, p) in enumerate(BAD_INPUTS):
@@ -244,13 +244,19 @@ def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
         assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
         topics = {c.topic: c for c in summary.channels.values()}
         assert set(topics) == {'/joint_states', '/tf', '/jacket_cloth_node/markers',
-                               '/diagnostics', '/jacket_cloth_node/wind'}
+                               '/diagnostics', '/jacket_cloth_node/wind', '/parameter_events'}
         assert all(c.message_encoding == 'cdr' and 'reliability' in
                    c.metadata['offered_qos_profiles'] for c in topics.values())
         counts = summary.statistics.channel_message_counts
         by_topic = {topics_id.topic: counts.get(cid, 0) for cid, topics_id in summary.channels.items()}
         assert by_topic['/joint_states'] == sent and by_topic['/tf'] == sent
-        assert 'rosbag2' in {m.name for m in reader.iter_metadata()}
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        assert 'rosbag2' in metadata
+        # What a replay needs besides the inputs travels in the file.
+        config = metadata['jacket_cloth_session']
+        assert config['urdf'].startswith('<?xml') and 'cloth:' in config['rig_yaml']
+        assert 'tweed_jacket' in config['fabrics_yaml']
+        assert '"record": "' + str(path) + '"' in config['parameters_json']
         types = {'/tf': TFMessage, '/joint_states': JointState}
         for schema, channel, message in reader.iter_messages(topics=list(types)):
             msg = deserialize_message(message.data, types[channel.topic])

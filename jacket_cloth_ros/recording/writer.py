@@ -8,6 +8,7 @@ Chunks are flushed about once a second (of stamps), so a killed process leaves a
 readable up to its last flushed chunk.
 """
 
+import json
 import os
 
 import yaml
@@ -15,6 +16,7 @@ from mcap.writer import CompressionType, Writer
 
 from .definitions import ros2msg_schema
 
+SESSION_CONFIG = 'jacket_cloth_session'     # the MCAP metadata record of a session's setup
 _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
 
 
@@ -77,6 +79,12 @@ class SessionRecorder:
         if abs(stamp_ns - self._last_flush) >= self._flush_period:
             self._writer.flush()
             self._last_flush = stamp_ns
+
+    def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
+        """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
+        self._writer.add_metadata(SESSION_CONFIG, {
+            'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
+            'parameters_json': json.dumps(parameters, sort_keys=True)})
 
     def close(self):
         if self._file.closed:

@@ -3,10 +3,18 @@
 
 from dataclasses import fields
 
+import numpy as np
+
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rcl_interfaces.msg import ParameterType as T
 
 from ..core.fabric import FABRIC_RANGES, Fabric
+from ..core.simulation import STRETCH_LIMITS, SimParams
+
+# Parameters that map onto SimParams; the rest are the node's own or read at start.
+SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
+            'wind_gust_period', 'stretch_limit', 'reset_gap', 'teleport_distance',
+            'teleport_angle_deg')
 
 # name: (type, default, (lo, hi) or None, read_only, description)
 NODE_PARAMETERS = {
@@ -72,3 +80,37 @@ def fabric_parameters(fabric):
         out['fabric.' + f.name] = (kind, int(value) if kind == T.PARAMETER_INTEGER
                                    else float(value), (lo, hi), False, f'fabric: {f.name}')
     return out
+
+
+def default_values(fabric):
+    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric``."""
+    values = {name: spec[1] for name, spec in NODE_PARAMETERS.items()}
+    values.update({name: spec[1] for name, spec in fabric_parameters(fabric).items()})
+    return values
+
+
+def check_value(name, value):
+    """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''."""
+    if name == 'wind':
+        v = list(value) if hasattr(value, '__len__') and not isinstance(value, str) else None
+        if (v is None or len(v) != 3 or any(isinstance(e, bool) for e in v)
+                or not all(isinstance(e, (int, float)) for e in v) or not np.isfinite(v).all()):
+            return 'wind must be 3 finite numbers [x, y, z]'
+    if name == 'stretch_limit' and value not in STRETCH_LIMITS:
+        return f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}'
+    if name == 'frame_prefix' and value.startswith('/'):
+        return 'frame ids must not start with "/"'
+    if name == 'world_joint' and not value:
+        return 'world_joint is empty'
+    return ''
+
+
+def sim_params_from(values):
+    sim = {k: values[k] for k in SIM_KEYS}
+    sim['wind'] = tuple(float(w) for w in sim['wind'])
+    return SimParams(**sim)
+
+
+def fabric_from(preset, values):
+    """The preset with every ``fabric.<field>`` value applied."""
+    return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})

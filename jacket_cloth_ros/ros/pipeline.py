@@ -1,0 +1,127 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""What the node does with each JointState, without the node: one path for live and replay.
+
+The live node feeds it what arrives and publishes what it returns; ``jacket_cloth replay``
+feeds it a recording and writes what it returns. Same input, same parameters: same messages.
+Only wall-clock step costs differ between runs, so they go into diagnostics only when
+``timing`` is on (live), keeping a replay's output file byte-identical run after run.
+"""
+
+import numpy as np
+
+from ..core.simulation import JacketSimulation
+from ..recording.writer import qos_profile_yaml
+from . import messages
+from .parameters import SIM_KEYS, fabric_from, sim_params_from
+
+
+def session_topics(joint_states='/joint_states', wind='/jacket_cloth_node/wind',
+                   markers='/jacket_cloth_node/markers'):
+    """A session's topics by key: (name, type, offered QoS as rosbag2 records it).
+
+    Inputs (JointState, wind, parameter changes) and outputs (/tf, markers, diagnostics): the
+    node records them all, a replay reads the inputs and writes them all again.
+    """
+    return {
+        'joint_states': (joint_states, 'sensor_msgs/msg/JointState',
+                         qos_profile_yaml(reliable=False)),
+        'wind': (wind, 'geometry_msgs/msg/Vector3Stamped', qos_profile_yaml()),
+        'parameter_events': ('/parameter_events', 'rcl_interfaces/msg/ParameterEvent',
+                             qos_profile_yaml(depth=1000)),
+        'tf': ('/tf', 'tf2_msgs/msg/TFMessage', qos_profile_yaml(depth=100)),
+        'markers': (markers, 'visualization_msgs/msg/MarkerArray', qos_profile_yaml()),
+        'diagnostics': ('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray',
+                        qos_profile_yaml()),
+    }
+
+
+class SessionPipeline:
+    """A simulation plus the cadence and content of its output messages."""
+
+    def __init__(self, skeleton, rig, fabrics, values, node_name='jacket_cloth_node',
+                 timing=True):
+        self.fabrics = fabrics
+        self.values = dict(values)
+        self.node_name = node_name
+        self.timing = timing
+        self.sim = JacketSimulation(skeleton, rig, self._fabric(), sim_params_from(values),
+                                    values['world_joint'])
+        self.inputs = 0
+        self.dropped = 0
+        self.last_reset_reason = ''
+        self._costs = []
+        self._last_marker = None
+        self._last_diag = None
+        self._marker_reset = True
+
+    def _fabric(self):
+        return fabric_from(self.fabrics[self.values['fabric']], self.values)
+
+    def apply(self, changes):
+        """Parameter changes (name -> value), acting from the next step; never a reset."""
+        self.values.update(changes)
+        if set(changes) & set(SIM_KEYS):
+            self.sim.set_params(sim_params_from(self.values))
+        if any(n.startswith('fabric.') for n in changes):
+            self.sim.set_fabric(self._fabric())
+        if 'world_joint' in changes:
+            self.sim.parser.set_world_joint(self.values['world_joint'])
+
+    def on_joint_state(self, msg, stamp_ns):
+        """Process one JointState; returns (StepReport, [(output key, message), ...])."""
+        self.inputs += 1
+        report = self.sim.process(stamp_ns, msg.name, msg.position)
+        if not report.accepted:
+            self.dropped += 1
+            return report, []
+        if report.reset:
+            self.last_reset_reason = report.reset
+            self._marker_reset = True
+        self._costs.append(report.step_cost_ns)
+        return report, self._outputs(stamp_ns)
+
+    def _outputs(self, stamp_ns):
+        bones = self.sim.bones()
+        if not (np.isfinite(bones.translations).all() and np.isfinite(bones.quaternions).all()):
+            return []            # never a NaN on /tf (the simulation resets itself on one)
+        out = [('tf', messages.tf_message(bones, stamp_ns, self.values['frame_prefix']))]
+        rate = self.values['markers_rate']
+        if rate > 0 and _due(self._last_marker, stamp_ns, rate):
+            self._last_marker = stamp_ns
+            out.append(('markers', messages.marker_array(
+                self.sim, stamp_ns, self.sim.skeleton.link_names[0], reset=self._marker_reset)))
+            self._marker_reset = False
+        if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
+            self._last_diag = stamp_ns
+            out.append(('diagnostics', self._diagnostics(stamp_ns)))
+        return out
+
+    def _diagnostics(self, stamp_ns):
+        sim = self.sim
+        vert, horiz = sim.strain()
+        values = {}
+        slow = False
+        if self.timing:
+            costs = np.array(self._costs or [0]) * 1e-3
+            values['step_cost_us_median'] = f'{np.median(costs):.1f}'
+            values['step_cost_us_max'] = f'{costs.max():.1f}'
+            slow = costs.max() > 1e6 / sim.params.sim_rate
+        self._costs = []
+        values.update({
+            'overruns': sim.overruns,
+            'resets': sim.resets,
+            'last_reset': self.last_reset_reason,
+            'worst_vertical_strain': f'{vert:.4f}',
+            'worst_horizontal_strain': f'{horiz:.4f}',
+            'inputs': self.inputs,
+            'dropped_inputs': self.dropped,
+            'sim_steps': sim.steps_total,
+            'recording': self.values['record'],
+        })
+        message = 'step cost above one step of real time' if slow else 'ok'
+        return messages.diagnostics(stamp_ns, self.node_name, values, slow, message)
+
+
+def _due(last, stamp_ns, rate):
+    # 5% slack: stamps rounded to whole ns must not turn every 2nd input into every 3rd.
+    return last is None or stamp_ns - last >= 0.95e9 / rate or stamp_ns < last
