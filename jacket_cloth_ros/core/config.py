@@ -28,6 +28,17 @@ def shipped(name):
     return os.path.join(config_dir(), name)
 
 
+def parse_yaml(text, where):
+    """YAML text (e.g. carried in a recording) to a mapping, with load_yaml's errors."""
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        raise ConfigError(f'{where}: not valid YAML ({e})'.replace('\n', ' ')) from None
+    if not isinstance(data, dict):
+        raise ConfigError(f'{where}: expected a mapping at the top level')
+    return data
+
+
 def load_yaml(path):
     try:
         with open(path, encoding='utf-8') as f:

@@ -37,7 +37,11 @@ FABRIC_RANGES = {
 def load_fabrics(path=None):
     """All presets of a fabrics YAML file, validated; {name: Fabric}."""
     path = path or shipped('fabrics.yaml')
-    data = load_yaml(path)
+    return fabrics_from_data(load_yaml(path), path)
+
+
+def fabrics_from_data(data, path):
+    """Presets from parsed YAML; ``path`` names where they came from in error messages."""
     out = {}
     for name in data:
         sec = Section(data[name], f'{path}: {name}')

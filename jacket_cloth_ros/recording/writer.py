@@ -35,11 +35,12 @@ def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it."""
 
-    def __init__(self, path, flush_period_ns=1_000_000_000):
+    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None):
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
         self.path = path
+        self._name = final_name or os.path.basename(path)     # as the bag will know it
         self._file = open(path, 'wb')
         self._writer = Writer(self._file, chunk_size=512 * 1024,
                               compression=CompressionType.ZSTD)
@@ -98,7 +99,7 @@ class SessionRecorder:
         meta = {'rosbag2_bagfile_information': {
             'version': 9,
             'storage_identifier': 'mcap',
-            'relative_file_paths': [os.path.basename(self.path)],
+            'relative_file_paths': [self._name],
             'duration': {'nanoseconds': (self._last or 0) - start},
             'starting_time': {'nanoseconds_since_epoch': start},
             'message_count': sum(self._counts.values()),

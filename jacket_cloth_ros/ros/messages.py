@@ -1,59 +1,51 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Building /tf, marker and diagnostic messages from the simulation's state."""
+"""/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py)."""
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
-from builtin_interfaces.msg import Duration, Time
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, TransformStamped
-from std_msgs.msg import ColorRGBA
-from tf2_msgs.msg import TFMessage
-from visualization_msgs.msg import Marker, MarkerArray
 
 from ..core.transforms import matrix_to_quat
+from . import cdr
+
+# visualization_msgs/Marker constants
+SPHERE, CUBE, CYLINDER, LINE_LIST, TRIANGLE_LIST = 2, 1, 3, 5, 11
+ADD, DELETEALL = 0, 3
+# diagnostic_msgs/DiagnosticStatus levels
+OK, WARN = 0, 1
 
 MARKER_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
-TWEED = ColorRGBA(r=0.42, g=0.33, b=0.24, a=0.9)
-SEAM = ColorRGBA(r=0.2, g=0.15, b=0.1, a=1.0)
-GHOST = ColorRGBA(r=0.4, g=0.6, b=0.9, a=0.25)
-HOOD = ColorRGBA(r=0.55, g=0.42, b=0.3, a=1.0)
+TWEED = (0.42, 0.33, 0.24, 0.9)
+SEAM = (0.2, 0.15, 0.1, 1.0)
+GHOST = (0.4, 0.6, 0.9, 0.25)
+HOOD = (0.55, 0.42, 0.3, 1.0)
+IDENTITY = (0.0, 0.0, 0.0, 1.0)
+
+
+@dataclass
+class MarkerSpec:
+    ns: str
+    id: int
+    type: int
+    action: int = ADD
+    position: tuple = (0.0, 0.0, 0.0)
+    orientation: tuple = IDENTITY
+    scale: tuple = (1.0, 1.0, 1.0)
+    color: tuple = (0.0, 0.0, 0.0, 0.0)
+    points: np.ndarray = None
+    lifetime_s: int = 1          # stale markers vanish if the node stops
 
 
 def stamp_msg(stamp_ns):
+    from builtin_interfaces.msg import Time
     return Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
 
 
 def tf_message(bones, stamp_ns, prefix=''):
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    stamp = stamp_msg(stamp_ns)
-    out = TFMessage()
-    for name, parent, p, q in zip(bones.names, bones.parents, bones.translations.tolist(),
-                                  bones.quaternions.tolist()):
-        t = TransformStamped()
-        t.header.stamp = stamp
-        t.header.frame_id = parent
-        t.child_frame_id = prefix + name
-        tr, ro = t.transform.translation, t.transform.rotation
-        tr.x, tr.y, tr.z = p
-        ro.x, ro.y, ro.z, ro.w = q
-        out.transforms.append(t)
-    return out
-
-
-def _points(array):
-    return [Point(x=a, y=b, z=c) for a, b, c in array.tolist()]
-
-
-def _marker(ns, mid, kind, frame, stamp):
-    m = Marker()
-    m.header.frame_id = frame
-    m.header.stamp = stamp
-    m.ns, m.id, m.type, m.action = ns, mid, kind, Marker.ADD
-    m.pose.orientation.w = 1.0
-    m.scale.x = m.scale.y = m.scale.z = 1.0
-    m.lifetime = Duration(sec=1)      # stale markers vanish if the node stops
-    return m
+    return cdr.tf_message(bones.names, bones.parents, bones.translations, bones.quaternions,
+                          stamp_ns, prefix)
 
 
 @functools.lru_cache(maxsize=8)
@@ -80,106 +72,68 @@ def grid_lines(rows, cols):
     return np.array(lines)
 
 
-def _place(m, position, quat):
-    m.pose.position.x, m.pose.position.y, m.pose.position.z = np.asarray(position).tolist()
-    o = m.pose.orientation
-    o.x, o.y, o.z, o.w = np.asarray(quat, dtype=float).tolist()
-
-
 def _z_to(direction):
     """Quaternion (x, y, z, w) turning +z onto the unit ``direction``."""
     z = np.array([0.0, 0.0, 1.0])
     axis = np.cross(z, direction)
     s, c = np.linalg.norm(axis), float(z @ direction)
     if s < 1e-9:
-        return (1.0, 0.0, 0.0, 0.0) if c < 0 else (0.0, 0.0, 0.0, 1.0)
+        return (1.0, 0.0, 0.0, 0.0) if c < 0 else IDENTITY
     half = np.arctan2(s, c) / 2
     v = axis / s * np.sin(half)
-    return (v[0], v[1], v[2], np.cos(half))
+    return (float(v[0]), float(v[1]), float(v[2]), float(np.cos(half)))
 
 
-def marker_array(sim, stamp_ns, frame, reset=False):
-    """Cloth mesh and seams, colliders, hood pendulum; DELETEALL per namespace after a reset."""
-    stamp = stamp_msg(stamp_ns)
-    out = MarkerArray()
-    if reset:
-        for ns in MARKER_NAMESPACES:
-            m = Marker()
-            m.header.frame_id, m.header.stamp, m.ns, m.action = frame, stamp, ns, Marker.DELETEALL
-            out.markers.append(m)
+def marker_specs(sim, reset=False):
+    """Cloth mesh and seams, colliders, hood pendulum, jacket bones; DELETEALL after a reset."""
+    out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
+           for ns in MARKER_NAMESPACES] if reset else []
     rig = sim.rig
-    mesh = _marker('cloth', 0, Marker.TRIANGLE_LIST, frame, stamp)
-    mesh.color = TWEED
-    mesh.points = _points(sim.x[grid_triangles(rig.rows, rig.cols)])
-    seams = _marker('cloth', 1, Marker.LINE_LIST, frame, stamp)
-    seams.scale.x = 0.004
-    seams.color = SEAM
-    seams.points = _points(sim.x[grid_lines(rig.rows, rig.cols)])
-    out.markers += [mesh, seams]
+    out.append(MarkerSpec('cloth', 0, TRIANGLE_LIST, color=TWEED,
+                          points=sim.x[grid_triangles(rig.rows, rig.cols)]))
+    out.append(MarkerSpec('cloth', 1, LINE_LIST, scale=(0.004, 1.0, 1.0), color=SEAM,
+                          points=sim.x[grid_lines(rig.rows, rig.cols)]))
     c = sim.collider_frames(sim.links)
     quats = matrix_to_quat(c.axes)
     for k in range(len(c.centers)):
-        m = _marker('colliders', k, Marker.SPHERE, frame, stamp)
-        _place(m, c.centers[k], quats[k])
-        m.scale.x, m.scale.y, m.scale.z = (2 * c.radii[k]).tolist()
-        m.color = GHOST
-        out.markers.append(m)
+        out.append(MarkerSpec('colliders', k, SPHERE, position=tuple(c.centers[k]),
+                              orientation=tuple(quats[k]), scale=tuple(2 * c.radii[k]),
+                              color=GHOST))
     mid = len(c.centers)
     for a, b, r in zip(c.capsule_a, c.capsule_b, c.capsule_radii):
         # A capsule drawn as its cylinder and two end spheres.
         axis = b - a
         length = float(np.linalg.norm(axis))
-        body = _marker('colliders', mid, Marker.CYLINDER, frame, stamp)
-        _place(body, (a + b) / 2, _z_to(axis / max(length, 1e-9)))
-        body.scale.x = body.scale.y = 2 * float(r)
-        body.scale.z = length
-        body.color = GHOST
-        out.markers.append(body)
+        out.append(MarkerSpec('colliders', mid, CYLINDER, position=tuple((a + b) / 2),
+                              orientation=_z_to(axis / max(length, 1e-9)),
+                              scale=(2 * r, 2 * r, length), color=GHOST))
         for k, end in enumerate((a, b)):
-            cap = _marker('colliders', mid + 1 + k, Marker.SPHERE, frame, stamp)
-            _place(cap, end, (0.0, 0.0, 0.0, 1.0))
-            cap.scale.x = cap.scale.y = cap.scale.z = 2 * float(r)
-            cap.color = GHOST
-            out.markers.append(cap)
+            out.append(MarkerSpec('colliders', mid + 1 + k, SPHERE, position=tuple(end),
+                                  scale=(2 * r,) * 3, color=GHOST))
         mid += 3
     for p, n in zip(c.plane_points, c.plane_normals):
-        # A plane drawn as a thin 2 m square around the point nearest the character.
-        centre = (p @ n) * n       # the plane's point below the character's root
-        tile = _marker('colliders', mid, Marker.CUBE, frame, stamp)
-        _place(tile, centre, _z_to(n))
-        tile.scale.x = tile.scale.y = 2.0
-        tile.scale.z = 0.002
-        tile.color = GHOST
-        out.markers.append(tile)
+        # A plane drawn as a thin 2 m square below the character's root.
+        out.append(MarkerSpec('colliders', mid, CUBE, position=tuple((p @ n) * n),
+                              orientation=_z_to(n), scale=(2.0, 2.0, 0.002), color=GHOST))
         mid += 1
+    anchor, _ = sim.hood_anchor(sim.links)
+    out.append(MarkerSpec('hood', 0, LINE_LIST, scale=(0.01, 1.0, 1.0), color=HOOD,
+                          points=np.array([anchor, sim.hood_p])))
+    out.append(MarkerSpec('hood', 1, SPHERE, position=tuple(sim.hood_p), scale=(0.05,) * 3,
+                          color=HOOD))
     if sim.layer is not None:
         # M1/M2 layer bones as segments from their pivots to their tips.
-        bones = _marker('jacket_bones', 0, Marker.LINE_LIST, frame, stamp)
-        bones.scale.x = 0.012
-        bones.color = SEAM
-        bones.points = _points(np.stack([sim.layer.positions, sim.layer.tips], axis=1).reshape(-1, 3))
-        out.markers.append(bones)
-    anchor, _ = sim.hood_anchor(sim.links)
-    rod = _marker('hood', 0, Marker.LINE_LIST, frame, stamp)
-    rod.scale.x = 0.01
-    rod.color = HOOD
-    rod.points = _points(np.array([anchor, sim.hood_p]))
-    bob = _marker('hood', 1, Marker.SPHERE, frame, stamp)
-    bob.pose.position.x, bob.pose.position.y, bob.pose.position.z = sim.hood_p.tolist()
-    bob.scale.x = bob.scale.y = bob.scale.z = 0.05
-    bob.color = HOOD
-    out.markers += [rod, bob]
+        segments = np.stack([sim.layer.positions, sim.layer.tips], axis=1).reshape(-1, 3)
+        out.append(MarkerSpec('jacket_bones', 0, LINE_LIST, scale=(0.012, 1.0, 1.0),
+                              color=SEAM, points=segments))
     return out
+
+
+def marker_array(sim, stamp_ns, frame, reset=False):
+    return cdr.marker_array(marker_specs(sim, reset), stamp_ns, frame)
 
 
 def diagnostics(stamp_ns, node_name, values, level_warn, message):
-    status = DiagnosticStatus()
-    status.level = DiagnosticStatus.WARN if level_warn else DiagnosticStatus.OK
-    status.name = f'{node_name}: cloth simulation'
-    status.message = message
-    status.hardware_id = 'jacket_cloth'
-    status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
-    out = DiagnosticArray()
-    out.header.stamp = stamp_msg(stamp_ns)
-    out.status = [status]
-    return out
+    status = (WARN if level_warn else OK, f'{node_name}: cloth simulation', message,
+              'jacket_cloth', values)
+    return cdr.diagnostic_array(stamp_ns, [status])

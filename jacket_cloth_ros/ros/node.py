@@ -243,7 +243,7 @@ class JacketClothNode(Node):
             self._warn('nan', 'non-finite bone pose: nothing published')
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
-            self._record(self._topics[key][0], serialize_message(out), stamp_ns)
+            self._record(self._topics[key][0], out, stamp_ns)
 
 
 def _read(path):

@@ -114,3 +114,44 @@ def sim_params_from(values):
 def fabric_from(preset, values):
     """The preset with every ``fabric.<field>`` value applied."""
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
+
+
+def parse_override(text, known):
+    """``name:=value`` (as ``--ros-args -p`` takes it) to (name, typed value), validated.
+
+    ``known`` maps parameter names to their current values (their types come from there).
+    """
+    import yaml
+    name, sep, raw = text.partition(':=')
+    if not sep:
+        raise ValueError(f'-p {text!r}: expected name:=value')
+    if name not in known:
+        raise ValueError(f'-p {name}: not a parameter (see README)')
+    try:
+        value = yaml.safe_load(raw) if raw else ''
+    except yaml.YAMLError:
+        value = raw
+    current = known[name]
+    if isinstance(current, bool):
+        ok = isinstance(value, bool)
+    elif isinstance(current, int):
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    elif isinstance(current, float):
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        value = float(value) if ok else value
+    elif isinstance(current, str):
+        value, ok = raw, True
+    else:
+        ok = isinstance(value, list)
+        value = [float(v) for v in value] if ok and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) else value
+    if not ok:
+        raise ValueError(f'-p {name}: {raw!r} is not a {type(current).__name__}')
+    spec = NODE_PARAMETERS.get(name)
+    rng = spec[2] if spec else FABRIC_RANGES.get(name[len('fabric.'):])
+    if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1]:
+        raise ValueError(f'-p {name}: {value} is outside [{rng[0]}, {rng[1]}]')
+    reason = check_value(name, value)
+    if reason:
+        raise ValueError(f'-p {name}: {reason}')
+    return name, value

@@ -68,7 +68,7 @@ class SessionPipeline:
             self.sim.parser.set_world_joint(self.values['world_joint'])
 
     def on_joint_state(self, msg, stamp_ns):
-        """Process one JointState; returns (StepReport, [(output key, message), ...])."""
+        """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
         self.inputs += 1
         report = self.sim.process(stamp_ns, msg.name, msg.position)
         if not report.accepted:

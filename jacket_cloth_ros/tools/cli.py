@@ -124,6 +124,28 @@ def cmd_picture(args):
     return 0
 
 
+def _session(args):
+    from .session import load_session
+    return load_session(args.input, topic=args.topic, urdf=args.urdf, rig=args.rig,
+                        fabric=args.fabric, overrides=args.param or ())
+
+
+def cmd_replay(args):
+    from .replay import replay
+    _check_output(args.output, args.force)
+    session = _session(args)
+    if not session.recording.complete:
+        print(f'jacket_cloth replay: warning: {args.input} is cut short; replaying its '
+              'readable part', file=sys.stderr)
+    pipeline, took = replay(session, args.output)
+    sim = pipeline.sim
+    span = (session.events[-1][0] - session.events[0][0]) * 1e-9
+    print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
+          f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
+          f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
+    return 0
+
+
 def cmd_demo(args):
     """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
     from ..tools.picture import render_filmstrip
@@ -196,7 +218,25 @@ def build_parser():
     f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
     f.add_argument('--force', action='store_true')
     f.set_defaults(func=cmd_picture)
+    r = sub.add_parser('replay', help='run a recording through the simulation again')
+    r.add_argument('input', help='an MCAP file or a rosbag2 bag directory (MCAP storage)')
+    r.add_argument('-o', '--output', required=True, help='the MCAP file to write')
+    _session_options(r)
+    r.add_argument('--force', action='store_true', help='overwrite the output file')
+    r.set_defaults(func=cmd_replay)
     return p
+
+
+def _session_options(parser):
+    parser.add_argument('--topic', default=None,
+                        help='JointState topic (default: the only one in the file)')
+    parser.add_argument('--urdf', default=None,
+                        help='URDF file (default: the recorded one, else the shipped character)')
+    parser.add_argument('--rig', default=None,
+                        help='rig YAML (default: the recorded one, else the shipped rig)')
+    parser.add_argument('--fabric', default=None, help='fabric preset instead of the recorded')
+    parser.add_argument('-p', '--param', action='append', metavar='NAME:=VALUE',
+                        help='a node parameter, as with --ros-args -p (repeatable)')
 
 
 def main(argv=None):

@@ -1,0 +1,37 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth replay``: a recording through the live node's pipeline, as fast as it runs.
+
+Writes what the node would have recorded: the input JointState (and wind and parameter
+changes) as they were, and the /tf, markers and diagnostics the simulation gives now. Same
+input and set-up: a byte-identical file (no wall-clock figure goes into it).
+"""
+
+import os
+import time
+
+from ..recording.writer import SessionRecorder
+from .session import output_topics, run_session
+
+
+def replay(session, out_path):
+    """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
+    topics = output_topics(session)
+    tmp = out_path + '.partial'
+    recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path))
+    try:
+        for name, kind, qos in topics.values():
+            recorder.add_topic(name, kind, qos)
+        setup = session.setup
+        recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
+                                    setup.values)
+        started = time.perf_counter()
+        pipeline = run_session(
+            session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data, stamp))
+        took = time.perf_counter() - started
+        recorder.close()
+        os.replace(tmp, out_path)           # a failed replay leaves no half-written output
+    finally:
+        recorder.close()
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return pipeline, took

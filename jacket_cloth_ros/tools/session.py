@@ -1,0 +1,182 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A recorded session as input to the simulation: its inputs, its set-up, and a runner.
+
+The replay and the analysis both run a recording through :class:`SessionPipeline`, the same
+per-input path as the live node. The set-up (URDF, rig, fabrics, parameters) comes from the
+recording when the node wrote it, and can be overridden; foreign recordings (a rosbag2 bag or a
+plain MCAP file with ``sensor_msgs/msg/JointState``) need at least the URDF, and a rig unless
+the shipped one fits the skeleton.
+"""
+
+import json
+from dataclasses import dataclass
+
+from rcl_interfaces.msg import ParameterEvent
+from rclpy.parameter import Parameter
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import JointState
+
+from ..core.config import ConfigError, parse_yaml, shipped
+from ..core.fabric import fabrics_from_data
+from ..core.rig import Rig
+from ..core.skeleton import Skeleton
+from ..recording.reader import RecordingError, read_recording
+from ..recording.writer import SESSION_CONFIG
+from ..ros.parameters import default_values, parse_override
+from ..ros.pipeline import SessionPipeline, session_topics
+
+JOINT_STATE = 'sensor_msgs/msg/JointState'
+PARAMETER_EVENT = 'rcl_interfaces/msg/ParameterEvent'
+WIND = 'geometry_msgs/msg/Vector3Stamped'
+
+
+@dataclass
+class SessionSetup:
+    urdf: str
+    rig_yaml: str
+    fabrics_yaml: str
+    values: dict
+    skeleton: Skeleton
+    rig: Rig
+    fabrics: dict
+
+
+@dataclass
+class SessionInput:
+    recording: object            # reader.Recording
+    topic: str                   # the JointState topic
+    events: list                 # (stamp_ns, order, kind, bytes): what the simulation is fed
+    setup: SessionSetup
+
+
+def _read_text(path, what):
+    try:
+        with open(path, encoding='utf-8') as f:
+            return f.read()
+    except OSError as e:
+        raise ConfigError(f'{what} {path}: cannot read ({e.strerror})') from None
+
+
+def joint_state_topic(recording, topic=None):
+    """The recording's JointState topic: the one asked for, else the only one there is."""
+    listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
+    if topic is not None:
+        if topic not in recording.topics:
+            raise RecordingError(f'{recording.path}: no topic {topic} (topics: {listed or "none"})')
+        if recording.topics[topic] != JOINT_STATE:
+            raise RecordingError(f'{recording.path}: {topic} is {recording.topics[topic]!r}, '
+                                 f'not {JOINT_STATE}')
+        return topic
+    found = [t for t, k in recording.topics.items() if k == JOINT_STATE]
+    if not found:
+        raise RecordingError(f'{recording.path}: no {JOINT_STATE} topic (topics: '
+                             f'{listed or "none"})')
+    if len(found) > 1:
+        if '/joint_states' in found:
+            return '/joint_states'
+        raise RecordingError(f'{recording.path}: several JointState topics ({", ".join(found)});'
+                             ' choose one with --topic')
+    return found[0]
+
+
+def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=()):
+    """Read a recording and settle its set-up: recorded values, then the options given."""
+    recording = read_recording(path)
+    topic = joint_state_topic(recording, topic)
+    recorded = recording.metadata.get(SESSION_CONFIG, {})
+    urdf_text = _read_text(urdf, 'URDF') if urdf else recorded.get('urdf')
+    if not urdf_text:
+        with open(shipped('character.urdf'), encoding='utf-8') as f:
+            urdf_text = f.read()
+    skeleton = Skeleton(urdf_text)
+    rig_yaml = _read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or _read_text(
+        shipped('jacket_rig.yaml'), 'rig')
+    rig_obj = Rig(parse_yaml(rig_yaml, rig or 'the rig'), skeleton, where=rig or 'rig')
+    fabrics_yaml = recorded.get('fabrics_yaml') or _read_text(shipped('fabrics.yaml'), 'fabrics')
+    fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, 'fabrics'), 'fabrics')
+    recorded_values = json.loads(recorded.get('parameters_json', '{}'))
+    preset = fabric or recorded_values.get('fabric', 'tweed_jacket')
+    if preset not in fabrics:
+        raise ConfigError(f'fabric {preset!r} is not a preset (presets: {", ".join(fabrics)})')
+    values = default_values(fabrics[preset])
+    if fabric is None:
+        values.update({k: v for k, v in recorded_values.items() if k in values})
+    else:        # a preset asked for: its fabric.* values, the recording's other parameters
+        values.update({k: v for k, v in recorded_values.items()
+                       if k in values and not k.startswith('fabric')})
+        values['fabric'] = preset
+    for text in overrides:
+        name, value = parse_override(text, values)
+        values[name] = value
+    setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics)
+    return SessionInput(recording, topic, _events(recording, topic), setup)
+
+
+def _events(recording, topic):
+    """JointState, wind and parameter changes in stamp order; at one stamp the JointState first
+    (the node records a change at the stamp of the input before it)."""
+    events = []
+    for m in recording.messages:
+        if m.topic == topic:
+            events.append((m.log_time, 0, 'joint_states', m.data))
+        elif m.type_name == PARAMETER_EVENT:
+            events.append((m.log_time, 1, 'parameter_events', m.data))
+        elif m.type_name == WIND and m.topic.endswith('/wind'):
+            events.append((m.log_time, 1, 'wind', m.data))
+    events.sort(key=lambda e: (e[0], e[1]))
+    if not any(e[2] == 'joint_states' for e in events):
+        raise RecordingError(f'{recording.path}: {topic} has no messages')
+    return events
+
+
+def _parameter_changes(data, values):
+    event = deserialize_message(data, ParameterEvent)
+    changes = {}
+    for msg in list(event.new_parameters) + list(event.changed_parameters):
+        p = Parameter.from_parameter_msg(msg)
+        if p.name in values and p.name != 'record':
+            value = p.value
+            changes[p.name] = [float(v) for v in value] if p.type_ == \
+                Parameter.Type.DOUBLE_ARRAY else value
+    return changes
+
+
+def run_session(session, sink=None, probe=None, timing=False):
+    """Feed a session to a fresh pipeline. ``sink(key, bytes, stamp)`` receives every message
+    the node would record; ``probe(pipeline, report, stamp, outputs)`` sees the state after each
+    input (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step
+    costs into diagnostics as the live node does; a replay file then differs run to run.
+    Returns the pipeline."""
+    setup = session.setup
+    pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
+                               timing=timing)
+    for stamp, _, kind, data in session.events:
+        if kind == 'joint_states':
+            try:
+                msg = deserialize_message(data, JointState)
+            except Exception as e:  # noqa: BLE001 - a foreign writer's bytes: one clear line
+                raise RecordingError(f'{session.recording.path}: a {session.topic} message at '
+                                     f'{stamp} ns does not decode as JointState ({e})') from None
+            report, outputs = pipeline.on_joint_state(msg, stamp)
+            if sink:
+                sink('joint_states', data, stamp)
+                for key, out in outputs:
+                    sink(key, out, stamp)
+            if probe:
+                probe(pipeline, report, stamp, outputs)
+        else:
+            if kind == 'parameter_events':
+                pipeline.apply(_parameter_changes(data, pipeline.values))
+            if sink:
+                sink(kind, data, stamp)
+    return pipeline
+
+
+def output_topics(session):
+    """The topics a replay writes, named as the node names them (inputs keep their names)."""
+    topics = session_topics(joint_states=session.topic)
+    for m in session.recording.messages:
+        if m.type_name == WIND and m.topic.endswith('/wind'):
+            topics['wind'] = (m.topic,) + topics['wind'][1:]
+            break
+    return topics
