@@ -123,7 +123,8 @@ class JacketSimulation:
         self.steps_total = 0
         self.overruns = 0
         self._bone_rc = np.array(rig.bone_vertices(), dtype=int).reshape(-1, 2)
-        self.layer = rig.layer.solve(self.links) if rig.layer else None
+        self._pads = self._solve_layer(self.links, full=False)
+        self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         layer_names = rig.layer.names if rig.layer else []
         layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
         root = skeleton.link_names[0]
@@ -195,8 +196,15 @@ class JacketSimulation:
         w = rig.pin_weight[:, None]
         return (1.0 - w) * top + w * below
 
-    def _solve_layer(self, links):
-        return self.rig.layer.solve(links) if self.rig.layer else None
+    def _solve_layer(self, links, full=True):
+        return self.rig.layer.solve(links, full) if self.rig.layer else None
+
+    @property
+    def layer(self):
+        """M1/M2 bones for the current skeleton pose (solved once per pose, on demand)."""
+        if self._layer is None or self._layer[0] is not self.links:
+            self._layer = (self.links, self._solve_layer(self.links))
+        return self._layer[1]
 
     def hood_anchor(self, links):
         """The hood bone's centre and its link's rotation, in the simulation frame."""
@@ -206,9 +214,9 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
-        self.layer = self._solve_layer(self.links)
-        self.x = self.reference_points(self.links, self.layer)
-        self.x[:self.rig.cols] = self.pinned_points(self.links, self.layer)
+        self._pads = self._solve_layer(self.links, full=False)
+        self.x = self.reference_points(self.links, self._pads)
+        self.x[:self.rig.cols] = self.pinned_points(self.links, self._pads)
         self.xp = self.x.copy()
         self.contact[:] = False
         anchor, rot = self.hood_anchor(self.links)
@@ -218,6 +226,13 @@ class JacketSimulation:
         self.t_sim = sample.stamp_ns
         self.last = sample
         self.resets += 1
+        # The skinned pose is not a cloth at rest (reference points ride different bones):
+        # settle it once, constraints and collisions without motion, so no step starts from a
+        # stretched grid and snaps.
+        self._cloth_step(self.links, self.root, np.zeros((self.rig.n, 3)),
+                         np.ones(self.rig.n), 0.0)
+        self.xp = self.x.copy()
+        self.contact[:] = False
 
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns, names, positions):
@@ -311,22 +326,27 @@ class JacketSimulation:
         wind = world_to_local @ p.wind_at(self.t_sim or 0)
         acc = gravity + self.wind_scale[:, None] * wind
         # M2 then M6: the upper jacket is solved, the pinned top row follows it.
-        self.layer = self._solve_layer(links)
-        top = self.pinned_points(links, self.layer)
+        self._pads = self._solve_layer(links, full=False)
+        top = self.pinned_points(links, self._pads)
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
-        ref = self.reference_points(links, self.layer)
+        deepest, limited = self._cloth_step(links, root, acc, self.damping, dt)
+        report.max_penetration = max(report.max_penetration, deepest)
+        report.limited_vertices += limited
+        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
+
+    def _cloth_step(self, links, root, acc, damping, dt):
+        """The kernel's step on the current state, for this skeleton pose."""
+        p, rig = self.params, self.rig
+        ref = self.reference_points(links, self._pads)
         c = self.collider_frames(links, root)
-        deepest, limited = kernel.cloth_step(
-            self.x, self.xp, rig.free, acc, self.damping, self.contact,
+        return kernel.cloth_step(
+            self.x, self.xp, rig.free, acc, damping, self.contact,
             self.fabric.contact_damping, dt, rig.con_a, rig.con_b, rig.con_rest, self.stiffness,
             self.fabric.iterations, c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b,
             c.capsule_radii, c.plane_points, c.plane_normals, ref, self.max_distance,
             STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
             rig.tether_anchor, rig.tether_length)
-        report.max_penetration = max(report.max_penetration, deepest)
-        report.limited_vertices += limited
-        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
 
     def _hood_step(self, links, acc, dt):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
@@ -378,12 +398,13 @@ class JacketSimulation:
         hood_pos = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
         rot = [frames, hood_rot[None]]
         pos = [origin, hood_pos[None]]
-        if self.layer is not None:
+        layer = self.layer
+        if layer is not None:
             # M1/M2 layer bones relative to their parent links.
-            parent = self.links[np.array(self.layer.parents)]
+            parent = self.links[np.array(layer.parents)]
             pr = np.transpose(parent[:, :3, :3], (0, 2, 1))
-            rot.append(pr @ self.layer.rotations)
-            pos.append(np.einsum('nij,nj->ni', pr, self.layer.positions - parent[:, :3, 3]))
+            rot.append(pr @ layer.rotations)
+            pos.append(np.einsum('nij,nj->ni', pr, layer.positions - parent[:, :3, 3]))
         return Bones(self.bone_names, self.bone_parents, np.concatenate(pos),
                      matrix_to_quat(np.concatenate(rot)))
 

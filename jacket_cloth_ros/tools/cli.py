@@ -146,6 +146,28 @@ def cmd_replay(args):
     return 0
 
 
+def cmd_analyze(args):
+    from .analyze import analyze
+    if len(args.input) > 1 and not args.compare:
+        raise ToolError('several sessions: add --compare to lay them side by side')
+    report_path = os.path.join(args.out, 'report.json')
+    if os.path.exists(report_path) and not args.force:
+        raise ToolError(f'{report_path} exists (use --force to overwrite)')
+    sessions = []
+    for path in args.input:
+        session = _session(argparse.Namespace(**{**vars(args), 'input': path}))
+        if not session.recording.complete:
+            print(f'jacket_cloth analyze: warning: {path} is cut short; analysing its readable '
+                  'part', file=sys.stderr)
+        sessions.append(session)
+    report = analyze(sessions, args.out, moments=args.moments)
+    print(f'{os.path.join(args.out, "report.json")}: '
+          + '; '.join(f'{os.path.basename(r["file"])} {r["frames"]} frames, vertical strain '
+                      f'{r["max_vertical_strain"]:.3f}, step {r["step_time_us"]["median"]:.0f}'
+                      ' us median' for r in report.get('sessions', [report])))
+    return 0
+
+
 def cmd_demo(args):
     """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
     from ..tools.picture import render_filmstrip
@@ -224,6 +246,14 @@ def build_parser():
     _session_options(r)
     r.add_argument('--force', action='store_true', help='overwrite the output file')
     r.set_defaults(func=cmd_replay)
+    a = sub.add_parser('analyze', help='figures, charts and a filmstrip of recorded sessions')
+    a.add_argument('input', nargs='+', help='MCAP files or rosbag2 bag directories')
+    a.add_argument('--out', required=True, help='folder for report.json, summary.md, PNGs')
+    a.add_argument('--compare', action='store_true', help='lay several sessions side by side')
+    a.add_argument('--moments', type=int, default=6, help='filmstrip frames per session')
+    _session_options(a)
+    a.add_argument('--force', action='store_true', help='overwrite an existing report')
+    a.set_defaults(func=cmd_analyze)
     return p
 
 

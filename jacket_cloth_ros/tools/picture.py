@@ -1,12 +1,15 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""A filmstrip of a recorded session: skeleton, jacket and hood at chosen moments.
+"""A filmstrip of a session: skeleton, jacket, hood and jacket bones at chosen moments.
 
-Drawn from what the node published: the cloth mesh, hood and jacket bones from the recorded
-markers, the skeleton from the recorded JointState through the same forward kinematics the node
-used. The response is shown against the skinned pose the simulation starts from (dashed: the
-jacket's reference hem and the hood at rest, as the rig puts them for that skeleton pose): the
-gap between dashed and solid is what the cloth and the pendulum add.
+Frames come either from a recording (the cloth mesh, hood and jacket bones as the node
+published them on ~/markers, the skeleton from the recorded JointState through the same forward
+kinematics) or straight from a simulation being run (the analysis). The response is drawn
+against the skinned pose the simulation starts from (dashed: the jacket's reference hem and the
+hood at rest for that skeleton pose): the gap between dashed and solid is what the cloth and
+the pendulum add.
 """
+
+from dataclasses import dataclass
 
 import matplotlib
 
@@ -21,88 +24,99 @@ from ..core.fabric import load_fabric  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import read_messages  # noqa: E402
+from ..ros.messages import grid_triangles  # noqa: E402
 
 VIEWS = (('side', 0, 'x (m, forward)'), ('front', 1, 'y (m, left)'))
+
+
+@dataclass
+class Frame:
+    stamp_ns: int
+    triangles: np.ndarray       # (T,3,3) cloth mesh
+    hood: np.ndarray            # (2,3) anchor and particle
+    bones: np.ndarray           # (B,2,3) jacket bone segments
+    links: np.ndarray           # (L,3) skeleton link origins
+    hem_ref: np.ndarray = None  # (C,3) skinned hem
+    hood_ref: np.ndarray = None  # (2,3) hood at rest
+
+
+def sim_frame(sim, stamp_ns):
+    """A frame of a running simulation (its current state)."""
+    rig = sim.rig
+    layer = sim.layer
+    ref = sim.reference_points(sim.links, layer).reshape(rig.rows, rig.cols, 3)
+    anchor, rot = sim.hood_anchor(sim.links)
+    rest = anchor + rot @ rig.hood.rest_direction * rig.hood.length
+    bones = np.stack([layer.positions, layer.tips], axis=1) if layer else np.zeros((0, 2, 3))
+    return Frame(stamp_ns, sim.x[grid_triangles(rig.rows, rig.cols)].reshape(-1, 3, 3),
+                 np.array([anchor, sim.hood_p]), bones, sim.links[:, :3, 3].copy(),
+                 ref[-1].copy(), np.array([anchor, rest]))
 
 
 def _stamp(msg):
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
-def _markers_by_time(messages):
-    out = []
-    for m in messages:
-        if m.type_name.endswith('MarkerArray'):
-            arr = deserialize_message(m.data, MarkerArray)
-            mesh = [k for k in arr.markers if k.ns == 'cloth' and k.id == 0
-                    and k.action == Marker.ADD]
-            hood = [k for k in arr.markers if k.ns == 'hood' and k.id == 0
-                    and k.action == Marker.ADD]
-            bones = [k for k in arr.markers if k.ns == 'jacket_bones' and k.id == 0
-                     and k.action == Marker.ADD]
-            if mesh and hood:
-                tri = np.array([[p.x, p.y, p.z] for p in mesh[0].points]).reshape(-1, 3, 3)
-                rod = np.array([[p.x, p.y, p.z] for p in hood[0].points])
-                segments = np.array([[p.x, p.y, p.z] for p in bones[0].points]).reshape(
-                    -1, 2, 3) if bones else np.zeros((0, 2, 3))
-                out.append((m.log_time, tri, rod, segments))
-    return out
-
-
-def _skinned(sim, links):
-    """The reference hem (M11 reference points of the last row) and the hood at rest."""
-    layer = sim._solve_layer(links)
-    ref = sim.reference_points(links, layer).reshape(sim.rig.rows, sim.rig.cols, 3)
-    anchor, rot = sim.hood_anchor(links)
-    hood = np.array([anchor, anchor + rot @ sim.rig.hood.rest_direction * sim.rig.hood.length])
-    return ref[-1], hood
-
-
-def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None,
-                     times=None, rig=None):
-    """Write a PNG of the session at ``times`` (s from its start) or at ``moments`` evenly
-    spaced instants; returns the stamps drawn. With ``rig``, the skinned pose is drawn too."""
+def recorded_frames(mcap_path, skeleton, rig=None):
+    """Frames at every recorded MarkerArray with a mesh; the skeleton from the nearest input."""
     messages, _ = read_messages(mcap_path)
-    frames = _markers_by_time(messages)
     states = [deserialize_message(m.data, JointState) for m in messages
               if m.type_name.endswith('JointState')]
-    if not frames or not states:
+    parser = InputParser(skeleton)
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket')) if rig else None
+    out = []
+    for m in messages:
+        if not m.type_name.endswith('MarkerArray'):
+            continue
+        arr = deserialize_message(m.data, MarkerArray)
+        found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
+        if ('cloth', 0) not in found or ('hood', 0) not in found:
+            continue
+        pts = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+        bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
+        js = min(states, key=lambda s: abs(_stamp(s) - m.log_time))
+        poses = skeleton.forward(parser.parse(_stamp(js), js.name, js.position).q)
+        frame = Frame(m.log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
+                      poses[:, :3, 3])
+        if sim is not None:
+            sim.links = poses          # the skinned pose of this skeleton pose
+            skinned = sim_frame(sim, m.log_time)
+            frame.hem_ref, frame.hood_ref = skinned.hem_ref, skinned.hood_ref
+        out.append(frame)
+    if not out or not states:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
-    t0 = _stamp(states[0])
+    return out, _stamp(states[0])
+
+
+def pick(frames, t0, times=None, moments=6):
+    """Frames nearest ``times`` (s after t0), or ``moments`` evenly spaced ones."""
     if times is None:
         picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
     else:
-        stamps = np.array([f[0] for f in frames])
+        stamps = np.array([f.stamp_ns for f in frames])
         picks = [int(np.argmin(np.abs(stamps - (t0 + t * 1e9)))) for t in times]
-    moments = len(picks)
-    parser = InputParser(skeleton)
-    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket')) if rig else None
-    fig, axes = plt.subplots(2, moments, figsize=(2.6 * moments, 7.2), squeeze=False)
-    chosen = []
-    for col, k in enumerate(picks):
-        stamp, tri, rod, segments = frames[k]
-        js = min(states, key=lambda s: abs(_stamp(s) - stamp))
-        sample = parser.parse(_stamp(js), js.name, js.position)
-        poses = skeleton.forward(sample.q)
-        links = poses[:, :3, 3]
-        hem, hood_rest = _skinned(sim, poses) if sim else (None, None)
-        chosen.append(stamp)
+    return [frames[k] for k in picks]
+
+
+def draw_filmstrip(frames, skeleton, png_path, t0, labels=None, title=None):
+    """Two rows (side and front view), one column per frame."""
+    fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
+    for col, f in enumerate(frames):
         for row, (view, axis, xlabel) in enumerate(VIEWS):
             ax = axes[row][col]
-            for i in range(1, len(links)):
-                p = links[[skeleton.parent[i], i]]
+            for i in range(1, len(f.links)):
+                p = f.links[[skeleton.parent[i], i]]
                 ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
             ax.add_collection(matplotlib.collections.PolyCollection(
-                tri[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
+                f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
                 edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
-            for seg in segments:
+            for seg in f.bones:
                 ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
-            ax.plot(rod[:, axis], rod[:, 2], color=(0.75, 0.3, 0.1), lw=3)
-            ax.plot(rod[1, axis], rod[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
-            if hem is not None:
-                ax.plot(hem[:, axis], hem[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
-                ax.plot(hood_rest[:, axis], hood_rest[:, 2], '--', color=(0.2, 0.2, 0.8),
-                        lw=1.2)
+            ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
+            ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
+            for ref in (f.hem_ref, f.hood_ref):
+                if ref is not None:
+                    ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
             ax.set_xlim(-0.7, 0.7)
             ax.set_ylim(-1.0, 1.3)
             ax.set_aspect('equal')
@@ -112,12 +126,21 @@ def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, titl
             if col == 0:
                 ax.set_ylabel(f'{view} view: z (m, up)', fontsize=8)
             if row == 0:
-                name = labels(stamp - t0) if labels else ''
-                ax.set_title(f't = {(stamp - t0) * 1e-9:.1f} s {name}', fontsize=9)
+                name = labels(f.stamp_ns - t0) if labels else ''
+                ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
     fig.suptitle(title or 'jacket (brown), hood pendulum (orange) and jacket bones (navy) on '
                  'the skeleton, character frame; dashed blue: skinned hem and hood at rest',
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(png_path, dpi=110)
     plt.close(fig)
-    return chosen
+
+
+def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None,
+                     times=None, rig=None):
+    """Filmstrip of a recording at ``times`` (s from its start) or ``moments`` evenly spaced
+    instants; with ``rig``, the skinned pose is drawn too. Returns the stamps drawn."""
+    frames, t0 = recorded_frames(mcap_path, skeleton, rig)
+    chosen = pick(frames, t0, times, moments)
+    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title)
+    return [f.stamp_ns for f in chosen]

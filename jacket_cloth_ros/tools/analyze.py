@@ -1,0 +1,205 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth analyze``: a session's figures, charts and filmstrip; several side by side.
+
+The session's inputs run through the same pipeline as the live node (its recorded set-up, or
+the options given), so every figure is the simulation's own, per input: strain, push-out depth,
+M11 interventions, resets, wall time per step. When the file holds the node's /tf, every
+re-simulated /tf is compared byte for byte with the recorded one (``replay_matches_recording``).
+Sessions compared in one call are timed in the same process, so their step-time ratios hold.
+"""
+
+import json
+import os
+
+import matplotlib
+
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .picture import draw_filmstrip, sim_frame  # noqa: E402
+from .session import run_session  # noqa: E402
+
+REPORTED_PARAMETERS = ('fabric', 'sim_rate', 'stretch_limit', 'fabric.iterations',
+                       'fabric.damping', 'fabric.world_share', 'wind', 'wind_gust')
+
+
+class SessionFigures:
+    """Per-input series of one session, gathered while it runs."""
+
+    def __init__(self, session, moments):
+        self.session = session
+        stamps = [e[0] for e in session.events if e[2] == 'joint_states']
+        self.t0, t1 = stamps[0], stamps[-1]
+        self.targets = list(np.linspace(self.t0, t1, moments + 2)[1:-1].astype(np.int64))
+        self.recorded_tf = {m.log_time: m.data for m in session.recording.messages
+                            if m.topic == '/tf'}
+        self.rows = []
+        self.frames = []
+        self.reset_reasons = []
+        self.tf_compared = 0
+        self.tf_equal = 0
+        self.nonfinite = 0
+        self.published = 0
+
+    def probe(self, pipeline, report, stamp, outputs):
+        sim = pipeline.sim
+        if not report.accepted:
+            return
+        if report.reset:
+            self.reset_reasons.append(report.reset)
+            if report.reset == 'non-finite cloth state':
+                self.nonfinite += 1
+        tf = [data for key, data in outputs if key == 'tf']
+        if not tf:
+            self.nonfinite += 1
+        else:
+            self.published += 1
+            if stamp in self.recorded_tf:
+                self.tf_compared += 1
+                self.tf_equal += self.recorded_tf[stamp] == tf[0]
+        vert, horiz = sim.strain()
+        rig = sim.rig
+        ref = sim.reference_points(sim.links, sim.layer)
+        hem = slice((rig.rows - 1) * rig.cols, rig.n)
+        anchor, rot = sim.hood_anchor(sim.links)
+        d = sim.hood_p - anchor
+        rest = rot @ rig.hood.rest_direction
+        hood = np.degrees(np.arccos(np.clip(d @ rest / max(np.linalg.norm(d), 1e-12), -1, 1)))
+        self.rows.append((
+            (stamp - self.t0) * 1e-9, report.steps, report.max_penetration,
+            report.limited_vertices, vert, horiz,
+            report.step_cost_ns / report.steps * 1e-3 if report.steps else np.nan,
+            float(np.linalg.norm(sim.x[hem] - ref[hem], axis=1).mean()), hood))
+        while self.targets and stamp >= self.targets[0]:
+            self.targets.pop(0)
+            self.frames.append(sim_frame(sim, stamp))
+
+    def report(self, pipeline):
+        a = np.array(self.rows, dtype=float).reshape(-1, 9)
+        step_us = a[:, 6][np.isfinite(a[:, 6])]
+        values = pipeline.values
+        return {
+            'file': os.path.abspath(self.session.recording.path),
+            'complete': self.session.recording.complete,
+            'topic': self.session.topic,
+            'frames': self.published,
+            'inputs': pipeline.inputs,
+            'dropped_inputs': pipeline.dropped,
+            'sim_steps': pipeline.sim.steps_total,
+            'duration_s': float(a[-1, 0]) if len(a) else 0.0,
+            'max_vertical_strain': float(a[:, 4].max()) if len(a) else 0.0,
+            'max_horizontal_strain': float(a[:, 5].max()) if len(a) else 0.0,
+            'max_penetration_m': float(a[:, 2].max()) if len(a) else 0.0,
+            'max_distance_exceeded': int(a[:, 3].sum()),
+            'nonfinite_count': self.nonfinite,
+            'resets': len(self.reset_reasons),
+            'reset_reasons': self.reset_reasons,
+            'step_time_us': {
+                'median': float(np.median(step_us)) if len(step_us) else None,
+                'p99': float(np.percentile(step_us, 99)) if len(step_us) else None},
+            'hem_offset_m': {'max': float(a[:, 7].max()) if len(a) else 0.0,
+                             'mean': float(a[:, 7].mean()) if len(a) else 0.0},
+            'hood_swing_deg': {'max': float(a[:, 8].max()) if len(a) else 0.0},
+            'replay_matches_recording': (self.tf_equal == self.tf_compared)
+            if self.tf_compared else None,
+            'recorded_tf_compared': self.tf_compared,
+            'parameters': {k: values[k] for k in REPORTED_PARAMETERS if k in values},
+        }
+
+
+def _series_chart(path, series, columns, title):
+    """One panel per column; one line per session."""
+    fig, axes = plt.subplots(len(columns), 1, figsize=(10, 2.2 * len(columns)), sharex=True,
+                             squeeze=False)
+    for ax, (col, label, scale) in zip(axes[:, 0], columns):
+        for name, rows in series:
+            ax.plot(rows[:, 0], rows[:, col] * scale, lw=1, label=name)
+        ax.set_ylabel(label, fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel('time in the session (s)')
+    if len(series) > 1:
+        axes[0, 0].legend(fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+CHARTS = {
+    'strain.png': ([(4, 'vertical strain', 1.0), (5, 'horizontal strain', 1.0)],
+                   'worst relative stretch of the simulated stretch constraints, per input'),
+    'penetration.png': ([(2, 'push-out depth (mm)', 1e3), (3, 'M11 vertices moved', 1.0)],
+                        'deepest collider push-out and M11 interventions, per input'),
+    'step_cost.png': ([(6, 'wall time per step (us)', 1.0)],
+                      'simulation wall time per fixed step, measured while analysing'),
+    'motion.png': ([(7, 'hem offset from skinned (cm)', 100.0), (8, 'hood swing (deg)', 1.0)],
+                   'hem motion (mean distance from the skinned hem) and hood swing from rest'),
+}
+
+
+def analyze(sessions, out_dir, names=None, moments=6):
+    """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
+    os.makedirs(out_dir, exist_ok=True)
+    names = names or [os.path.basename(s.recording.path.rstrip('/')) for s in sessions]
+    reports, series = [], []
+    for name, session in zip(names, sessions):
+        figures = SessionFigures(session, moments)
+        pipeline = run_session(session, probe=figures.probe)
+        reports.append(figures.report(pipeline))
+        series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
+        strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'
+        if figures.frames:
+            draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
+                           figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
+                           'bones (navy); dashed blue: skinned hem and hood')
+        reports[-1]['filmstrip'] = strip
+    for chart, (columns, title) in CHARTS.items():
+        _series_chart(os.path.join(out_dir, chart), series, columns, title)
+    if len(reports) == 1:
+        report = dict(reports[0])
+    else:
+        base = reports[0]['step_time_us']['median']
+        for r in reports:
+            med = r['step_time_us']['median']
+            r['step_time_vs_first'] = med / base if med and base else None
+        report = {'sessions': reports}
+    report['charts'] = sorted(CHARTS)
+    with open(os.path.join(out_dir, 'report.json'), 'w', encoding='utf-8') as f:
+        json.dump(report, f, indent=2)
+    with open(os.path.join(out_dir, 'summary.md'), 'w', encoding='utf-8') as f:
+        f.write(_summary(names, reports))
+    return report
+
+
+def _summary(names, reports):
+    rows = [
+        ('frames (/tf published)', lambda r: r['frames']),
+        ('simulation steps', lambda r: r['sim_steps']),
+        ('duration (s)', lambda r: f"{r['duration_s']:.1f}"),
+        ('max vertical strain', lambda r: f"{r['max_vertical_strain']:.4f}"),
+        ('max horizontal strain', lambda r: f"{r['max_horizontal_strain']:.4f}"),
+        ('max push-out (mm)', lambda r: f"{r['max_penetration_m'] * 1e3:.1f}"),
+        ('M11 vertex-steps moved', lambda r: r['max_distance_exceeded']),
+        ('non-finite', lambda r: r['nonfinite_count']),
+        ('resets', lambda r: f"{r['resets']} ({'; '.join(r['reset_reasons'])})"),
+        ('step time median / p99 (us)', lambda r: _pair(r['step_time_us'])),
+        ('hem offset max (cm)', lambda r: f"{r['hem_offset_m']['max'] * 100:.1f}"),
+        ('hood swing max (deg)', lambda r: f"{r['hood_swing_deg']['max']:.0f}"),
+        ('replay matches recording', lambda r: r['replay_matches_recording']),
+    ]
+    lines = ['# Session analysis', '',
+             '| | ' + ' | '.join(names) + ' |', '|---' * (len(names) + 1) + '|']
+    for label, get in rows:
+        lines.append(f'| {label} | ' + ' | '.join(str(get(r)) for r in reports) + ' |')
+    lines += ['', 'Step times were measured in this run, one session after the other; '
+              'compare them as ratios, not across runs.', '',
+              'Charts: ' + ', '.join(f'[{c}]({c})' for c in sorted(CHARTS)) + '; filmstrip: '
+              + ', '.join(f'[{r["filmstrip"]}]({r["filmstrip"]})' for r in reports), '']
+    return '\n'.join(lines)
+
+
+def _pair(t):
+    if t['median'] is None:
+        return 'n/a'
+    return f"{t['median']:.1f} / {t['p99']:.1f}"
