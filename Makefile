@@ -20,7 +20,7 @@ else
   SETUP := system
 endif
 
-.PHONY: all setup demo test bench-kernel clean-venv
+.PHONY: all setup demo analysis test bench-kernel clean-venv
 all: test
 
 setup: $(READY)
@@ -48,6 +48,14 @@ endif
 
 demo: $(READY)
 	$(PY) -m jacket_cloth_ros demo --out out/demo
+
+# The demo session replayed as a down jacket, both analysed side by side (README picture).
+analysis: $(READY)
+	test -f out/demo/session.mcap || $(MAKE) demo
+	$(PY) -m jacket_cloth_ros replay out/demo/session.mcap -o out/demo/down_jacket.mcap \
+	    --fabric down_jacket --force
+	$(PY) -m jacket_cloth_ros analyze out/demo/session.mcap out/demo/down_jacket.mcap \
+	    --compare --out out/analysis --force
 
 test: $(READY)
 	$(PY) -m pytest -q test

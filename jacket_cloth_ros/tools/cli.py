@@ -126,17 +126,20 @@ def cmd_picture(args):
 
 def _session(args):
     from .session import load_session
-    return load_session(args.input, topic=args.topic, urdf=args.urdf, rig=args.rig,
-                        fabric=args.fabric, overrides=args.param or ())
+    session = load_session(args.input, topic=args.topic, urdf=args.urdf, rig=args.rig,
+                           fabric=args.fabric, overrides=args.param or ())
+    for line in session.warnings:
+        print(f'jacket_cloth {args.command}: warning: {args.input}: {line}', file=sys.stderr)
+    if not session.recording.complete:
+        print(f'jacket_cloth {args.command}: warning: {args.input} is cut short; using its '
+              'readable part', file=sys.stderr)
+    return session
 
 
 def cmd_replay(args):
     from .replay import replay
     _check_output(args.output, args.force)
     session = _session(args)
-    if not session.recording.complete:
-        print(f'jacket_cloth replay: warning: {args.input} is cut short; replaying its '
-              'readable part', file=sys.stderr)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
     span = (session.events[-1][0] - session.events[0][0]) * 1e-9
@@ -155,11 +158,7 @@ def cmd_analyze(args):
         raise ToolError(f'{report_path} exists (use --force to overwrite)')
     sessions = []
     for path in args.input:
-        session = _session(argparse.Namespace(**{**vars(args), 'input': path}))
-        if not session.recording.complete:
-            print(f'jacket_cloth analyze: warning: {path} is cut short; analysing its readable '
-                  'part', file=sys.stderr)
-        sessions.append(session)
+        sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
     report = analyze(sessions, args.out, moments=args.moments)
     print(f'{os.path.join(args.out, "report.json")}: '
           + '; '.join(f'{os.path.basename(r["file"])} {r["frames"]} frames, vertical strain '

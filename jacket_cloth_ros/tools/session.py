@@ -47,6 +47,7 @@ class SessionInput:
     topic: str                   # the JointState topic
     events: list                 # (stamp_ns, order, kind, bytes): what the simulation is fed
     setup: SessionSetup
+    warnings: list = None        # one line each, for the user
 
 
 def _read_text(path, what):
@@ -109,7 +110,33 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
         name, value = parse_override(text, values)
         values[name] = value
     setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics)
-    return SessionInput(recording, topic, _events(recording, topic), setup)
+    session = SessionInput(recording, topic, _events(recording, topic), setup)
+    session.warnings = _check_joints(session)
+    return session
+
+
+def _check_joints(session):
+    """The JointState must speak of this skeleton: none known is an error, some unknown a
+    warning (the node would ignore them too)."""
+    first = next(e for e in session.events if e[2] == 'joint_states')
+    try:
+        names = list(deserialize_message(first[3], JointState).name)
+    except Exception as e:  # noqa: BLE001 - a foreign writer's bytes: one clear line
+        raise RecordingError(f'{session.recording.path}: {session.topic} does not decode as '
+                             f'JointState ({e})') from None
+    world = session.setup.values['world_joint'] + '/'
+    joints = [n for n in names if not n.startswith(world)]
+    known = set(session.setup.skeleton.joint_names)
+    unknown = [n for n in joints if n not in known]
+    if joints and len(unknown) == len(joints):
+        raise RecordingError(
+            f'{session.recording.path}: none of the joints in {session.topic} '
+            f'({", ".join(joints[:4])}{", ..." if len(joints) > 4 else ""}) is in the URDF '
+            f'{session.setup.skeleton.name!r}; give the matching --urdf (and --rig)')
+    if unknown:
+        return [f'{len(unknown)} joint(s) not in the URDF are ignored: '
+                f'{", ".join(unknown[:4])}{", ..." if len(unknown) > 4 else ""}']
+    return []
 
 
 def _events(recording, topic):

@@ -1,0 +1,223 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Replay and analysis of recorded sessions: determinism, reports, foreign and broken files.
+
+Live-versus-replay equality needs the node over DDS: it is in test_node.py.
+"""
+
+import json
+import os
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from mcap_ros2.writer import Writer as Ros2Writer
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.recording.definitions import ros2msg_schema
+from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.session import load_session, run_session
+
+
+@pytest.fixture(scope='module')
+def clip(tmp_path_factory):
+    """An input-only session: 3 s of the run clip at 60 Hz, as the motion tool writes it."""
+    path = tmp_path_factory.mktemp('clip') / 'clip.mcap'
+    assert main(['motion', '--clip', 'run', '--duration', '3.0', '-o', str(path)]) == 0
+    return path
+
+
+def _replay(src, dst, *extra):
+    return main(['replay', str(src), '-o', str(dst), *extra])
+
+
+def test_replay_is_byte_identical_run_after_run(clip, tmp_path):
+    for folder in ('a', 'b'):
+        (tmp_path / folder).mkdir()
+        assert _replay(clip, tmp_path / folder / 'out.mcap') == 0
+    a = (tmp_path / 'a' / 'out.mcap').read_bytes()
+    assert a == (tmp_path / 'b' / 'out.mcap').read_bytes() and len(a) > 50_000
+    # Other parameters give another file; a replay of a replay gives the same bones again.
+    assert _replay(clip, tmp_path / 'iter3.mcap', '-p', 'fabric.iterations:=3') == 0
+    assert (tmp_path / 'iter3.mcap').read_bytes() != a
+    again = load_session(str(tmp_path / 'a' / 'out.mcap'))
+    recorded = {m.log_time: m.data for m in again.recording.messages if m.topic == '/tf'}
+    same = []
+    run_session(again, probe=lambda p, r, stamp, outs: same.extend(
+        recorded[stamp] == data for key, data in outs if key == 'tf'))
+    assert len(same) == 181 and all(same)
+
+
+def test_replay_writes_what_the_node_records_and_an_independent_reader_decodes_it(clip,
+                                                                                  tmp_path):
+    out = tmp_path / 'out.mcap'
+    assert _replay(clip, out) == 0
+    with open(out, 'rb') as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        topics = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+        assert topics == {
+            '/joint_states': 'sensor_msgs/msg/JointState', '/tf': 'tf2_msgs/msg/TFMessage',
+            '/jacket_cloth_node/markers': 'visualization_msgs/msg/MarkerArray',
+            '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
+            '/jacket_cloth_node/wind': 'geometry_msgs/msg/Vector3Stamped',
+            '/parameter_events': 'rcl_interfaces/msg/ParameterEvent'}
+        assert all('offered_qos_profiles' in c.metadata for c in summary.channels.values())
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+        bag = yaml.safe_load(meta['rosbag2']['serialized_metadata'])
+        assert bag['rosbag2_bagfile_information']['relative_file_paths'] == ['out.mcap']
+        assert summary.statistics.message_count == bag['rosbag2_bagfile_information'][
+            'message_count']
+        decoded = {}
+        for _, channel, _, msg in reader.iter_decoded_messages():
+            decoded.setdefault(channel.topic, []).append(msg)
+    tf = decoded['/tf'][-1]
+    assert len(tf.transforms) == 68 and tf.transforms[0].child_frame_id == 'jacket_r00_c00'
+    q = tf.transforms[0].transform.rotation
+    assert abs(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 - 1) < 1e-9
+    mesh = decoded['/jacket_cloth_node/markers'][0].markers
+    assert {m.ns for m in mesh} == {'cloth', 'colliders', 'hood', 'jacket_bones'}
+    status = decoded['/diagnostics'][0].status[0]
+    assert status.name == 'jacket_cloth_node: cloth simulation'
+    assert 'step_cost_us_median' not in {kv.key for kv in status.values}   # no wall clock
+
+
+def test_analyze_writes_the_report_charts_and_filmstrip(clip, tmp_path, capsys):
+    out = tmp_path / 'analysis'
+    assert main(['analyze', str(clip), '--out', str(out)]) == 0
+    report = json.loads((out / 'report.json').read_text())
+    for key in ('frames', 'sim_steps', 'max_vertical_strain', 'max_horizontal_strain',
+                'max_penetration_m', 'max_distance_exceeded', 'nonfinite_count', 'resets'):
+        assert key in report
+    assert report['frames'] == 181 and report['sim_steps'] == 360
+    assert report['max_vertical_strain'] < 1e-9          # M12 (hard pass) every step
+    assert report['nonfinite_count'] == 0 and report['resets'] == 1
+    assert report['max_distance_exceeded'] > 0 and report['max_penetration_m'] > 0.001
+    assert report['step_time_us']['median'] > 0
+    assert report['step_time_us']['p99'] >= report['step_time_us']['median']
+    assert report['replay_matches_recording'] is None   # an input-only file: nothing to compare
+    for png in report['charts'] + ['filmstrip.png']:
+        assert (out / png).stat().st_size > 10_000
+    assert '| max vertical strain |' in (out / 'summary.md').read_text()
+    # Side by side: the same session through the tethers instead of M12.
+    replayed = tmp_path / 'tethers.mcap'
+    assert _replay(clip, replayed, '-p', 'stretch_limit:=tethers') == 0
+    both = tmp_path / 'both'
+    assert main(['analyze', str(clip), str(replayed), '--compare', '--out', str(both)]) == 0
+    sessions = json.loads((both / 'report.json').read_text())['sessions']
+    assert [s['parameters']['stretch_limit'] for s in sessions] == ['hard_pass', 'tethers']
+    assert sessions[1]['replay_matches_recording'] is True
+    assert sessions[1]['max_vertical_strain'] > sessions[0]['max_vertical_strain']
+    assert (both / 'filmstrip_2.png').exists()
+
+
+def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', seconds=1.0):
+    """A plain MCAP written by mcap_ros2's own writer, not ours."""
+    with open(path, 'wb') as f:
+        w = Ros2Writer(f)
+        schema = w.register_msgdef('sensor_msgs/msg/JointState',
+                                   ros2msg_schema('sensor_msgs/msg/JointState'))
+        for k in range(int(seconds * 50)):
+            t = 5_000_000_000 + k * 20_000_000
+            pos = [0.0] * len(skeleton_names)
+            pos[skeleton_names.index('LeftShoulder_raise')] = 1.2 * np.sin(k / 10)
+            w.write_message(topic, schema, {
+                'header': {'stamp': {'sec': t // 10**9, 'nanosec': t % 10**9}, 'frame_id': ''},
+                'name': skeleton_names, 'position': pos, 'velocity': [], 'effort': []},
+                log_time=t, publish_time=t)
+        w.finish()
+
+
+def test_foreign_mcap_and_rosbag2_directory_of_another_skeleton(tmp_path):
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    urdf = shipped('examples/mannequin.urdf')
+    rig = shipped('examples/mannequin_rig.yaml')
+    with open(urdf, encoding='utf-8') as f:
+        names = list(Skeleton(f.read()).joint_names)
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    _foreign_joint_states(bag / 'bag_0.mcap', names)
+    (bag / 'metadata.yaml').write_text(yaml.safe_dump({'rosbag2_bagfile_information': {
+        'version': 9, 'storage_identifier': 'mcap', 'relative_file_paths': ['bag_0.mcap']}}))
+    out = tmp_path / 'out.mcap'
+    assert main(['replay', str(bag), '-o', str(out), '--urdf', urdf, '--rig', rig]) == 0
+    session = load_session(str(out))               # the replay carries its set-up
+    assert session.setup.skeleton.name == 'example_mannequin'
+    assert session.topic == '/robot/joint_states'
+    # The .mcap file of the bag reads the same as the directory.
+    assert main(['analyze', str(bag / 'bag_0.mcap'), '--out', str(tmp_path / 'an'),
+                 '--urdf', urdf, '--rig', rig]) == 0
+    report = json.loads((tmp_path / 'an' / 'report.json').read_text())
+    assert report['frames'] == 50 and report['nonfinite_count'] == 0
+
+
+def _one_line_error(capsys, argv):
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert '\n' not in err and 'Traceback' not in err
+    return err
+
+
+def test_broken_files_are_one_line_errors(clip, tmp_path, capsys):
+    out = str(tmp_path / 'out.mcap')
+    text = tmp_path / 'notes.txt'
+    text.write_text('not a recording')
+    assert 'not an MCAP file' in _one_line_error(capsys, ['replay', str(text), '-o', out])
+    assert 'no such file' in _one_line_error(capsys, ['replay', str(tmp_path / 'x'), '-o', out])
+    # No JointState: a file with markers only.
+    markers_only = tmp_path / 'markers.mcap'
+    with open(markers_only, 'wb') as f:
+        w = Ros2Writer(f)
+        schema = w.register_msgdef('std_msgs/msg/String', 'string data')
+        w.write_message('/joint_states', schema, {'data': 'hello'}, log_time=1, publish_time=1)
+        w.finish()
+    err = _one_line_error(capsys, ['replay', str(markers_only), '-o', out])
+    assert 'no sensor_msgs/msg/JointState topic' in err and '/joint_states' in err
+    err = _one_line_error(capsys, ['replay', str(markers_only), '-o', out,
+                                   '--topic', '/joint_states'])
+    assert "is 'std_msgs/msg/String', not sensor_msgs/msg/JointState" in err
+    # Joints of another skeleton without its URDF.
+    foreign = tmp_path / 'mannequin.mcap'
+    _foreign_joint_states(foreign, ['LeftShoulder_raise', 'Spine_bend'])
+    err = _one_line_error(capsys, ['replay', str(foreign), '-o', out])
+    assert 'none of the joints' in err and '--urdf' in err
+    # Bad parameter values.
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', out, '-p', 'sim_rate:=5'])
+    assert 'sim_rate' in err and 'outside' in err
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', out, '-p', 'nope:=1'])
+    assert 'not a parameter' in err
+    # An existing output is not overwritten without --force.
+    existing = tmp_path / 'existing.mcap'
+    existing.write_bytes(b'keep me')
+    assert 'exists' in _one_line_error(capsys, ['replay', str(clip), '-o', str(existing)])
+    assert existing.read_bytes() == b'keep me'
+    assert _replay(clip, existing, '--force') == 0 and existing.stat().st_size > 1000
+
+
+def test_truncated_recording_gives_its_readable_part_with_a_warning(clip, tmp_path, capsys):
+    full = tmp_path / 'full.mcap'
+    assert _replay(clip, full) == 0
+    data = full.read_bytes()
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(data[:int(len(data) * 0.6)])
+    out = tmp_path / 'out.mcap'
+    capsys.readouterr()
+    assert main(['replay', str(cut), '-o', str(out)]) == 0
+    captured = capsys.readouterr()
+    assert 'cut short' in captured.err
+    n = int(captured.out.split(': ')[1].split(' JointState')[0])
+    assert 0 < n < 181
+
+
+def test_a_partial_output_never_replaces_the_file(clip, tmp_path, capsys, monkeypatch):
+    from jacket_cloth_ros.tools import replay as replay_module
+    out = tmp_path / 'out.mcap'
+
+    def boom(*args, **kwargs):
+        raise OSError('disk full')
+    monkeypatch.setattr(replay_module, 'run_session', boom)
+    assert 'disk full' in _one_line_error(capsys, ['replay', str(clip), '-o', str(out)])
+    assert not out.exists() and not os.path.exists(str(out) + '.partial')
+    shutil.rmtree(tmp_path, ignore_errors=True)
