@@ -167,6 +167,22 @@ def cmd_analyze(args):
     return 0
 
 
+def cmd_stress(args):
+    from ..lab.stress import METHODS, stress, write_matrix
+    methods = tuple(args.methods.split(',')) if args.methods else METHODS
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ToolError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(METHODS)})')
+    loop = 3600.0 if args.full else args.loop
+    results = stress(methods, loop_s=loop)
+    write_matrix(results, args.out, methods)
+    failed = sorted({s for (s, m), (v, _) in results.items() if v != 'holds'})
+    print(f'{os.path.join(args.out, "stress.md")}: {len(results)} runs, '
+          f'{sum(v == "holds" for v, _ in results.values())} hold'
+          + (f'; failures in: {", ".join(failed)}' if failed else ''))
+    return 0
+
+
 def cmd_demo(args):
     """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
     from ..tools.picture import render_filmstrip
@@ -253,6 +269,12 @@ def build_parser():
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
+    st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
+    st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
+    st.add_argument('--methods', default=None, help='comma-separated (default: all)')
+    st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')
+    st.add_argument('--full', action='store_true', help='an hour of looped walk')
+    st.set_defaults(func=cmd_stress)
     return p
 
 

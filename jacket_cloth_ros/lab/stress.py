@@ -1,0 +1,246 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth stress``: the scenes where cloth methods fail, run for every method.
+
+Each scene feeds the shipped character's JointState to the simulation core (the same
+``JacketSimulation.process`` the node calls), then one and a half seconds of standing still,
+and is judged on what a user would see:
+
+- non-finite: a NaN or inf in the cloth (the simulation resets itself on one; counted here);
+- exploded: a vertex more than ``EXPLODED_M`` from where the skinned pose puts it;
+- tunnelled: a vertex left more than ``TUNNEL_M`` inside a collider at the end of an input;
+- knotted/flipped: more than ``FLIPPED_SHARE`` of the mesh triangles facing the other way than
+  on the skinned pose, after the calm tail;
+- stretched: vertical strain above ``VERTICAL_BOUND`` after the calm tail;
+- did not recover: the hem still more than ``RECOVER_M`` (mean) from the skinned hem after the
+  calm tail.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.config import shipped
+from ..core.fabric import load_fabric
+from ..core.rig import load_rig
+from ..core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
+from ..core.skeleton import Skeleton
+from ..motion.clips import joint_state_content
+from ..ros.messages import grid_triangles
+
+EXPLODED_M = 1.0
+TUNNEL_M = 0.02
+FLIPPED_SHARE = 0.10
+VERTICAL_BOUND = 0.10
+RECOVER_M = 0.15
+RATE = 60.0
+CALM_S = 1.5
+METHODS = tuple(STRETCH_LIMITS)          # how the vertical stretch is removed (none first)
+
+
+@dataclass
+class Scene:
+    name: str
+    inputs: list                         # (stamp_ns, names, positions)
+    params: dict = field(default_factory=dict)
+    fabric: dict = field(default_factory=dict)
+
+
+def _clip(skeleton, clip, t0, t1, start_s=10.0, every=1, edit=None):
+    out = []
+    for k in range(int(round(t0 * RATE)), int(round(t1 * RATE)), every):
+        t = k / RATE
+        names, pos = joint_state_content(skeleton.joint_names, clip, t)
+        if edit:
+            pos = edit(names, list(pos), t)
+        out.append((int(round((start_s + t) * 1e9)), names, pos))
+    return out
+
+
+def _calm(skeleton, after_s, pose_from):
+    """Standing still after a scene, in the last scene pose's place in the world."""
+    names, last = pose_from
+    out = []
+    for k in range(1, int(CALM_S * RATE) + 1):
+        idle_names, idle = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+        pos = list(idle[:len(skeleton.joint_names)]) + list(last[len(skeleton.joint_names):])
+        out.append((int(round((after_s + k / RATE) * 1e9)), idle_names, pos))
+    return out
+
+
+def _with_calm(skeleton, inputs):
+    stamp, names, pos = inputs[-1]
+    return inputs + _calm(skeleton, stamp * 1e-9, (names, pos))
+
+
+def scenes(skeleton, loop_s=60.0):
+    """The failure scenes, as JointState content for the shipped character."""
+    joints = len(skeleton.joint_names)
+
+    def turned(names, pos, t):          # 180 degrees about z in one frame, at 1 s
+        if t >= 1.0:
+            pos[joints + 5], pos[joints + 6] = 1.0, 0.0
+        return pos
+
+    def kicked(names, pos, t):          # the left thigh through the cloth at 30 rad/s
+        phase = (t * 30.0) % (2 * 1.4)
+        pos[names.index('l_hip_pitch')] = -(phase if phase < 1.4 else 2 * 1.4 - phase)
+        return pos
+
+    def garbage(names, pos, t):          # every 10th input NaN, every 10th+5th all zeros
+        k = int(round(t * RATE))
+        if k % 10 == 0:
+            return [math.nan] * len(pos)
+        if k % 10 == 5:
+            return [0.0] * len(pos)
+        return pos
+
+    hitch = [i for i in _clip(skeleton, 'walk', 0.0, 3.0) if not 10.0 + 1.5 <= i[0] * 1e-9 < 12.0]
+    return [
+        Scene('teleport 10 m', _with_calm(skeleton, _clip(skeleton, 'teleport', 0.0, 3.0))),
+        Scene('180 deg turn in one frame',
+              _with_calm(skeleton, _clip(skeleton, 'idle', 0.0, 2.0, edit=turned)),
+              params={'teleport_angle_deg': 180.0}),
+        Scene('0.5 s frame hitch', _with_calm(skeleton, hitch)),
+        Scene('thigh through the cloth at 30 rad/s',
+              _with_calm(skeleton, _clip(skeleton, 'idle', 0.0, 2.0, edit=kicked))),
+        Scene('step 10x too large (12 Hz)', _with_calm(skeleton, _clip(skeleton, 'run', 0.0, 3.0)),
+              params={'sim_rate': 12.0}),
+        Scene('full stiffness, 100 iterations',
+              _with_calm(skeleton, _clip(skeleton, 'run', 0.0, 2.0)),
+              fabric={'stretch_stiffness': 1.0, 'shear_bend_stiffness': 1.0, 'iterations': 100}),
+        Scene('NaN and all-zero input',
+              _with_calm(skeleton, _clip(skeleton, 'walk', 0.0, 2.0, edit=garbage))),
+        Scene(f'walk looped for {loop_s:.0f} s',     # the gait repeats; the walker goes on
+              _with_calm(skeleton, _clip(skeleton, 'walk', 0.0, loop_s))),
+    ]
+
+
+def _flipped_share(sim):
+    rig = sim.rig
+    tri = grid_triangles(rig.rows, rig.cols).reshape(-1, 3)
+    ref = sim.reference_points(sim.links, sim._pads)
+    ref[:rig.cols] = sim.pinned_points(sim.links, sim._pads)
+
+    def normals(x):
+        a, b, c = x[tri[:, 0]], x[tri[:, 1]], x[tri[:, 2]]
+        return np.cross(b - a, c - a)
+    return float(((normals(sim.x) * normals(ref)).sum(axis=1) < 0).mean())
+
+
+def _deepest_inside(sim):
+    c = sim.collider_frames(sim.links)
+    deepest = 0.0
+    free = sim.x[sim.rig.free]
+    for center, axes, radii in zip(c.centers, c.axes, c.radii):
+        q = ((free - center) @ axes) / radii
+        r = np.linalg.norm(q, axis=1)
+        inside = r < 1.0
+        if inside.any():
+            deepest = max(deepest, float(((1.0 - r[inside]) * radii.min()).max()))
+    return deepest
+
+
+def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
+    """The verdict of one method on one scene: 'holds' or how it failed, and the figures."""
+    fabric = load_fabric(fabric_name).with_values(**scene.fabric)
+    params = SimParams(stretch_limit=method, **scene.params)
+    sim = JacketSimulation(skeleton, rig, fabric, params)
+    nonfinite = 0
+    worst_offset = 0.0
+    worst_tunnel = 0.0
+    for stamp, names, pos in scene.inputs:
+        report = sim.process(stamp, names, pos)
+        if report.reset == 'non-finite cloth state':
+            nonfinite += 1
+        if not report.accepted or sim.last is None:
+            continue
+        ref = sim.reference_points(sim.links, sim._pads)
+        worst_offset = max(worst_offset, float(np.linalg.norm(sim.x - ref, axis=1).max()))
+        worst_tunnel = max(worst_tunnel, _deepest_inside(sim))
+    rig_ = sim.rig
+    ref = sim.reference_points(sim.links, sim._pads)
+    hem = slice((rig_.rows - 1) * rig_.cols, rig_.n)
+    figures = {
+        'nonfinite': nonfinite,
+        'max_offset_m': worst_offset,
+        'max_inside_m': worst_tunnel,
+        'flipped_share_end': _flipped_share(sim),
+        'vertical_strain_end': sim.strain()[0],
+        'hem_offset_end_m': float(np.linalg.norm(sim.x[hem] - ref[hem], axis=1).mean()),
+        'resets': sim.resets,
+        'overruns': sim.overruns,
+    }
+    if nonfinite or not np.isfinite(sim.x).all():
+        verdict = 'non-finite'
+    elif worst_offset > EXPLODED_M:
+        verdict = 'exploded'
+    elif worst_tunnel > TUNNEL_M:
+        verdict = 'tunnelled'
+    elif figures['flipped_share_end'] > FLIPPED_SHARE:
+        verdict = 'knotted/flipped'
+    elif figures['vertical_strain_end'] > VERTICAL_BOUND:
+        verdict = 'stretched'
+    elif figures['hem_offset_end_m'] > RECOVER_M:
+        verdict = 'did not recover'
+    else:
+        verdict = 'holds'
+    return verdict, figures
+
+
+def stress(methods=METHODS, loop_s=60.0):
+    """Every method on every scene: {(scene, method): (verdict, figures)}."""
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        skeleton = Skeleton(f.read())
+    rig = load_rig(skeleton)
+    out = {}
+    for scene in scenes(skeleton, loop_s):
+        for method in methods:
+            out[(scene.name, method)] = run_scene(skeleton, rig, scene, method)
+    return out
+
+
+def write_matrix(results, out_dir, methods):
+    """stress.md, stress.json and stress.png: scene x method -> verdict."""
+    import json
+    import os
+
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    os.makedirs(out_dir, exist_ok=True)
+    scene_names = list(dict.fromkeys(s for s, _ in results))
+    lines = ['# Stress matrix', '', '| scene | ' + ' | '.join(methods) + ' |',
+             '|---' * (len(methods) + 1) + '|']
+    for scene in scene_names:
+        cells = []
+        for m in methods:
+            verdict, f = results[(scene, m)]
+            cells.append(f'{verdict} (inside {f["max_inside_m"] * 100:.1f} cm, vertical '
+                         f'{f["vertical_strain_end"] * 100:.1f} %)')
+        lines.append(f'| {scene} | ' + ' | '.join(cells) + ' |')
+    lines += ['', f'Bounds: exploded > {EXPLODED_M} m from the skinned pose; tunnelled > '
+              f'{TUNNEL_M * 100:.0f} cm inside a collider; knotted/flipped > '
+              f'{FLIPPED_SHARE:.0%} of triangles reversed, stretched > {VERTICAL_BOUND:.0%} '
+              f'vertical strain, did not recover: hem > {RECOVER_M * 100:.0f} cm from the '
+              f'skinned hem, each {CALM_S} s after the scene.', '']
+    with open(os.path.join(out_dir, 'stress.md'), 'w', encoding='utf-8') as f:
+        f.write('\n'.join(lines))
+    with open(os.path.join(out_dir, 'stress.json'), 'w', encoding='utf-8') as f:
+        json.dump([{'scene': s, 'method': m, 'verdict': v, **fig}
+                   for (s, m), (v, fig) in results.items()], f, indent=2)
+    fig, ax = plt.subplots(figsize=(2.2 * len(methods) + 3.5, 0.5 * len(scene_names) + 1.2))
+    for i, scene in enumerate(scene_names):
+        for j, m in enumerate(methods):
+            verdict = results[(scene, m)][0]
+            ax.add_patch(plt.Rectangle((j, i), 1, 1, color=(0.6, 0.85, 0.6)
+                                       if verdict == 'holds' else (0.95, 0.6, 0.55)))
+            ax.text(j + 0.5, i + 0.5, verdict, ha='center', va='center', fontsize=8)
+    ax.set_xlim(0, len(methods))
+    ax.set_ylim(len(scene_names), 0)
+    ax.set_xticks([j + 0.5 for j in range(len(methods))], methods, fontsize=8)
+    ax.set_yticks([i + 0.5 for i in range(len(scene_names))], scene_names, fontsize=8)
+    ax.set_title('jacket_cloth stress: does each method hold? (stretch_limit)', fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, 'stress.png'), dpi=100)
+    plt.close(fig)

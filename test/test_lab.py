@@ -1,0 +1,46 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The lab: stability where methods fail (quick mode of `jacket_cloth stress`)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from jacket_cloth_ros.lab.stress import run_scene, scenes
+from jacket_cloth_ros.tools.cli import main
+
+
+@pytest.fixture(scope='module')
+def stress_scenes(skeleton):
+    return {s.name: s for s in scenes(skeleton, loop_s=20.0)}
+
+
+@pytest.mark.parametrize('name', [
+    'teleport 10 m', '180 deg turn in one frame', '0.5 s frame hitch',
+    'thigh through the cloth at 30 rad/s', 'step 10x too large (12 Hz)',
+    'full stiffness, 100 iterations', 'NaN and all-zero input', 'walk looped for 20 s'])
+def test_the_shipped_default_holds_in_every_stress_scene(skeleton, rig, stress_scenes, name):
+    verdict, figures = run_scene(skeleton, rig, stress_scenes[name], 'hard_pass')
+    assert verdict == 'holds', figures
+    assert figures['nonfinite'] == 0 and figures['max_inside_m'] <= 0.02
+
+
+def test_the_stress_scenes_tell_methods_apart(skeleton, rig, stress_scenes):
+    # At a step ten times too large, no vertical limit lets the jacket stretch and sink in.
+    verdict, figures = run_scene(skeleton, rig, stress_scenes['step 10x too large (12 Hz)'],
+                                 'none')
+    assert verdict != 'holds' and figures['vertical_strain_end'] > 0.1
+
+
+def test_stress_command_writes_the_matrix(tmp_path, capsys):
+    out = tmp_path / 'stress'
+    assert main(['stress', '--out', str(out), '--methods', 'hard_pass,none',
+                 '--loop', '5']) == 0
+    rows = json.loads((out / 'stress.json').read_text())
+    assert len(rows) == 16 and {r['method'] for r in rows} == {'hard_pass', 'none'}
+    assert all(r['verdict'] == 'holds' for r in rows if r['method'] == 'hard_pass')
+    assert np.isfinite([r['max_offset_m'] for r in rows]).all()
+    assert '| scene | hard_pass | none |' in (out / 'stress.md').read_text()
+    assert (out / 'stress.png').stat().st_size > 5_000
+    assert main(['stress', '--out', str(out), '--methods', 'glue']) == 1
+    assert 'unknown method' in capsys.readouterr().err
