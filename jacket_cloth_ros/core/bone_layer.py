@@ -118,9 +118,7 @@ class BoneLayer:
         self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
         self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
-        self._rest_gap = None
-        if self.pads:
-            self._rest_gap = self._pad_ends(rest)[2]
+        self._rest_gap = self._pad_ends(rest)[2] if self.pads else None
 
     def _load_upper(self, upper, skeleton, where):
         self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
@@ -177,7 +175,7 @@ class BoneLayer:
                 pos.append(pivot)
                 tips.append(end)
             # Left/right position constraint: each bone below moves half the error.
-            if self._rest_gap is not None and gap > 1e-9:
+            if gap > 1e-9:
                 corr = 0.5 * (gap - self._rest_gap) / gap * (ends[1] - ends[0])
                 ends = [ends[0] + corr, ends[1] - corr]
             down = links[self.upper_link][:3, :3] @ DOWN

@@ -164,21 +164,27 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
 
 
 @njit(cache=True)
+def _pull_within(x, i, c0, c1, c2, reach):
+    """Move vertex i along its line to (c0, c1, c2) until it is ``reach`` away; True if moved."""
+    d0 = x[i, 0] - c0
+    d1 = x[i, 1] - c1
+    d2 = x[i, 2] - c2
+    length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if length <= reach:
+        return False
+    g = reach / length
+    x[i, 0] = c0 + d0 * g
+    x[i, 1] = c1 + d1 * g
+    x[i, 2] = c2 + d2 * g
+    return True
+
+
+@njit(cache=True)
 def limit_distance(x, free, ref, max_distance):
     """M11: move a vertex back towards its reference point when it is too far. Returns count."""
     moved = 0
     for i in range(x.shape[0]):
-        if not free[i]:
-            continue
-        d0 = x[i, 0] - ref[i, 0]
-        d1 = x[i, 1] - ref[i, 1]
-        d2 = x[i, 2] - ref[i, 2]
-        length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if length > max_distance[i]:
-            g = max_distance[i] / length
-            x[i, 0] = ref[i, 0] + d0 * g
-            x[i, 1] = ref[i, 1] + d1 * g
-            x[i, 2] = ref[i, 2] + d2 * g
+        if free[i] and _pull_within(x, i, ref[i, 0], ref[i, 1], ref[i, 2], max_distance[i]):
             moved += 1
     return moved
 
@@ -208,18 +214,8 @@ def tethers(x, free, anchor, length):
     """
     moved = 0
     for i in range(x.shape[0]):
-        if not free[i]:
-            continue
         a = anchor[i]
-        d0 = x[i, 0] - x[a, 0]
-        d1 = x[i, 1] - x[a, 1]
-        d2 = x[i, 2] - x[a, 2]
-        dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if dist > length[i]:
-            g = length[i] / dist
-            x[i, 0] = x[a, 0] + d0 * g
-            x[i, 1] = x[a, 1] + d1 * g
-            x[i, 2] = x[a, 2] + d2 * g
+        if free[i] and _pull_within(x, i, x[a, 0], x[a, 1], x[a, 2], length[i]):
             moved += 1
     return moved
 

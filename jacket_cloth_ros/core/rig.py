@@ -221,7 +221,7 @@ class Rig:
         self.pin_below_local = np.zeros((self.cols, 3))
         if self.layer is None or not self.layer.pads or self.layer.skin_radius <= 0:
             return
-        below = self.layer.solve(rest).below
+        below = self.layer.solve(rest, full=False).below
         dist = np.empty((self.cols, len(below)))
         for k, (frame, pad) in enumerate(zip(below, self.layer.pads)):
             a = frame[:3, 3]

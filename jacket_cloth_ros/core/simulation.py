@@ -169,32 +169,34 @@ class JacketSimulation:
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links, layer=None):
-        """M11: each vertex's rest position carried by its nearest bone.
-
-        With the M2 upper jacket, a column hangs from a top vertex that the shoulder pads may
-        lift; the column's reference points are lifted with it, or M11 would pull the cloth
-        away from its own pinned row.
-        """
-        rig = self.rig
-        t = links[rig.reference_link]
-        ref = np.einsum('nij,nj->ni', t[:, :3, :3], rig.reference_local) + t[:, :3, 3]
-        if layer is not None and len(layer.below):
-            lift = self.pinned_points(links, layer) - self.pinned_points(links)
-            ref += np.tile(lift, (rig.rows, 1))
-        return ref
+        """M11: each vertex's rest position carried by its nearest bone (see _skinned_pose)."""
+        return self._skinned_pose(links, layer)[1]
 
     def pinned_points(self, links, layer=None):
-        """M6: where the top row is: carried by its link, and near the shoulders by the M2
-        bones below the shoulder pads (``layer`` is that pose, solved for ``links``)."""
+        """M6: where the top row is (see _skinned_pose)."""
+        return self._skinned_pose(links, layer)[0]
+
+    def _skinned_pose(self, links, layer):
+        """(pinned top row, M11 reference points) for a skeleton pose.
+
+        M6: the top row is carried by its link and, near the shoulders, by the M2 bones below
+        the shoulder pads (``layer``, solved for ``links``). A column hangs from its top vertex,
+        so the column's reference points are lifted with it, or M11 would pull the cloth away
+        from its own pinned row.
+        """
         rig = self.rig
-        top = apply_transform(links[rig.pin_link], rig.pin_local)
+        carried = apply_transform(links[rig.pin_link], rig.pin_local)
+        t = links[rig.reference_link]
+        ref = np.einsum('nij,nj->ni', t[:, :3, :3], rig.reference_local) + t[:, :3, 3]
         if layer is None or not len(layer.below):
-            return top
+            return carried, ref
         frames = layer.below[rig.pin_below]
         below = np.einsum('nij,nj->ni', frames[:, :3, :3], rig.pin_below_local)
         below += frames[:, :3, 3]
         w = rig.pin_weight[:, None]
-        return (1.0 - w) * top + w * below
+        top = (1.0 - w) * carried + w * below
+        ref += np.tile(top - carried, (rig.rows, 1))
+        return top, ref
 
     def _solve_layer(self, links, full=True):
         return self.rig.layer.solve(links, full) if self.rig.layer else None
@@ -215,8 +217,9 @@ class JacketSimulation:
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
         self._pads = self._solve_layer(self.links, full=False)
-        self.x = self.reference_points(self.links, self._pads)
-        self.x[:self.rig.cols] = self.pinned_points(self.links, self._pads)
+        top, ref = self._skinned_pose(self.links, self._pads)
+        self.x = ref.copy()
+        self.x[:self.rig.cols] = top
         self.xp = self.x.copy()
         self.contact[:] = False
         anchor, rot = self.hood_anchor(self.links)
@@ -229,7 +232,7 @@ class JacketSimulation:
         # The skinned pose is not a cloth at rest (reference points ride different bones):
         # settle it once, constraints and collisions without motion, so no step starts from a
         # stretched grid and snaps.
-        self._cloth_step(self.links, self.root, np.zeros((self.rig.n, 3)),
+        self._cloth_step(self.links, self.root, ref, np.zeros((self.rig.n, 3)),
                          np.ones(self.rig.n), 0.0)
         self.xp = self.x.copy()
         self.contact[:] = False
@@ -327,18 +330,17 @@ class JacketSimulation:
         acc = gravity + self.wind_scale[:, None] * wind
         # M2 then M6: the upper jacket is solved, the pinned top row follows it.
         self._pads = self._solve_layer(links, full=False)
-        top = self.pinned_points(links, self._pads)
+        top, ref = self._skinned_pose(links, self._pads)
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
-        deepest, limited = self._cloth_step(links, root, acc, self.damping, dt)
+        deepest, limited = self._cloth_step(links, root, ref, acc, self.damping, dt)
         report.max_penetration = max(report.max_penetration, deepest)
         report.limited_vertices += limited
         self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
 
-    def _cloth_step(self, links, root, acc, damping, dt):
-        """The kernel's step on the current state, for this skeleton pose."""
+    def _cloth_step(self, links, root, ref, acc, damping, dt):
+        """The kernel's step on the current state, for this skeleton pose (M11 refs ``ref``)."""
         p, rig = self.params, self.rig
-        ref = self.reference_points(links, self._pads)
         c = self.collider_frames(links, root)
         return kernel.cloth_step(
             self.x, self.xp, rig.free, acc, damping, self.contact,
@@ -369,11 +371,12 @@ class JacketSimulation:
         centers = np.einsum('nij,nj->ni', t[:, :3, :3], rig.collider_centers) + t[:, :3, 3]
         tc = links[rig.capsule_links]
         ends = np.einsum('nij,nkj->nki', tc[:, :3, :3], rig.capsule_ends) + tc[:, None, :3, 3]
-        root = self.root if root is None else root
-        to_local = invert_transform(root)
         points, normals = [], []
         for plane in rig.planes:
-            frame = to_local if plane.link < 0 else links[plane.link]
+            if plane.link < 0:        # fixed in the world: world -> the root's local frame
+                frame = invert_transform(self.root if root is None else root)
+            else:
+                frame = links[plane.link]
             points.append(frame[:3, :3] @ plane.point + frame[:3, 3])
             normals.append(frame[:3, :3] @ plane.normal)
         return Colliders(centers, t[:, :3, :3] @ rig.collider_rotations, rig.collider_radii,

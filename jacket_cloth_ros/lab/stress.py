@@ -59,13 +59,12 @@ def _clip(skeleton, clip, t0, t1, start_s=10.0, every=1, edit=None):
 
 def _calm(skeleton, after_s, pose_from):
     """Standing still after a scene, in the last scene pose's place in the world."""
-    names, last = pose_from
-    out = []
-    for k in range(1, int(CALM_S * RATE) + 1):
-        idle_names, idle = joint_state_content(skeleton.joint_names, 'idle', 0.0)
-        pos = list(idle[:len(skeleton.joint_names)]) + list(last[len(skeleton.joint_names):])
-        out.append((int(round((after_s + k / RATE) * 1e9)), idle_names, pos))
-    return out
+    _, last = pose_from
+    idle_names, idle = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+    joints = len(skeleton.joint_names)
+    pos = list(idle[:joints]) + list(last[joints:])
+    return [(int(round((after_s + k / RATE) * 1e9)), idle_names, pos)
+            for k in range(1, int(CALM_S * RATE) + 1)]
 
 
 def _with_calm(skeleton, inputs):
