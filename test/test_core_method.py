@@ -156,7 +156,7 @@ def test_m5_stretch_and_shear_bend_groups_have_their_own_stiffness():
     errors = {}
     for bend in (0.0, 1.0):
         x = x0.copy()
-        kernel.relax(x, free, ca, cb, rest, np.array([1.0, bend]), 1)
+        kernel.relax(x, free, ca, cb, rest, np.array([1.0, bend]), 1, 0.0)
         errors[bend] = np.linalg.norm(x[2] - x[0]) - 2.0
     assert errors[0.0] > errors[1.0] + 0.05       # a free bend group leaves its error alone
 

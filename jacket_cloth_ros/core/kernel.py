@@ -31,9 +31,14 @@ def integrate(x, xp, free, acc, damping, contact, contact_damping, dt):
 
 
 @njit(cache=True)
-def relax(x, free, ca, cb, rest, stiffness, iterations):
-    """M5: Gauss-Seidel over distance constraints; each end moves by its share of the error."""
-    for _ in range(iterations):
+def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
+    """M5: Gauss-Seidel over distance constraints; each end moves by its share of the error.
+
+    Stops early once a sweep moves no vertex more than ``tolerance`` (m; 0 never stops early),
+    the automatic quality mode. Returns the sweeps run.
+    """
+    for sweep in range(iterations):
+        largest = 0.0
         for j in range(ca.shape[0]):
             a, b = ca[j], cb[j]
             fa, fb = free[a], free[b]
@@ -54,6 +59,48 @@ def relax(x, free, ca, cb, rest, stiffness, iterations):
                 x[b, 0] -= d0 * f
                 x[b, 1] -= d1 * f
                 x[b, 2] -= d2 * f
+            largest = max(largest, abs(f) * length)
+        if largest < tolerance:
+            return sweep + 1
+    return iterations
+
+
+@njit(cache=True)
+def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance):
+    """XPBD (Macklin et al. 2016): compliance instead of stiffness, so the cloth's softness no
+    longer depends on the iteration count or the step; ``lam`` accumulates each constraint's
+    multiplier over the sweeps of one (sub)step. Unit masses. Returns the sweeps run.
+    """
+    lam[:] = 0.0
+    inv_dt2 = 1.0 / (dt * dt) if dt > 0.0 else 0.0
+    for sweep in range(iterations):
+        largest = 0.0
+        for j in range(ca.shape[0]):
+            a, b = ca[j], cb[j]
+            wa = 1.0 if free[a] else 0.0
+            wb = 1.0 if free[b] else 0.0
+            if wa + wb == 0.0:
+                continue
+            d0 = x[b, 0] - x[a, 0]
+            d1 = x[b, 1] - x[a, 1]
+            d2 = x[b, 2] - x[a, 2]
+            length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if length < 1e-9:
+                continue
+            alpha = compliance[j] * inv_dt2
+            dlam = (rest[j] - length - alpha * lam[j]) / (wa + wb + alpha)
+            lam[j] += dlam
+            f = -dlam / length
+            x[a, 0] += wa * d0 * f
+            x[a, 1] += wa * d1 * f
+            x[a, 2] += wa * d2 * f
+            x[b, 0] -= wb * d0 * f
+            x[b, 1] -= wb * d1 * f
+            x[b, 2] -= wb * d2 * f
+            largest = max(largest, abs(dlam))
+        if largest < tolerance:
+            return sweep + 1
+    return iterations
 
 
 @njit(cache=True)
@@ -222,26 +269,54 @@ def tethers(x, free, anchor, length):
 
 # How the vertical stretch left by the iterative solve is removed (SimParams.stretch_limit).
 LIMIT_NONE, LIMIT_HARD_PASS, LIMIT_TETHERS = 0, 1, 2
+# The constraint solver (SimParams.solver): the article's relaxation, or XPBD.
+SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = 0, 1
 
 
 @njit(cache=True)
 def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
                ca, cb, rest, stiffness, iterations,
                centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
-               ref, max_distance, limit_mode, upper, lower, vrest, anchor, tether):
-    """One fixed step of the jacket cloth. Returns (deepest push-out, vertices limited by M11)."""
-    integrate(x, xp, free, acc, damping, contact, contact_damping, dt)
-    relax(x, free, ca, cb, rest, stiffness, iterations)
-    if limit_mode == LIMIT_TETHERS:
-        tethers(x, free, anchor, tether)
-    deepest = collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
-                      contact)
-    limited = limit_distance(x, free, ref, max_distance)
-    if limit_mode == LIMIT_HARD_PASS:
-        hard_vertical_pass(x, upper, lower, vrest)
-        # The pass moves lower vertices without looking at the body; run last, it left cloth
-        # up to 5 cm inside a collider in `jacket_cloth stress` (a 0.5 s hitch, a 12 Hz step).
-        # A last push-out keeps it outside; only the verticals of the vertices it moves lose
-        # their exact length (about 3 of 99 per step on the showcase).
-        collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, contact)
-    return deepest, limited
+               ref, max_distance, limit_mode, upper, lower, vrest, anchor, tether,
+               solver, substeps, compliance, lam, pin_from, tolerance):
+    """One fixed step of the jacket cloth, in ``substeps`` equal substeps ("Small Steps").
+
+    ``damping`` and ``contact_damping`` are per substep. The pinned vertices are already at
+    their new place; with substeps they move there from ``pin_from`` in equal parts (collider
+    frames are the step's, as in Small Steps, which detects contacts once per frame).
+    Returns (deepest push-out, vertices limited by M11, relaxation sweeps run).
+    """
+    deepest = 0.0
+    limited = 0
+    sweeps = 0
+    h = dt / substeps
+    pin_to = x.copy() if substeps > 1 else x
+    for s in range(substeps):
+        if substeps > 1:
+            w = (s + 1.0) / substeps
+            for i in range(x.shape[0]):
+                if not free[i]:
+                    for k in range(3):
+                        x[i, k] = pin_from[i, k] + w * (pin_to[i, k] - pin_from[i, k])
+                        xp[i, k] = x[i, k]
+        integrate(x, xp, free, acc, damping, contact, contact_damping, h)
+        if solver == SOLVER_XPBD:
+            sweeps += relax_xpbd(x, free, ca, cb, rest, compliance, lam, h, iterations,
+                                 tolerance)
+        else:
+            sweeps += relax(x, free, ca, cb, rest, stiffness, iterations, tolerance)
+        if limit_mode == LIMIT_TETHERS:
+            tethers(x, free, anchor, tether)
+        deepest = max(deepest, collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r,
+                                       plane_p, plane_n, contact))
+        limited += limit_distance(x, free, ref, max_distance)
+        if limit_mode == LIMIT_HARD_PASS:
+            hard_vertical_pass(x, upper, lower, vrest)
+            # The pass moves lower vertices without looking at the body; run last, it left
+            # cloth up to 5 cm inside a collider in `jacket_cloth stress` (a 0.5 s hitch, a
+            # 12 Hz step). A last push-out keeps it outside; only the verticals of the
+            # vertices it moves lose their exact length (about 3 of 99 per step on the
+            # showcase).
+            collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
+                    contact)
+    return deepest, limited, sweeps

@@ -25,6 +25,34 @@ from .transforms import (
 
 STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
                   'tethers': kernel.LIMIT_TETHERS}
+SOLVERS = {'gauss_seidel': kernel.SOLVER_GAUSS_SEIDEL, 'xpbd': kernel.SOLVER_XPBD}
+# Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
+# their stiffness is what one step of this length does (see per_step and xpbd_compliance).
+DESIGN_RATE = 120.0
+# Automatic quality mode: relaxation stops once a sweep moves nothing by more than this share of
+# the tolerance.
+AUTO_SWEEP_SHARE = 0.1
+
+
+def per_step(share, exponent):
+    """A share lost per design step, as the share lost in a step ``exponent`` times as long."""
+    if exponent == 1.0:
+        return share
+    return 1.0 - (1.0 - np.asarray(share, dtype=float)) ** exponent
+
+
+def xpbd_compliance(stiffness, iterations):
+    """XPBD compliance (m/N at unit mass) that one design step of XPBD makes as stiff as the
+    article's relaxation makes it with ``stiffness`` per sweep and ``iterations`` sweeps.
+
+    For one constraint between two unit masses, n sweeps of stiffness k correct a share
+    k_n = 1 - (1 - k)^n of the error, and XPBD corrects 2 / (2 + alpha / dt^2), so
+    alpha = 2 dt^2 (1 - k_n) / k_n with dt = 1 / DESIGN_RATE. Stiffness 1 gives alpha = 0.
+    """
+    k = 1.0 - (1.0 - np.asarray(stiffness, dtype=float)) ** iterations
+    with np.errstate(divide='ignore'):
+        alpha = 2.0 * (1.0 - k) / np.maximum(k, 1e-12) / DESIGN_RATE ** 2
+    return alpha
 
 
 @dataclass(frozen=True)
@@ -36,6 +64,9 @@ class SimParams:
     wind_gust: float = 0.0             # relative amplitude of the wind's variation over time
     wind_gust_period: float = 3.0      # s, of the slowest gust component
     stretch_limit: str = 'hard_pass'   # M12 'hard_pass', 'tethers' (long-range attachments), 'none'
+    solver: str = 'gauss_seidel'       # M5 relaxation 'gauss_seidel' (the article) or 'xpbd'
+    substeps: int = 1                  # equal substeps per step ("Small Steps"); the most, in auto
+    quality_tolerance: float = 0.0     # m; > 0: automatic quality mode (see JacketSimulation)
     reset_gap: float = 1.0             # s: a longer gap between stamps resets the cloth
     teleport_distance: float = 1.0     # m of world motion between two samples that is a jump
     teleport_angle_deg: float = 90.0   # deg of world turn between two samples that is a jump
@@ -44,6 +75,12 @@ class SimParams:
         if self.stretch_limit not in STRETCH_LIMITS:
             raise ValueError(f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}, '
                              f'not {self.stretch_limit!r}')
+        if self.solver not in SOLVERS:
+            raise ValueError(f'solver must be one of {", ".join(SOLVERS)}, not {self.solver!r}')
+        if not 1 <= self.substeps <= 64:
+            raise ValueError(f'substeps must be 1 to 64, not {self.substeps}')
+        if self.quality_tolerance < 0:
+            raise ValueError('quality_tolerance must be >= 0 m (0 turns the automatic mode off)')
 
     def with_values(self, **changes):
         return replace(self, **changes)
@@ -97,6 +134,8 @@ class StepReport:
     step_cost_ns: int = 0              # wall time of the simulation work for this sample
     max_penetration: float = 0.0
     limited_vertices: int = 0          # M11 vertex-steps moved back to their bound
+    sweeps: int = 0                    # relaxation sweeps run (over all steps and substeps)
+    substeps: int = 0                  # substeps run (over all steps)
 
 
 class JacketSimulation:
@@ -165,7 +204,21 @@ class JacketSimulation:
                              * region['max_distance_scale'])                     # M11, M13
         self.stiffness = np.where(rig.con_group == 0, f.stretch_stiffness,
                                   f.shear_bend_stiffness)                        # M5
+        self.compliance = xpbd_compliance(self.stiffness, f.iterations)
+        self._lam = np.zeros(len(self.stiffness))
         self.dt_ns = int(round(1e9 / self.params.sim_rate))
+        self._per_substep = {}
+
+    def _dampings(self, substeps):
+        """(cloth, contact) damping per substep and the hood's per step (one hood step per step):
+        fabrics give them per design step."""
+        if substeps not in self._per_substep:
+            e = DESIGN_RATE / (self.params.sim_rate * substeps)
+            f = self.fabric
+            self._per_substep[substeps] = (per_step(self.damping, e),
+                                           float(per_step(f.contact_damping, e)),
+                                           float(per_step(f.hood_damping, e * substeps)))
+        return self._per_substep[substeps]
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links, layer=None):
@@ -233,7 +286,7 @@ class JacketSimulation:
         # settle it once, constraints and collisions without motion, so no step starts from a
         # stretched grid and snaps.
         self._cloth_step(self.links, self.root, ref, np.zeros((self.rig.n, 3)),
-                         np.ones(self.rig.n), 0.0)
+                         np.ones(self.rig.n), 0.0, 0.0, 1, self.x)
         self.xp = self.x.copy()
         self.contact[:] = False
 
@@ -331,31 +384,50 @@ class JacketSimulation:
         # M2 then M6: the upper jacket is solved, the pinned top row follows it.
         self._pads = self._solve_layer(links, full=False)
         top, ref = self._skinned_pose(links, self._pads)
+        substeps = self._substeps_for(top)
+        pin_from = self.x.copy() if substeps > 1 else self.x
         self.x[:rig.cols] = top
         self.xp[:rig.cols] = top
-        deepest, limited = self._cloth_step(links, root, ref, acc, self.damping, dt)
+        damping, contact_damping, hood_damping = self._dampings(substeps)
+        deepest, limited, sweeps = self._cloth_step(links, root, ref, acc, damping,
+                                                    contact_damping, dt, substeps, pin_from)
         report.max_penetration = max(report.max_penetration, deepest)
         report.limited_vertices += limited
-        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt)
+        report.sweeps += sweeps
+        report.substeps += substeps
+        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt, hood_damping)
 
-    def _cloth_step(self, links, root, ref, acc, damping, dt):
+    def _substeps_for(self, top):
+        """Substeps for this step: ``substeps``, or in the automatic quality mode as few as
+        keep the pinned row's move per substep under the tolerance (calm motion needs one)."""
+        p = self.params
+        if p.quality_tolerance <= 0.0 or p.substeps == 1:
+            return p.substeps
+        move = float(np.abs(top - self.x[:self.rig.cols]).max())
+        return int(min(p.substeps, max(1, np.ceil(move / p.quality_tolerance))))
+
+    def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt, substeps,
+                    pin_from):
         """The kernel's step on the current state, for this skeleton pose (M11 refs ``ref``)."""
         p, rig = self.params, self.rig
         c = self.collider_frames(links, root)
+        # In the automatic mode a sweep that moves nothing by more than a tenth of the
+        # tolerance ends the relaxation (the lab measured the share; see README, "The lab").
         return kernel.cloth_step(
-            self.x, self.xp, rig.free, acc, damping, self.contact,
-            self.fabric.contact_damping, dt, rig.con_a, rig.con_b, rig.con_rest, self.stiffness,
-            self.fabric.iterations, c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b,
-            c.capsule_radii, c.plane_points, c.plane_normals, ref, self.max_distance,
+            self.x, self.xp, rig.free, acc, damping, self.contact, contact_damping, dt,
+            rig.con_a, rig.con_b, rig.con_rest, self.stiffness, self.fabric.iterations,
+            c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b, c.capsule_radii,
+            c.plane_points, c.plane_normals, ref, self.max_distance,
             STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
-            rig.tether_anchor, rig.tether_length)
+            rig.tether_anchor, rig.tether_length, SOLVERS[p.solver], substeps,
+            self.compliance, self._lam, pin_from, AUTO_SWEEP_SHARE * p.quality_tolerance)
 
-    def _hood_step(self, links, acc, dt):
+    def _hood_step(self, links, acc, dt, damping):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
         anchor, _ = self.hood_anchor(links)
         v = self.hood_p - self.hood_pp
         self.hood_pp = self.hood_p.copy()
-        self.hood_p = self.hood_p + v * (1.0 - self.fabric.hood_damping) + acc * dt * dt
+        self.hood_p = self.hood_p + v * (1.0 - damping) + acc * dt * dt
         d = self.hood_p - anchor
         length = np.linalg.norm(d)
         if length > 1e-9:
