@@ -274,23 +274,52 @@ SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = 0, 1
 
 
 @njit(cache=True)
+def _lerp(out, a, b, w):
+    """out = a + w (b - a), elementwise over arrays of one shape."""
+    fa, fb, fo = a.reshape(-1), b.reshape(-1), out.reshape(-1)
+    for i in range(fo.shape[0]):
+        fo[i] = fa[i] + w * (fb[i] - fa[i])
+
+
+@njit(cache=True)
+def _orthonormalise(axes):
+    """Gram-Schmidt on each 3x3 frame's columns (interpolated rotations drift off unit)."""
+    for e in range(axes.shape[0]):
+        for c in range(3):
+            for p in range(c):
+                dot = axes[e, 0, c] * axes[e, 0, p] + axes[e, 1, c] * axes[e, 1, p] \
+                    + axes[e, 2, c] * axes[e, 2, p]
+                for r in range(3):
+                    axes[e, r, c] -= dot * axes[e, r, p]
+            norm = np.sqrt(axes[e, 0, c] ** 2 + axes[e, 1, c] ** 2 + axes[e, 2, c] ** 2)
+            for r in range(3):
+                axes[e, r, c] /= norm
+
+
+@njit(cache=True)
 def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
                ca, cb, rest, stiffness, iterations,
                centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
                ref, max_distance, limit_mode, upper, lower, vrest, anchor, tether,
-               solver, substeps, compliance, lam, pin_from, tolerance):
+               solver, substeps, compliance, lam, pin_from, tolerance,
+               centers0, axes0, cap_a0, cap_b0, plane_p0, plane_n0, ref0):
     """One fixed step of the jacket cloth, in ``substeps`` equal substeps ("Small Steps").
 
-    ``damping`` and ``contact_damping`` are per substep. The pinned vertices are already at
-    their new place; with substeps they move there from ``pin_from`` in equal parts (collider
-    frames are the step's, as in Small Steps, which detects contacts once per frame).
+    ``damping`` and ``contact_damping`` are per substep. The pinned vertices, the colliders and
+    the M11 references are given where they are at the end of the step; with substeps they move
+    there in equal parts from where they were at its start (``pin_from``, ``*0``). Colliders
+    that jumped ahead a whole step would push cloth out at the substep's speed, many times the
+    body's (the depenetration pop of Small Steps).
     Returns (deepest push-out, vertices limited by M11, relaxation sweeps run).
     """
     deepest = 0.0
     limited = 0
     sweeps = 0
     h = dt / substeps
-    pin_to = x.copy() if substeps > 1 else x
+    if substeps > 1:
+        pin_to = x.copy()
+        c_to, a_to, ka_to, kb_to = centers.copy(), axes.copy(), cap_a.copy(), cap_b.copy()
+        pp_to, pn_to, ref_to = plane_p.copy(), plane_n.copy(), ref.copy()
     for s in range(substeps):
         if substeps > 1:
             w = (s + 1.0) / substeps
@@ -299,6 +328,15 @@ def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
                     for k in range(3):
                         x[i, k] = pin_from[i, k] + w * (pin_to[i, k] - pin_from[i, k])
                         xp[i, k] = x[i, k]
+            _lerp(centers, centers0, c_to, w)
+            _lerp(axes, axes0, a_to, w)
+            _orthonormalise(axes)
+            _lerp(cap_a, cap_a0, ka_to, w)
+            _lerp(cap_b, cap_b0, kb_to, w)
+            _lerp(plane_p, plane_p0, pp_to, w)
+            _lerp(plane_n, plane_n0, pn_to, w)
+            _orthonormalise_rows(plane_n)
+            _lerp(ref, ref0, ref_to, w)
         integrate(x, xp, free, acc, damping, contact, contact_damping, h)
         if solver == SOLVER_XPBD:
             sweeps += relax_xpbd(x, free, ca, cb, rest, compliance, lam, h, iterations,
@@ -319,4 +357,15 @@ def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
             # showcase).
             collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
                     contact)
+    if substeps > 1:        # leave the frames exactly where the step ends (lerp rounds)
+        centers[:], axes[:], cap_a[:], cap_b[:] = c_to, a_to, ka_to, kb_to
+        plane_p[:], plane_n[:], ref[:] = pp_to, pn_to, ref_to
     return deepest, limited, sweeps
+
+
+@njit(cache=True)
+def _orthonormalise_rows(normals):
+    for k in range(normals.shape[0]):
+        norm = np.sqrt(normals[k, 0] ** 2 + normals[k, 1] ** 2 + normals[k, 2] ** 2)
+        for r in range(3):
+            normals[k, r] /= norm

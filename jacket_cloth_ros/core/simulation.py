@@ -164,6 +164,7 @@ class JacketSimulation:
         self._bone_rc = np.array(rig.bone_vertices(), dtype=int).reshape(-1, 2)
         self._pads = self._solve_layer(self.links, full=False)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
+        self._frames_before = None  # (colliders, M11 references) at the last step's end
         layer_names = rig.layer.names if rig.layer else []
         layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
         root = skeleton.link_names[0]
@@ -411,6 +412,8 @@ class JacketSimulation:
         """The kernel's step on the current state, for this skeleton pose (M11 refs ``ref``)."""
         p, rig = self.params, self.rig
         c = self.collider_frames(links, root)
+        c0, ref0 = self._frames_before if substeps > 1 and self._frames_before else (c, ref)
+        self._frames_before = (c, ref)     # where the next step's substeps start from
         # In the automatic mode a sweep that moves nothing by more than a tenth of the
         # tolerance ends the relaxation (the lab measured the share; see README, "The lab").
         return kernel.cloth_step(
@@ -420,7 +423,9 @@ class JacketSimulation:
             c.plane_points, c.plane_normals, ref, self.max_distance,
             STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
             rig.tether_anchor, rig.tether_length, SOLVERS[p.solver], substeps,
-            self.compliance, self._lam, pin_from, AUTO_SWEEP_SHARE * p.quality_tolerance)
+            self.compliance, self._lam, pin_from, AUTO_SWEEP_SHARE * p.quality_tolerance,
+            c0.centers, c0.axes, c0.capsule_a, c0.capsule_b, c0.plane_points,
+            c0.plane_normals, ref0)
 
     def _hood_step(self, links, acc, dt, damping):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""

@@ -9,12 +9,12 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rcl_interfaces.msg import ParameterType as T
 
 from ..core.fabric import FABRIC_RANGES, Fabric
-from ..core.simulation import STRETCH_LIMITS, SimParams
+from ..core.simulation import SOLVERS, STRETCH_LIMITS, SimParams
 
 # Parameters that map onto SimParams; the rest are the node's own or read at start.
 SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
-            'wind_gust_period', 'stretch_limit', 'reset_gap', 'teleport_distance',
-            'teleport_angle_deg')
+            'wind_gust_period', 'stretch_limit', 'solver', 'substeps', 'quality_tolerance',
+            'reset_gap', 'teleport_distance', 'teleport_angle_deg')
 
 # name: (type, default, (lo, hi) or None, read_only, description)
 NODE_PARAMETERS = {
@@ -42,6 +42,14 @@ NODE_PARAMETERS = {
     'stretch_limit': (T.PARAMETER_STRING, 'hard_pass', None, False,
                       'what removes vertical stretch: hard_pass (M12, exact rest lengths), '
                       'tethers (long-range attachments) or none'),
+    'solver': (T.PARAMETER_STRING, 'gauss_seidel', None, False,
+               'constraint solver: gauss_seidel (the article, stiffness per sweep) or xpbd '
+               '(compliance, the same softness at any rate and iteration count)'),
+    'substeps': (T.PARAMETER_INTEGER, 1, (1, 64), False,
+                 'equal substeps per simulation step; with quality_tolerance, the most used'),
+    'quality_tolerance': (T.PARAMETER_DOUBLE, 0.0, (0.0, 0.5), False,
+                          'm; > 0: automatic quality mode, fewer sweeps and substeps when the '
+                          'motion is calm; 0: fabric.iterations and substeps every step'),
     'reset_gap': (T.PARAMETER_DOUBLE, 1.0, (0.05, 60.0), False,
                   'a gap between stamps longer than this (s) resets the cloth'),
     'teleport_distance': (T.PARAMETER_DOUBLE, 1.0, (0.01, 1000.0), False,
@@ -98,6 +106,8 @@ def check_value(name, value):
             return 'wind must be 3 finite numbers [x, y, z]'
     if name == 'stretch_limit' and value not in STRETCH_LIMITS:
         return f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}'
+    if name == 'solver' and value not in SOLVERS:
+        return f'solver must be one of {", ".join(SOLVERS)}'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     if name == 'world_joint' and not value:

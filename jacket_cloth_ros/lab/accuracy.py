@@ -1,0 +1,310 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""References and metrics: how far a method is from the cloth model it approximates.
+
+The model is the rig's cloth with inextensible stretch edges, compliant shear/bend edges (the
+fabric's softness as an XPBD compliance, see ``simulation.xpbd_compliance``), collisions (M10)
+and the maximum distance (M11). Its converged solution, the *reference*, is XPBD in float64 with
+steps of 1/``REFERENCE_RATE`` s with ``REFERENCE_ITERATIONS`` sweeps each; running it again
+at half the step (Richardson) says how far the reference itself still is from converged.
+
+Cheap exact references need no reference run: the hood pendulum's large-amplitude period
+(``pendulum``) and a hanging chain's equilibrium, a column of the cloth straight down at its
+rest length (``hanging_chain``).
+
+Every run goes through ``JacketSimulation.process``, the node's own door, with 60 Hz
+JointState of a motion clip.
+"""
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..core import kernel
+from ..core.simulation import (
+    AUTO_SWEEP_SHARE, DESIGN_RATE, SOLVERS, STRETCH_LIMITS, JacketSimulation, SimParams, per_step,
+    xpbd_compliance)
+from ..motion.clips import joint_state_content
+
+CLIP_RATE = 60.0                 # Hz of the lab's JointState
+HEM_SAMPLES = 33                 # points along the hem curve, so grids of any width compare
+REFERENCE_RATE = 1920.0          # Hz: a step 16 times shorter than the default's
+REFERENCE_ITERATIONS = 48
+
+
+@dataclass(frozen=True)
+class Method:
+    """One point of the sweep: solver, stretch limit and budget."""
+
+    solver: str = 'gauss_seidel'
+    stretch_limit: str = 'hard_pass'
+    iterations: int = 8
+    substeps: int = 1
+    sim_rate: float = 120.0
+    tolerance: float = 0.0           # m, the automatic quality mode (0: off)
+
+    @property
+    def family(self):
+        """The method without its budget: what the charts colour by."""
+        name = 'GS' if self.solver == 'gauss_seidel' else 'XPBD'
+        return name if self.stretch_limit == 'none' else f'{name}+{self.stretch_limit}'
+
+    @property
+    def label(self):
+        auto = f' auto {self.tolerance * 1e3:g} mm' if self.tolerance else ''
+        return (f'{self.family} it{self.iterations} sub{self.substeps} '
+                f'{self.sim_rate:g} Hz{auto}')
+
+    def params(self, **base):
+        # Every step a clip asks for runs, however fine the step (the reference's are).
+        steps = int(math.ceil(self.sim_rate / CLIP_RATE)) + 4
+        return SimParams(sim_rate=self.sim_rate, stretch_limit=self.stretch_limit,
+                         solver=self.solver, substeps=self.substeps,
+                         quality_tolerance=self.tolerance,
+                         max_steps_per_input=max(steps, 12), **base)
+
+
+SHIPPED = Method()               # what the node runs with its default parameters
+# The hood steps once per step, so the reference shortens the step itself, not substeps.
+REFERENCE = Method('xpbd', 'none', REFERENCE_ITERATIONS, 1, REFERENCE_RATE)
+
+
+def clip_inputs(skeleton, clip, seconds, start_s=10.0):
+    """(stamp_ns, names, positions) of ``clip`` at CLIP_RATE for ``seconds``."""
+    out = []
+    for k in range(int(round(seconds * CLIP_RATE))):
+        t = k / CLIP_RATE
+        names, pos = joint_state_content(skeleton.joint_names, clip, t)
+        out.append((int(round((start_s + t) * 1e9)), names, pos))
+    return out
+
+
+@dataclass
+class Trace:
+    """What one run did, input by input (the first input, the reset, is left out)."""
+
+    method: Method
+    hem: np.ndarray                  # (T, HEM_SAMPLES, 3) the hem curve, simulation frame
+    hood: np.ndarray                 # (T, 3) the hood particle
+    strain: dict                     # {'vertical'|'horizontal'|'shear': (T,) worst |l/L - 1|}
+    strain_mean: dict                # the same, mean over the edges
+    inside: np.ndarray               # (T,) deepest vertex inside a collider (m)
+    kinetic: np.ndarray              # (T,) kinetic energy of the cloth, unit vertex masses
+    step_ns: np.ndarray              # (T,) process() wall time per input
+    sweeps: int                      # relaxation sweeps run
+    steps: int                       # simulation steps run
+    sim_seconds: float
+
+    @property
+    def cost_ms_per_s(self):
+        """Measured cost per simulated second: the median input's time at the input rate."""
+        return float(np.median(self.step_ns)) * 1e-6 * CLIP_RATE
+
+
+def edge_classes(rig):
+    """Constraint indices of the simulated vertical, horizontal and shear edges."""
+    C = rig.cols
+    ra, ca = np.divmod(rig.con_a, C)
+    rb, cb = np.divmod(rig.con_b, C)
+    dr, dc = np.abs(rb - ra), np.abs(cb - ca)
+    simulated = rig.free[rig.con_a] | rig.free[rig.con_b]
+    return {'vertical': np.nonzero((dr == 1) & (dc == 0) & simulated)[0],
+            'horizontal': np.nonzero((dr == 0) & (dc == 1) & simulated)[0],
+            'shear': np.nonzero((dr == 1) & (dc == 1) & simulated)[0]}
+
+
+def hem_curve(rig, x):
+    """The bottom row as HEM_SAMPLES points evenly spaced in column parameter."""
+    hem = x[(rig.rows - 1) * rig.cols:]
+    u = np.linspace(0.0, rig.cols - 1, HEM_SAMPLES)
+    i = np.minimum(u.astype(int), rig.cols - 2)
+    w = (u - i)[:, None]
+    return (1.0 - w) * hem[i] + w * hem[i + 1]
+
+
+def deepest_inside(sim):
+    """Deepest free vertex inside an ellipsoid (depth along its shortest radius) or a plane."""
+    c = sim.collider_frames(sim.links)
+    free = sim.x[sim.rig.free]
+    deepest = 0.0
+    for center, axes, radii in zip(c.centers, c.axes, c.radii):
+        r = np.linalg.norm(((free - center) @ axes) / radii, axis=1)
+        if (r < 1.0).any():
+            deepest = max(deepest, float(((1.0 - r[r < 1.0]) * radii.min()).max()))
+    for point, normal in zip(c.plane_points, c.plane_normals):
+        deepest = max(deepest, float(-((free - point) @ normal).min()))
+    return deepest
+
+
+def run(skeleton, rig, fabric, method, inputs):
+    """Feed ``inputs`` to a fresh simulation with ``method``; the Trace of what it did."""
+    sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
+                           method.params())
+    edges = edge_classes(rig)
+    hem, hood, inside, kinetic, step_ns = [], [], [], [], []
+    strain = {k: [] for k in edges}
+    strain_mean = {k: [] for k in edges}
+    sweeps = steps = 0
+    for k, (stamp, names, pos) in enumerate(inputs):
+        t0 = time.perf_counter_ns()
+        report = sim.process(stamp, names, pos)
+        spent = time.perf_counter_ns() - t0
+        if k == 0:
+            continue
+        step_ns.append(spent)
+        sweeps += report.sweeps
+        steps += report.steps
+        x = sim.x
+        hem.append(hem_curve(rig, x))
+        hood.append(sim.hood_p.copy())
+        length = np.linalg.norm(x[rig.con_a] - x[rig.con_b], axis=1)
+        s = np.abs(length / rig.con_rest - 1.0)
+        for name, idx in edges.items():
+            strain[name].append(s[idx].max())
+            strain_mean[name].append(s[idx].mean())
+        inside.append(deepest_inside(sim))
+        h = sim.dt_ns * 1e-9 / max(report.substeps // max(report.steps, 1), 1)
+        v = (x - sim.xp)[rig.free] / h     # xp is the last substep's
+        kinetic.append(0.5 * float((v * v).sum()))
+    return Trace(method, np.array(hem), np.array(hood),
+                 {k: np.array(v) for k, v in strain.items()},
+                 {k: np.array(v) for k, v in strain_mean.items()}, np.array(inside),
+                 np.array(kinetic), np.array(step_ns), sweeps, steps,
+                 (len(inputs) - 1) / CLIP_RATE)
+
+
+def reference(skeleton, rig, fabric, inputs, method=REFERENCE):
+    """The converged reference and its own error estimate: (trace, Richardson figures).
+
+    The estimate compares the reference with a run at half its step (Richardson).
+    """
+    ref = run(skeleton, rig, fabric, method, inputs)
+    finer = run(skeleton, rig, fabric, replace(method, sim_rate=method.sim_rate * 2), inputs)
+    return ref, compare(ref, finer)
+
+
+def compare(trace, ref):
+    """Position error of ``trace`` against ``ref`` (m): hem and hood, RMS and max."""
+    hem = np.linalg.norm(trace.hem - ref.hem, axis=2)
+    hood = np.linalg.norm(trace.hood - ref.hood, axis=1)
+    return {'hem_rms_m': float(np.sqrt((hem ** 2).mean())), 'hem_max_m': float(hem.max()),
+            'hood_rms_m': float(np.sqrt((hood ** 2).mean())), 'hood_max_m': float(hood.max())}
+
+
+def metrics(trace, ref):
+    """Every figure of one run against the reference, for the tables."""
+    out = {'method': trace.method.family, 'label': trace.method.label,
+           'solver': trace.method.solver, 'stretch_limit': trace.method.stretch_limit,
+           'iterations': trace.method.iterations, 'substeps': trace.method.substeps,
+           'sim_rate': trace.method.sim_rate, 'tolerance_m': trace.method.tolerance,
+           'cost_ms_per_s': trace.cost_ms_per_s,
+           'sweeps_per_step': trace.sweeps / max(trace.steps, 1)}
+    out.update(compare(trace, ref))
+    for name in trace.strain:
+        out[f'{name}_strain_max'] = float(trace.strain[name].max())
+        out[f'{name}_strain_mean'] = float(trace.strain_mean[name].mean())
+    out['inside_max_m'] = float(trace.inside.max())
+    # Numerical damping shows as kinetic energy lost against the model: < 1 is too damped.
+    out['energy_ratio'] = float(trace.kinetic.mean() / max(ref.kinetic.mean(), 1e-12))
+    return out
+
+
+# -- exact references -----------------------------------------------------------------------------
+
+def elliptic_k(k):
+    """Complete elliptic integral of the first kind K(k), by the arithmetic-geometric mean."""
+    a, b = 1.0, math.sqrt(1.0 - k * k)
+    while abs(a - b) > 1e-15 * a:
+        a, b = (a + b) / 2.0, math.sqrt(a * b)
+    return math.pi / (2.0 * a)
+
+
+def pendulum_period_exact(length, gravity, theta0):
+    """T = 4 sqrt(L/g) K(sin(theta0 / 2)): the large-amplitude pendulum."""
+    return 4.0 * math.sqrt(length / gravity) * elliptic_k(math.sin(theta0 / 2.0))
+
+
+def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
+    """The M8 hood released from ``theta0_deg`` with no damping, the skeleton still.
+
+    Verlet with a projection onto the rod loses energy each step (first order in the step), so
+    the amplitude falls from cycle to cycle; each cycle's period is compared with the exact
+    period at that cycle's own amplitude, which separates the phase error from that loss.
+    Returns the first cycle's figures and the amplitude lost per cycle.
+    """
+    sim = JacketSimulation(skeleton, rig, fabric.with_values(hood_damping=0.0),
+                           SimParams(sim_rate=sim_rate))
+    links = sim.links
+    anchor, _ = sim.hood_anchor(links)
+    L, g = rig.hood.length, sim.params.gravity
+    th = math.radians(theta0_deg)
+    sim.hood_p = anchor + L * np.array([math.sin(th), 0.0, -math.cos(th)])
+    sim.hood_pp = sim.hood_p.copy()
+    dt = sim.dt_ns * 1e-9
+    n = int(math.ceil(periods * pendulum_period_exact(L, g, th) / dt)) + 2
+    angle, rod = np.empty(n + 1), np.empty(n + 1)
+    angle[0], rod[0] = th, L
+    for k in range(1, n + 1):
+        sim._hood_step(links, np.array([0.0, 0.0, -g]), dt, 0.0)
+        d = sim.hood_p - anchor
+        angle[k], rod[k] = math.atan2(d[0], -d[2]), np.linalg.norm(d)
+    # Crossings of the vertical in the same direction, linearly interpolated, bound the cycles.
+    k = np.nonzero((angle[:-1] > 0.0) & (angle[1:] <= 0.0))[0]
+    crossings = (k + angle[k] / (angle[k] - angle[k + 1])) * dt
+    amplitude = np.array([np.abs(angle[a:b + 1]).max() for a, b in zip(k[:-1], k[1:])])
+    periods_s = np.diff(crossings)
+    exact = np.array([pendulum_period_exact(L, g, a) for a in amplitude])
+    loss = 1.0 - (amplitude[-1] / th) ** (1.0 / (len(amplitude) + 0.5))
+    return {'theta0_deg': theta0_deg, 'sim_rate': sim_rate, 'period_s': float(periods_s[0]),
+            'exact_s': float(exact[0]), 'amplitude_deg': float(np.degrees(amplitude[0])),
+            'period_error': float(periods_s[0] / exact[0] - 1.0),
+            'amplitude_loss_per_cycle': float(loss), 'rod_error_m': float(np.abs(rod - L).max())}
+
+
+def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.81):
+    """A column of the cloth, pinned at the top and released horizontal, through the kernel.
+
+    Its exact equilibrium hangs straight down at its rest length. Returns the stretch of the
+    whole column and of its worst link at the end, how far the bottom is from the exact
+    equilibrium, and the settling time (the bottom stays within 1 cm of it from then on).
+    """
+    n = rows
+    x = np.zeros((n, 3))
+    x[:, 0] = np.arange(n) * spacing
+    xp = x.copy()
+    free = np.ones(n, dtype=np.bool_)
+    free[0] = False
+    ca = np.concatenate([np.arange(n - 1), np.arange(n - 2)])       # stretch, then bend
+    cb = np.concatenate([np.arange(1, n), np.arange(2, n)])
+    rest = np.concatenate([np.full(n - 1, spacing), np.full(n - 2, 2 * spacing)])
+    stiffness = np.concatenate([np.full(n - 1, fabric.stretch_stiffness),
+                                np.full(n - 2, fabric.shear_bend_stiffness)])
+    compliance = xpbd_compliance(stiffness, fabric.iterations)
+    dt = 1.0 / method.sim_rate
+    damping = per_step(np.full(n, fabric.damping), DESIGN_RATE / (method.sim_rate
+                                                                  * method.substeps))
+    acc = np.tile([0.0, 0.0, -gravity], (n, 1))
+    none3 = np.zeros((0, 3))
+    total = (n - 1) * spacing
+    exact_bottom = np.array([0.0, 0.0, -total])
+    settled_at, steps = None, int(round(seconds / dt))
+    for k in range(steps):
+        kernel.cloth_step(
+            x, xp, free, acc, damping, np.zeros(n, dtype=np.bool_), 0.0, dt, ca, cb, rest,
+            stiffness, method.iterations, none3, np.zeros((0, 3, 3)), none3, none3, none3,
+            np.zeros(0), none3, none3, x.copy(), np.full(n, 1e9),
+            STRETCH_LIMITS[method.stretch_limit], np.arange(n - 1), np.arange(1, n),
+            np.full(n - 1, spacing), np.zeros(n, dtype=np.int64), np.arange(n) * spacing,
+            SOLVERS[method.solver], method.substeps, compliance, np.zeros(len(ca)), x,
+            method.tolerance * AUTO_SWEEP_SHARE)
+        off = np.linalg.norm(x[-1] - exact_bottom)
+        if off > 0.01:
+            settled_at = None
+        elif settled_at is None:
+            settled_at = (k + 1) * dt
+    links = np.linalg.norm(np.diff(x, axis=0), axis=1)
+    return {'method': method.label, 'stretch': float(np.linalg.norm(x[-1] - x[0]) / total - 1),
+            'worst_link_strain': float(np.abs(links / spacing - 1).max()),
+            'bottom_error_m': float(np.linalg.norm(x[-1] - exact_bottom)),
+            'settle_s': settled_at}
