@@ -91,14 +91,14 @@ class Trace:
     strain_mean: dict                # the same, mean over the edges
     inside: np.ndarray               # (T,) deepest vertex inside a collider (m)
     kinetic: np.ndarray              # (T,) kinetic energy of the cloth, unit vertex masses
-    step_ns: np.ndarray              # (T,) process() wall time per input
+    step_ns: np.ndarray              # (T,) process() CPU time per input
     sweeps: int                      # relaxation sweeps run
     steps: int                       # simulation steps run
     sim_seconds: float
 
     @property
     def cost_ms_per_s(self):
-        """Measured cost per simulated second: the median input's time at the input rate."""
+        """Measured cost per simulated second: the median input's CPU time at the input rate."""
         return float(np.median(self.step_ns)) * 1e-6 * CLIP_RATE
 
 
@@ -147,9 +147,9 @@ def run(skeleton, rig, fabric, method, inputs):
     strain_mean = {k: [] for k in edges}
     sweeps = steps = 0
     for k, (stamp, names, pos) in enumerate(inputs):
-        t0 = time.perf_counter_ns()
+        t0 = time.thread_time_ns()        # CPU time: what the shared computer pays
         report = sim.process(stamp, names, pos)
-        spent = time.perf_counter_ns() - t0
+        spent = time.thread_time_ns() - t0
         if k == 0:
             continue
         step_ns.append(spent)
@@ -289,15 +289,17 @@ def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.
     total = (n - 1) * spacing
     exact_bottom = np.array([0.0, 0.0, -total])
     settled_at, steps = None, int(round(seconds / dt))
+    axes = np.zeros((0, 3, 3))
+    far = x.copy()                       # no M11: references anywhere, bound of a kilometre
     for k in range(steps):
         kernel.cloth_step(
             x, xp, free, acc, damping, np.zeros(n, dtype=np.bool_), 0.0, dt, ca, cb, rest,
-            stiffness, method.iterations, none3, np.zeros((0, 3, 3)), none3, none3, none3,
-            np.zeros(0), none3, none3, x.copy(), np.full(n, 1e9),
-            STRETCH_LIMITS[method.stretch_limit], np.arange(n - 1), np.arange(1, n),
-            np.full(n - 1, spacing), np.zeros(n, dtype=np.int64), np.arange(n) * spacing,
-            SOLVERS[method.solver], method.substeps, compliance, np.zeros(len(ca)), x,
-            method.tolerance * AUTO_SWEEP_SHARE)
+            stiffness, method.iterations, none3, axes, none3, none3, none3, np.zeros(0),
+            none3, none3, far, np.full(n, 1e3), STRETCH_LIMITS[method.stretch_limit],
+            np.arange(n - 1), np.arange(1, n), np.full(n - 1, spacing),
+            np.zeros(n, dtype=np.int64), np.arange(n) * spacing, SOLVERS[method.solver],
+            method.substeps, compliance, np.zeros(len(ca)), x.copy(),
+            method.tolerance * AUTO_SWEEP_SHARE, none3, axes, none3, none3, none3, none3, far)
         off = np.linalg.norm(x[-1] - exact_bottom)
         if off > 0.01:
             settled_at = None

@@ -1,0 +1,280 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth bench``: every method's error against its measured cost, per motion clip.
+
+For each clip the lab computes the converged reference (``accuracy.reference``), then runs the
+sweep (methods x iterations x substeps x step) through ``JacketSimulation.process`` and times
+it: cost is the measured CPU time per simulated second on this machine, not a model. It also
+runs the exact references (pendulum, hanging chain), the automatic quality mode against the
+fixed default, and the rig-detail study: the converged cloth of coarser grids and of fewer
+colliders against the finest grid's.
+"""
+
+import copy
+import json
+import os
+from dataclasses import replace
+
+import numpy as np
+
+from ..core.config import load_yaml, shipped
+from ..core.fabric import load_fabric
+from ..core.rig import Rig
+from ..core.skeleton import Skeleton
+from . import accuracy
+from .accuracy import SHIPPED, Method
+
+CLIPS = ('idle', 'walk', 'run', 'dodge', 'jump', 'arms_up', 'turn')
+CLIP_SECONDS = 3.0
+FAMILIES = (('gauss_seidel', 'none'), ('gauss_seidel', 'hard_pass'), ('gauss_seidel', 'tethers'),
+            ('xpbd', 'none'), ('xpbd', 'hard_pass'))
+GRIDS = ((5, 7), (7, 9), (9, 12), (13, 18))       # cols x rows; 9x12 ships
+TOLERANCES = (0.002, 0.005, 0.01, 0.02)           # m, the automatic mode's settings measured
+AUTO_BUDGET = {'substeps': 2, 'iterations': 16}   # the most the automatic mode may spend
+PENDULUM = ((60.0, 120.0, 240.0), (10.0, 60.0, 120.0, 170.0))   # rates (Hz) x amplitudes (deg)
+
+
+def sweep(quick=False):
+    """The methods run on every clip."""
+    if quick:
+        return [SHIPPED, Method('gauss_seidel', 'none'), Method('gauss_seidel', 'hard_pass', 2),
+                Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2),
+                replace(SHIPPED, sim_rate=60.0)]
+    out = []
+    for solver, limit in FAMILIES:
+        for it in (1, 2, 4, 8, 16):
+            for sub in (1, 2, 4):
+                out.append(Method(solver, limit, it, sub))
+        out += [Method(solver, limit, 8, 1, rate) for rate in (60.0, 240.0)]
+    return out
+
+
+def auto_methods(quick=False):
+    """The automatic quality mode at each tolerance, over the default method and budget."""
+    tolerances = TOLERANCES[2:3] if quick else TOLERANCES
+    return [replace(SHIPPED, tolerance=t, **AUTO_BUDGET) for t in tolerances]
+
+
+def rig_at_grid(skeleton, cols, rows, colliders=None):
+    """The shipped rig with another grid over the same jacket (and optionally fewer colliders).
+
+    Row spacing and flare are rescaled so the hem stays where it is; region ranges scale with
+    the grid.
+    """
+    data = copy.deepcopy(load_yaml(shipped('jacket_rig.yaml')))
+    cloth = data['cloth']
+    rs = (cloth['rows'] - 1) / (rows - 1)
+    cs = (cloth['cols'] - 1) / (cols - 1)
+    cloth['shape']['row_spacing'] *= rs
+    cloth['shape']['flare'] *= rs
+    for region in cloth.get('regions', []):
+        region['rows'] = [min(rows - 1, int(round(r / rs))) for r in region['rows']]
+        region['cols'] = [min(cols - 1, int(round(c / cs))) for c in region['cols']]
+    cloth['cols'], cloth['rows'] = cols, rows
+    if colliders is not None:
+        data['colliders'] = [c for c in data['colliders'] if c['name'] in colliders]
+    return Rig(data, skeleton, where=f'shipped rig at {cols}x{rows}')
+
+
+def _character():
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        return Skeleton(f.read())
+
+
+def pareto_front(rows):
+    """Indices of the rows no other row beats on both cost and hem error."""
+    order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'],
+                                                   rows[i]['hem_rms_m']))
+    front, best = [], np.inf
+    for i in order:
+        if rows[i]['hem_rms_m'] < best:
+            front.append(i)
+            best = rows[i]['hem_rms_m']
+    return front
+
+
+def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jacket',
+          progress=None):
+    """Run everything; a JSON-ready dict of results."""
+    say = progress or (lambda text: None)
+    skeleton = _character()
+    fabric = load_fabric(fabric_name)
+    rig = rig_at_grid(skeleton, 9, 12)
+    ref_method = replace(accuracy.REFERENCE, sim_rate=960.0, iterations=32) if quick \
+        else accuracy.REFERENCE
+    out = {'fabric': fabric_name, 'quick': quick, 'clip_seconds': seconds,
+           'reference': ref_method.label, 'default': SHIPPED.label, 'clips': {}}
+    for clip in clips:
+        inputs = accuracy.clip_inputs(skeleton, clip, seconds)
+        say(f'{clip}: reference ({ref_method.label}) and its Richardson check')
+        ref, richardson = accuracy.reference(skeleton, rig, fabric, inputs, ref_method)
+        rows = []
+        for method in sweep(quick) + auto_methods(quick):
+            trace = accuracy.run(skeleton, rig, fabric, method, inputs)
+            rows.append(accuracy.metrics(trace, ref))
+        for i in pareto_front([r for r in rows if not r['tolerance_m']]):
+            rows[i]['pareto'] = True
+        out['clips'][clip] = {'richardson': richardson, 'rows': rows}
+        say(f'{clip}: {len(rows)} runs')
+    out['pendulum'] = [accuracy.pendulum(skeleton, rig, fabric, rate, theta)
+                       for rate in (PENDULUM[0][1:2] if quick else PENDULUM[0])
+                       for theta in PENDULUM[1]]
+    chain_methods = ([SHIPPED, Method('gauss_seidel', 'none'), Method('xpbd', 'none')] if quick
+                     else [Method(s, lim, it, sub) for s, lim in FAMILIES
+                           for it, sub in ((2, 1), (8, 1), (2, 4))])
+    out['chain'] = [accuracy.hanging_chain(fabric, m) for m in chain_methods]
+    out['rig_detail'] = rig_detail(skeleton, fabric, clips[:1] if quick else clips, seconds,
+                                   ref_method, quick, say)
+    return out
+
+
+def rig_detail(skeleton, fabric, clips, seconds, ref_method, quick, say):
+    """Converged cloth of each grid and collider set against the finest grid's, per clip."""
+    grids = GRIDS[1:3] if quick else GRIDS
+    variants = [(f'{c}x{r}', rig_at_grid(skeleton, c, r)) for c, r in grids]
+    variants.append(('9x12, no thigh colliders',
+                     rig_at_grid(skeleton, 9, 12, colliders=('torso', 'pelvis', 'floor'))))
+    finest = variants[len(grids) - 1][1]
+    out = []
+    for clip in clips:
+        inputs = accuracy.clip_inputs(skeleton, clip, seconds)
+        say(f'{clip}: rig detail')
+        best = accuracy.run(skeleton, finest, fabric, ref_method, inputs)
+        for name, rig in variants:
+            trace = accuracy.run(skeleton, rig, fabric, ref_method, inputs)
+            shipped_method = accuracy.run(skeleton, rig, fabric, SHIPPED, inputs)
+            row = {'clip': clip, 'rig': name, 'vertices': rig.n,
+                   'constraints': len(rig.con_a),
+                   'colliders': len(rig.colliders) + len(rig.capsules) + len(rig.planes),
+                   'cost_ms_per_s': shipped_method.cost_ms_per_s}
+            row.update(accuracy.compare(trace, best))
+            out.append(row)
+    return out
+
+
+# -- output ---------------------------------------------------------------------------------------
+
+def _mm(v):
+    return f'{v * 1e3:.1f}'
+
+
+def write(results, out_dir):
+    """bench.json, bench.md and the charts."""
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, 'bench.json'), 'w', encoding='utf-8') as f:
+        json.dump(results, f, indent=1)
+    with open(os.path.join(out_dir, 'bench.md'), 'w', encoding='utf-8') as f:
+        f.write(markdown(results))
+    charts(results, out_dir)
+
+
+def markdown(results):
+    lines = ['# jacket_cloth bench', '',
+             f'Fabric `{results["fabric"]}`, clips of {results["clip_seconds"]} s at 60 Hz '
+             f'JointState. Reference: {results["reference"]}, float64. Default: '
+             f'{results["default"]}. Cost: measured CPU time of `process()` per simulated '
+             'second on this machine (ms/s). Errors against the reference (mm). Strain: worst '
+             '|l/L - 1| of simulated edges (%). Energy: mean kinetic energy / the reference\'s.',
+             '']
+    for clip, data in results['clips'].items():
+        r = data['richardson']
+        lines += [f'## {clip}', '',
+                  f'Reference vs half its step (Richardson): hem RMS {_mm(r["hem_rms_m"])} mm, '
+                  f'max {_mm(r["hem_max_m"])} mm; hood RMS {_mm(r["hood_rms_m"])} mm.', '',
+                  '| method | cost ms/s | sweeps/step | hem RMS | hem max | hood RMS | hood max '
+                  '| vertical % | horizontal % | shear % | inside mm | energy | Pareto |',
+                  '|---' * 13 + '|']
+        for row in sorted(data['rows'], key=lambda x: x['cost_ms_per_s']):
+            mark = ' (default)' if row['label'] == results['default'] else ''
+            lines.append(
+                f'| {row["label"]}{mark} | {row["cost_ms_per_s"]:.1f} | '
+                f'{row["sweeps_per_step"]:.1f} | {_mm(row["hem_rms_m"])} | '
+                f'{_mm(row["hem_max_m"])} | {_mm(row["hood_rms_m"])} | {_mm(row["hood_max_m"])} | '
+                f'{row["vertical_strain_max"] * 100:.1f} | '
+                f'{row["horizontal_strain_max"] * 100:.1f} | {row["shear_strain_max"] * 100:.1f} '
+                f'| {_mm(row["inside_max_m"])} | {row["energy_ratio"]:.2f} | '
+                f'{"yes" if row.get("pareto") else ""} |')
+        lines.append('')
+    lines += ['## Hood pendulum (M8) against T = 4 sqrt(L/g) K(sin(theta/2))', '',
+              '| rate Hz | released at deg | first-cycle amplitude deg | period s | exact s | '
+              'period error % | amplitude lost per cycle % |', '|---' * 7 + '|']
+    for p in results['pendulum']:
+        lines.append(f'| {p["sim_rate"]:g} | {p["theta0_deg"]:g} | {p["amplitude_deg"]:.1f} | '
+                     f'{p["period_s"]:.4f} | {p["exact_s"]:.4f} | {p["period_error"] * 100:.2f} '
+                     f'| {p["amplitude_loss_per_cycle"] * 100:.1f} |')
+    lines += ['', '## Hanging chain: a 12-vertex column released horizontal, after 4 s', '',
+              '| method | stretch % | worst link % | bottom from exact mm | settled (1 cm) at s |',
+              '|---' * 5 + '|']
+    for c in results['chain']:
+        settle = f'{c["settle_s"]:.2f}' if c['settle_s'] is not None else 'never'
+        lines.append(f'| {c["method"]} | {c["stretch"] * 100:.3f} | '
+                     f'{c["worst_link_strain"] * 100:.3f} | {_mm(c["bottom_error_m"])} | '
+                     f'{settle} |')
+    lines += ['', '## Rig detail: converged cloth against the finest grid\'s', '',
+              '| clip | rig | vertices | colliders | default cost ms/s | hem RMS mm | hem max mm |',
+              '|---' * 7 + '|']
+    for d in results['rig_detail']:
+        lines.append(f'| {d["clip"]} | {d["rig"]} | {d["vertices"]} | {d["colliders"]} | '
+                     f'{d["cost_ms_per_s"]:.1f} | {_mm(d["hem_rms_m"])} | '
+                     f'{_mm(d["hem_max_m"])} |')
+    return '\n'.join(lines) + '\n'
+
+
+COLOURS = {'GS': 'tab:gray', 'GS+hard_pass': 'tab:blue', 'GS+tethers': 'tab:green',
+           'XPBD': 'tab:orange', 'XPBD+hard_pass': 'tab:red'}
+
+
+def _pareto_axes(ax, clip, data, default_label):
+    rows = data['rows']
+    for family, colour in COLOURS.items():
+        pts = [r for r in rows if r['method'] == family and not r['tolerance_m']]
+        if pts:
+            ax.scatter([r['cost_ms_per_s'] for r in pts], [r['hem_rms_m'] * 1e3 for r in pts],
+                       s=14, color=colour, label=family, alpha=0.8)
+    auto = [r for r in rows if r['tolerance_m']]
+    if auto:
+        ax.scatter([r['cost_ms_per_s'] for r in auto], [r['hem_rms_m'] * 1e3 for r in auto],
+                   marker='s', s=22, facecolors='none', edgecolors='k', label='auto (tolerance)')
+    front = sorted((r for r in rows if r.get('pareto')), key=lambda r: r['cost_ms_per_s'])
+    ax.step([r['cost_ms_per_s'] for r in front], [r['hem_rms_m'] * 1e3 for r in front],
+            where='post', color='k', lw=0.8, label='Pareto front')
+    for r in rows:
+        if r['label'] == default_label:
+            ax.scatter([r['cost_ms_per_s']], [r['hem_rms_m'] * 1e3], marker='*', s=160,
+                       color='gold', edgecolors='k', zorder=5, label='shipped default')
+    floor = data['richardson']['hem_rms_m'] * 1e3
+    ax.axhline(max(floor, 1e-3), color='k', ls=':', lw=0.8, label='reference uncertainty')
+    ax.set_xscale('log')
+    ax.set_yscale('log')
+    ax.set_xlabel('cost: CPU ms per simulated second')
+    ax.set_ylabel('hem error, RMS vs converged (mm)')
+    ax.set_title(clip, fontsize=9)
+    ax.grid(True, which='both', alpha=0.3)
+
+
+def charts(results, out_dir):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    clips = list(results['clips'])
+    for clip in clips:
+        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        _pareto_axes(ax, clip, results['clips'][clip], results['default'])
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out_dir, f'pareto_{clip}.png'), dpi=100)
+        plt.close(fig)
+    cols = min(4, len(clips))
+    rows = (len(clips) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for ax, clip in zip(axes.flat, clips):
+        _pareto_axes(ax, clip, results['clips'][clip], results['default'])
+        ax.xaxis.label.set_size(7)
+        ax.yaxis.label.set_size(7)
+    for ax in list(axes.flat)[len(clips):]:
+        ax.axis('off')
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc='lower right', fontsize=7, ncol=2)
+    fig.suptitle('jacket_cloth bench: hem error against measured cost, per clip', fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, 'pareto.png'), dpi=90)
+    plt.close(fig)
