@@ -19,7 +19,7 @@ import numpy as np
 from . import kernel
 from .inputs import InputParser, InputRejected
 from .transforms import (
-    apply_transform, invert_transform, matrix_to_quat, quat_slerp, quat_to_matrix,
+    apply_transform, cross, invert_transform, matrix_to_quat, quat_slerp, quat_to_matrix,
     rotation_angle)
 
 
@@ -503,7 +503,7 @@ class JacketSimulation:
 def _orthonormal(xa, ya):
     """Rotation matrices with columns x, y, z from rough x and y axes (shear removed)."""
     x = xa / np.linalg.norm(xa, axis=-1, keepdims=True)
-    z = np.cross(x, ya)
+    z = cross(x, ya)
     z /= np.linalg.norm(z, axis=-1, keepdims=True)
-    y = np.cross(z, x)
+    y = cross(z, x)
     return np.stack([x, y, z], axis=-1)

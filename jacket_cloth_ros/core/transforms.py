@@ -53,6 +53,16 @@ def quat_to_matrix(q):
     return r
 
 
+def cross(a, b):
+    """np.cross for (..., 3) arrays without its axis juggling (some 40 us a call here)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
 def matrix_to_quat(r):
     """(...,3,3) rotations to unit (...,4) quaternions (x, y, z, w) with w >= 0."""
     r = np.asarray(r, dtype=float)

@@ -69,7 +69,7 @@ class CdrWriter:
 
 
 def tf_message(names, parents, translations, quaternions, stamp_ns, prefix=''):
-    """tf2_msgs/TFMessage: one TransformStamped per bone."""
+    """tf2_msgs/TFMessage: one TransformStamped per bone (field by field; see TfTemplate)."""
     w = CdrWriter()
     w.u32(len(names))
     for name, parent, t, q in zip(names, parents, translations.tolist(), quaternions.tolist()):
@@ -77,6 +77,41 @@ def tf_message(names, parents, translations, quaternions, stamp_ns, prefix=''):
         w.string(prefix + name)
         w.f64s(t + q)
     return w.bytes()
+
+
+class TfTemplate:
+    """The bytes of a TFMessage whose bone names and parents never change, laid out once.
+
+    Each message then only writes its stamps and poses into place: two numpy assignments
+    instead of about 400 small appends (measured: 0.85 ms of a 2.5 ms profiled input went to
+    encoding /tf field by field). The bytes equal :func:`tf_message`'s.
+    """
+
+    def __init__(self, names, parents, prefix=''):
+        w = CdrWriter()
+        w.u32(len(names))
+        stamps, poses = [], []
+        for name, parent in zip(names, parents):
+            w.align(4)
+            stamps.append(len(w.buf))
+            w.header(0, parent)
+            w.string(prefix + name)
+            w.align(8)
+            poses.append(len(w.buf))
+            w.f64s((0.0,) * 7)
+        self._buf = w.buf
+        self._u8 = np.frombuffer(self._buf, dtype=np.uint8)
+        self._stamp_at = np.array(stamps)[:, None] + np.arange(8)
+        self._pose_at = np.array(poses)[:, None] + np.arange(56)
+        self._pose = np.empty((len(names), 7), dtype='<f8')
+
+    def encode(self, translations, quaternions, stamp_ns):
+        stamp = struct.pack('<iI', int(stamp_ns // 1_000_000_000), int(stamp_ns % 1_000_000_000))
+        self._u8[self._stamp_at] = np.frombuffer(stamp, dtype=np.uint8)
+        self._pose[:, :3] = translations
+        self._pose[:, 3:] = quaternions
+        self._u8[self._pose_at] = self._pose.view(np.uint8)
+        return bytes(self._buf)
 
 
 def marker(w, m, stamp_ns, frame):

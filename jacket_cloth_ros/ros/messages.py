@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.transforms import matrix_to_quat
+from ..core.transforms import cross, matrix_to_quat
 from . import cdr
 
 # visualization_msgs/Marker constants
@@ -44,8 +44,13 @@ def stamp_msg(stamp_ns):
 
 def tf_message(bones, stamp_ns, prefix=''):
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    return cdr.tf_message(bones.names, bones.parents, bones.translations, bones.quaternions,
-                          stamp_ns, prefix)
+    return _tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(
+        bones.translations, bones.quaternions, stamp_ns)
+
+
+@functools.lru_cache(maxsize=8)
+def _tf_template(names, parents, prefix):
+    return cdr.TfTemplate(names, parents, prefix)
 
 
 @functools.lru_cache(maxsize=8)
@@ -75,7 +80,7 @@ def grid_lines(rows, cols):
 def _z_to(direction):
     """Quaternion (x, y, z, w) turning +z onto the unit ``direction``."""
     z = np.array([0.0, 0.0, 1.0])
-    axis = np.cross(z, direction)
+    axis = cross(z, direction)
     s, c = np.linalg.norm(axis), float(z @ direction)
     if s < 1e-9:
         return (1.0, 0.0, 0.0, 0.0) if c < 0 else IDENTITY
