@@ -227,6 +227,7 @@ class JacketClothNode(Node):
                      last.stamp_ns if last else header)
 
     def _on_joint_state(self, raw):
+        arrived = time.perf_counter_ns()
         msg = deserialize_message(raw, JointState)
         stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         self.inputs += 1
@@ -243,6 +244,8 @@ class JacketClothNode(Node):
             self._warn('nan', 'non-finite bone pose: nothing published')
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
+            if key == 'tf':      # latency: the callback's start to /tf handed to DDS
+                self.pipeline.note_latency(time.perf_counter_ns() - arrived)
             self._record(self._topics[key][0], out, stamp_ns)
 
 

@@ -50,6 +50,7 @@ class SessionPipeline:
         self.dropped = 0
         self.last_reset_reason = ''
         self._costs = []
+        self._latencies = []
         self._last_marker = None
         self._last_diag = None
         self._marker_reset = True
@@ -66,6 +67,10 @@ class SessionPipeline:
             self.sim.set_fabric(self._fabric())
         if 'world_joint' in changes:
             self.sim.parser.set_world_joint(self.values['world_joint'])
+
+    def note_latency(self, ns):
+        """The live node's time from a JointState's arrival to its /tf going out."""
+        self._latencies.append(ns)
 
     def on_joint_state(self, msg, stamp_ns):
         """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
@@ -106,7 +111,12 @@ class SessionPipeline:
             values['step_cost_us_median'] = f'{np.median(costs):.1f}'
             values['step_cost_us_max'] = f'{costs.max():.1f}'
             slow = costs.max() > 1e6 / sim.params.sim_rate
+            if self._latencies:
+                lat = np.array(self._latencies) * 1e-3
+                values['latency_us_p99'] = f'{np.percentile(lat, 99):.1f}'
+                values['latency_us_max'] = f'{lat.max():.1f}'
         self._costs = []
+        self._latencies = []
         values.update({
             'overruns': sim.overruns,
             'resets': sim.resets,

@@ -1,0 +1,434 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth bench speed``: each cost as a ratio, measured in one run on this machine.
+
+- kernel: one cloth step of the shipped rig (``lab.bench.rig_at_grid``) against the compiled
+  yardstick ``../shared/limit/cloth_ref.c`` at the same grid and iterations (built here when
+  the file exists; the project never copies it);
+- input: the node's pipeline per JointState (simulation, bones, /tf, markers, diagnostics)
+  against the bare kernel's time for the steps that input triggers;
+- node: the live node's CPU per JointState at 120 Hz with recording on, against the floor, a
+  minimal rclpy node republishing a pre-built TFMessage of the same size plus the bare kernel;
+  and its latency p99 (arrival to /tf) against one simulation step;
+- start: process start to the first /tf, warm (compiled kernels cached) and cold;
+- replay: simulated seconds per second of replay, for sessions of several lengths;
+- endurance: simulated motion through the node's JointState callback with recording on, as
+  fast as it runs: resident memory and step cost over time, every input with its output.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from ..core import kernel
+from ..core.config import shipped
+from ..core.fabric import load_fabric, load_fabrics
+from ..core.simulation import JacketSimulation
+from .accuracy import clip_inputs
+from .bench import _character, rig_at_grid
+
+LIMIT_SOURCE = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'shared', 'limit',
+                            'cloth_ref.c')
+GRIDS = ((6, 10), (9, 12), (16, 24), (33, 48))
+ITERATIONS = (4, 8, 16)
+RATE = 120.0                   # JointState Hz of the node runs, as the issue sets
+
+
+def limit_source():
+    """The yardstick's source if this checkout sits beside ../shared, else None."""
+    path = os.environ.get('JACKET_CLOTH_LIMIT', os.path.abspath(LIMIT_SOURCE))
+    return path if os.path.isfile(path) else None
+
+
+class Yardstick:
+    """cloth_ref built once into a temporary folder."""
+
+    def __init__(self, source):
+        self._tmp = tempfile.TemporaryDirectory()
+        self.exe = os.path.join(self._tmp.name, 'cloth_ref')
+        subprocess.run(['cc', '-O3', '-march=native', '-o', self.exe, source, '-lm'], check=True)
+
+    def step_ns(self, cols, rows, iterations, steps=4200):
+        out = subprocess.run([self.exe, str(cols), str(rows), str(iterations), str(steps)],
+                             check=True, capture_output=True, text=True).stdout
+        return json.loads(out)
+
+
+def captured_steps(skeleton, rig, fabric, seconds=1.0):
+    """The kernel's arguments of every step of a walk, as the simulation made them."""
+    sim = JacketSimulation(skeleton, rig, fabric)
+    captured = []
+    real = kernel.cloth_step
+
+    def capture(*args):
+        captured.append([a.copy() if isinstance(a, np.ndarray) else a for a in args])
+        return real(*args)
+    kernel.cloth_step = capture
+    try:
+        for stamp, names, pos in clip_inputs(skeleton, 'walk', seconds):
+            sim.process(stamp, names, pos)
+    finally:
+        kernel.cloth_step = real
+    return captured[2:]             # past the warm-up and the reset's settling step
+
+
+def kernel_step_ns(steps, repeat=3):
+    """Median time of the kernel on each captured state (copies made outside the timing)."""
+    times = []
+    for _ in range(repeat):
+        for args in steps:
+            a = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
+            t0 = time.perf_counter_ns()
+            kernel.cloth_step(*a)
+            times.append(time.perf_counter_ns() - t0)
+    return float(np.median(times))
+
+
+def kernel_vs_limit(skeleton, grids=GRIDS, iterations=ITERATIONS, yardstick=None):
+    rows = []
+    for cols, nrows in grids:
+        rig = rig_at_grid(skeleton, cols, nrows)
+        for it in iterations:
+            fabric = load_fabric('tweed_jacket').with_values(iterations=it)
+            ns = kernel_step_ns(captured_steps(skeleton, rig, fabric))
+            row = {'grid': f'{cols}x{nrows}', 'vertices': rig.n,
+                   'constraints': int(len(rig.con_a)), 'iterations': it, 'kernel_ns': ns}
+            if yardstick:
+                ref = yardstick.step_ns(cols, nrows, it)
+                row.update(limit_ns=ref['step_ns_median'], limit_constraints=ref['constraints'],
+                           ratio=ns / ref['step_ns_median'])
+            rows.append(row)
+    return rows
+
+
+def input_vs_kernel(skeleton, seconds=10.0):
+    """Per JointState at 120 Hz: the pipeline's CPU time and the kernel's part of it."""
+    from ..ros.parameters import default_values
+    from ..ros.pipeline import SessionPipeline
+    from ..tools.cli import clip_messages
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(skeleton, rig_at_grid(skeleton, 9, 12), fabrics,
+                           default_values(fabrics['tweed_jacket']), timing=False)
+    spent = []
+    kernel_ns = []
+    real = kernel.cloth_step
+
+    def timed(*args):
+        t0 = time.thread_time_ns()
+        out = real(*args)
+        kernel_ns[-1] += time.thread_time_ns() - t0
+        return out
+    kernel.cloth_step = timed
+    try:
+        for stamp, msg in clip_messages(skeleton, 'walk', RATE, seconds, 10 ** 10):
+            kernel_ns.append(0)
+            t0 = time.thread_time_ns()
+            pipe.on_joint_state(msg, stamp)
+            spent.append(time.thread_time_ns() - t0)
+    finally:
+        kernel.cloth_step = real
+    spent, kernel_ns = np.array(spent[2:]), np.array(kernel_ns[2:])
+    return {'input_us_median': float(np.median(spent)) * 1e-3,
+            'kernel_us_median': float(np.median(kernel_ns)) * 1e-3,
+            'ratio': float(np.median(spent) / np.median(kernel_ns))}
+
+
+# -- the live node ---------------------------------------------------------------------------
+
+def _cpu_s(pid):
+    with open(f'/proc/{pid}/stat', encoding='ascii') as f:
+        fields = f.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def live_node(skeleton, command, seconds, domain, record_dir=None):
+    """Drive ``command`` (a node process) with JointState at RATE; its CPU per message and
+    what it sent back: (cpu_s_per_message, start_to_first_tf_s, latency p99 values in us)."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from tf2_msgs.msg import TFMessage
+
+    from ..tools.cli import clip_messages
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    node = rclpy.create_node('jacket_cloth_speed_driver', context=ctx)
+    first_tf, latencies, tf_count = [], [], [0]
+
+    def on_tf(raw):
+        tf_count[0] += 1
+        if not first_tf:
+            first_tf.append(time.monotonic())
+
+    def on_diag(msg):
+        for status in msg.status:
+            for kv in status.values:
+                if kv.key == 'latency_us_p99':
+                    latencies.append(float(kv.value))
+    node.create_subscription(TFMessage, '/tf', on_tf, 100, raw=True)
+    node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 10)
+    pub = node.create_publisher(JointState, 'joint_states',
+                                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    msgs = list(clip_messages(skeleton, 'walk', RATE, seconds + 3.0, 10 ** 10))
+    from rclpy.executors import SingleThreadedExecutor
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node)
+    started = time.monotonic()
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    try:
+        k = 0
+        while time.monotonic() - started < 30.0 and not first_tf:
+            if pub.get_subscription_count():
+                pub.publish(msgs[k][1])
+                k += 1
+            ex.spin_once(timeout_sec=1.0 / RATE)
+        if not first_tf:
+            raise RuntimeError(f'{command[-1]}: no /tf within 30 s')
+        start_s = first_tf[0] - started
+        for _ in range(int(RATE)):                     # a second of warm-up
+            pub.publish(msgs[k][1])
+            k += 1
+            ex.spin_once(timeout_sec=1.0 / RATE)
+        cpu0, tf0, n = _cpu_s(proc.pid), tf_count[0], int(seconds * RATE)
+        wall0 = time.monotonic()
+        for j in range(n):
+            pub.publish(msgs[k + j][1])
+            while True:
+                left = wall0 + (j + 1) / RATE - time.monotonic()
+                if left <= 0:
+                    break
+                ex.spin_once(timeout_sec=left)
+        end = time.monotonic() + 0.5
+        while time.monotonic() < end:
+            ex.spin_once(timeout_sec=0.05)
+        cpu = (_cpu_s(proc.pid) - cpu0) / n
+        answered = tf_count[0] - tf0
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        ex.shutdown()
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    return {'cpu_us_per_message': cpu * 1e6, 'start_s': start_s, 'answered': answered,
+            'sent': n, 'latency_us_p99': latencies}
+
+
+def node_vs_floor(skeleton, seconds, kernel_us, record_dir):
+    domain = 40 + os.getpid() % 50
+    node_cmd = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+                '-p', f'record:={os.path.join(record_dir, "speed_session.mcap")}']
+    ours = live_node(skeleton, node_cmd, seconds, domain)
+    floor = live_node(skeleton, [sys.executable, '-m', 'jacket_cloth_ros.lab.floor_node'],
+                      seconds, domain + 1)
+    floor_us = floor['cpu_us_per_message'] + kernel_us
+    return {'node': ours, 'floor_node': floor, 'floor_us': floor_us,
+            'ratio': ours['cpu_us_per_message'] / floor_us}
+
+
+def cold_start(skeleton, seconds=1.0):
+    """First /tf after start with an empty numba cache: what a fresh install pays once."""
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ['NUMBA_CACHE_DIR'] = cache
+        try:
+            return live_node(skeleton, [sys.executable, '-m', 'jacket_cloth_ros.ros.node'],
+                             seconds, 95)['start_s']
+        finally:
+            del os.environ['NUMBA_CACHE_DIR']
+
+
+# -- replay and endurance --------------------------------------------------------------------
+
+def replay_scaling(skeleton, lengths, folder):
+    """Replay throughput (simulated s per s) for sessions of each length (s)."""
+    from rclpy.serialization import serialize_message
+
+    from ..recording.writer import SessionRecorder, qos_profile_yaml
+    from ..tools.cli import clip_messages
+    from ..tools.replay import replay
+    from ..tools.session import load_session
+    rows = []
+    for length in lengths:
+        src = os.path.join(folder, f'clip_{length:g}.mcap')
+        rec = SessionRecorder(src)
+        rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState',
+                      qos_profile_yaml(reliable=False))
+        for stamp, msg in clip_messages(skeleton, 'walk', 60.0, length, 10 ** 10):
+            rec.write('/joint_states', serialize_message(msg), stamp)
+        rec.close()
+        out = os.path.join(folder, f'replay_{length:g}.mcap')
+        _, took = replay(load_session(src), out)
+        rows.append({'session_s': length, 'replay_s': took, 'realtime_x': length / took})
+    return rows
+
+
+def endurance(skeleton, simulated_s, folder, window_s=60.0):
+    """Simulated motion through the node's JointState callback with recording on.
+
+    The real JacketClothNode in this process, fed serialized JointState at 120 Hz stamps as
+    fast as it takes them (DDS is skipped: nothing can be lost on the way). Returns resident
+    memory and step cost per window and the recording's input and output counts.
+    """
+    import rclpy
+    from rclpy.parameter import Parameter
+    from rclpy.serialization import serialize_message
+
+    from ..recording.reader import read_recording
+    from ..ros.node import JacketClothNode
+    from ..tools.cli import _joint_state
+    from ..motion.clips import joint_state_content
+    path = os.path.join(folder, 'endurance.mcap')
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=97)
+    node = JacketClothNode(context=ctx, parameter_overrides=[
+        Parameter('record', value=path),
+        Parameter('robot_description', value=open(shipped('character.urdf')).read())])
+    windows = []
+    n = int(simulated_s * RATE)
+    per_window = int(window_s * RATE)
+    costs = []
+    try:
+        for k in range(n):                 # the gait repeats; the walker goes on
+            t = k / RATE
+            names, pos = joint_state_content(skeleton.joint_names, 'walk', t)
+            raw = serialize_message(_joint_state(names, pos, 10 ** 10 + int(round(t * 1e9))))
+            t0 = time.thread_time_ns()
+            node._on_joint_state(raw)
+            costs.append(time.thread_time_ns() - t0)
+            if (k + 1) % per_window == 0:
+                windows.append({'simulated_s': (k + 1) / RATE, 'rss_mb': _rss_mb(),
+                                'input_us_median': float(np.median(costs)) * 1e-3})
+                costs = []
+    finally:
+        node.close()
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    recording = read_recording(path)
+    counts = {}
+    for m in recording.messages:
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+    os.remove(path)
+    return {'windows': windows, 'inputs': counts.get('/joint_states', 0),
+            'tf': counts.get('/tf', 0), 'complete': recording.complete}
+
+
+def _rss_mb():
+    with open('/proc/self/status', encoding='ascii') as f:
+        for line in f:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) / 1024.0
+    return float('nan')
+
+
+# -- the command -----------------------------------------------------------------------------
+
+def run(quick, out_dir, say=print):
+    skeleton = _character()
+    os.makedirs(out_dir, exist_ok=True)
+    source = limit_source()
+    yardstick = Yardstick(source) if source and not quick else None
+    results = {'quick': quick, 'limit': source or 'not found (../shared/limit/cloth_ref.c)'}
+    say('kernel against the yardstick')
+    results['kernel'] = kernel_vs_limit(skeleton, GRIDS[:2] if quick else GRIDS,
+                                        (8,) if quick else ITERATIONS, yardstick)
+    say('pipeline per input')
+    results['input'] = input_vs_kernel(skeleton, 2.0 if quick else 10.0)
+    with tempfile.TemporaryDirectory() as tmp:
+        say('replay throughput by session length')
+        results['replay'] = replay_scaling(skeleton, (5.0, 10.0) if quick
+                                           else (15.0, 30.0, 60.0, 120.0), tmp)
+        say('endurance')
+        results['endurance'] = endurance(skeleton, 10.0 if quick else 3600.0, tmp,
+                                         window_s=5.0 if quick else 60.0)
+        if not quick:
+            say('live node against the floor node (120 Hz, recording on)')
+            kernel_us = results['input']['kernel_us_median']
+            results['node'] = node_vs_floor(skeleton, 20.0, kernel_us, tmp)
+            say('cold start')
+            results['cold_start_s'] = cold_start(skeleton)
+    write(results, out_dir)
+    return results
+
+
+def summary(results):
+    lines = ['# jacket_cloth bench speed', '']
+    k = results['kernel']
+    lines += ['## Kernel against the C yardstick (one step, same grid and iterations)', '',
+              '| grid | constraints | iterations | kernel us | yardstick us | ratio |',
+              '|---|---|---|---|---|---|']
+    for r in k:
+        lines.append(f'| {r["grid"]} | {r["constraints"]} | {r["iterations"]} | '
+                     f'{r["kernel_ns"] / 1e3:.1f} | '
+                     + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x |' if 'ratio' in r
+                        else 'n/a | n/a |'))
+    i = results['input']
+    lines += ['', f'Pipeline per JointState (120 Hz in, 120 Hz steps): median '
+              f'{i["input_us_median"]:.0f} us CPU, kernel {i["kernel_us_median"]:.0f} us: '
+              f'{i["ratio"]:.1f}x the kernel.', '',
+              '| session s | replay s | x real time |', '|---|---|---|']
+    for r in results['replay']:
+        lines.append(f'| {r["session_s"]:g} | {r["replay_s"]:.2f} | {r["realtime_x"]:.1f} |')
+    e = results['endurance']
+    w = e['windows']
+    lines += ['', f'Endurance: {w[-1]["simulated_s"]:.0f} s simulated through the node '
+              f'callback with recording on; RSS {w[0]["rss_mb"]:.1f} -> {w[-1]["rss_mb"]:.1f} MB; '
+              f'input median {w[0]["input_us_median"]:.0f} -> {w[-1]["input_us_median"]:.0f} '
+              f'us; {e["inputs"]} JointState and {e["tf"]} /tf recorded.']
+    if 'node' in results:
+        n = results['node']
+        lat = n['node']['latency_us_p99']
+        lines += ['', f'Live node at 120 Hz, recording on: {n["node"]["cpu_us_per_message"]:.0f} '
+                  f'us CPU per message; floor {n["floor_us"]:.0f} us (minimal node '
+                  f'{n["floor_node"]["cpu_us_per_message"]:.0f} + kernel): {n["ratio"]:.2f}x '
+                  f'the floor. Latency p99 (worst window) {max(lat) if lat else float("nan"):.0f}'
+                  f' us, one step is {1e6 / 120:.0f} us. First /tf {n["node"]["start_s"]:.2f} s '
+                  f'after start (warm), {results["cold_start_s"]:.2f} s cold.']
+    return '\n'.join(lines) + '\n'
+
+
+def write(results, out_dir):
+    with open(os.path.join(out_dir, 'speed.json'), 'w', encoding='utf-8') as f:
+        json.dump(results, f, indent=1)
+    with open(os.path.join(out_dir, 'speed.md'), 'w', encoding='utf-8') as f:
+        f.write(summary(results))
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for it in sorted({r['iterations'] for r in results['kernel']}):
+        rows = [r for r in results['kernel'] if r['iterations'] == it]
+        a.plot([r['constraints'] for r in rows], [r['kernel_ns'] / 1e3 for r in rows], 'o-',
+               label=f'kernel, {it} iterations')
+        if all('limit_ns' in r for r in rows):
+            a.plot([r['constraints'] for r in rows], [r['limit_ns'] / 1e3 for r in rows], 'x--',
+                   label=f'C yardstick, {it} iterations')
+    a.set_xscale('log')
+    a.set_yscale('log')
+    a.set_xlabel('constraints (grids 6x10 to 33x48)')
+    a.set_ylabel('one step (us)')
+    a.legend(fontsize=7)
+    a.set_title('cloth step against the compiled limit', fontsize=9)
+    rep = results['replay']
+    b.plot([r['session_s'] for r in rep], [r['replay_s'] for r in rep], 'o-')
+    b.set_xlabel('session length (s)')
+    b.set_ylabel('replay time (s)')
+    b.set_title('replay: time against session length', fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, 'speed.png'), dpi=100)
+    plt.close(fig)
+
+
+def main(args):
+    results = run(args.quick, args.out, say=lambda t: print(t, flush=True))
+    print(summary(results))
+    return 0
