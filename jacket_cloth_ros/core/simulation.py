@@ -361,12 +361,12 @@ class JacketSimulation:
             root = np.eye(4)
             root[:3, :3] = quat_to_matrix(rq)
             root[:3, 3] = a.root[:3, 3] + w * (sample.root[:3, 3] - a.root[:3, 3])
-            self._step(self.skeleton.forward(q), root, report)
+            self._step(self.skeleton.forward(q), root, report, last=_ == n - 1)
         report.steps = n
         self.steps_total += n
         self.last = sample
 
-    def _step(self, links, root, report):
+    def _step(self, links, root, report, last=False):
         p, rig = self.params, self.rig
         dt = self.dt_ns * 1e-9
         # M14: the character moved through the world by `delta` (old local -> new local); a
@@ -384,7 +384,11 @@ class JacketSimulation:
         wind = world_to_local @ p.wind_at(self.t_sim or 0)
         acc = gravity + self.wind_scale[:, None] * wind
         # M2 then M6: the upper jacket is solved, the pinned top row follows it.
-        self._pads = self._solve_layer(links, full=False)
+        # The last step of an input solves the whole layer once: the bones need it, and the
+        # bones below the pads are the same either way.
+        self._pads = self._solve_layer(links, full=last)
+        if last:
+            self._layer = (links, self._pads)
         top, ref = self._skinned_pose(links, self._pads)
         substeps = self._substeps_for(top)
         pin_from = self.x.copy() if substeps > 1 else self.x
