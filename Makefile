@@ -60,6 +60,16 @@ analysis: $(READY)
 test: $(READY)
 	$(PY) -m pytest -q test
 
+# The lab's full modes (minutes; `make test` runs their quick modes).
+bench: $(READY)
+	$(PY) -m jacket_cloth_ros bench --out out/bench
+
+bench-speed: $(READY)
+	$(PY) -m jacket_cloth_ros bench speed --out out/bench_speed
+
+stress: $(READY)
+	$(PY) -m jacket_cloth_ros stress --out out/stress
+
 # Why the cloth step is compiled: the same step in numpy, and the C yardstick if it is here.
 bench-kernel: $(READY)
 	$(PY) benchmarks/kernel_choice.py

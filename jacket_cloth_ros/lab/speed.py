@@ -332,7 +332,7 @@ def _rss_mb():
 
 # -- the command -----------------------------------------------------------------------------
 
-def run(quick, out_dir, say=print):
+def run(quick, out_dir, say=print, endurance_s=None):
     skeleton = _character()
     os.makedirs(out_dir, exist_ok=True)
     source = limit_source()
@@ -348,7 +348,8 @@ def run(quick, out_dir, say=print):
         results['replay'] = replay_scaling(skeleton, (5.0, 10.0) if quick
                                            else (15.0, 30.0, 60.0, 120.0), tmp)
         say('endurance')
-        results['endurance'] = endurance(skeleton, 10.0 if quick else 3600.0, tmp,
+        endurance_s = endurance_s or (10.0 if quick else 600.0)
+        results['endurance'] = endurance(skeleton, endurance_s, tmp,
                                          window_s=5.0 if quick else 60.0)
         if not quick:
             say('live node against the floor node (120 Hz, recording on)')
@@ -429,6 +430,7 @@ def write(results, out_dir):
 
 
 def main(args):
-    results = run(args.quick, args.out, say=lambda t: print(t, flush=True))
+    results = run(args.quick, args.out, say=lambda t: print(t, flush=True),
+                  endurance_s=args.endurance)
     print(summary(results))
     return 0

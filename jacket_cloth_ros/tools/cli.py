@@ -304,6 +304,8 @@ def build_parser():
     b.add_argument('--quick', action='store_true', help='a few methods on one short clip')
     b.add_argument('--clips', default=None, help='comma-separated motion clips')
     b.add_argument('--seconds', type=float, default=None, help='length of each clip')
+    b.add_argument('--endurance', type=float, default=None,
+                   help='speed: simulated s through the node (default 600; 3600 for the hour)')
     b.set_defaults(func=cmd_bench)
     return p
 
