@@ -12,11 +12,8 @@ result lies from the kernel's (the colour order is not the kernel's Gauss-Seidel
 """
 
 import argparse
-import json
 import os
-import subprocess
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -27,12 +24,8 @@ from jacket_cloth_ros.core import kernel  # noqa: E402
 from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
-from jacket_cloth_ros.core.simulation import JacketSimulation  # noqa: E402
 from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
-from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
-
-LIMIT_SOURCE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                            '..', 'shared', 'limit', 'cloth_ref.c')
+from jacket_cloth_ros.lab.speed import Yardstick, captured_steps, limit_source  # noqa: E402
 
 
 def colours(ca, cb, n):
@@ -93,26 +86,14 @@ def run(steps):
     with open(shipped('character.urdf'), encoding='utf-8') as fh:
         skeleton = Skeleton(fh.read())
     rig = load_rig(skeleton)
-    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
     groups = colours(rig.con_a, rig.con_b, rig.n)
     C = rig.cols
     rows_of_vertical = [(rig.vert_a[r * C:(r + 1) * C], rig.vert_b[r * C:(r + 1) * C],
                          rig.vert_rest[r * C:(r + 1) * C]) for r in range(rig.rows - 1)]
-    captured = []
+    # Every step's kernel inputs as the simulation made them (120 Hz steps, 60 Hz inputs).
+    captured = captured_steps(skeleton, rig, load_fabric('tweed_jacket'), 'showcase',
+                              steps / 120.0 + 0.1)[:steps]
     real_step = kernel.cloth_step
-
-    def capture(*args):                         # record each step's inputs as the sim made them
-        captured.append([a.copy() if isinstance(a, np.ndarray) else a for a in args])
-        return real_step(*args)
-    kernel.cloth_step = capture
-    try:
-        rate = 60
-        for k in range(int(steps / 2) + 1):
-            names, pos = joint_state_content(skeleton.joint_names, 'showcase', k / rate)
-            sim.process(int((10 + k / rate) * 1e9), names, pos)
-    finally:
-        kernel.cloth_step = real_step
-    captured = captured[1:steps + 1]            # the first is the warm-up step
     numba_ns, numpy_ns, diff = [], [], []
     for args in captured:
         a = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
@@ -132,15 +113,10 @@ def run(steps):
 
 def limit_ns(rig):
     """The C yardstick's median step for the same grid, or None if it is not on this machine."""
-    if not os.path.isfile(LIMIT_SOURCE):
+    source = limit_source()
+    if source is None:
         return None
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = os.path.join(tmp, 'cloth_ref')
-        subprocess.run(['cc', '-O3', '-march=native', '-o', exe, LIMIT_SOURCE, '-lm'],
-                       check=True)
-        out = subprocess.run([exe, str(rig.cols), str(rig.rows), '8'], check=True,
-                             capture_output=True, text=True).stdout
-    return float(json.loads(out)['step_ns_median'])
+    return float(Yardstick(source).step_ns(rig.cols, rig.rows, 8, 21000)['step_ns_median'])
 
 
 def main():

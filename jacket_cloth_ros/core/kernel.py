@@ -59,7 +59,8 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
                 x[b, 0] -= d0 * f
                 x[b, 1] -= d1 * f
                 x[b, 2] -= d2 * f
-            largest = max(largest, abs(f) * length)
+            if tolerance > 0.0:
+                largest = max(largest, abs(f) * length)
         if largest < tolerance:
             return sweep + 1
     return iterations
@@ -97,7 +98,8 @@ def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance
             x[b, 0] -= wb * d0 * f
             x[b, 1] -= wb * d1 * f
             x[b, 2] -= wb * d2 * f
-            largest = max(largest, abs(dlam))
+            if tolerance > 0.0:
+                largest = max(largest, abs(dlam))
         if largest < tolerance:
             return sweep + 1
     return iterations
@@ -297,6 +299,15 @@ def _orthonormalise(axes):
 
 
 @njit(cache=True)
+def _normalise_rows(normals):
+    """Each row to unit length (interpolated plane normals)."""
+    for k in range(normals.shape[0]):
+        norm = np.sqrt(normals[k, 0] ** 2 + normals[k, 1] ** 2 + normals[k, 2] ** 2)
+        for r in range(3):
+            normals[k, r] /= norm
+
+
+@njit(cache=True)
 def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
                ca, cb, rest, stiffness, iterations,
                centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
@@ -335,7 +346,7 @@ def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
             _lerp(cap_b, cap_b0, kb_to, w)
             _lerp(plane_p, plane_p0, pp_to, w)
             _lerp(plane_n, plane_n0, pn_to, w)
-            _orthonormalise_rows(plane_n)
+            _normalise_rows(plane_n)
             _lerp(ref, ref0, ref_to, w)
         integrate(x, xp, free, acc, damping, contact, contact_damping, h)
         if solver == SOLVER_XPBD:
@@ -361,11 +372,3 @@ def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
         centers[:], axes[:], cap_a[:], cap_b[:] = c_to, a_to, ka_to, kb_to
         plane_p[:], plane_n[:], ref[:] = pp_to, pn_to, ref_to
     return deepest, limited, sweeps
-
-
-@njit(cache=True)
-def _orthonormalise_rows(normals):
-    for k in range(normals.shape[0]):
-        norm = np.sqrt(normals[k, 0] ** 2 + normals[k, 1] ** 2 + normals[k, 2] ** 2)
-        for r in range(3):
-            normals[k, r] /= norm

@@ -59,8 +59,8 @@ class Yardstick:
         return json.loads(out)
 
 
-def captured_steps(skeleton, rig, fabric, seconds=1.0):
-    """The kernel's arguments of every step of a walk, as the simulation made them."""
+def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
+    """The kernel's arguments of every step of a clip, as the simulation made them."""
     sim = JacketSimulation(skeleton, rig, fabric)
     captured = []
     real = kernel.cloth_step
@@ -70,7 +70,7 @@ def captured_steps(skeleton, rig, fabric, seconds=1.0):
         return real(*args)
     kernel.cloth_step = capture
     try:
-        for stamp, names, pos in clip_inputs(skeleton, 'walk', seconds):
+        for stamp, names, pos in clip_inputs(skeleton, clip, seconds):
             sim.process(stamp, names, pos)
     finally:
         kernel.cloth_step = real
@@ -290,9 +290,10 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=97)
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        urdf = f.read()
     node = JacketClothNode(context=ctx, parameter_overrides=[
-        Parameter('record', value=path),
-        Parameter('robot_description', value=open(shipped('character.urdf')).read())])
+        Parameter('record', value=path), Parameter('robot_description', value=urdf)])
     windows = []
     n = int(simulated_s * RATE)
     per_window = int(window_s * RATE)

@@ -27,6 +27,7 @@ from ..core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
 from ..core.skeleton import Skeleton
 from ..motion.clips import joint_state_content
 from ..ros.messages import grid_triangles
+from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
 TUNNEL_M = 0.02
@@ -127,19 +128,6 @@ def _flipped_share(sim):
     return float(((normals(sim.x) * normals(ref)).sum(axis=1) < 0).mean())
 
 
-def _deepest_inside(sim):
-    c = sim.collider_frames(sim.links)
-    deepest = 0.0
-    free = sim.x[sim.rig.free]
-    for center, axes, radii in zip(c.centers, c.axes, c.radii):
-        q = ((free - center) @ axes) / radii
-        r = np.linalg.norm(q, axis=1)
-        inside = r < 1.0
-        if inside.any():
-            deepest = max(deepest, float(((1.0 - r[inside]) * radii.min()).max()))
-    return deepest
-
-
 def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
     """The verdict of one method on one scene: 'holds' or how it failed, and the figures."""
     fabric = load_fabric(fabric_name).with_values(**scene.fabric)
@@ -156,7 +144,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
             continue
         ref = sim.reference_points(sim.links, sim._pads)
         worst_offset = max(worst_offset, float(np.linalg.norm(sim.x - ref, axis=1).max()))
-        worst_tunnel = max(worst_tunnel, _deepest_inside(sim))
+        worst_tunnel = max(worst_tunnel, deepest_inside(sim))
     rig_ = sim.rig
     ref = sim.reference_points(sim.links, sim._pads)
     hem = slice((rig_.rows - 1) * rig_.cols, rig_.n)
