@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from jacket_cloth_ros.core.config import ConfigError, shipped
-from jacket_cloth_ros.core.rig import Rig, split_ellipsoid
+from jacket_cloth_ros.core.rig import Rig, interleaved_order, split_ellipsoid
 from jacket_cloth_ros.core.skeleton import Skeleton
 
 
@@ -82,6 +82,20 @@ def test_shipped_rig_topology(rig):
     assert grid[0].all() and grid[-1].all() and grid[:, 0].all() and grid[:, -1].all()
     assert not grid[1:-1, 1:-1].any()
     assert rig.free.sum() == rig.n - rig.cols
+
+
+def test_constraint_order_hides_latency_and_stays_top_down(rig):
+    # M5 Gauss-Seidel order: each constraint shares no vertex with the two before it, so the
+    # CPU overlaps consecutive projections, and the sweep still runs from the top row down.
+    pairs = list(zip(rig.con_a.tolist(), rig.con_b.tolist()))
+    assert sorted(pairs) == sorted(set(pairs)) and len(pairs) == 545
+    clashes = sum(bool({a, b} & {*pairs[j - 1], *pairs[j - 2]})
+                  for j, (a, b) in enumerate(pairs) if j >= 2)
+    assert clashes <= 2          # only where the last few constraints leave no choice
+    top_row = np.minimum(rig.con_a, rig.con_b) // rig.cols
+    assert np.all(np.diff(top_row) >= -1)
+    # A chain 0-1, 1-2, 2-3: 2-3 shares nothing with 0-1 so it comes second.
+    assert interleaved_order([0, 1, 2], [1, 2, 3]).tolist() == [0, 2, 1]
 
 
 def test_stretched_ellipsoids_are_split(rig):
