@@ -10,7 +10,7 @@ import pytest
 from conftest import play, stepwise
 
 from jacket_cloth_ros.core import kernel
-from jacket_cloth_ros.core.bone_layer import twist_angle
+from jacket_cloth_ros.core.pose_kernel import twist_angle
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
@@ -111,7 +111,7 @@ def test_m2_left_right_position_constraint_keeps_the_bones_below_apart(make_sim,
     rest_gap = np.linalg.norm(rest.below[1, :3, 3] - rest.below[0, :3, 3])
     assert gap == pytest.approx(rest_gap, abs=1e-12)
     # Without it, the pad ends would have spread apart.
-    _, ends, raw_gap = rig.layer._pad_ends(skeleton.forward(q))
+    raw_gap = rig.layer.pad_ends_gap(skeleton.forward(q))
     assert abs(raw_gap - rest_gap) > 0.02
 
 

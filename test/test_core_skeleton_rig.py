@@ -7,7 +7,9 @@ import yaml
 
 from jacket_cloth_ros.core.config import ConfigError, shipped
 from jacket_cloth_ros.core.rig import Rig, interleaved_order, split_ellipsoid
+from jacket_cloth_ros.core.pose_kernel import quats_from_matrices
 from jacket_cloth_ros.core.skeleton import Skeleton
+from jacket_cloth_ros.core.transforms import matrix_to_quat
 
 
 def test_forward_kinematics_of_the_shipped_character(skeleton):
@@ -110,3 +112,17 @@ def test_stretched_ellipsoids_are_split(rig):
     # The shipped thighs (0.085 x 0.25) are split in two, torso and pelvis are not.
     names = [c.name for c in rig.colliders]
     assert names.count('l_thigh_0') == 1 and 'l_thigh_1' in names and 'torso_1' not in names
+
+
+def test_compiled_quaternions_match_transforms(skeleton):
+    # pose_kernel turns the bones' frames into /tf quaternions; transforms.matrix_to_quat is
+    # the numpy reference. Random link frames, plus half turns where w is zero.
+    rng = np.random.default_rng(3)
+    frames = [skeleton.forward(rng.uniform(-3, 3, len(skeleton.joint_names)))[:, :3, :3]
+              for _ in range(20)]
+    frames.append(np.array([np.diag(d) for d in ((1, -1, -1), (-1, 1, -1), (-1, -1, 1))]))
+    rotations = np.concatenate(frames)
+    out = np.empty((len(rotations), 4))
+    quats_from_matrices(rotations, out)
+    assert out == pytest.approx(matrix_to_quat(rotations), abs=1e-12)
+    assert np.linalg.norm(out, axis=1) == pytest.approx(1.0)

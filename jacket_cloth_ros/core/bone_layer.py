@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import ConfigError
+from .pose_kernel import solve_layer
 from .transforms import apply_transform
 
 DOWN = np.array([[0.0, 0.0, 1.0],     # a bone aimed straight down: x = -z, y = y, z = x
@@ -52,45 +53,11 @@ class LayerPose:
     """Bone frames of the layer in the simulation frame, and the bones below the pads."""
 
     names: list
-    parents: list           # skeleton link index of each bone's parent frame
+    parents: np.ndarray     # skeleton link index of each bone's parent frame
     rotations: np.ndarray   # (B,3,3)
     positions: np.ndarray   # (B,3)
     tips: np.ndarray        # (B,3) where each bone ends, for drawing
     below: np.ndarray       # (2,4,4) left and right bones below the pads, (0,4,4) if none
-
-
-def twist_angle(rotation, axis):
-    """The twist part of ``rotation`` about the unit ``axis`` (swing-twist split), radians."""
-    w = np.sqrt(max(0.0, 1.0 + np.trace(rotation))) / 2
-    v = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0],
-                  rotation[1, 0] - rotation[0, 1]])
-    v = v / (4 * w) if w > 1e-6 else _axis_of_half_turn(rotation)
-    return 2 * np.arctan2(v @ axis, w)
-
-
-def _axis_of_half_turn(rotation):
-    k = int(np.argmax(np.diag(rotation)))
-    axis = (rotation[:, k] + np.eye(3)[:, k]) / 2
-    return axis / np.linalg.norm(axis)
-
-
-def axis_angle(axis, angle):
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
-
-
-def _cross(a, b):
-    # np.cross costs some 40 us per call on 3-vectors (axis juggling); this is the same sum.
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
-
-
-def aim_frame(x_axis, y_hint):
-    """Look-at: x along ``x_axis``, y as close to ``y_hint`` as an orthonormal frame allows."""
-    x = x_axis / np.sqrt(x_axis @ x_axis)
-    z = _cross(x, y_hint)
-    z /= np.sqrt(z @ z)
-    return np.column_stack([x, _cross(z, x), z])
 
 
 class BoneLayer:
@@ -118,7 +85,12 @@ class BoneLayer:
         self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
         self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
-        self._rest_gap = self._pad_ends(rest)[2] if self.pads else None
+        self._parent_index = np.array(self.parents, dtype=np.int64)
+        self._rest_gap = 0.0
+        self._packed = self._arrays()
+        if self.pads:
+            self._rest_gap = self.pad_ends_gap(rest)
+            self._packed = self._arrays()
 
     def _load_upper(self, upper, skeleton, where):
         self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
@@ -139,52 +111,36 @@ class BoneLayer:
         self.skin_radius = upper.number('skin_radius', 0.2, lo=0.0, hi=2.0)
         upper.reject_unknown()
 
-    def _pad_ends(self, links):
-        torso = links[self.upper_link]
-        frames, ends = [], []
-        for p in self.pads:
-            pivot = torso[:3, :3] @ p.pivot + torso[:3, 3]
-            target = apply_transform(links[p.aim_link], p.aim[None])[0]
-            frame = aim_frame(target - pivot, torso[:3, 1])
-            frames.append((pivot, frame))
-            ends.append(pivot + p.length * frame[:, 0])
-        return frames, ends, float(np.linalg.norm(ends[1] - ends[0]))
+    def pad_ends_gap(self, links):
+        """Distance between the two pad ends before the left/right constraint: their tips."""
+        pose = self.solve(links)
+        first = 2 * len(self.sleeves)
+        return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
+
+    def _arrays(self):
+        """The layer as the arrays pose_kernel.solve_layer takes."""
+        s, p = self.sleeves, self.pads
+        return (np.array([x.link for x in s], dtype=np.int64),
+                np.array([x.end_link for x in s], dtype=np.int64),
+                np.array([x.axis for x in s]).reshape(-1, 3),
+                np.array([x.length for x in s], dtype=float),
+                np.array([x.twist_share for x in s], dtype=float),
+                self.upper_link if p else 0,
+                np.array([x.pivot for x in p], dtype=float).reshape(-1, 3),
+                np.array([x.aim_link for x in p], dtype=np.int64),
+                np.array([x.aim for x in p], dtype=float).reshape(-1, 3),
+                np.array([x.length for x in p], dtype=float),
+                np.array([x.below_length for x in p], dtype=float),
+                self._rest_gap, DOWN)
 
     def solve(self, links, full=True):
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
         ``full=False`` solves only what the cloth needs each step: the bones below the pads.
+        Compiled: pose_kernel.solve_layer.
         """
-        rot, pos, tips = [], [], []
-        for s in (self.sleeves if full else ()):
-            t = links[s.link]
-            rot.append(t[:3, :3])
-            pos.append(t[:3, 3])
-            tips.append(links[s.end_link][:3, 3])
-        for s in (self.sleeves if full else ()):
-            t, end = links[s.link], links[s.end_link]
-            twist = twist_angle(t[:3, :3].T @ end[:3, :3], s.axis)
-            rot.append(t[:3, :3] @ axis_angle(s.axis, s.twist_share * twist))
-            pos.append(t[:3, :3] @ (s.axis * s.length / 2) + t[:3, 3])
-            tips.append(end[:3, 3])
-        below = np.tile(np.eye(4), (len(self.pads), 1, 1))
-        if self.pads:
-            frames, ends, gap = self._pad_ends(links)
-            for (pivot, frame), end in zip(frames if full else (), ends):
-                rot.append(frame)
-                pos.append(pivot)
-                tips.append(end)
-            # Left/right position constraint: each bone below moves half the error.
-            if gap > 1e-9:
-                corr = 0.5 * (gap - self._rest_gap) / gap * (ends[1] - ends[0])
-                ends = [ends[0] + corr, ends[1] - corr]
-            down = links[self.upper_link][:3, :3] @ DOWN
-            for k, p in enumerate(self.pads):
-                if full:
-                    rot.append(down)
-                    pos.append(ends[k])
-                    tips.append(ends[k] + down[:, 0] * p.below_length)
-                below[k, :3, :3] = down
-                below[k, :3, 3] = ends[k]
-        return LayerPose(self.names, self.parents, np.array(rot).reshape(-1, 3, 3),
-                         np.array(pos).reshape(-1, 3), np.array(tips).reshape(-1, 3), below)
+        n = len(self.names) if full else 0
+        rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
+        below = np.empty((len(self.pads), 4, 4))
+        solve_layer(links, *self._packed, full, rot, pos, tips, below)
+        return LayerPose(self.names, self._parent_index, rot, pos, tips, below)

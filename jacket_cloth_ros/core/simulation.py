@@ -16,11 +16,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import kernel
+from . import kernel, pose_kernel
 from .inputs import InputParser, InputRejected
 from .transforms import (
-    apply_transform, cross, invert_transform, matrix_to_quat, quat_slerp, quat_to_matrix,
-    rotation_angle)
+    apply_transform, invert_transform, quat_slerp, quat_to_matrix, rotation_angle)
 
 
 STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
@@ -467,29 +466,26 @@ class JacketSimulation:
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):
         """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
-        C = self.rig.cols
-        g = self.x.reshape(self.rig.rows, C, 3)
-        r, c = self._bone_rc[:, 0], self._bone_rc[:, 1]
-        origin = g[r, c]
-        xa = g[r + 1, c] - origin
-        ya = g[r, np.minimum(c + 1, C - 1)] - g[r, np.maximum(c - 1, 0)]
-        frames = _orthonormal(xa, ya)
-        anchor, link_rot = self.hood_anchor(self.links)
-        hood = _orthonormal((self.hood_p - anchor)[None], link_rot[:, 1][None])[0]
-        hood_link = self.links[self.rig.hood.link]
-        hood_rot = hood_link[:3, :3].T @ hood
-        hood_pos = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
-        rot = [frames, hood_rot[None]]
-        pos = [origin, hood_pos[None]]
+        n_grid = len(self._bone_rc)
         layer = self.layer
+        n = n_grid + 1 + (len(layer.names) if layer is not None else 0)
+        pos, quat = np.empty((n, 3)), np.empty((n, 4))
+        pose_kernel.grid_bones(self.x, self.rig.cols, self._bone_rc, pos[:n_grid],
+                               quat[:n_grid])
+        anchor, link_rot = self.hood_anchor(self.links)
+        hood = np.empty((3, 3))
+        pose_kernel.orthonormal_frame(self.hood_p - anchor, link_rot[:, 1], hood)
+        hood_link = self.links[self.rig.hood.link]
+        pos[n_grid] = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
+        rot = [(hood_link[:3, :3].T @ hood)[None]]
         if layer is not None:
             # M1/M2 layer bones relative to their parent links.
-            parent = self.links[np.array(layer.parents)]
+            parent = self.links[layer.parents]
             pr = np.transpose(parent[:, :3, :3], (0, 2, 1))
             rot.append(pr @ layer.rotations)
-            pos.append(np.einsum('nij,nj->ni', pr, layer.positions - parent[:, :3, 3]))
-        return Bones(self.bone_names, self.bone_parents, np.concatenate(pos),
-                     matrix_to_quat(np.concatenate(rot)))
+            pos[n_grid + 1:] = np.einsum('nij,nj->ni', pr, layer.positions - parent[:, :3, 3])
+        pose_kernel.quats_from_matrices(np.concatenate(rot), quat[n_grid:])
+        return Bones(self.bone_names, self.bone_parents, pos, quat)
 
     def strain(self):
         """Worst relative stretch of the simulated vertical and horizontal stretch constraints.
@@ -502,12 +498,3 @@ class JacketSimulation:
         horiz = np.linalg.norm(self.x[rig.con_a[h]] - self.x[rig.con_b[h]], axis=1)
         horiz /= rig.con_rest[h]
         return float(np.abs(vert - 1).max()), float(np.abs(horiz - 1).max())
-
-
-def _orthonormal(xa, ya):
-    """Rotation matrices with columns x, y, z from rough x and y axes (shear removed)."""
-    x = xa / np.linalg.norm(xa, axis=-1, keepdims=True)
-    z = cross(x, ya)
-    z /= np.linalg.norm(z, axis=-1, keepdims=True)
-    y = cross(z, x)
-    return np.stack([x, y, z], axis=-1)

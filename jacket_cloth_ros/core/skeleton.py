@@ -13,7 +13,8 @@ import numpy as np
 from urdf_parser_py import urdf
 
 from .config import ConfigError
-from .transforms import make_transform, rotation_about_axes, rpy_matrix
+from .pose_kernel import forward_kinematics
+from .transforms import make_transform, rpy_matrix
 
 _MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
 
@@ -89,12 +90,6 @@ class Skeleton:
             self.mult[k] = j.mimic.multiplier if j.mimic.multiplier is not None else 1.0
             self.offset[k] = j.mimic.offset if j.mimic.offset is not None else 0.0
         self.joint_index = index
-        depth = np.zeros(n, dtype=int)
-        for k in range(1, n):
-            depth[k] = depth[self.parent[k]] + 1
-        self.levels = [np.nonzero(depth == d)[0] for d in range(1, depth.max() + 1)]
-        self._rot = np.nonzero(self.kind == 0)[0]
-        self._trans = np.nonzero(self.kind == 1)[0]
 
     def link(self, name, where='rig'):
         if name not in self.link_index:
@@ -104,19 +99,7 @@ class Skeleton:
 
     def forward(self, q):
         """Link transforms (L,4,4) in the root link's frame for joint values q (J,)."""
-        q = np.asarray(q, dtype=float)
-        n = len(self.link_names)
-        local = self.origin.copy()
-        values = np.where(self.var >= 0, q[np.maximum(self.var, 0)] * self.mult + self.offset, 0)
-        if len(self._rot):
-            motion = rotation_about_axes(self.axis[self._rot], values[self._rot])
-            local[self._rot, :3, :3] = local[self._rot, :3, :3] @ motion
-        if len(self._trans):
-            local[self._trans, :3, 3] += np.einsum(
-                'nij,nj->ni', local[self._trans, :3, :3],
-                self.axis[self._trans] * values[self._trans, None])
-        world = np.empty((n, 4, 4))
-        world[0] = np.eye(4)
-        for level in self.levels:
-            world[level] = world[self.parent[level]] @ local[level]
+        world = np.empty((len(self.link_names), 4, 4))
+        forward_kinematics(self.origin, self.axis, self.kind, self.var, self.mult, self.offset,
+                           self.parent, np.asarray(q, dtype=float), world)
         return world

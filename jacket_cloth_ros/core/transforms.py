@@ -4,26 +4,6 @@
 import numpy as np
 
 
-def rotation_about_axes(axes, angles):
-    """Batched Rodrigues: (N,3) unit axes and (N,) angles to (N,3,3) rotations."""
-    axes = np.asarray(axes, dtype=float)
-    angles = np.asarray(angles, dtype=float)
-    c, s = np.cos(angles), np.sin(angles)
-    x, y, z = axes[:, 0], axes[:, 1], axes[:, 2]
-    t = 1.0 - c
-    r = np.empty((len(angles), 3, 3))
-    r[:, 0, 0] = c + x * x * t
-    r[:, 0, 1] = x * y * t - z * s
-    r[:, 0, 2] = x * z * t + y * s
-    r[:, 1, 0] = y * x * t + z * s
-    r[:, 1, 1] = c + y * y * t
-    r[:, 1, 2] = y * z * t - x * s
-    r[:, 2, 0] = z * x * t - y * s
-    r[:, 2, 1] = z * y * t + x * s
-    r[:, 2, 2] = c + z * z * t
-    return r
-
-
 def rpy_matrix(rpy):
     """URDF roll-pitch-yaw (fixed axes x, y, z) to a 3x3 rotation."""
     r, p, y = rpy
