@@ -115,13 +115,21 @@ class TfTemplate:
 
 
 def marker(w, m, stamp_ns, frame):
-    """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`."""
+    """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`.
+
+    Returns where its varying fields start: (stamp, pose, scale, points) byte offsets.
+    """
+    w.align(4)
+    stamp_at = len(w.buf)
     w.header(stamp_ns, frame)
     w.string(m.ns)
     w.i32(m.id)
     w.i32(m.type)
     w.i32(m.action)
+    w.align(8)
+    pose_at = len(w.buf)
     w.f64s(tuple(m.position) + tuple(m.orientation))
+    scale_at = len(w.buf)
     w.f64s(tuple(m.scale))
     w.f32s(tuple(m.color))
     w.i32(m.lifetime_s)
@@ -129,6 +137,8 @@ def marker(w, m, stamp_ns, frame):
     w.u8(0)                                  # frame_locked
     points = np.zeros((0, 3)) if m.points is None else m.points
     w.u32(len(points))
+    w.align(8)
+    points_at = len(w.buf)
     if len(points):
         w.f64_array(points)
     w.u32(0)                                 # colors
@@ -142,14 +152,55 @@ def marker(w, m, stamp_ns, frame):
     w.string('')                             # mesh_file.filename
     w.u32(0)                                 # mesh_file.data
     w.u8(0)                                  # mesh_use_embedded_materials
+    return stamp_at, pose_at, scale_at, points_at
 
 
 def marker_array(markers, stamp_ns, frame):
+    """visualization_msgs/MarkerArray, field by field (see MarkerTemplate)."""
     w = CdrWriter()
     w.u32(len(markers))
     for m in markers:
         marker(w, m, stamp_ns, frame)
     return w.bytes()
+
+
+def marker_layout(markers, frame):
+    """What fixes a MarkerArray's byte layout: everything but stamps, poses, scales, points."""
+    return frame, tuple((m.ns, m.id, m.type, m.action, tuple(m.color), m.lifetime_s,
+                         0 if m.points is None else len(m.points)) for m in markers)
+
+
+class MarkerTemplate:
+    """The bytes of a MarkerArray of one layout (marker_layout), laid out once, as TfTemplate.
+
+    Each message writes its stamps, poses, scales and point blocks into place (measured: the
+    field-by-field encoding was 0.8 ms of CPU per array, most of it small appends).
+    The bytes equal :func:`marker_array`'s.
+    """
+
+    def __init__(self, markers, frame):
+        w = CdrWriter()
+        w.u32(len(markers))
+        at = np.array([marker(w, m, 0, frame) for m in markers]).reshape(-1, 4)
+        self._buf = w.buf
+        self._u8 = np.frombuffer(self._buf, dtype=np.uint8)
+        self._stamp_at = at[:, 0, None] + np.arange(8)
+        self._pose_at = at[:, 1, None] + np.arange(80)       # pose (7) and scale (3) doubles
+        self._points_at = at[:, 3].tolist()
+        self._pose = np.empty((len(markers), 10), dtype='<f8')
+
+    def encode(self, markers, stamp_ns):
+        stamp = struct.pack('<iI', int(stamp_ns // 1_000_000_000), int(stamp_ns % 1_000_000_000))
+        self._u8[self._stamp_at] = np.frombuffer(stamp, dtype=np.uint8)
+        for k, m in enumerate(markers):
+            self._pose[k, :3] = m.position
+            self._pose[k, 3:7] = m.orientation
+            self._pose[k, 7:] = m.scale
+            if m.points is not None and len(m.points):
+                block = np.ascontiguousarray(m.points, dtype='<f8').view(np.uint8).reshape(-1)
+                self._u8[self._points_at[k]:self._points_at[k] + len(block)] = block
+        self._u8[self._pose_at] = self._pose.view(np.uint8)
+        return bytes(self._buf)
 
 
 def diagnostic_array(stamp_ns, statuses):
