@@ -152,6 +152,8 @@ def test_bad_input_never_reaches_tf_and_the_node_keeps_running(harness):
     last = stamp + 3 * 10 ** 7                     # the accepted 'unknown names' message
     assert send(names, pos, last)                  # repeated stamp
     assert send(names, pos, last - 5 * 10 ** 6)    # backwards
+    h.pub.publish(b'\x00\x01\x00\x00' + b'\xff' * 40)  # bytes that are no JointState
+    h.spin_until(lambda: 'decode' in h.node._log_times)  # warned about, dropped
     assert not send(names, pos, last + 10 ** 8)
     h.spin_until(lambda: len(h.tf) == 3)
     assert all(_all_finite(tf) for tf in h.tf)

@@ -46,9 +46,48 @@ class InputParser:
     def set_world_joint(self, name):
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
+        self._plans = {}
+
+    def _plan(self, names):
+        """Where each name of a message goes, and the warnings its name list earns: worked out
+        once per distinct name list (a publisher sends the same list every time)."""
+        plan = self._plans.get(names)
+        if plan is not None:
+            return plan
+        index = self.skeleton.joint_index
+        joint_from, joint_to, world_from, world_to, unknown = [], [], [], [], []
+        for i, n in enumerate(names):
+            if n in index:
+                joint_from.append(i)
+                joint_to.append(index[n])
+            elif n in self.world_names:
+                world_from.append(i)
+                world_to.append(self.world_names[n])
+            else:
+                unknown.append(n)
+        warnings = []
+        if unknown:
+            warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
+                             f'{", ".join(sorted(unknown)[:5])}'))
+        missing = sorted(set(range(len(index))) - set(joint_to))
+        if missing:
+            text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])
+            warnings.append(('missing', f'{len(missing)} joint(s) missing, holding their last '
+                             f'value: {text}'))
+        world = len(set(world_to))
+        if 0 < world < len(WORLD_VARIABLES):
+            warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
+                             'keeping the last world pose'))
+        plan = (np.array(joint_from, dtype=np.int64), np.array(joint_to, dtype=np.int64),
+                np.array(world_from, dtype=np.int64), np.array(world_to, dtype=np.int64),
+                world == len(WORLD_VARIABLES), warnings)
+        if len(self._plans) > 16:           # a publisher that changes its list every time
+            self._plans.clear()
+        self._plans[names] = plan
+        return plan
 
     def parse(self, stamp_ns, names, positions):
-        names = list(names)
+        names = tuple(names)
         positions = np.asarray(positions, dtype=float)
         if len(names) == 0 and len(positions) == 0:
             raise InputRejected('empty', 'empty JointState (no names, no positions): ignored')
@@ -59,40 +98,19 @@ class InputParser:
             bad = [n for n, p in zip(names, positions) if not np.isfinite(p)]
             raise InputRejected('nonfinite', f'non-finite position for {", ".join(bad[:5])}: '
                                 'message dropped')
-        warnings = []
+        joint_from, joint_to, world_from, world_to, whole_world, warnings = self._plan(names)
         q = self.last_q.copy()
-        world = np.full(7, np.nan)
-        seen = np.zeros(len(q), dtype=bool)
-        unknown = []
-        index = self.skeleton.joint_index
-        for n, p in zip(names, positions):
-            k = index.get(n)
-            if k is not None:
-                q[k] = p
-                seen[k] = True
-            elif n in self.world_names:
-                world[self.world_names[n]] = p
-            else:
-                unknown.append(n)
-        if unknown:
-            warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
-                             f'{", ".join(sorted(unknown)[:5])}'))
-        if not seen.all():
-            missing = [self.skeleton.joint_names[k] for k in np.nonzero(~seen)[0]]
-            warnings.append(('missing', f'{len(missing)} joint(s) missing, holding their last '
-                             f'value: {", ".join(missing[:5])}'))
+        q[joint_to] = positions[joint_from]          # a repeated name: the last one counts
         trans, quat = self.last_root
-        got = ~np.isnan(world)
-        if got.any():
-            if not got.all():
-                warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
-                                 'keeping the last world pose'))
-            else:
-                norm = np.linalg.norm(world[3:])
-                if norm < 1e-6:
-                    raise InputRejected('world', f'{self.world_joint} rotation is a zero '
-                                        'quaternion: message dropped')
-                trans, quat = world[:3].copy(), world[3:] / norm
+        if whole_world:
+            world = np.empty(len(WORLD_VARIABLES))
+            world[world_to] = positions[world_from]
+            norm = np.linalg.norm(world[3:])
+            if norm < 1e-6:
+                raise InputRejected('world', f'{self.world_joint} rotation is a zero '
+                                    'quaternion: message dropped')
+            trans, quat = world[:3].copy(), world[3:] / norm
         self.last_q = q
         self.last_root = (trans, quat)
-        return Sample(stamp_ns, q, make_transform(quat_to_matrix(quat), trans), quat, warnings)
+        return Sample(stamp_ns, q, make_transform(quat_to_matrix(quat), trans), quat,
+                      list(warnings))

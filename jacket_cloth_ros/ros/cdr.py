@@ -218,3 +218,84 @@ def diagnostic_array(stamp_ns, statuses):
             w.string(str(k))
             w.string(str(v))
     return w.bytes()
+
+
+# What bad JointState bytes raise in JointStateReader.read.
+DECODE_ERRORS = (ValueError, struct.error, UnicodeDecodeError)
+
+
+class JointStateContent:
+    """What the simulation reads of a sensor_msgs/JointState: stamp, names, positions."""
+
+    __slots__ = ('stamp_ns', 'name', 'position')
+
+    def __init__(self, stamp_ns, name, position):
+        self.stamp_ns, self.name, self.position = stamp_ns, name, position
+
+
+class JointStateReader:
+    """Decodes the stamp, names and positions of CDR JointState bytes, skipping the rest.
+
+    Why not rclpy's deserialize_message: it builds the whole message object, velocities and
+    efforts included (measured: 70 us of a 900 us input). A publisher sends the same name list
+    every time, so the names are decoded once and then recognised by their bytes. Big-endian
+    bytes go through rclpy; malformed bytes raise ValueError (callers name the message).
+    """
+
+    def __init__(self):
+        self._names_bytes = b''
+        self._names = ()
+
+    def read(self, raw):
+        raw = bytes(raw)
+        if raw[:2] == b'\x00\x00':                 # CDR_BE: not what ROS 2 writes on x86/ARM
+            return _joint_state_by_rclpy(raw)
+        if len(raw) < 16 or raw[:2] != _HEADER[:2]:
+            raise ValueError('not a CDR message')
+        sec, nanosec, frame_len = struct.unpack_from('<iII', raw, 4)
+        at = _aligned(16 + frame_len, 4)
+        if self._names_bytes and raw.startswith(self._names_bytes, at):
+            names, at = self._names, at + len(self._names_bytes)
+        else:
+            start = at
+            names, at = _strings(raw, at)
+            self._names_bytes, self._names = raw[start:at], names
+        at = _aligned(at, 4)
+        (count,) = struct.unpack_from('<I', raw, at)
+        at = _aligned(at + 4, 8)
+        if at + 8 * count > len(raw):
+            raise ValueError('positions run past the end of the message')
+        position = np.frombuffer(raw, dtype='<f8', count=count, offset=at)
+        return JointStateContent(sec * 1_000_000_000 + nanosec, names, position)
+
+
+def _joint_state_by_rclpy(raw):
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
+    try:
+        msg = deserialize_message(raw, JointState)
+    except Exception as e:  # noqa: BLE001 - rclpy raises its own error types
+        raise ValueError(str(e)) from None
+    return JointStateContent(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+                             tuple(msg.name), np.array(msg.position, dtype=float))
+
+
+def _aligned(at, n):
+    return at + (-(at - 4) % n)
+
+
+def _strings(raw, at):
+    """A CDR sequence<string> at ``at``: (tuple of str, offset after it)."""
+    (count,) = struct.unpack_from('<I', raw, at)
+    at += 4
+    if count > len(raw):
+        raise ValueError('string count past the end of the message')
+    out = []
+    for _ in range(count):
+        at = _aligned(at, 4)
+        (n,) = struct.unpack_from('<I', raw, at)
+        if n < 1 or at + 4 + n > len(raw):
+            raise ValueError('string runs past the end of the message')
+        out.append(raw[at + 4:at + 3 + n].decode())
+        at += 4 + n
+    return tuple(out), at

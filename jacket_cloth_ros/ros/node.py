@@ -25,7 +25,7 @@ from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton
 from ..recording.writer import SessionRecorder
-from . import messages
+from . import cdr, messages
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
 
@@ -55,6 +55,7 @@ class JacketClothNode(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
 
         self.pipeline = None
+        self._joint_states = cdr.JointStateReader()
         self.recorder = None
         self._urdf = None
         self._log_times = {}
@@ -228,8 +229,12 @@ class JacketClothNode(Node):
 
     def _on_joint_state(self, raw):
         arrived = time.perf_counter_ns()
-        msg = deserialize_message(raw, JointState)
-        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        try:
+            msg = self._joint_states.read(raw)
+        except cdr.DECODE_ERRORS as e:
+            self._warn('decode', f'a JointState that does not decode ({e}): message dropped')
+            return
+        stamp_ns = msg.stamp_ns
         self.inputs += 1
         self._record(self._topics['joint_states'][0], raw, stamp_ns)
         report, outputs = self.pipeline.on_joint_state(msg, stamp_ns)

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 from rcl_interfaces.msg import ParameterEvent
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
-from sensor_msgs.msg import JointState
 
 from ..core.config import ConfigError, parse_yaml, shipped
 from ..core.fabric import fabrics_from_data
@@ -22,6 +21,7 @@ from ..core.rig import Rig
 from ..core.skeleton import Skeleton
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
+from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, parse_override
 from ..ros.pipeline import SessionPipeline, session_topics
 
@@ -120,8 +120,8 @@ def _check_joints(session):
     warning (the node would ignore them too)."""
     first = next(e for e in session.events if e[2] == 'joint_states')
     try:
-        names = list(deserialize_message(first[3], JointState).name)
-    except Exception as e:  # noqa: BLE001 - a foreign writer's bytes: one clear line
+        names = list(JointStateReader().read(first[3]).name)
+    except DECODE_ERRORS as e:
         raise RecordingError(f'{session.recording.path}: {session.topic} does not decode as '
                              f'JointState ({e})') from None
     world = session.setup.values['world_joint'] + '/'
@@ -177,11 +177,12 @@ def run_session(session, sink=None, probe=None, timing=False):
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
                                timing=timing)
+    joint_states = JointStateReader()
     for stamp, _, kind, data in session.events:
         if kind == 'joint_states':
             try:
-                msg = deserialize_message(data, JointState)
-            except Exception as e:  # noqa: BLE001 - a foreign writer's bytes: one clear line
+                msg = joint_states.read(data)
+            except DECODE_ERRORS as e:
                 raise RecordingError(f'{session.recording.path}: a {session.topic} message at '
                                      f'{stamp} ns does not decode as JointState ({e})') from None
             report, outputs = pipeline.on_joint_state(msg, stamp)
