@@ -200,3 +200,55 @@ def solve_layer(links, sleeve_link, sleeve_end, sleeve_axis, sleeve_length, slee
         below[k] = np.eye(4)
         below[k, :3, :3] = m
         below[k, :3, 3] = ends[k]
+
+
+@njit(cache=True)
+def skinned_pose(links, pin_link, pin_local, reference_link, reference_local, below,
+                 pin_below, pin_below_local, pin_weight, top, ref):
+    """M6 pinned top row and M11 reference points (see JacketSimulation._skinned_pose).
+
+    The top row rides its link, blended towards the M2 bones below the pads (``below``, none
+    when empty); each column's reference points are lifted with its top vertex.
+    """
+    cols = pin_local.shape[0]
+    carried = np.empty(3)
+    held = np.empty(3)
+    for i in range(ref.shape[0]):
+        _transform_point(links[reference_link[i]], reference_local[i], ref[i])
+    for c in range(cols):
+        _transform_point(links[pin_link], pin_local[c], carried)
+        if below.shape[0] == 0:
+            top[c] = carried
+            continue
+        _transform_point(below[pin_below[c]], pin_below_local[c], held)
+        w = pin_weight[c]
+        for k in range(3):
+            top[c, k] = (1.0 - w) * carried[k] + w * held[k]
+            lift = top[c, k] - carried[k]
+            for i in range(c, ref.shape[0], cols):
+                ref[i, k] += lift
+
+
+@njit(cache=True)
+def collider_poses(links, links_of, centers_local, rotations_local, capsule_links,
+                   capsule_ends, centers, axes, cap_a, cap_b):
+    """M10 ellipsoids (centre, axes as columns) and capsule ends on their links."""
+    for e in range(centers.shape[0]):
+        t = links[links_of[e]]
+        _transform_point(t, centers_local[e], centers[e])
+        _matmul3(t[:3, :3], rotations_local[e], axes[e])
+    for k in range(cap_a.shape[0]):
+        t = links[capsule_links[k]]
+        _transform_point(t, capsule_ends[k, 0], cap_a[k])
+        _transform_point(t, capsule_ends[k, 1], cap_b[k])
+
+
+@njit(cache=True)
+def share_world_motion(delta, points, share):
+    """M14: move each point by its share of the rigid move ``delta`` (4x4) of the frame."""
+    moved = np.empty(3)
+    for i in range(points.shape[0]):
+        _transform_point(delta, points[i], moved)
+        s = share[i]
+        for k in range(3):
+            points[i, k] += s * (moved[k] - points[i, k])

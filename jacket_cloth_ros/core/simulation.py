@@ -22,6 +22,7 @@ from .transforms import (
     apply_transform, invert_transform, quat_slerp, quat_to_matrix, rotation_angle)
 
 
+_NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
 STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
                   'tethers': kernel.LIMIT_TETHERS}
 SOLVERS = {'gauss_seidel': kernel.SOLVER_GAUSS_SEIDEL, 'xpbd': kernel.SOLVER_XPBD}
@@ -239,17 +240,11 @@ class JacketSimulation:
         from its own pinned row.
         """
         rig = self.rig
-        carried = apply_transform(links[rig.pin_link], rig.pin_local)
-        t = links[rig.reference_link]
-        ref = np.einsum('nij,nj->ni', t[:, :3, :3], rig.reference_local) + t[:, :3, 3]
-        if layer is None or not len(layer.below):
-            return carried, ref
-        frames = layer.below[rig.pin_below]
-        below = np.einsum('nij,nj->ni', frames[:, :3, :3], rig.pin_below_local)
-        below += frames[:, :3, 3]
-        w = rig.pin_weight[:, None]
-        top = (1.0 - w) * carried + w * below
-        ref += np.tile(top - carried, (rig.rows, 1))
+        below = layer.below if layer is not None else _NO_BELOW
+        top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
+        pose_kernel.skinned_pose(links, rig.pin_link, rig.pin_local, rig.reference_link,
+                                 rig.reference_local, below, rig.pin_below,
+                                 rig.pin_below_local, rig.pin_weight, top, ref)
         return top, ref
 
     def _solve_layer(self, links, full=True):
@@ -371,11 +366,10 @@ class JacketSimulation:
         # M14: the character moved through the world by `delta` (old local -> new local); a
         # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         delta = invert_transform(root) @ self.root
-        share = self.world_share[:, None]
-        for points, s in ((self.x, share), (self.xp, share),
-                          (self.hood_p[None], self.fabric.world_share),
-                          (self.hood_pp[None], self.fabric.world_share)):
-            points += s * (apply_transform(delta, points) - points)
+        pose_kernel.share_world_motion(delta, self.x, self.world_share)
+        pose_kernel.share_world_motion(delta, self.xp, self.world_share)
+        for points in (self.hood_p[None], self.hood_pp[None]):
+            points += self.fabric.world_share * (apply_transform(delta, points) - points)
         self.root = root
         self.links = links
         world_to_local = root[:3, :3].T
@@ -446,10 +440,11 @@ class JacketSimulation:
         Planes fixed in the world (the floor) need the root's world pose ``root``.
         """
         rig = self.rig
-        t = links[rig.collider_links]
-        centers = np.einsum('nij,nj->ni', t[:, :3, :3], rig.collider_centers) + t[:, :3, 3]
-        tc = links[rig.capsule_links]
-        ends = np.einsum('nij,nkj->nki', tc[:, :3, :3], rig.capsule_ends) + tc[:, None, :3, 3]
+        centers, axes = np.empty_like(rig.collider_centers), np.empty_like(rig.collider_rotations)
+        cap_a, cap_b = np.empty((len(rig.capsule_links), 3)), np.empty((len(rig.capsule_links), 3))
+        pose_kernel.collider_poses(links, rig.collider_links, rig.collider_centers,
+                                   rig.collider_rotations, rig.capsule_links, rig.capsule_ends,
+                                   centers, axes, cap_a, cap_b)
         points, normals = [], []
         for plane in rig.planes:
             if plane.link < 0:        # fixed in the world: world -> the root's local frame
@@ -458,8 +453,7 @@ class JacketSimulation:
                 frame = links[plane.link]
             points.append(frame[:3, :3] @ plane.point + frame[:3, 3])
             normals.append(frame[:3, :3] @ plane.normal)
-        return Colliders(centers, t[:, :3, :3] @ rig.collider_rotations, rig.collider_radii,
-                         np.ascontiguousarray(ends[:, 0]), np.ascontiguousarray(ends[:, 1]),
+        return Colliders(centers, axes, rig.collider_radii, cap_a, cap_b,
                          rig.capsule_radii, np.array(points).reshape(-1, 3),
                          np.array(normals).reshape(-1, 3))
 
