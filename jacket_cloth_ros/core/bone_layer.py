@@ -86,11 +86,10 @@ class BoneLayer:
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
         self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
         self._parent_index = np.array(self.parents, dtype=np.int64)
-        self._rest_gap = 0.0
         self._packed = self._arrays()
+        self._rest_gap = 0.0
         if self.pads:
             self._rest_gap = self.pad_ends_gap(rest)
-            self._packed = self._arrays()
 
     def _load_upper(self, upper, skeleton, where):
         self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
@@ -118,7 +117,7 @@ class BoneLayer:
         return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
 
     def _arrays(self):
-        """The layer as the arrays pose_kernel.solve_layer takes."""
+        """The layer as the arrays pose_kernel.solve_layer takes (all but the rest gap)."""
         s, p = self.sleeves, self.pads
         return (np.array([x.link for x in s], dtype=np.int64),
                 np.array([x.end_link for x in s], dtype=np.int64),
@@ -130,8 +129,7 @@ class BoneLayer:
                 np.array([x.aim_link for x in p], dtype=np.int64),
                 np.array([x.aim for x in p], dtype=float).reshape(-1, 3),
                 np.array([x.length for x in p], dtype=float),
-                np.array([x.below_length for x in p], dtype=float),
-                self._rest_gap, DOWN)
+                np.array([x.below_length for x in p], dtype=float), DOWN)
 
     def solve(self, links, full=True):
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
@@ -142,5 +140,5 @@ class BoneLayer:
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
-        solve_layer(links, *self._packed, full, rot, pos, tips, below)
+        solve_layer(links, *self._packed, self._rest_gap, full, rot, pos, tips, below)
         return LayerPose(self.names, self._parent_index, rot, pos, tips, below)

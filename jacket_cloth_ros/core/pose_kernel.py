@@ -141,7 +141,7 @@ def twist_angle(rotation, axis):
 @njit(cache=True)
 def solve_layer(links, sleeve_link, sleeve_end, sleeve_axis, sleeve_length, sleeve_share,
                 upper, pad_pivot, pad_aim_link, pad_aim, pad_length, pad_below_length,
-                rest_gap, down, full, rot, pos, tips, below):
+                down, rest_gap, full, rot, pos, tips, below):
     """M1 sleeves and M2 pads (see bone_layer.BoneLayer.solve): bones into rot/pos/tips in
     the layer's order when ``full``, and always the bones below the pads into ``below``."""
     n_s = sleeve_link.shape[0]

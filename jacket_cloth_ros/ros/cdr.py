@@ -9,6 +9,7 @@ are (``Publisher.publish`` takes serialised bytes) and records the same bytes.
 """
 
 import struct
+from collections import namedtuple
 
 import numpy as np
 
@@ -117,7 +118,8 @@ class TfTemplate:
 def marker(w, m, stamp_ns, frame):
     """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`.
 
-    Returns where its varying fields start: (stamp, pose, scale, points) byte offsets.
+    Returns where its varying fields start: (stamp, pose, points) byte offsets; the scale's
+    three doubles follow the pose's seven.
     """
     w.align(4)
     stamp_at = len(w.buf)
@@ -128,9 +130,7 @@ def marker(w, m, stamp_ns, frame):
     w.i32(m.action)
     w.align(8)
     pose_at = len(w.buf)
-    w.f64s(tuple(m.position) + tuple(m.orientation))
-    scale_at = len(w.buf)
-    w.f64s(tuple(m.scale))
+    w.f64s(tuple(m.position) + tuple(m.orientation) + tuple(m.scale))
     w.f32s(tuple(m.color))
     w.i32(m.lifetime_s)
     w.u32(0)
@@ -152,7 +152,7 @@ def marker(w, m, stamp_ns, frame):
     w.string('')                             # mesh_file.filename
     w.u32(0)                                 # mesh_file.data
     w.u8(0)                                  # mesh_use_embedded_materials
-    return stamp_at, pose_at, scale_at, points_at
+    return stamp_at, pose_at, points_at
 
 
 def marker_array(markers, stamp_ns, frame):
@@ -170,6 +170,11 @@ def marker_layout(markers, frame):
                          0 if m.points is None else len(m.points)) for m in markers)
 
 
+# A marker as its layout gives it; the template's poses, scales and points are written later.
+_LaidOut = namedtuple('_LaidOut', 'ns id type action color lifetime_s points position '
+                      'orientation scale', defaults=((0.0,) * 3, (0.0,) * 4, (0.0,) * 3))
+
+
 class MarkerTemplate:
     """The bytes of a MarkerArray of one layout (marker_layout), laid out once, as TfTemplate.
 
@@ -178,15 +183,17 @@ class MarkerTemplate:
     The bytes equal :func:`marker_array`'s.
     """
 
-    def __init__(self, markers, frame):
+    def __init__(self, layout):
+        frame, entries = layout
+        markers = [_LaidOut(*e[:6], np.zeros((e[6], 3))) for e in entries]
         w = CdrWriter()
         w.u32(len(markers))
-        at = np.array([marker(w, m, 0, frame) for m in markers]).reshape(-1, 4)
+        at = np.array([marker(w, m, 0, frame) for m in markers]).reshape(-1, 3)
         self._buf = w.buf
         self._u8 = np.frombuffer(self._buf, dtype=np.uint8)
         self._stamp_at = at[:, 0, None] + np.arange(8)
         self._pose_at = at[:, 1, None] + np.arange(80)       # pose (7) and scale (3) doubles
-        self._points_at = at[:, 3].tolist()
+        self._points_at = at[:, 2].tolist()
         self._pose = np.empty((len(markers), 10), dtype='<f8')
 
     def encode(self, markers, stamp_ns):

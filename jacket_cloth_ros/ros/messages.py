@@ -136,19 +136,13 @@ def marker_specs(sim, reset=False):
 
 def marker_array(sim, stamp_ns, frame, reset=False):
     specs = marker_specs(sim, reset)
-    return _marker_template(cdr.marker_layout(specs, frame), specs).encode(specs, stamp_ns)
+    return _marker_template(cdr.marker_layout(specs, frame)).encode(specs, stamp_ns)
 
 
-_MARKER_TEMPLATES = {}
-
-
-def _marker_template(layout, specs):
-    """One template per layout (the reset array has its DELETEALLs in front)."""
-    if layout not in _MARKER_TEMPLATES:
-        if len(_MARKER_TEMPLATES) >= 8:
-            _MARKER_TEMPLATES.clear()
-        _MARKER_TEMPLATES[layout] = cdr.MarkerTemplate(specs, layout[0])
-    return _MARKER_TEMPLATES[layout]
+@functools.lru_cache(maxsize=8)
+def _marker_template(layout):
+    """One per layout: the reset array, with its DELETEALLs in front, is another."""
+    return cdr.MarkerTemplate(layout)
 
 
 def diagnostics(stamp_ns, node_name, values, level_warn, message):
