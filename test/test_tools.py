@@ -61,7 +61,7 @@ def _run_node_and_motion(tmp_path, stop):
     try:
         motion = subprocess.run(
             [sys.executable, '-m', 'jacket_cloth_ros', 'motion', '--clip', 'walk', '--rate',
-             '60', '--duration', '3', '--wait', '2'], env=env, capture_output=True, timeout=60)
+             '60', '--duration', '3', '--wait', '30'], env=env, capture_output=True, timeout=60)
         assert motion.returncode == 0, motion.stderr
         time.sleep(0.5)
         node.send_signal(stop)
