@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from jacket_cloth_ros.core.fabric import load_fabric
-from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams, per_step
+from jacket_cloth_ros.core import step_kernel
+from jacket_cloth_ros.core.simulation import DESIGN_RATE, JacketSimulation, SimParams, per_step
 from jacket_cloth_ros.lab import accuracy
 from jacket_cloth_ros.lab.accuracy import SHIPPED, Method
 from jacket_cloth_ros.lab.bench import rig_at_grid
@@ -105,8 +106,12 @@ def test_fabric_damping_is_per_time_not_per_step(skeleton, rig, fabric):
     # Two steps of 1/240 s lose what one of 1/120 s does, so a rate change keeps the fabric.
     assert (1 - per_step(0.035, 0.5)) ** 2 == pytest.approx(1 - 0.035)
     assert per_step(0.035, 1.0) == 0.035
+    # The compiled step applies the same rule: 240 Hz in two substeps is a quarter design step.
     fast = JacketSimulation(skeleton, rig, fabric, SimParams(sim_rate=240.0, substeps=2))
-    assert fast._dampings(2)[0] == pytest.approx(per_step(fast.damping, 0.25))
+    per_substep = np.empty(len(fast.damping))
+    step_kernel._per_substep(fast.damping, DESIGN_RATE / 240.0 / 2, per_substep)
+    assert per_substep == pytest.approx(per_step(fast.damping, 0.25))
+    assert per_substep[0] < fast.damping[0] / 3.9
 
 
 def test_automatic_mode_saves_when_calm_and_stays_within_tolerance(skeleton, rig, fabric,

@@ -60,6 +60,12 @@ class LayerPose:
     below: np.ndarray       # (2,4,4) left and right bones below the pads, (0,4,4) if none
 
 
+# A rig without a layer, as solve_layer takes it: no sleeves, no pads, nothing solved.
+NO_LAYER = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3)),
+            np.zeros(0), np.zeros(0), 0, np.zeros((0, 3)), np.zeros(0, dtype=np.int64),
+            np.zeros((0, 3)), np.zeros(0), np.zeros(0), DOWN, 0.0)
+
+
 class BoneLayer:
     """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section)."""
 
@@ -85,7 +91,7 @@ class BoneLayer:
         self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
         self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
-        self._parent_index = np.array(self.parents, dtype=np.int64)
+        self.parent_index = np.array(self.parents, dtype=np.int64)
         self._packed = self._arrays()
         self._rest_gap = 0.0
         if self.pads:
@@ -131,6 +137,10 @@ class BoneLayer:
                 np.array([x.length for x in p], dtype=float),
                 np.array([x.below_length for x in p], dtype=float), DOWN)
 
+    def kernel_arrays(self):
+        """The layer as pose_kernel.solve_layer takes it, rest gap included."""
+        return self._packed + (self._rest_gap,)
+
     def solve(self, links, full=True):
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
@@ -141,4 +151,4 @@ class BoneLayer:
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
         solve_layer(links, *self._packed, self._rest_gap, full, rot, pos, tips, below)
-        return LayerPose(self.names, self._parent_index, rot, pos, tips, below)
+        return LayerPose(self.names, self.parent_index, rot, pos, tips, below)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .transforms import make_transform, quat_to_matrix
+from .step_kernel import quat_matrix
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
 
@@ -105,12 +105,14 @@ class InputParser:
         if whole_world:
             world = np.empty(len(WORLD_VARIABLES))
             world[world_to] = positions[world_from]
-            norm = np.linalg.norm(world[3:])
+            norm = float(np.sqrt(world[3:] @ world[3:]))
             if norm < 1e-6:
                 raise InputRejected('world', f'{self.world_joint} rotation is a zero '
                                     'quaternion: message dropped')
             trans, quat = world[:3].copy(), world[3:] / norm
         self.last_q = q
         self.last_root = (trans, quat)
-        return Sample(stamp_ns, q, make_transform(quat_to_matrix(quat), trans), quat,
-                      list(warnings))
+        root = np.eye(4)
+        quat_matrix(quat, root)
+        root[:3, 3] = trans
+        return Sample(stamp_ns, q, root, quat, list(warnings))

@@ -111,6 +111,36 @@ def grid_bones(x, cols, bone_rc, positions, quaternions):
 
 
 @njit(cache=True)
+def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_parents,
+               layer_rot, layer_pos, positions, quaternions):
+    """Every bone relative to its parent link (see JacketSimulation.bones): M9 grid bones in
+    the root frame, then the M8 hood bone and the M1/M2 layer bones on their links."""
+    n_grid = bone_rc.shape[0]
+    grid_bones(x, cols, bone_rc, positions[:n_grid], quaternions[:n_grid])
+    t = links[hood_link]
+    anchor, frame, local = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
+    _transform_point(t, hood_pivot, anchor)
+    orthonormal_frame(hood_p - anchor, t[:3, 1], frame)
+    _to_link(t, anchor, frame, positions[n_grid], local)
+    quat_from_matrix(local, quaternions[n_grid])
+    for b in range(layer_parents.shape[0]):
+        _to_link(links[layer_parents[b]], layer_pos[b], layer_rot[b],
+                 positions[n_grid + 1 + b], local)
+        quat_from_matrix(local, quaternions[n_grid + 1 + b])
+
+
+@njit(cache=True)
+def _to_link(t, position, rotation, local_position, local_rotation):
+    """A frame (position, rotation) in the root frame, seen from link pose ``t``."""
+    for r in range(3):
+        local_position[r] = (t[0, r] * (position[0] - t[0, 3]) + t[1, r] * (position[1] - t[1, 3])
+                             + t[2, r] * (position[2] - t[2, 3]))
+        for c in range(3):
+            local_rotation[r, c] = (t[0, r] * rotation[0, c] + t[1, r] * rotation[1, c]
+                                    + t[2, r] * rotation[2, c])
+
+
+@njit(cache=True)
 def quats_from_matrices(rotations, out):
     for b in range(rotations.shape[0]):
         quat_from_matrix(rotations[b], out[b])

@@ -11,18 +11,20 @@ Space: the cloth lives in the character's local frame (the URDF root) and feels 
 skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import kernel, pose_kernel
-from .inputs import InputParser, InputRejected
-from .transforms import (
-    apply_transform, invert_transform, quat_slerp, quat_to_matrix, rotation_angle)
+from . import kernel, pose_kernel, step_kernel
+from .bone_layer import LayerPose, NO_LAYER
+from .inputs import InputParser, InputRejected, Sample
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
+_NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)), np.zeros((0, 3)),
+                           np.zeros((0, 3)), _NO_BELOW)
 STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
                   'tethers': kernel.LIMIT_TETHERS}
 SOLVERS = {'gauss_seidel': kernel.SOLVER_GAUSS_SEIDEL, 'xpbd': kernel.SOLVER_XPBD}
@@ -162,10 +164,14 @@ class JacketSimulation:
         self.resets = 0
         self.steps_total = 0
         self.overruns = 0
-        self._bone_rc = np.array(rig.bone_vertices(), dtype=int).reshape(-1, 2)
-        self._pads = self._solve_layer(self.links, full=False)
+        self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
-        self._frames_before = None  # (colliders, M11 references) at the last step's end
+        self._fixed = self._fixed_arrays()
+        # Colliders and M11 references where the last step ended: substeps start from them.
+        self._before = np.zeros(1, dtype=np.bool_)
+        c = self.collider_frames(self.links)
+        self._frames_before = (c.centers, c.axes, c.capsule_a, c.capsule_b, c.plane_points,
+                               c.plane_normals, np.zeros((n, 3)))
         layer_names = rig.layer.names if rig.layer else []
         layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
         root = skeleton.link_names[0]
@@ -176,12 +182,47 @@ class JacketSimulation:
                              + layer_parents)
         self._warm_up()
 
+    def _fixed_arrays(self):
+        """The skeleton's and rig's arrays in step_kernel.advance's order (set at start)."""
+        sk, rig = self.skeleton, self.rig
+        layer = rig.layer.kernel_arrays() if rig.layer else NO_LAYER
+        planes = rig.planes
+        return ((sk.origin, sk.axis, sk.kind, sk.var, sk.mult, sk.offset, sk.parent) + layer
+                + (rig.pin_link, rig.pin_local, rig.reference_link, rig.reference_local,
+                   rig.pin_below, rig.pin_below_local, rig.pin_weight,
+                   rig.collider_links, rig.collider_centers, rig.collider_rotations,
+                   rig.collider_radii, rig.capsule_links, rig.capsule_ends, rig.capsule_radii,
+                   np.array([p.link for p in planes], dtype=np.int64),
+                   np.array([p.point for p in planes], dtype=float).reshape(-1, 3),
+                   np.array([p.normal for p in planes], dtype=float).reshape(-1, 3),
+                   rig.free, rig.con_a, rig.con_b, rig.con_rest))
+
+    def _tuned_arrays(self):
+        """The fabric's and parameters' values in step_kernel.advance's order."""
+        p, f, rig = self.params, self.fabric, self.rig
+        return (self.stiffness, f.iterations, self.max_distance, STRETCH_LIMITS[p.stretch_limit],
+                rig.vert_a, rig.vert_b, rig.vert_rest, rig.tether_anchor, rig.tether_length,
+                SOLVERS[p.solver], p.substeps, p.quality_tolerance,
+                AUTO_SWEEP_SHARE * p.quality_tolerance, self.compliance, self._lam,
+                self.damping, f.contact_damping, f.hood_damping, DESIGN_RATE / p.sim_rate,
+                self.world_share, f.world_share, self.wind_scale, f.wind_scale, p.gravity,
+                np.asarray(p.wind, dtype=float), p.wind_gust, p.wind_gust_period,
+                self.rig.hood.link, self.rig.hood.pivot, self.rig.hood.length)
+
     def _warm_up(self):
-        """Load (or compile) the kernel now, not on the first input, which would stall it."""
+        """Load (or compile) the kernels now, not on the first input, which would stall it."""
         saved = (self.x.copy(), self.xp.copy(), self.contact.copy(), self.hood_p.copy(),
-                 self.hood_pp.copy())
-        self._step(self.links, self.root, StepReport(0))
-        self.x, self.xp, self.contact, self.hood_p, self.hood_pp = saved
+                 self.hood_pp.copy(), self.root.copy(), self._lam.copy(), self.links,
+                 self._layer, self._before.copy(), [a.copy() for a in self._frames_before])
+        still = Sample(0, np.zeros(len(self.skeleton.joint_names)), np.eye(4),
+                       np.array([0.0, 0.0, 0.0, 1.0]))
+        self.t_sim = 0
+        self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
+        (self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root, self._lam,
+         self.links, self._layer, self._before, frames) = saved
+        self._frames_before = tuple(frames)
+        self._tuned = self._tuned_arrays()
+        self.t_sim = None
 
     # -- parameters -------------------------------------------------------------------------
     def set_fabric(self, fabric):
@@ -209,18 +250,7 @@ class JacketSimulation:
         self.compliance = xpbd_compliance(self.stiffness, f.iterations)
         self._lam = np.zeros(len(self.stiffness))
         self.dt_ns = int(round(1e9 / self.params.sim_rate))
-        self._per_substep = {}
-
-    def _dampings(self, substeps):
-        """(cloth, contact) damping per substep and the hood's per step (one hood step per step):
-        fabrics give them per design step."""
-        if substeps not in self._per_substep:
-            e = DESIGN_RATE / (self.params.sim_rate * substeps)
-            f = self.fabric
-            self._per_substep[substeps] = (per_step(self.damping, e),
-                                           float(per_step(f.contact_damping, e)),
-                                           float(per_step(f.hood_damping, e * substeps)))
-        return self._per_substep[substeps]
+        self._tuned = self._tuned_arrays()
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links, layer=None):
@@ -265,8 +295,7 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
-        self._pads = self._solve_layer(self.links, full=False)
-        top, ref = self._skinned_pose(self.links, self._pads)
+        top, ref = self._skinned_pose(self.links, self.layer)
         self.x = ref.copy()
         self.x[:self.rig.cols] = top
         self.xp = self.x.copy()
@@ -274,7 +303,7 @@ class JacketSimulation:
         anchor, rot = self.hood_anchor(self.links)
         self.hood_p = anchor + rot @ self.rig.hood.rest_direction * self.rig.hood.length
         self.hood_pp = self.hood_p.copy()
-        self.root = sample.root
+        self.root = sample.root.copy()          # the steps move it in place
         self.t_sim = sample.stamp_ns
         self.last = sample
         self.resets += 1
@@ -282,7 +311,7 @@ class JacketSimulation:
         # settle it once, constraints and collisions without motion, so no step starts from a
         # stretched grid and snaps.
         self._cloth_step(self.links, self.root, ref, np.zeros((self.rig.n, 3)),
-                         np.ones(self.rig.n), 0.0, 0.0, 1, self.x)
+                         np.ones(self.rig.n), 0.0, 0.0)
         self.xp = self.x.copy()
         self.contact[:] = False
 
@@ -329,10 +358,12 @@ class JacketSimulation:
 
     def _jump(self, a, b):
         """Why the world move from sample a to b is too big to simulate through, or ''."""
-        move = np.linalg.norm(b.root[:3, 3] - a.root[:3, 3])
+        d = b.root[:3, 3] - a.root[:3, 3]
+        move = math.sqrt(d @ d)
         if move > self.params.teleport_distance:
             return f'teleport: moved {move:.2f} m between two inputs'
-        turn = np.degrees(rotation_angle(a.root[:3, :3].T @ b.root[:3, :3]))
+        # The angle between two unit quaternions q and -q is the same turn: 2 acos |q_a . q_b|.
+        turn = math.degrees(2.0 * math.acos(min(1.0, abs(float(a.root_quat @ b.root_quat)))))
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
@@ -346,93 +377,83 @@ class JacketSimulation:
             self.overruns += 1
             self.t_sim += (n - cap) * self.dt_ns
             n = cap
-        span = sample.stamp_ns - a.stamp_ns
-        for _ in range(n):
-            self.t_sim += self.dt_ns
-            w = min(1.0, max(0.0, (self.t_sim - a.stamp_ns) / span))
-            q = a.q + w * (sample.q - a.q)
-            rq = quat_slerp(a.root_quat, sample.root_quat, w)
-            root = np.eye(4)
-            root[:3, :3] = quat_to_matrix(rq)
-            root[:3, 3] = a.root[:3, 3] + w * (sample.root[:3, 3] - a.root[:3, 3])
-            self._step(self.skeleton.forward(q), root, report, last=_ == n - 1)
+        if n > 0:
+            stats = self._run_steps(a, sample, n)
+            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
+            report.limited_vertices += int(stats[step_kernel.LIMITED])
+            report.sweeps += int(stats[step_kernel.SWEEPS])
+            report.substeps += int(stats[step_kernel.SUBSTEPS])
         report.steps = n
         self.steps_total += n
         self.last = sample
 
-    def _step(self, links, root, report, last=False):
-        p, rig = self.params, self.rig
-        dt = self.dt_ns * 1e-9
-        # M14: the character moved through the world by `delta` (old local -> new local); a
-        # world-space cloth would stay behind by that much. Feel only `world_share` of it.
-        delta = invert_transform(root) @ self.root
-        pose_kernel.share_world_motion(delta, self.x, self.world_share)
-        pose_kernel.share_world_motion(delta, self.xp, self.world_share)
-        for points in (self.hood_p[None], self.hood_pp[None]):
-            points += self.fabric.world_share * (apply_transform(delta, points) - points)
-        self.root = root
+    def _run_steps(self, a, b, n):
+        """``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call: the skeleton
+        interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth and M8 (see
+        step_kernel.advance). Returns its stats."""
+        links = np.empty_like(self.links)
+        layer = self.rig.layer
+        k = len(layer.names) if layer else 0
+        rot, pos, tips = np.empty((k, 3, 3)), np.empty((k, 3)), np.empty((k, 3))
+        below = np.empty((len(layer.pads) if layer else 0, 4, 4))
+        stats = np.zeros(4)
+        self.t_sim = step_kernel.advance(
+            a.q, b.q, a.root_quat, b.root_quat, a.root[:3, 3].copy(), b.root[:3, 3].copy(),
+            a.stamp_ns, b.stamp_ns - a.stamp_ns, self.t_sim, self.dt_ns, n, *self._fixed,
+            *self._tuned, self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
+            links, self._before, self._frames_before, rot, pos, tips, below, stats)
         self.links = links
-        world_to_local = root[:3, :3].T
-        gravity = world_to_local @ np.array([0.0, 0.0, -p.gravity])
-        wind = world_to_local @ p.wind_at(self.t_sim or 0)
-        acc = gravity + self.wind_scale[:, None] * wind
-        # M2 then M6: the upper jacket is solved, the pinned top row follows it.
-        # The last step of an input solves the whole layer once: the bones need it, and the
-        # bones below the pads are the same either way.
-        self._pads = self._solve_layer(links, full=last)
-        if last:
-            self._layer = (links, self._pads)
-        top, ref = self._skinned_pose(links, self._pads)
-        substeps = self._substeps_for(top)
-        pin_from = self.x.copy() if substeps > 1 else self.x
-        self.x[:rig.cols] = top
-        self.xp[:rig.cols] = top
-        damping, contact_damping, hood_damping = self._dampings(substeps)
-        deepest, limited, sweeps = self._cloth_step(links, root, ref, acc, damping,
-                                                    contact_damping, dt, substeps, pin_from)
-        report.max_penetration = max(report.max_penetration, deepest)
-        report.limited_vertices += limited
-        report.sweeps += sweeps
-        report.substeps += substeps
-        self._hood_step(links, gravity + self.fabric.wind_scale * wind, dt, hood_damping)
+        self._layer = (links, LayerPose(layer.names, layer.parent_index, rot, pos, tips, below)
+                       if layer else None)
+        return stats
 
-    def _substeps_for(self, top):
-        """Substeps for this step: ``substeps``, or in the automatic quality mode as few as
-        keep the pinned row's move per substep under the tolerance (calm motion needs one)."""
-        p = self.params
-        if p.quality_tolerance <= 0.0 or p.substeps == 1:
-            return p.substeps
-        move = float(np.abs(top - self.x[:self.rig.cols]).max())
-        return int(min(p.substeps, max(1, np.ceil(move / p.quality_tolerance))))
+    def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt):
+        """One kernel step of the current state at this skeleton pose, no substeps (the
+        reset's settling step); its colliders and references are where the next step's
+        substeps start from."""
+        args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
+        out = kernel.cloth_step(*args)
+        for kept, now in zip(self._frames_before, (args[13], args[14], args[16], args[17],
+                                                   args[19], args[20], args[21])):
+            kept[:] = now
+        self._before[0] = True
+        return out
 
-    def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt, substeps,
-                    pin_from):
-        """The kernel's step on the current state, for this skeleton pose (M11 refs ``ref``)."""
-        p, rig = self.params, self.rig
+    def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
+                         contact_damping=None, dt=None):
+        """kernel.cloth_step's arguments for one step of the current state without substeps;
+        by default at the current pose with the fabric's forces (the lab times the kernel on
+        them)."""
+        p, rig, f = self.params, self.rig, self.fabric
+        links = self.links if links is None else links
+        root = self.root if root is None else root
+        if ref is None:
+            ref = self.reference_points(links, self.layer if links is self.links else None)
+        if acc is None:
+            world_to_local = root[:3, :3].T
+            acc = (world_to_local @ np.array([0.0, 0.0, -p.gravity])
+                   + self.wind_scale[:, None] * (world_to_local @ p.wind_at(self.t_sim or 0)))
+        e = DESIGN_RATE / p.sim_rate
+        damping = per_step(self.damping, e) if damping is None else damping
+        if contact_damping is None:
+            contact_damping = float(per_step(f.contact_damping, e))
+        dt = self.dt_ns * 1e-9 if dt is None else dt
         c = self.collider_frames(links, root)
-        c0, ref0 = self._frames_before if substeps > 1 and self._frames_before else (c, ref)
-        self._frames_before = (c, ref)     # where the next step's substeps start from
-        return kernel.cloth_step(
-            self.x, self.xp, rig.free, acc, damping, self.contact, contact_damping, dt,
-            rig.con_a, rig.con_b, rig.con_rest, self.stiffness, self.fabric.iterations,
-            c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b, c.capsule_radii,
-            c.plane_points, c.plane_normals, ref, self.max_distance,
-            STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
-            rig.tether_anchor, rig.tether_length, SOLVERS[p.solver], substeps,
-            self.compliance, self._lam, pin_from, AUTO_SWEEP_SHARE * p.quality_tolerance,
-            c0.centers, c0.axes, c0.capsule_a, c0.capsule_b, c0.plane_points,
-            c0.plane_normals, ref0)
+        return (self.x, self.xp, rig.free, acc, damping, self.contact, contact_damping, dt,
+                rig.con_a, rig.con_b, rig.con_rest, self.stiffness, f.iterations,
+                c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b, c.capsule_radii,
+                c.plane_points, c.plane_normals, ref, self.max_distance,
+                STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
+                rig.tether_anchor, rig.tether_length, SOLVERS[p.solver], 1,
+                self.compliance, self._lam, self.x, AUTO_SWEEP_SHARE * p.quality_tolerance,
+                c.centers, c.axes, c.capsule_a, c.capsule_b, c.plane_points, c.plane_normals,
+                ref)
 
     def _hood_step(self, links, acc, dt, damping):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
-        anchor, _ = self.hood_anchor(links)
-        v = self.hood_p - self.hood_pp
-        self.hood_pp = self.hood_p.copy()
-        self.hood_p = self.hood_p + v * (1.0 - damping) + acc * dt * dt
-        d = self.hood_p - anchor
-        length = np.linalg.norm(d)
-        if length > 1e-9:
-            self.hood_p = anchor + d * (self.rig.hood.length / length)
+        hood = self.rig.hood
+        step_kernel.hood_step(links, hood.link, hood.pivot, hood.length, self.hood_p,
+                              self.hood_pp, np.asarray(acc, dtype=float), dt, damping)
 
     def collider_frames(self, links, root=None):
         """Every collider in the simulation frame, for the kernel and the markers.
@@ -445,40 +466,25 @@ class JacketSimulation:
         pose_kernel.collider_poses(links, rig.collider_links, rig.collider_centers,
                                    rig.collider_rotations, rig.capsule_links, rig.capsule_ends,
                                    centers, axes, cap_a, cap_b)
-        points, normals = [], []
-        for plane in rig.planes:
-            if plane.link < 0:        # fixed in the world: world -> the root's local frame
-                frame = invert_transform(self.root if root is None else root)
-            else:
-                frame = links[plane.link]
-            points.append(frame[:3, :3] @ plane.point + frame[:3, 3])
-            normals.append(frame[:3, :3] @ plane.normal)
+        fixed = self._fixed
+        plane_links, plane_points, plane_normals = fixed[34:37]
+        points, normals = np.empty_like(plane_points), np.empty_like(plane_normals)
+        step_kernel.plane_poses(links, self.root if root is None else root, plane_links,
+                                plane_points, plane_normals, points, normals)
         return Colliders(centers, axes, rig.collider_radii, cap_a, cap_b,
-                         rig.capsule_radii, np.array(points).reshape(-1, 3),
-                         np.array(normals).reshape(-1, 3))
+                         rig.capsule_radii, points, normals)
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):
         """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
-        n_grid = len(self._bone_rc)
         layer = self.layer
-        n = n_grid + 1 + (len(layer.names) if layer is not None else 0)
+        n = len(self.bone_names)
         pos, quat = np.empty((n, 3)), np.empty((n, 4))
-        pose_kernel.grid_bones(self.x, self.rig.cols, self._bone_rc, pos[:n_grid],
-                               quat[:n_grid])
-        anchor, link_rot = self.hood_anchor(self.links)
-        hood = np.empty((3, 3))
-        pose_kernel.orthonormal_frame(self.hood_p - anchor, link_rot[:, 1], hood)
-        hood_link = self.links[self.rig.hood.link]
-        pos[n_grid] = hood_link[:3, :3].T @ (anchor - hood_link[:3, 3])
-        rot = [(hood_link[:3, :3].T @ hood)[None]]
-        if layer is not None:
-            # M1/M2 layer bones relative to their parent links.
-            parent = self.links[layer.parents]
-            pr = np.transpose(parent[:, :3, :3], (0, 2, 1))
-            rot.append(pr @ layer.rotations)
-            pos[n_grid + 1:] = np.einsum('nij,nj->ni', pr, layer.positions - parent[:, :3, 3])
-        pose_kernel.quats_from_matrices(np.concatenate(rot), quat[n_grid:])
+        hood = self.rig.hood
+        layer = _NO_LAYER_POSE if layer is None else layer
+        pose_kernel.bone_poses(self.x, self.rig.cols, self._bone_rc, self.links, hood.link,
+                               hood.pivot, self.hood_p, layer.parents, layer.rotations,
+                               layer.positions, pos, quat)
         return Bones(self.bone_names, self.bone_parents, pos, quat)
 
     def strain(self):

@@ -60,21 +60,15 @@ class Yardstick:
 
 
 def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
-    """The kernel's arguments of every step of a clip, as the simulation made them."""
+    """The kernel's arguments after each input of a clip: one step of the state and pose the
+    simulation reached there (JacketSimulation.kernel_arguments)."""
     sim = JacketSimulation(skeleton, rig, fabric)
     captured = []
-    real = kernel.cloth_step
-
-    def capture(*args):
-        captured.append([a.copy() if isinstance(a, np.ndarray) else a for a in args])
-        return real(*args)
-    kernel.cloth_step = capture
-    try:
-        for stamp, names, pos in clip_inputs(skeleton, clip, seconds):
-            sim.process(stamp, names, pos)
-    finally:
-        kernel.cloth_step = real
-    return captured[2:]             # past the warm-up and the reset's settling step
+    for stamp, names, pos in clip_inputs(skeleton, clip, seconds):
+        sim.process(stamp, names, pos)
+        captured.append([a.copy() if isinstance(a, np.ndarray) else a
+                         for a in sim.kernel_arguments()])
+    return captured[2:]             # past the reset and the first step after it
 
 
 def kernel_step_ns(steps, repeat=3):
@@ -107,35 +101,24 @@ def kernel_vs_limit(skeleton, grids=GRIDS, iterations=ITERATIONS, yardstick=None
 
 
 def input_vs_kernel(skeleton, seconds=10.0):
-    """Per JointState at 120 Hz: the pipeline's CPU time and the kernel's part of it."""
+    """Per JointState at 120 Hz (one step each): the pipeline's CPU time against the bare
+    kernel's time for that step, each the median of its own run."""
     from ..ros.parameters import default_values
     from ..ros.pipeline import SessionPipeline
     from ..tools.cli import clip_messages
     fabrics = load_fabrics()
-    pipe = SessionPipeline(skeleton, rig_at_grid(skeleton, 9, 12), fabrics,
-                           default_values(fabrics['tweed_jacket']), timing=False)
+    rig = rig_at_grid(skeleton, 9, 12)
+    pipe = SessionPipeline(skeleton, rig, fabrics, default_values(fabrics['tweed_jacket']),
+                           timing=False)
     spent = []
-    kernel_ns = []
-    real = kernel.cloth_step
-
-    def timed(*args):
+    for stamp, msg in clip_messages(skeleton, 'walk', RATE, seconds, 10 ** 10):
         t0 = time.thread_time_ns()
-        out = real(*args)
-        kernel_ns[-1] += time.thread_time_ns() - t0
-        return out
-    kernel.cloth_step = timed
-    try:
-        for stamp, msg in clip_messages(skeleton, 'walk', RATE, seconds, 10 ** 10):
-            kernel_ns.append(0)
-            t0 = time.thread_time_ns()
-            pipe.on_joint_state(msg, stamp)
-            spent.append(time.thread_time_ns() - t0)
-    finally:
-        kernel.cloth_step = real
-    spent, kernel_ns = np.array(spent[2:]), np.array(kernel_ns[2:])
-    return {'input_us_median': float(np.median(spent)) * 1e-3,
-            'kernel_us_median': float(np.median(kernel_ns)) * 1e-3,
-            'ratio': float(np.median(spent) / np.median(kernel_ns))}
+        pipe.on_joint_state(msg, stamp)
+        spent.append(time.thread_time_ns() - t0)
+    kernel_ns = kernel_step_ns(captured_steps(skeleton, rig, fabrics['tweed_jacket']))
+    input_ns = float(np.median(spent[2:]))
+    return {'input_us_median': input_ns * 1e-3, 'kernel_us_median': kernel_ns * 1e-3,
+            'ratio': input_ns / kernel_ns}
 
 
 # -- the live node ---------------------------------------------------------------------------

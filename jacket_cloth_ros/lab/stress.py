@@ -119,8 +119,8 @@ def scenes(skeleton, loop_s=60.0):
 def _flipped_share(sim):
     rig = sim.rig
     tri = grid_triangles(rig.rows, rig.cols).reshape(-1, 3)
-    ref = sim.reference_points(sim.links, sim._pads)
-    ref[:rig.cols] = sim.pinned_points(sim.links, sim._pads)
+    ref = sim.reference_points(sim.links, sim.layer)
+    ref[:rig.cols] = sim.pinned_points(sim.links, sim.layer)
 
     def normals(x):
         a, b, c = x[tri[:, 0]], x[tri[:, 1]], x[tri[:, 2]]
@@ -142,11 +142,11 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
             nonfinite += 1
         if not report.accepted or sim.last is None:
             continue
-        ref = sim.reference_points(sim.links, sim._pads)
+        ref = sim.reference_points(sim.links, sim.layer)
         worst_offset = max(worst_offset, float(np.linalg.norm(sim.x - ref, axis=1).max()))
         worst_tunnel = max(worst_tunnel, deepest_inside(sim))
     rig_ = sim.rig
-    ref = sim.reference_points(sim.links, sim._pads)
+    ref = sim.reference_points(sim.links, sim.layer)
     hem = slice((rig_.rows - 1) * rig_.cols, rig_.n)
     figures = {
         'nonfinite': nonfinite,

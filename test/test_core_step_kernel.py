@@ -1,0 +1,82 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The compiled step (step_kernel.advance) does what the step did as numpy and separate parts."""
+
+import numpy as np
+
+from jacket_cloth_ros.core import kernel, step_kernel
+from jacket_cloth_ros.core.simulation import DESIGN_RATE, per_step
+from jacket_cloth_ros.core.transforms import (
+    apply_transform, invert_transform, make_transform, quat_slerp, quat_to_matrix)
+from jacket_cloth_ros.lab.accuracy import clip_inputs
+
+
+def test_compiled_slerp_and_rotation_equal_the_numpy_ones():
+    rng = np.random.default_rng(3)
+    out, m = np.empty(4), np.empty((4, 4))
+    for k in range(200):
+        a = rng.normal(size=4)
+        a /= np.linalg.norm(a)
+        # Far apart, opposite hemispheres, and nearly equal (the linear branch).
+        b = rng.normal(size=4) if k % 3 else a + 1e-5 * rng.normal(size=4)
+        b /= np.linalg.norm(b)
+        t = rng.uniform()
+        step_kernel.quat_slerp(a, b, t, out)
+        assert np.allclose(out, quat_slerp(a, b, t), atol=1e-12)
+        step_kernel.quat_matrix(3.0 * a, m)          # normalises as quat_to_matrix does
+        assert np.allclose(m[:3, :3], quat_to_matrix(a), atol=1e-12)
+
+
+def _reference_steps(sim, a, b, n):
+    """M7, M14, M2/M6/M11, M10, the cloth and M8 as _step ran them before the fusion: numpy
+    transforms between separately compiled parts."""
+    p, f, rig = sim.params, sim.fabric, sim.rig
+    e = DESIGN_RATE / p.sim_rate
+    dt = sim.dt_ns * 1e-9
+    for _ in range(n):
+        sim.t_sim += sim.dt_ns
+        w = min(1.0, max(0.0, (sim.t_sim - a.stamp_ns) / (b.stamp_ns - a.stamp_ns)))
+        root = make_transform(quat_to_matrix(quat_slerp(a.root_quat, b.root_quat, w)),
+                              a.root[:3, 3] + w * (b.root[:3, 3] - a.root[:3, 3]))
+        links = sim.skeleton.forward(a.q + w * (b.q - a.q))
+        delta = invert_transform(root) @ sim.root
+        for points, share in ((sim.x, sim.world_share[:, None]), (sim.xp, sim.world_share[:, None]),
+                              (sim.hood_p[None], f.world_share), (sim.hood_pp[None], f.world_share)):
+            points += share * (apply_transform(delta, points) - points)
+        sim.root, sim.links = root, links
+        layer = rig.layer.solve(links)
+        top, ref = sim.pinned_points(links, layer), sim.reference_points(links, layer)
+        sim.x[:rig.cols] = top
+        sim.xp[:rig.cols] = top
+        to_local = root[:3, :3].T
+        gravity = to_local @ np.array([0.0, 0.0, -p.gravity])
+        wind = to_local @ p.wind_at(sim.t_sim)
+        kernel.cloth_step(*sim.kernel_arguments(
+            links, root, ref, gravity + sim.wind_scale[:, None] * wind,
+            per_step(sim.damping, e), float(per_step(f.contact_damping, e)), dt))
+        sim._hood_step(links, gravity + f.wind_scale * wind, dt,
+                       float(per_step(f.hood_damping, e)))
+
+
+def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):
+    # 60 Hz inputs at a 120 Hz step: each input interpolates a step between two samples (M7).
+    params = dict(wind=(2.0, 1.0, 0.0), wind_gust=0.5)
+    fused, reference = make_sim(**params), make_sim(**params)
+    inputs = clip_inputs(skeleton, 'turn', 0.6) + clip_inputs(skeleton, 'dodge', 0.6,
+                                                                   start_s=10.6)
+    stamp, names, pos = inputs[0]
+    for sim in (fused, reference):
+        sim.process(stamp, names, pos)
+    last = reference.last
+    for stamp, names, pos in inputs[1:]:
+        report = fused.process(stamp, names, pos)
+        assert report.steps == 2 and not report.reset
+        sample = reference.parser.parse(stamp, names, pos)
+        _reference_steps(reference, last, sample, 2)
+        last = sample
+    assert np.abs(fused.root - reference.root).max() < 1e-12        # the character moved
+    assert np.linalg.norm(fused.root[:3, 3]) > 0.1
+    assert np.abs(fused.links - reference.links).max() < 1e-12
+    assert np.abs(fused.x - reference.x).max() < 1e-9
+    assert np.abs(fused.hood_p - reference.hood_p).max() < 1e-9
+    moved = np.abs(fused.x - fused.rig.rest).max()
+    assert moved > 0.05                                              # not a cloth at rest
