@@ -239,3 +239,23 @@ def test_byte_templates_equal_the_field_by_field_encoding(make_sim):
             specs = messages.marker_specs(sim, reset)
             assert messages.marker_array(sim, stamp, 'base_link', reset) == \
                 cdr.marker_array(specs, stamp, 'base_link')
+
+
+def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_path):
+    # The replay writes through a thread: same records in the same order, so the same bytes.
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    session = load_session(str(clip))
+    files = []
+    for background in (False, True):
+        path = tmp_path / f'bg_{background}.mcap'
+        rec = SessionRecorder(str(path), final_name='session.mcap', background=background)
+        rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState')
+        for stamp, _, kind, data in session.events:
+            rec.write('/joint_states', data, stamp)
+        rec.close()
+        files.append(path.read_bytes())
+    assert files[0] == files[1] and len(files[0]) > 10_000
+    broken = SessionRecorder(str(tmp_path / 'broken.mcap'), background=True)
+    broken.write('/not_added', b'\0' * 8, 1)          # no such topic: fails in the thread
+    with pytest.raises(KeyError):
+        broken.close()

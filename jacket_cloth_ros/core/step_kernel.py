@@ -110,7 +110,7 @@ def _per_substep(share, exponent, out):
         out[i] = share[i] if exponent == 1.0 else 1.0 - (1.0 - share[i]) ** exponent
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
 def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns, n,
             origin, axis, kind, var, mult, offset, parent,
             sleeve_link, sleeve_end, sleeve_axis, sleeve_length, sleeve_share, upper,

@@ -10,6 +10,8 @@ readable up to its last flushed chunk.
 
 import json
 import os
+import queue
+import threading
 
 import yaml
 from mcap.writer import CompressionType, Writer
@@ -33,9 +35,15 @@ def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
 
 
 class SessionRecorder:
-    """Write CDR-serialised messages to one MCAP file; ``close()`` completes it."""
+    """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None):
+    ``background``: the MCAP records and their compression are made by a writer thread, in
+    the order they were handed over (the same file). The replay uses it: the compiled steps
+    release the GIL, so the file is written on the second core meanwhile. A write error then
+    shows at the next call or at ``close()``.
+    """
+
+    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False):
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
@@ -53,8 +61,36 @@ class SessionRecorder:
         self._last = None
         self._flush_period = flush_period_ns
         self._last_flush = None
+        self._queue = self._thread = self._error = None
+        if background:
+            self._queue = queue.SimpleQueue()
+            self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
+            self._thread.start()
+
+    def _do(self, work, *args):
+        """Run ``work`` now, or hand it to the writer thread (in order)."""
+        if self._queue is None:
+            work(*args)
+            return
+        if self._error is not None:
+            raise self._error
+        self._queue.put((work, args))
+
+    def _drain(self):
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            if self._error is None:         # after an error, drop the rest and say so once
+                try:
+                    item[0](*item[1])
+                except Exception as e:  # noqa: BLE001 - whatever it is, the caller must hear
+                    self._error = e
 
     def add_topic(self, topic, type_name, qos_yaml=None):
+        self._do(self._add_topic, topic, type_name, qos_yaml)
+
+    def _add_topic(self, topic, type_name, qos_yaml):
         if topic in self._channels:
             return
         if type_name not in self._schemas:
@@ -69,8 +105,11 @@ class SessionRecorder:
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
+        self._do(self._write, topic, bytes(data), stamp_ns)
+
+    def _write(self, topic, data, stamp_ns):
         self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,
-                                 data=bytes(data), publish_time=stamp_ns,
+                                 data=data, publish_time=stamp_ns,
                                  sequence=self._counts[topic])
         self._counts[topic] += 1
         if self._first is None:
@@ -83,11 +122,18 @@ class SessionRecorder:
 
     def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
         """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
-        self._writer.add_metadata(SESSION_CONFIG, {
+        self._do(self._writer.add_metadata, SESSION_CONFIG, {
             'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
             'parameters_json': json.dumps(parameters, sort_keys=True)})
 
     def close(self):
+        if self._thread is not None:
+            self._queue.put(None)
+            self._thread.join()
+            self._thread = None
+            if self._error is not None:
+                self._file.close()
+                raise self._error
         if self._file.closed:
             return
         self._writer.add_metadata('rosbag2', {'serialized_metadata': self._bag_metadata()})
