@@ -266,7 +266,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     from rclpy.parameter import Parameter
     from rclpy.serialization import serialize_message
 
-    from ..recording.reader import read_recording
+    from ..recording.reader import count_messages
     from ..ros.node import JacketClothNode
     from ..tools.cli import _joint_state
     from ..motion.clips import joint_state_content
@@ -297,13 +297,10 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
         node.close()
         node.destroy_node()
         rclpy.shutdown(context=ctx)
-    recording = read_recording(path)
-    counts = {}
-    for m in recording.messages:
-        counts[m.topic] = counts.get(m.topic, 0) + 1
+    counts, complete = count_messages(path)
     os.remove(path)
     return {'windows': windows, 'inputs': counts.get('/joint_states', 0),
-            'tf': counts.get('/tf', 0), 'complete': recording.complete}
+            'tf': counts.get('/tf', 0), 'complete': complete}
 
 
 def _rss_mb():

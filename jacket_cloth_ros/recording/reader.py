@@ -70,6 +70,22 @@ def read_recording(path, topics=None):
     return out
 
 
+class _TopicCounter(dict):
+    """Stands in for Recording.messages: counts each message by topic and keeps nothing."""
+
+    def append(self, message):
+        self[message.topic] = self.get(message.topic, 0) + 1
+
+
+def count_messages(path):
+    """Messages per topic and whether the recording is complete, streamed: an hour of
+    session (gigabytes of /tf and markers) is counted without holding it in memory."""
+    out = Recording(path, _TopicCounter())
+    for one in mcap_files(path):
+        _read_file(one, None, out)
+    return dict(out.messages), out.complete
+
+
 def read_messages(path, topics=None):
     """All messages (optionally of some topics) in file order; (messages, complete)."""
     rec = read_recording(path, topics)
