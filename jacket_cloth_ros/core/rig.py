@@ -233,6 +233,9 @@ class Rig:
         self.capsule_links = np.array([c.link for c in self.capsules], dtype=int)
         self.capsule_ends = np.array([[c.a, c.b] for c in self.capsules]).reshape(-1, 2, 3)
         self.capsule_radii = np.array([c.radius for c in self.capsules], dtype=float)
+        self.plane_links = np.array([p.link for p in self.planes], dtype=np.int64)
+        self.plane_points = np.array([p.point for p in self.planes], dtype=float).reshape(-1, 3)
+        self.plane_normals = np.array([p.normal for p in self.planes], dtype=float).reshape(-1, 3)
 
     def _skin_top_row(self, rest):
         """M6 + M2: the pinned top row follows its link and, near the shoulders, the bones

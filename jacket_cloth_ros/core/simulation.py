@@ -186,16 +186,12 @@ class JacketSimulation:
         """The skeleton's and rig's arrays in step_kernel.advance's order (set at start)."""
         sk, rig = self.skeleton, self.rig
         layer = rig.layer.kernel_arrays() if rig.layer else NO_LAYER
-        planes = rig.planes
         return ((sk.origin, sk.axis, sk.kind, sk.var, sk.mult, sk.offset, sk.parent) + layer
                 + (rig.pin_link, rig.pin_local, rig.reference_link, rig.reference_local,
                    rig.pin_below, rig.pin_below_local, rig.pin_weight,
                    rig.collider_links, rig.collider_centers, rig.collider_rotations,
                    rig.collider_radii, rig.capsule_links, rig.capsule_ends, rig.capsule_radii,
-                   np.array([p.link for p in planes], dtype=np.int64),
-                   np.array([p.point for p in planes], dtype=float).reshape(-1, 3),
-                   np.array([p.normal for p in planes], dtype=float).reshape(-1, 3),
-                   rig.free, rig.con_a, rig.con_b, rig.con_rest))
+                   rig.plane_links, rig.plane_points, rig.plane_normals, rig.free, rig.con_a, rig.con_b, rig.con_rest))
 
     def _tuned_arrays(self):
         """The fabric's and parameters' values in step_kernel.advance's order."""
@@ -218,10 +214,12 @@ class JacketSimulation:
                        np.array([0.0, 0.0, 0.0, 1.0]))
         self.t_sim = 0
         self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
-        (self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root, self._lam,
-         self.links, self._layer, self._before, frames) = saved
-        self._frames_before = tuple(frames)
-        self._tuned = self._tuned_arrays()
+        (self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root, lam,
+         self.links, self._layer, before, frames) = saved
+        # In place: self._tuned and self._frames_before hold these very arrays.
+        self._lam[:], self._before[:] = lam, before
+        for kept, was in zip(self._frames_before, frames):
+            kept[:] = was
         self.t_sim = None
 
     # -- parameters -------------------------------------------------------------------------
@@ -362,7 +360,7 @@ class JacketSimulation:
         move = math.sqrt(d @ d)
         if move > self.params.teleport_distance:
             return f'teleport: moved {move:.2f} m between two inputs'
-        # The angle between two unit quaternions q and -q is the same turn: 2 acos |q_a . q_b|.
+        # The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
         turn = math.degrees(2.0 * math.acos(min(1.0, abs(float(a.root_quat @ b.root_quat)))))
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
@@ -411,16 +409,17 @@ class JacketSimulation:
         """One kernel step of the current state at this skeleton pose, no substeps (the
         reset's settling step); its colliders and references are where the next step's
         substeps start from."""
-        args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
-        out = kernel.cloth_step(*args)
-        for kept, now in zip(self._frames_before, (args[13], args[14], args[16], args[17],
-                                                   args[19], args[20], args[21])):
+        c = self.collider_frames(links, root)
+        out = kernel.cloth_step(*self.kernel_arguments(links, root, ref, acc, damping,
+                                                       contact_damping, dt, c))
+        for kept, now in zip(self._frames_before, (c.centers, c.axes, c.capsule_a, c.capsule_b,
+                                                   c.plane_points, c.plane_normals, ref)):
             kept[:] = now
         self._before[0] = True
         return out
 
     def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
-                         contact_damping=None, dt=None):
+                         contact_damping=None, dt=None, colliders=None):
         """kernel.cloth_step's arguments for one step of the current state without substeps;
         by default at the current pose with the fabric's forces (the lab times the kernel on
         them)."""
@@ -438,7 +437,7 @@ class JacketSimulation:
         if contact_damping is None:
             contact_damping = float(per_step(f.contact_damping, e))
         dt = self.dt_ns * 1e-9 if dt is None else dt
-        c = self.collider_frames(links, root)
+        c = self.collider_frames(links, root) if colliders is None else colliders
         return (self.x, self.xp, rig.free, acc, damping, self.contact, contact_damping, dt,
                 rig.con_a, rig.con_b, rig.con_rest, self.stiffness, f.iterations,
                 c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b, c.capsule_radii,
@@ -466,11 +465,9 @@ class JacketSimulation:
         pose_kernel.collider_poses(links, rig.collider_links, rig.collider_centers,
                                    rig.collider_rotations, rig.capsule_links, rig.capsule_ends,
                                    centers, axes, cap_a, cap_b)
-        fixed = self._fixed
-        plane_links, plane_points, plane_normals = fixed[34:37]
-        points, normals = np.empty_like(plane_points), np.empty_like(plane_normals)
-        step_kernel.plane_poses(links, self.root if root is None else root, plane_links,
-                                plane_points, plane_normals, points, normals)
+        points, normals = np.empty_like(rig.plane_points), np.empty_like(rig.plane_normals)
+        step_kernel.plane_poses(links, self.root if root is None else root, rig.plane_links,
+                                rig.plane_points, rig.plane_normals, points, normals)
         return Colliders(centers, axes, rig.collider_radii, cap_a, cap_b,
                          rig.capsule_radii, points, normals)
 

@@ -220,7 +220,7 @@ def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns,
                        capsule_ends, centers, axes, cap_a, cap_b)
         plane_poses(links, root, plane_links, plane_points_local, plane_normals_local,
                     plane_p, plane_n)
-        if substeps == 1 or not before[0]:
+        if not before[0]:              # no step before: substeps start where this one ends
             c_centers[:], c_axes[:], c_cap_a[:], c_cap_b[:] = centers, axes, cap_a, cap_b
             c_plane_p[:], c_plane_n[:], c_ref[:] = plane_p, plane_n, ref
         deepest, limited, sweeps = cloth_step(
