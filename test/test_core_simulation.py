@@ -123,6 +123,23 @@ def test_unusable_input_is_dropped_and_changes_nothing(make_sim, rest_input, nam
     assert sim.last is before[3] and sim.t_sim == before[4]
 
 
+def test_a_non_finite_cloth_or_hood_resets_to_the_skinned_pose(make_sim, rest_input):
+    # Whatever blows up inside the steps (here a NaN planted in the state), the step that finds
+    # it resets: no NaN ever reaches /tf.
+    n, p = rest_input
+    for planted in ('xp', 'hood_pp'):
+        sim = make_sim()
+        sim.process(1_000_000_000, n, p)
+        assert sim.process(1_016_000_000, n, p).reset == ''
+        getattr(sim, planted)[-1] = np.nan
+        assert sim.process(1_032_000_000, n, p).reset == 'non-finite cloth state'
+        assert np.isfinite(sim.x).all() and np.isfinite(sim.hood_p).all()
+        assert sim.bones().finite and np.isfinite(sim.bones().poses).all()
+        assert sim.process(1_048_000_000, n, p).reset == ''
+    sim.x[-1] = np.nan                      # the pipeline publishes no /tf from such bones
+    assert not sim.bones().finite
+
+
 def test_stamps_backwards_or_repeated_are_dropped_a_long_gap_resets(make_sim, rest_input):
     sim = make_sim(reset_gap=1.0)
     n, p = rest_input

@@ -12,9 +12,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from numba import njit
+
 from .step_kernel import quat_matrix
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
+_OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
 
 
 class InputRejected(ValueError):
@@ -41,7 +44,7 @@ class InputParser:
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
         self.last_q = np.zeros(len(skeleton.joint_names))
-        self.last_root = (np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0]))
+        self.last_root, self.last_quat = np.eye(4), np.array([0.0, 0.0, 0.0, 1.0])
 
     def set_world_joint(self, name):
         self.world_joint = name
@@ -94,25 +97,47 @@ class InputParser:
         if len(names) != len(positions):
             raise InputRejected('length', f'JointState has {len(names)} names but '
                                 f'{len(positions)} positions: message dropped')
-        if not np.isfinite(positions).all():
+        joint_from, joint_to, world_from, world_to, whole_world, warnings = self._plan(names)
+        q, root, quat = np.empty_like(self.last_q), np.empty((4, 4)), np.empty(4)
+        found = _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world,
+                             self.last_q, self.last_root, self.last_quat, q, root, quat)
+        if found == _NON_FINITE:
             bad = [n for n, p in zip(names, positions) if not np.isfinite(p)]
             raise InputRejected('nonfinite', f'non-finite position for {", ".join(bad[:5])}: '
                                 'message dropped')
-        joint_from, joint_to, world_from, world_to, whole_world, warnings = self._plan(names)
-        q = self.last_q.copy()
-        q[joint_to] = positions[joint_from]          # a repeated name: the last one counts
-        trans, quat = self.last_root
-        if whole_world:
-            world = np.empty(len(WORLD_VARIABLES))
-            world[world_to] = positions[world_from]
-            norm = float(np.sqrt(world[3:] @ world[3:]))
-            if norm < 1e-6:
-                raise InputRejected('world', f'{self.world_joint} rotation is a zero '
-                                    'quaternion: message dropped')
-            trans, quat = world[:3].copy(), world[3:] / norm
-        self.last_q = q
-        self.last_root = (trans, quat)
-        root = np.eye(4)
-        quat_matrix(quat, root)
-        root[:3, 3] = trans
+        if found == _ZERO_QUATERNION:
+            raise InputRejected('world', f'{self.world_joint} rotation is a zero '
+                                'quaternion: message dropped')
+        self.last_q, self.last_root, self.last_quat = q, root, quat
         return Sample(stamp_ns, q, root, quat, list(warnings))
+
+
+@njit(cache=True)
+def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
+                 last_root, last_quat, q, root, quat):
+    """A sample's joint values ``q``, root pose ``root`` and its unit quaternion ``quat`` from
+    one message's positions by its plan; joints and a world pose it leaves out keep their last
+    values. Compiled: in numpy this was 12 us of every input (replay profile)."""
+    for k in range(positions.shape[0]):
+        if not np.isfinite(positions[k]):
+            return _NON_FINITE
+    q[:] = last_q
+    for k in range(joint_from.shape[0]):
+        q[joint_to[k]] = positions[joint_from[k]]        # a repeated name: the last one counts
+    if not whole_world:
+        root[:] = last_root
+        quat[:] = last_quat
+        return _OK
+    world = np.empty(7)
+    for k in range(world_from.shape[0]):
+        world[world_to[k]] = positions[world_from[k]]
+    norm = np.sqrt(world[3] ** 2 + world[4] ** 2 + world[5] ** 2 + world[6] ** 2)
+    if norm < 1e-6:
+        return _ZERO_QUATERNION
+    for k in range(4):
+        quat[k] = world[3 + k] / norm
+    root[:] = 0.0
+    root[3, 3] = 1.0
+    quat_matrix(quat, root)
+    root[:3, 3] = world[:3]
+    return _OK

@@ -114,7 +114,8 @@ def grid_bones(x, cols, bone_rc, positions, quaternions):
 def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_parents,
                layer_rot, layer_pos, positions, quaternions):
     """Every bone relative to its parent link (see JacketSimulation.bones): M9 grid bones in
-    the root frame, then the M8 hood bone and the M1/M2 layer bones on their links."""
+    the root frame, then the M8 hood bone and the M1/M2 layer bones on their links. Returns
+    whether every number is finite."""
     n_grid = bone_rc.shape[0]
     grid_bones(x, cols, bone_rc, positions[:n_grid], quaternions[:n_grid])
     t = links[hood_link]
@@ -127,6 +128,7 @@ def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_par
         _to_link(links[layer_parents[b]], layer_pos[b], layer_rot[b],
                  positions[n_grid + 1 + b], local)
         quat_from_matrix(local, quaternions[n_grid + 1 + b])
+    return np.isfinite(positions).all() and np.isfinite(quaternions).all()
 
 
 @njit(cache=True)

@@ -106,8 +106,16 @@ class Bones:
 
     names: list
     parents: list
-    translations: np.ndarray   # (B,3)
-    quaternions: np.ndarray    # (B,4) x, y, z, w
+    poses: np.ndarray          # (B,7): translation, then quaternion x, y, z, w
+    finite: bool = True        # False if any number is not (never to be published)
+
+    @property
+    def translations(self):
+        return self.poses[:, :3]
+
+    @property
+    def quaternions(self):
+        return self.poses[:, 3:]
 
 
 @dataclass
@@ -332,9 +340,13 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             self._reset(sample)
+            finite = np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()
         else:
-            self._advance(sample, report)
-        if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
+            try:
+                finite = self._advance(sample, report)
+            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
+                finite = False
+        if not finite:
             report.reset = 'non-finite cloth state'
             self._reset(sample)
         report.step_cost_ns = time.perf_counter_ns() - started
@@ -367,6 +379,7 @@ class JacketSimulation:
         return ''
 
     def _advance(self, sample, report):
+        """The steps up to ``sample``; False if they left a non-finite cloth or hood."""
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns
         cap = self.params.max_steps_per_input
@@ -384,6 +397,7 @@ class JacketSimulation:
         report.steps = n
         self.steps_total += n
         self.last = sample
+        return n <= 0 or not stats[step_kernel.NON_FINITE]
 
     def _run_steps(self, a, b, n):
         """``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call: the skeleton
@@ -394,7 +408,7 @@ class JacketSimulation:
         k = len(layer.names) if layer else 0
         rot, pos, tips = np.empty((k, 3, 3)), np.empty((k, 3)), np.empty((k, 3))
         below = np.empty((len(layer.pads) if layer else 0, 4, 4))
-        stats = np.zeros(4)
+        stats = np.zeros(5)
         self.t_sim = step_kernel.advance(
             a.q, b.q, a.root_quat, b.root_quat, a.root[:3, 3].copy(), b.root[:3, 3].copy(),
             a.stamp_ns, b.stamp_ns - a.stamp_ns, self.t_sim, self.dt_ns, n, *self._fixed,
@@ -476,13 +490,17 @@ class JacketSimulation:
         """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
         layer = self.layer
         n = len(self.bone_names)
-        pos, quat = np.empty((n, 3)), np.empty((n, 4))
+        poses = np.empty((n, 7))
         hood = self.rig.hood
         layer = _NO_LAYER_POSE if layer is None else layer
-        pose_kernel.bone_poses(self.x, self.rig.cols, self._bone_rc, self.links, hood.link,
-                               hood.pivot, self.hood_p, layer.parents, layer.rotations,
-                               layer.positions, pos, quat)
-        return Bones(self.bone_names, self.bone_parents, pos, quat)
+        try:
+            finite = pose_kernel.bone_poses(self.x, self.rig.cols, self._bone_rc, self.links,
+                                            hood.link, hood.pivot, self.hood_p, layer.parents,
+                                            layer.rotations, layer.positions, poses[:, :3],
+                                            poses[:, 3:])
+        except ZeroDivisionError:           # a degenerate frame (numba raises, numpy gives NaN)
+            finite = False
+        return Bones(self.bone_names, self.bone_parents, poses, finite)
 
     def strain(self):
         """Worst relative stretch of the simulated vertical and horizontal stretch constraints.

@@ -19,7 +19,7 @@ from .pose_kernel import (
     _transform_point, collider_poses, forward_kinematics, share_world_motion, skinned_pose,
     solve_layer)
 
-DEEPEST, LIMITED, SWEEPS, SUBSTEPS = range(4)       # the ``stats`` slots
+DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE = range(5)       # the ``stats`` slots
 
 
 @njit(cache=True)
@@ -241,4 +241,6 @@ def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns,
             hood_acc[k] = gravity_l[k] + hood_wind_scale * wind_l[k]
         hood_step(links, hood_link, hood_pivot, hood_length, hood_p, hood_pp, hood_acc, dt,
                   hood_damp)
+    if n > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
+        stats[NON_FINITE] = 1.0
     return t_sim

@@ -24,9 +24,8 @@ def main():
     rclpy.init(args=sys.argv)
     node = rclpy.create_node('jacket_cloth_floor')
     names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
-    data = TfTemplate(names, ['spine'] * BONES).encode(np.zeros((BONES, 3)),
-                                                       np.tile([0.0, 0.0, 0.0, 1.0], (BONES, 1)),
-                                                       0)
+    identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
+    data = TfTemplate(names, ['spine'] * BONES).encode(identity, 0)
     pub = node.create_publisher(TFMessage, '/tf', 100)
     node.create_subscription(JointState, 'joint_states', lambda raw: pub.publish(data),
                              qos_profile_sensor_data, raw=True)

@@ -2,12 +2,11 @@
 """/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py)."""
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.transforms import cross, matrix_to_quat
-from . import cdr
+from . import cdr, marker_kernel
 
 # visualization_msgs/Marker constants
 SPHERE, CUBE, CYLINDER, LINE_LIST, TRIANGLE_LIST = 2, 1, 3, 5, 11
@@ -35,6 +34,9 @@ class MarkerSpec:
     color: tuple = (0.0, 0.0, 0.0, 0.0)
     points: np.ndarray = None
     lifetime_s: int = 1          # stale markers vanish if the node stops
+    # Where a marker of marker_layout takes its varying values from (see marker_values):
+    pose_row: int = -1           # its position, orientation and scale: this row of the poses
+    point_rows: np.ndarray = None  # its points: these rows of the point table
 
 
 def stamp_msg(stamp_ns):
@@ -44,8 +46,8 @@ def stamp_msg(stamp_ns):
 
 def tf_message(bones, stamp_ns, prefix=''):
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    return _tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(
-        bones.translations, bones.quaternions, stamp_ns)
+    return _tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(bones.poses,
+                                                                                stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
@@ -77,72 +79,79 @@ def grid_lines(rows, cols):
     return np.array(lines)
 
 
-def _z_to(direction):
-    """Quaternion (x, y, z, w) turning +z onto the unit ``direction``."""
-    z = np.array([0.0, 0.0, 1.0])
-    axis = cross(z, direction)
-    s, c = np.linalg.norm(axis), float(z @ direction)
-    if s < 1e-9:
-        return (1.0, 0.0, 0.0, 0.0) if c < 0 else IDENTITY
-    half = np.arctan2(s, c) / 2
-    v = axis / s * np.sin(half)
-    return (float(v[0]), float(v[1]), float(v[2]), float(np.cos(half)))
+@functools.lru_cache(maxsize=8)
+def marker_layout(rig, layer_bones, reset):
+    """Every marker of the rig but its varying values: cloth mesh and seams, colliders, hood
+    pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in each namespace first after a reset."""
+    out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
+           for ns in MARKER_NAMESPACES] if reset else []
+    n = rig.n
+    out.append(MarkerSpec('cloth', 0, TRIANGLE_LIST, color=TWEED,
+                          point_rows=grid_triangles(rig.rows, rig.cols)))
+    out.append(MarkerSpec('cloth', 1, LINE_LIST, scale=(0.004, 1.0, 1.0), color=SEAM,
+                          point_rows=grid_lines(rig.rows, rig.cols)))
+    shapes = ([SPHERE] * len(rig.collider_links) + [CYLINDER, SPHERE, SPHERE] * len(
+        rig.capsule_links) + [CUBE] * len(rig.plane_links))
+    for k, kind in enumerate(shapes):
+        out.append(MarkerSpec('colliders', k, kind, color=GHOST, pose_row=k))
+    out.append(MarkerSpec('hood', 0, LINE_LIST, scale=(0.01, 1.0, 1.0), color=HOOD,
+                          point_rows=np.array([n, n + 1])))          # anchor to particle
+    out.append(MarkerSpec('hood', 1, SPHERE, color=HOOD, pose_row=len(shapes)))
+    if layer_bones:
+        # Segments from each bone's pivot to its tip.
+        pivots = np.arange(layer_bones) + n + 2
+        out.append(MarkerSpec('jacket_bones', 0, LINE_LIST, scale=(0.012, 1.0, 1.0),
+                              color=SEAM, point_rows=np.stack([pivots, pivots + layer_bones], 1)
+                              .reshape(-1)))
+    return tuple(out)
+
+
+def marker_values(sim):
+    """(poses, points): the pose table (marker_kernel.shape_poses) and the point table (the
+    cloth's vertices, the hood's anchor and particle, the layer bones' pivots, their tips)."""
+    c = sim.collider_frames(sim.links)
+    poses = np.empty((marker_kernel.shape_count(sim.rig), marker_kernel.POSE_WIDTH))
+    marker_kernel.shape_poses(c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b,
+                              c.capsule_radii, c.plane_points, c.plane_normals, sim.hood_p,
+                              poses)
+    anchor, _ = sim.hood_anchor(sim.links)
+    parts = [sim.x, anchor[None], sim.hood_p[None]]
+    if sim.layer is not None:
+        parts += [sim.layer.positions, sim.layer.tips]
+    return poses, np.concatenate(parts)
+
+
+def _layer_bones(sim):
+    return 0 if sim.layer is None else len(sim.layer.positions)
 
 
 def marker_specs(sim, reset=False):
-    """Cloth mesh and seams, colliders, hood pendulum, jacket bones; DELETEALL after a reset."""
-    out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
-           for ns in MARKER_NAMESPACES] if reset else []
-    rig = sim.rig
-    out.append(MarkerSpec('cloth', 0, TRIANGLE_LIST, color=TWEED,
-                          points=sim.x[grid_triangles(rig.rows, rig.cols)]))
-    out.append(MarkerSpec('cloth', 1, LINE_LIST, scale=(0.004, 1.0, 1.0), color=SEAM,
-                          points=sim.x[grid_lines(rig.rows, rig.cols)]))
-    c = sim.collider_frames(sim.links)
-    quats = matrix_to_quat(c.axes)
-    for k in range(len(c.centers)):
-        out.append(MarkerSpec('colliders', k, SPHERE, position=tuple(c.centers[k]),
-                              orientation=tuple(quats[k]), scale=tuple(2 * c.radii[k]),
-                              color=GHOST))
-    mid = len(c.centers)
-    for a, b, r in zip(c.capsule_a, c.capsule_b, c.capsule_radii):
-        # A capsule drawn as its cylinder and two end spheres.
-        axis = b - a
-        length = float(np.linalg.norm(axis))
-        out.append(MarkerSpec('colliders', mid, CYLINDER, position=tuple((a + b) / 2),
-                              orientation=_z_to(axis / max(length, 1e-9)),
-                              scale=(2 * r, 2 * r, length), color=GHOST))
-        for k, end in enumerate((a, b)):
-            out.append(MarkerSpec('colliders', mid + 1 + k, SPHERE, position=tuple(end),
-                                  scale=(2 * r,) * 3, color=GHOST))
-        mid += 3
-    for p, n in zip(c.plane_points, c.plane_normals):
-        # A plane drawn as a thin 2 m square below the character's root.
-        out.append(MarkerSpec('colliders', mid, CUBE, position=tuple((p @ n) * n),
-                              orientation=_z_to(n), scale=(2.0, 2.0, 0.002), color=GHOST))
-        mid += 1
-    anchor, _ = sim.hood_anchor(sim.links)
-    out.append(MarkerSpec('hood', 0, LINE_LIST, scale=(0.01, 1.0, 1.0), color=HOOD,
-                          points=np.array([anchor, sim.hood_p])))
-    out.append(MarkerSpec('hood', 1, SPHERE, position=tuple(sim.hood_p), scale=(0.05,) * 3,
-                          color=HOOD))
-    if sim.layer is not None:
-        # M1/M2 layer bones as segments from their pivots to their tips.
-        segments = np.stack([sim.layer.positions, sim.layer.tips], axis=1).reshape(-1, 3)
-        out.append(MarkerSpec('jacket_bones', 0, LINE_LIST, scale=(0.012, 1.0, 1.0),
-                              color=SEAM, points=segments))
+    """The MarkerArray's markers with their values: what marker_array encodes, readable."""
+    poses, points = marker_values(sim)
+    out = []
+    for m in marker_layout(sim.rig, _layer_bones(sim), reset):
+        if m.pose_row >= 0:
+            row = poses[m.pose_row].tolist()
+            m = replace(m, position=tuple(row[:3]), orientation=tuple(row[3:7]),
+                        scale=tuple(row[7:]))
+        if m.point_rows is not None:
+            m = replace(m, points=points[m.point_rows])
+        out.append(m)
     return out
 
 
 def marker_array(sim, stamp_ns, frame, reset=False):
-    specs = marker_specs(sim, reset)
-    return _marker_template(cdr.marker_layout(specs, frame)).encode(specs, stamp_ns)
+    """The MarkerArray's CDR bytes: its values written into a template laid out once."""
+    template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
+    poses, points = marker_values(sim)
+    return template.encode(poses, points, stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
-def _marker_template(layout):
+def _marker_template(rig, layer_bones, reset, frame):
     """One per layout: the reset array, with its DELETEALLs in front, is another."""
-    return cdr.MarkerTemplate(layout)
+    return cdr.MarkerTemplate(marker_layout(rig, layer_bones, reset), frame,
+                              marker_kernel.shape_count(rig))
 
 
 def diagnostics(stamp_ns, node_name, values, level_warn, message):

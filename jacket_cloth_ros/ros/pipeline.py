@@ -87,7 +87,7 @@ class SessionPipeline:
 
     def _outputs(self, stamp_ns):
         bones = self.sim.bones()
-        if not (np.isfinite(bones.translations).all() and np.isfinite(bones.quaternions).all()):
+        if not bones.finite:
             return []            # never a NaN on /tf (the simulation resets itself on one)
         out = [('tf', messages.tf_message(bones, stamp_ns, self.values['frame_prefix']))]
         rate = self.values['markers_rate']

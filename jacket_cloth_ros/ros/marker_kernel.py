@@ -1,0 +1,81 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The poses of the collider and hood markers, compiled.
+
+Why compiled: worked out in numpy, one marker per collider, they cost about 150 us of CPU per
+MarkerArray (measured in a replay profile), more than a cloth step. One row per solid marker:
+position (3), orientation (x, y, z, w) and scale (3), in the order messages.marker_layout lists
+them.
+"""
+
+import numpy as np
+from numba import njit
+
+from ..core.pose_kernel import quat_from_matrix
+
+POSE_WIDTH = 10
+HOOD_SPHERE = 0.05                 # diameter of the hood particle's sphere, m
+PLANE_SIZE, PLANE_THICKNESS = 2.0, 0.002
+
+
+def shape_count(rig):
+    """Rows of shape_poses for ``rig``: ellipsoids, three per capsule, planes, the hood."""
+    return len(rig.collider_links) + 3 * len(rig.capsule_links) + len(rig.plane_links) + 1
+
+
+@njit(cache=True, nogil=True)
+def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hood_p, out):
+    """Ellipsoids as scaled spheres; a capsule as its cylinder and two end spheres; a plane as
+    a thin square at its point nearest the origin (the root); the hood particle as a sphere."""
+    j = 0
+    for k in range(centers.shape[0]):
+        out[j, :3] = centers[k]
+        quat_from_matrix(axes[k], out[j, 3:7])
+        out[j, 7:] = 2.0 * radii[k]
+        j += 1
+    for k in range(cap_a.shape[0]):
+        a, b, d = cap_a[k], cap_b[k], 2.0 * cap_r[k]
+        axis = b - a
+        length = np.sqrt(_dot(axis, axis))
+        out[j, :3] = 0.5 * (a + b)
+        _z_to(axis / max(length, 1e-9), out[j, 3:7])
+        out[j, 7], out[j, 8], out[j, 9] = d, d, length
+        for e in range(2):
+            out[j + 1 + e, :3] = a if e == 0 else b
+            _identity(out[j + 1 + e, 3:7])
+            out[j + 1 + e, 7:] = d
+        j += 3
+    for k in range(plane_p.shape[0]):
+        n = plane_n[k]
+        out[j, :3] = _dot(plane_p[k], n) * n
+        _z_to(n, out[j, 3:7])
+        out[j, 7], out[j, 8], out[j, 9] = PLANE_SIZE, PLANE_SIZE, PLANE_THICKNESS
+        j += 1
+    out[j, :3] = hood_p
+    _identity(out[j, 3:7])
+    out[j, 7:] = HOOD_SPHERE
+
+
+@njit(cache=True, nogil=True)
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]       # numpy's @ would need scipy's BLAS
+
+
+@njit(cache=True, nogil=True)
+def _identity(q):
+    q[0], q[1], q[2], q[3] = 0.0, 0.0, 0.0, 1.0
+
+
+@njit(cache=True, nogil=True)
+def _z_to(d, q):
+    """Quaternion (x, y, z, w) turning +z onto the unit direction ``d``."""
+    # axis = z x d = (-d1, d0, 0); turn by atan2(|axis|, d2) about it.
+    s = np.sqrt(d[0] * d[0] + d[1] * d[1])
+    if s < 1e-9:
+        if d[2] < 0:
+            q[0], q[1], q[2], q[3] = 1.0, 0.0, 0.0, 0.0
+        else:
+            _identity(q)
+        return
+    half = 0.5 * np.arctan2(s, d[2])
+    f = np.sin(half) / s
+    q[0], q[1], q[2], q[3] = -d[1] * f, d[0] * f, 0.0, np.cos(half)
