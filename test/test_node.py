@@ -226,6 +226,9 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
     try:
         h = harness(robot_description_timeout=20.0)
         assert h.node.sim.skeleton.name == 'from_topic'
+        # Loaded: the node stops listening and its fallback timer is gone (less executor work).
+        assert '/robot_description' not in [s.topic_name for s in h.node.subscriptions]
+        assert not list(h.node.timers)
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)

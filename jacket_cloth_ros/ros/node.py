@@ -72,12 +72,13 @@ class JacketClothNode(Node):
             self.resolve_topic_name('joint_states'), self.resolve_topic_name('~/wind'),
             self.publishers_by_key['markers'].topic_name)
         self._open_recorder(self._p('record'))
+        self._description = self._fallback = None
         urdf = self._p('robot_description')
         if urdf:
             self._load_model(urdf, 'the robot_description parameter')
         else:
-            self.create_subscription(String, '/robot_description', self._on_description,
-                                     LATCHED)
+            self._description = self.create_subscription(
+                String, '/robot_description', self._on_description, LATCHED)
             self._fallback = self.create_timer(self._p('robot_description_timeout'),
                                                self._use_shipped_character)
 
@@ -102,12 +103,11 @@ class JacketClothNode(Node):
         if self.pipeline is None:
             try:
                 self._load_model(msg.data, 'the /robot_description topic')
-                self._fallback.cancel()
             except ConfigError as e:
                 self.get_logger().error(f'/robot_description rejected: {e}')
 
     def _use_shipped_character(self):
-        self._fallback.cancel()
+        self._fallback.cancel()                 # once, even if the shipped one fails to load
         if self.pipeline is None:
             with open(shipped('character.urdf'), encoding='utf-8') as f:
                 self._load_model(f.read(), 'the shipped character (config/character.urdf)')
@@ -124,6 +124,11 @@ class JacketClothNode(Node):
                               'links: change frame_prefix')
         self.pipeline = pipeline
         self._urdf = urdf
+        # Done waiting: every entity left in the node is work for each executor wake-up.
+        if self._description is not None:
+            self.destroy_subscription(self._description)
+            self.destroy_timer(self._fallback)
+            self._description = self._fallback = None
         self._write_session_config()
         # Subscribed only now: a publisher that waits for us knows we can simulate.
         self.create_subscription(JointState, 'joint_states', self._on_joint_state,
