@@ -15,6 +15,7 @@
   fast as it runs: resident memory and step cost over time, every input with its output.
 """
 
+import itertools
 import json
 import os
 import signal
@@ -180,7 +181,9 @@ def live_node(skeleton, command, seconds, domain, record_dir=None, start_limit_s
     description = node.create_publisher(String, '/robot_description', LATCHED)
     with open(shipped('character.urdf'), encoding='utf-8') as f:
         description.publish(String(data=f.read()))
-    msgs = list(clip_messages(skeleton, 'walk', RATE, seconds + 3.0, 10 ** 10))
+    # One walk: until the first /tf (30 s and more on a cold start) made as it is sent, then
+    # the measured part made beforehand.
+    walk = clip_messages(skeleton, 'walk', RATE, 2 * start_limit_s + seconds + 3.0, 10 ** 10)
     from rclpy.executors import SingleThreadedExecutor
     ex = SingleThreadedExecutor(context=ctx)
     ex.add_node(node)
@@ -188,15 +191,15 @@ def live_node(skeleton, command, seconds, domain, record_dir=None, start_limit_s
     proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
     try:
-        k = 0
         while time.monotonic() - started < start_limit_s and not first_tf:
             if pub.get_subscription_count():
-                pub.publish(msgs[k][1])
-                k += 1
+                pub.publish(next(walk)[1])
             ex.spin_once(timeout_sec=1.0 / RATE)
         if not first_tf:
             raise RuntimeError(f'{command[-1]}: no /tf within {start_limit_s:g} s')
         start_s = first_tf[0] - started
+        msgs = list(itertools.islice(walk, int((seconds + 3.0) * RATE)))
+        k = 0
         for _ in range(int(RATE)):                     # a second of warm-up
             pub.publish(msgs[k][1])
             k += 1
