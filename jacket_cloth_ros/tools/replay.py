@@ -27,8 +27,8 @@ def replay(session, out_path):
         started = time.perf_counter()
         pipeline = run_session(
             session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data, stamp))
+        recorder.close()                    # the writer thread's backlog is part of the time
         took = time.perf_counter() - started
-        recorder.close()
         os.replace(tmp, out_path)           # a failed replay leaves no half-written output
     finally:
         recorder.close()
