@@ -408,7 +408,7 @@ class JacketSimulation:
         k = len(layer.names) if layer else 0
         rot, pos, tips = np.empty((k, 3, 3)), np.empty((k, 3)), np.empty((k, 3))
         below = np.empty((len(layer.pads) if layer else 0, 4, 4))
-        stats = np.zeros(5)
+        stats = np.zeros(step_kernel.STAT_SLOTS)
         self.t_sim = step_kernel.advance(
             a.q, b.q, a.root_quat, b.root_quat, a.root[:3, 3].copy(), b.root[:3, 3].copy(),
             a.stamp_ns, b.stamp_ns - a.stamp_ns, self.t_sim, self.dt_ns, n, *self._fixed,

@@ -20,6 +20,7 @@ from .pose_kernel import (
     solve_layer)
 
 DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE = range(5)       # the ``stats`` slots
+STAT_SLOTS = NON_FINITE + 1
 
 
 @njit(cache=True)

@@ -218,8 +218,7 @@ class MarkerTemplate(_Template):
                 src.append(pose_rows * width + (3 * np.asarray(rows)[:, None]
                                                 + np.arange(3)).reshape(-1))
         super().__init__(w, stamps)
-        self._dst = np.concatenate(dst) if dst else np.zeros(0, dtype=int)
-        self._src = np.concatenate(src) if src else np.zeros(0, dtype=int)
+        self._dst, self._src = np.concatenate(dst), np.concatenate(src)  # the mesh has points
 
     def encode(self, poses, points, stamp_ns):
         """``poses`` (pose_rows, 10) and ``points`` (any, 3), as messages.marker_values."""
