@@ -7,7 +7,12 @@ noisy for timed tests); what is asserted is what must hold on any machine.
 
 import json
 
-from jacket_cloth_ros.lab.speed import _cpu_s, endurance
+import numpy as np
+
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.lab.floor_node import kernel_stepper
+from jacket_cloth_ros.lab.speed import _cpu_s, captured_steps, endurance
 from jacket_cloth_ros.tools.cli import main
 
 
@@ -35,3 +40,14 @@ def test_cpu_of_a_process_is_read_from_proc():
     import os
     busy = sum(i * i for i in range(200_000))
     assert busy > 0 and _cpu_s(os.getpid()) > 0
+
+
+def test_the_floor_node_runs_one_bare_kernel_step_per_message(skeleton):
+    # The floor's kernel share is measured in the floor node itself: one cloth step a call.
+    steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'), 'run', 0.2)
+    before = [s[0].copy() for s in steps]
+    step = kernel_stepper(steps)
+    step()
+    step()
+    moved = [not np.array_equal(s[0], b) for s, b in zip(steps, before)]
+    assert moved[:2] == [True, True] and not any(moved[2:])

@@ -141,3 +141,18 @@ def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_wo
     quat_matrix(quat, root)
     root[:3, 3] = world[:3]
     return _OK
+
+
+@njit(cache=True)
+def root_jump(root_a, root_b, quat_a, quat_b):
+    """How far (m) and through what angle (degrees) the root moved from sample a to b.
+
+    The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
+    Compiled: the same in numpy cost 10 us of every input, 50 us at 120 Hz with a sleep
+    between inputs (one run, the node's conditions)."""
+    d0 = root_b[0, 3] - root_a[0, 3]
+    d1 = root_b[1, 3] - root_a[1, 3]
+    d2 = root_b[2, 3] - root_a[2, 3]
+    dot = abs(quat_a[0] * quat_b[0] + quat_a[1] * quat_b[1] + quat_a[2] * quat_b[2]
+              + quat_a[3] * quat_b[3])
+    return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), np.degrees(2.0 * np.arccos(min(1.0, dot)))

@@ -11,7 +11,6 @@ Space: the cloth lives in the character's local frame (the URDF root) and feels 
 skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -19,7 +18,7 @@ import numpy as np
 
 from . import kernel, pose_kernel, step_kernel
 from .bone_layer import LayerPose, NO_LAYER
-from .inputs import InputParser, InputRejected, Sample
+from .inputs import InputParser, InputRejected, Sample, root_jump
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
@@ -368,12 +367,9 @@ class JacketSimulation:
 
     def _jump(self, a, b):
         """Why the world move from sample a to b is too big to simulate through, or ''."""
-        d = b.root[:3, 3] - a.root[:3, 3]
-        move = math.sqrt(d @ d)
+        move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
         if move > self.params.teleport_distance:
             return f'teleport: moved {move:.2f} m between two inputs'
-        # The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
-        turn = math.degrees(2.0 * math.acos(min(1.0, abs(float(a.root_quat @ b.root_quat)))))
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
