@@ -54,6 +54,9 @@ class SessionPipeline:
         self._last_marker = None
         self._last_diag = None
         self._marker_reset = True
+        # Load the encoders' compiled parts now rather than on the first input's outputs.
+        messages.tf_message(self.sim.bones(), 0, self.values['frame_prefix'])
+        messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True)
 
     def _fabric(self):
         return fabric_from(self.fabrics[self.values['fabric']], self.values)
