@@ -8,7 +8,7 @@ encoding, no recording. Its CPU per message plus the bare kernel's is what the n
 With ``--kernel`` it also runs the bare kernel (one ``kernel.cloth_step`` of the shipped rig,
 states captured from a walk) in each callback, so that the kernel's share of the floor is
 measured as the node runs it: once per message, 8 ms apart, in this process. Called back to
-back, the same step took a third of that (``lab/speed.py``, ``paced_kernel``).
+back, the same step took a third to a half of that (``speed.node_vs_floor``, README).
 """
 
 import sys
