@@ -80,3 +80,12 @@ def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):
     assert np.abs(fused.hood_p - reference.hood_p).max() < 1e-9
     moved = np.abs(fused.x - fused.rig.rest).max()
     assert moved > 0.05                                              # not a cloth at rest
+
+
+def test_the_cached_step_is_marked_with_the_cloth_kernels_source_too():
+    # advance compiles kernel.cloth_step into itself; numba marks a cache with its own file
+    # only, so an edit of kernel.py went on running the old cloth step from the cache.
+    import hashlib
+    stamp = step_kernel.advance._cache._impl._locator.get_source_stamp()
+    with open(kernel.__file__, 'rb') as f:
+        assert hashlib.sha256(f.read()).digest() in stamp

@@ -11,7 +11,8 @@ constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out i
 """
 
 import numpy as np
-from numba import njit
+
+from .kernel_cache import njit
 
 # Fused multiply-add, reciprocals and signless zeros only: no 'nnan'/'ninf', which would let
 # LLVM drop the checks that keep a NaN from reaching /tf.

@@ -8,7 +8,8 @@ numpy's per-call overhead, not arithmetic, made them cost several times the clot
 """
 
 import numpy as np
-from numba import njit
+
+from .kernel_cache import njit
 
 FIXED, ROTATION, TRANSLATION = -1, 0, 1      # Skeleton.kind
 

@@ -12,8 +12,8 @@ between inputs). Here the step is the same sequence of the same compiled parts:
 """
 
 import numpy as np
-from numba import njit
 
+from .kernel_cache import njit
 from .kernel import cloth_step
 from .pose_kernel import (
     _transform_point, collider_poses, forward_kinematics, share_world_motion, skinned_pose,

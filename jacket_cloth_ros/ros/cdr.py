@@ -12,7 +12,8 @@ import dataclasses
 import struct
 
 import numpy as np
-from numba import njit
+
+from ..core.kernel_cache import njit
 
 _HEADER = b'\x00\x01\x00\x00'        # CDR_LE encapsulation
 

@@ -8,8 +8,8 @@ them.
 """
 
 import numpy as np
-from numba import njit
 
+from ..core.kernel_cache import njit
 from ..core.pose_kernel import quat_from_matrix
 
 POSE_WIDTH = 10

@@ -1,0 +1,63 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""numba's on-disk cache of this package's kernels, kept in step with every kernel's source.
+
+numba marks a cached function with the hash of its own file only. Our kernels call each other
+across files (step_kernel.advance compiles kernel.cloth_step into itself), so after an edit of
+kernel.py the cached ``advance`` went on running the old cloth step: seen here, a replay's
+/tf differed in the last bits from a fresh build of the same source. Here each of the
+package's kernels is marked with the hashes of all the files that hold kernels, so an edit to
+any of them recompiles them all. The kernel modules take ``njit`` from here, so the marks
+are in place before their first ``@njit(cache=True)``.
+"""
+
+import os
+
+from numba import njit
+from numba.core import caching
+
+__all__ = ['njit', 'kernels_stamp']
+
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
+    'core/kernel.py', 'core/pose_kernel.py', 'core/step_kernel.py', 'core/inputs.py',
+    'ros/cdr.py', 'ros/marker_kernel.py'))
+
+
+def kernels_stamp():
+    """The content hashes of every file holding one of the package's kernels."""
+    stamps = []
+    for path in KERNEL_FILES:
+        st = os.stat(path)
+        stamps.append(caching._hash_source_file(path, st.st_mtime, st.st_size))
+    return tuple(stamps)
+
+
+class _PackageStamp:
+    """For the package's own files: the stamp of all kernel files, not of one."""
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if os.path.abspath(py_file) not in KERNEL_FILES:
+            return None
+        return super().from_function(py_func, py_file)
+
+    def get_source_stamp(self):
+        return kernels_stamp()
+
+
+class PackageUserDirLocator(_PackageStamp, caching.UserProvidedCacheLocator):
+    """NUMBA_CACHE_DIR set: there, as numba would."""
+
+
+class PackageInTreeLocator(_PackageStamp, caching.InTreeCacheLocator):
+    """Else in the package's __pycache__, as numba would."""
+
+
+class PackageUserWideLocator(_PackageStamp, caching.UserWideCacheLocator):
+    """Else (an install that cannot be written) in the user's cache folder, as numba would."""
+
+
+_LOCATORS = caching.CacheImpl._locator_classes
+for _locator in (PackageUserWideLocator, PackageInTreeLocator, PackageUserDirLocator):
+    if _locator not in _LOCATORS:           # ends in numba's order, before numba's own
+        _LOCATORS.insert(0, _locator)
