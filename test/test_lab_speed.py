@@ -12,7 +12,7 @@ import numpy as np
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.lab.floor_node import kernel_stepper
-from jacket_cloth_ros.lab.speed import _cpu_s, captured_steps, endurance
+from jacket_cloth_ros.lab.speed import _cpu_s, _cpu_ticks, captured_steps, endurance
 from jacket_cloth_ros.tools.cli import main
 
 
@@ -26,7 +26,12 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert [r['session_s'] for r in results['replay']] == [5.0, 10.0]
     assert all(r['realtime_x'] > 1.0 for r in results['replay'])
     assert (out / 'speed.png').stat().st_size > 10_000
-    assert 'x the kernel' in capsys.readouterr().out
+    # Each part says how much of the machine the host took meanwhile (a share, in percent).
+    steal = results['steal_percent']
+    assert set(steal) == {'kernel', 'input', 'replay', 'endurance'}
+    assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
+    printed = capsys.readouterr().out
+    assert 'x the kernel' in printed and 'CPU steal' in printed
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):
@@ -40,6 +45,11 @@ def test_cpu_of_a_process_is_read_from_proc():
     import os
     busy = sum(i * i for i in range(200_000))
     assert busy > 0 and _cpu_s(os.getpid()) > 0
+
+
+def test_steal_is_read_from_proc_stat():
+    steal, total = _cpu_ticks()
+    assert total > 0 and 0 <= steal <= total
 
 
 def test_the_floor_node_runs_one_bare_kernel_step_per_message(skeleton):
