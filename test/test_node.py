@@ -124,6 +124,23 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0 and mesh.color.a > 0
 
 
+def test_latency_counts_from_the_messages_arrival_in_the_process(harness):
+    from rclpy.serialization import serialize_message
+    h = harness()
+    h.send_clip('walk', 60, 0.3)
+    # Over DDS: the rmw's receive time is on the same clock as the node's (a wrong clock
+    # would give years or negative values).
+    over_dds = list(h.node.pipeline._latencies)
+    assert over_dds and all(0 < ns < 1e9 for ns in over_dds), over_dds
+    # A message that waited 50 ms behind other callbacks: the wait is part of its latency.
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'walk', 0.4)
+    msg = JointState(name=list(names), position=[float(p) for p in pos])
+    msg.header.stamp.sec = 101
+    waited = {'received_timestamp': time.time_ns() - 50_000_000}
+    h.node._on_joint_state(serialize_message(msg), waited)
+    assert h.node.pipeline._latencies[-1] >= 50_000_000
+
+
 BAD_INPUTS = [
     ('nan', ['l_knee'], [float('nan')]),
     ('inf', ['l_knee', 'r_knee'], [0.1, float('inf')]),

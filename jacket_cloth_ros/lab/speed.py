@@ -394,7 +394,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
             names, pos = joint_state_content(skeleton.joint_names, 'walk', t)
             raw = serialize_message(_joint_state(names, pos, 10 ** 10 + int(round(t * 1e9))))
             t0 = time.thread_time_ns()
-            node._on_joint_state(raw)
+            node._on_joint_state(raw, {})
             costs.append(time.thread_time_ns() - t0)
             if (k + 1) % per_window == 0:
                 windows.append({'simulated_s': (k + 1) / RATE, 'rss_mb': _rss_mb(),

@@ -232,8 +232,10 @@ class JacketClothNode(Node):
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
 
-    def _on_joint_state(self, raw):
-        arrived = time.perf_counter_ns()
+    def _on_joint_state(self, raw, info):
+        # Latency counts from the message's arrival in this process (the rmw's receive time,
+        # system clock), so time queued behind other callbacks is in it; without one, from now.
+        arrived = info.get('received_timestamp') or time.time_ns()
         try:
             msg = self._joint_states.read(raw)
         except cdr.DECODE_ERRORS as e:
@@ -254,8 +256,8 @@ class JacketClothNode(Node):
             self._warn('nan', 'non-finite bone pose: nothing published')
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
-            if key == 'tf':      # latency: the callback's start to /tf handed to DDS
-                self.pipeline.note_latency(time.perf_counter_ns() - arrived)
+            if key == 'tf':      # latency: arrival to /tf handed to DDS
+                self.pipeline.note_latency(time.time_ns() - arrived)
             self._record(self._topics[key][0], out, stamp_ns)
 
 
