@@ -181,7 +181,8 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     ``commands``: name -> (argv, the /tf topic it publishes on). All of them take the same
     messages over the same wall-clock interval, so a drift in this machine's speed (other
     guests on the host) reaches each alike. Returns name -> {cpu_us_per_message, start_s
-    (to its first /tf), answered, sent, latency_us_p99 (the node's diagnostics windows)}.
+    (to its first /tf), answered, sent, latency_by_status (each diagnostics status's p99
+    per window), latency_us_p99 (those of the only status, if one)}.
 
     The character's URDF is on /robot_description, latched, as robot_state_publisher offers
     it: the node does not wait out its robot_description_timeout for the shipped character.
@@ -202,7 +203,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     node = rclpy.create_node('jacket_cloth_speed_driver', context=ctx)
     first_tf = {}
     tf_count = dict.fromkeys(commands, 0)
-    latencies = []
+    latencies = {}                  # the diagnostics' status name -> p99 per window
 
     def counter(name):
         def on_tf(raw):
@@ -214,7 +215,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
         for status in msg.status:
             for kv in status.values:
                 if kv.key == 'latency_us_p99':
-                    latencies.append(float(kv.value))
+                    latencies.setdefault(status.name, []).append(float(kv.value))
     for name, (_, topic) in commands.items():
         node.create_subscription(TFMessage, topic, counter(name), 100, raw=True)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 10)
@@ -276,7 +277,9 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
         rclpy.shutdown(context=ctx)
     return {name: {'cpu_us_per_message': (cpu1[name] - cpu0[name]) / n * 1e6,
                    'start_s': first_tf[name] - started, 'answered': tf_count[name] - tf0[name],
-                   'sent': n, 'latency_us_p99': list(latencies)}
+                   'sent': n, 'latency_by_status': latencies,
+                   # with one node on /diagnostics, its windows
+                   'latency_us_p99': next(iter(latencies.values())) if len(latencies) == 1 else []}
             for name in commands}
 
 
