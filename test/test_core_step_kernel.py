@@ -89,3 +89,18 @@ def test_the_cached_step_is_marked_with_the_cloth_kernels_source_too():
     stamp = step_kernel.advance._cache._impl._locator.get_source_stamp()
     with open(kernel.__file__, 'rb') as f:
         assert hashlib.sha256(f.read()).digest() in stamp
+
+
+def test_every_module_with_cached_kernels_is_marked_by_all_kernel_files():
+    # A new kernel module left out of kernel_cache.KERNEL_FILES (or taking njit straight from
+    # numba) would be cached against its own file only again.
+    import pathlib
+    import re
+    from jacket_cloth_ros.core import kernel_cache
+    package = pathlib.Path(kernel_cache.__file__).parent.parent
+    with_kernels = {str(p) for p in package.rglob('*.py')
+                    if re.search(r'^@njit', p.read_text(), re.MULTILINE)}
+    assert with_kernels == set(kernel_cache.KERNEL_FILES)
+    for path in with_kernels:
+        text = pathlib.Path(path).read_text()
+        assert 'kernel_cache import njit' in text and 'from numba import njit' not in text, path
