@@ -10,6 +10,8 @@ any of them recompiles them all. The kernel modules take ``njit`` from here, so 
 are in place before their first ``@njit(cache=True)``.
 """
 
+import functools
+import hashlib
 import os
 
 from numba import njit
@@ -23,12 +25,18 @@ KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
     'ros/cdr.py', 'ros/marker_kernel.py'))
 
 
+@functools.lru_cache(maxsize=None)
+def _content_hash(path, mtime, size):        # read again only when the file changes
+    with open(path, 'rb') as f:
+        return hashlib.sha256(f.read()).digest()
+
+
 def kernels_stamp():
     """The content hashes of every file holding one of the package's kernels."""
     stamps = []
     for path in KERNEL_FILES:
         st = os.stat(path)
-        stamps.append(caching._hash_source_file(path, st.st_mtime, st.st_size))
+        stamps.append(_content_hash(path, st.st_mtime, st.st_size))
     return tuple(stamps)
 
 
