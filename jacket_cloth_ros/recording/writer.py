@@ -65,7 +65,6 @@ class SessionRecorder:
         self._last = None
         self._flush_period = flush_period_ns
         self._last_flush = None
-        self._pending = []                  # (topic, bytes, stamp) not yet in the writer
         self._queue = self._thread = self._error = None
         if background:
             self._queue = queue.SimpleQueue()
@@ -73,16 +72,14 @@ class SessionRecorder:
             self._thread.start()
 
     def _do(self, work, *args):
-        """Run ``work`` now, or hand it to the writer thread (in order), after the messages
-        waiting for their batch."""
-        if self._error is not None:
-            raise self._error
-        if self._pending and work != self._write_batch:
-            self._hand_over(flush=False)
+        """Run ``work`` now, or hand it to the writer thread (in order)."""
         if self._queue is None:
             work(*args)
-        else:
-            self._queue.put((work, args))
+            return
+        if self._error is not None:
+            raise self._error
+        self._queue.put((work, args))
+
     def _drain(self):
         while True:
             item = self._queue.get()
@@ -112,34 +109,20 @@ class SessionRecorder:
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
-        """Keep one message; a flush period's worth (by stamps) goes into the file at once.
+        self._do(self._write, topic, bytes(data), stamp_ns)
 
-        Why batches: one MCAP record made per message, 8 ms apart in a live node, cost 24 us
-        (cold caches); the same records made in a row cost a third of that.
-        """
-        if self._error is not None:
-            raise self._error
-        self._pending.append((topic, bytes(data), stamp_ns))
-        if self._last_flush is None:
-            self._last_flush = stamp_ns
-        elif abs(stamp_ns - self._last_flush) >= self._flush_period:
-            self._last_flush = stamp_ns
-            self._hand_over(flush=True)
-
-    def _hand_over(self, flush):
-        batch, self._pending = self._pending, []
-        self._do(self._write_batch, batch, flush)
-
-    def _write_batch(self, batch, flush):
-        for topic, data, stamp_ns in batch:
-            self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,
-                                     data=data, publish_time=stamp_ns,
-                                     sequence=self._counts[topic])
-            self._counts[topic] += 1
-            self._first = stamp_ns if self._first is None else min(self._first, stamp_ns)
-            self._last = stamp_ns if self._last is None else max(self._last, stamp_ns)
-        if flush:
+    def _write(self, topic, data, stamp_ns):
+        self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,
+                                 data=data, publish_time=stamp_ns,
+                                 sequence=self._counts[topic])
+        self._counts[topic] += 1
+        if self._first is None:
+            self._first = self._last_flush = stamp_ns
+        self._first = min(self._first, stamp_ns)
+        self._last = stamp_ns if self._last is None else max(self._last, stamp_ns)
+        if abs(stamp_ns - self._last_flush) >= self._flush_period:
             self._writer.flush()
+            self._last_flush = stamp_ns
 
     def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
         """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
@@ -148,8 +131,6 @@ class SessionRecorder:
             'parameters_json': json.dumps(parameters, sort_keys=True)})
 
     def close(self):
-        if self._pending and self._error is None and not self._file.closed:
-            self._hand_over(flush=False)
         if self._thread is not None:
             self._queue.put(None)
             self._thread.join()
