@@ -141,6 +141,14 @@ def test_latency_counts_from_the_messages_arrival_in_the_process(harness):
     assert h.node.pipeline._latencies[-1] >= 50_000_000
 
 
+def test_only_the_input_and_tf_keep_rclpys_qos_event_handlers(harness):
+    # The executor visits every handler at each wake-up; markers, diagnostics and wind have
+    # none (the peer warns), joint_states, /tf and /parameter_events keep rclpy's two each.
+    h = harness()
+    handlers = sorted(str(w.event_type).rsplit('.', 1)[-1] for w in h.node.waitables)
+    assert len(handlers) == 6, handlers
+
+
 BAD_INPUTS = [
     ('nan', ['l_knee'], [float('nan')]),
     ('inf', ['l_knee', 'r_knee'], [0.1, float('inf')]),
