@@ -199,6 +199,8 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert not bad.successful and 'wind' in bad.reason
     bad = h.node.set_parameters([Parameter('stretch_limit', value='glue')])[0]
     assert not bad.successful and 'hard_pass' in bad.reason
+    bad = h.node.set_parameters([Parameter('record_compression', value='gzip')])[0]
+    assert not bad.successful and 'lz4' in bad.reason
     ok = h.node.set_parameters([Parameter('stretch_limit', value='tethers'),
                                 Parameter('wind_gust', value=0.5)])
     assert all(r.successful for r in ok) and h.node.sim.params.stretch_limit == 'tethers'
@@ -287,6 +289,8 @@ def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
         assert config['urdf'].startswith('<?xml') and 'cloth:' in config['rig_yaml']
         assert 'tweed_jacket' in config['fabrics_yaml']
         assert '"record": "' + str(path) + '"' in config['parameters_json']
+        # Chunks in lz4 by default (record_compression): lower latency than zstd in the node.
+        assert {c.compression for c in summary.chunk_indexes} == {'lz4'}
         types = {'/tf': TFMessage, '/joint_states': JointState}
         for schema, channel, message in reader.iter_messages(topics=list(types)):
             msg = deserialize_message(message.data, types[channel.topic])

@@ -42,6 +42,9 @@ def test_replay_is_byte_identical_run_after_run(clip, tmp_path):
     # Other parameters give another file; a replay of a replay gives the same bones again.
     assert _replay(clip, tmp_path / 'iter3.mcap', '-p', 'fabric.iterations:=3') == 0
     assert (tmp_path / 'iter3.mcap').read_bytes() != a
+    assert _replay(clip, tmp_path / 'zstd.mcap', '-p', 'record_compression:=zstd') == 0
+    with open(tmp_path / 'zstd.mcap', 'rb') as f:
+        assert {c.compression for c in make_reader(f).get_summary().chunk_indexes} == {'zstd'}
     again = load_session(str(tmp_path / 'a' / 'out.mcap'))
     recorded = {m.log_time: m.data for m in again.recording.messages if m.topic == '/tf'}
     same = []
@@ -65,6 +68,8 @@ def test_replay_writes_what_the_node_records_and_an_independent_reader_decodes_i
             '/jacket_cloth_node/wind': 'geometry_msgs/msg/Vector3Stamped',
             '/parameter_events': 'rcl_interfaces/msg/ParameterEvent'}
         assert all('offered_qos_profiles' in c.metadata for c in summary.channels.values())
+        # Compressed as the node would have (record_compression, lz4 by default).
+        assert {c.compression for c in summary.chunk_indexes} == {'lz4'}
         meta = {m.name: m.metadata for m in reader.iter_metadata()}
         bag = yaml.safe_load(meta['rosbag2']['serialized_metadata'])
         assert bag['rosbag2_bagfile_information']['relative_file_paths'] == ['out.mcap']

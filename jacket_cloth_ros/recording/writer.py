@@ -24,6 +24,11 @@ _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
 # chunk until close (the MCAP summary), and 512 KB chunks (four a second at 120 Hz with
 # markers) grew the node by 10 MB an hour (bench speed --endurance 3600).
 CHUNK_BYTES = 8 * 1024 * 1024
+# Chunk compression by name (the node's record_compression parameter). lz4 makes files about
+# 1.4x zstd's, but a second's chunk compresses in well under half the time, and the node does it
+# in the callback that closes the chunk: lower latency windows (README, bench speed).
+COMPRESSIONS = {'lz4': CompressionType.LZ4, 'zstd': CompressionType.ZSTD,
+                'none': CompressionType.NONE}
 
 
 def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
@@ -41,13 +46,15 @@ def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    ``background``: the MCAP records and their compression are made by a writer thread, in
+    ``compression``: a key of COMPRESSIONS. ``background``: the MCAP records and their
+    compression are made by a writer thread, in
     the order they were handed over (the same file). The replay uses it: the compiled steps
     release the GIL, so the file is written on the second core meanwhile. A write error then
     shows at the next call or at ``close()``.
     """
 
-    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False):
+    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False,
+                 compression='zstd'):
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
@@ -55,7 +62,7 @@ class SessionRecorder:
         self._name = final_name or os.path.basename(path)     # as the bag will know it
         self._file = open(path, 'wb')
         self._writer = Writer(self._file, chunk_size=CHUNK_BYTES,
-                              compression=CompressionType.ZSTD)
+                              compression=COMPRESSIONS[compression])
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}

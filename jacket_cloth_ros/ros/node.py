@@ -185,7 +185,7 @@ class JacketClothNode(Node):
         if not path:
             return
         try:
-            self.recorder = SessionRecorder(path)
+            self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
             for topic, kind, qos in self._topics.values():
                 self.recorder.add_topic(topic, kind, qos)
             self.get_logger().info(f'recording the session to {path}')

@@ -10,6 +10,7 @@ from rcl_interfaces.msg import ParameterType as T
 
 from ..core.fabric import FABRIC_RANGES, Fabric
 from ..core.simulation import SOLVERS, STRETCH_LIMITS, SimParams
+from ..recording.writer import COMPRESSIONS
 
 # Parameters that map onto SimParams; the rest are the node's own or read at start.
 SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
@@ -65,6 +66,9 @@ NODE_PARAMETERS = {
     'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
     'record': (T.PARAMETER_STRING, '', None, False,
                'MCAP path to record the session to; empty: no recording'),
+    'record_compression': (T.PARAMETER_STRING, 'lz4', None, False,
+                           'MCAP chunk compression of the next recording: lz4 (fast, the '
+                           'default), zstd (files about 0.7x the size) or none'),
 }
 
 
@@ -108,6 +112,8 @@ def check_value(name, value):
         return f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}'
     if name == 'solver' and value not in SOLVERS:
         return f'solver must be one of {", ".join(SOLVERS)}'
+    if name == 'record_compression' and value not in COMPRESSIONS:
+        return f'record_compression must be one of {", ".join(COMPRESSIONS)}'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     if name == 'world_joint' and not value:

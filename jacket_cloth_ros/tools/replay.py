@@ -17,7 +17,8 @@ def replay(session, out_path):
     """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
     topics = output_topics(session)
     tmp = out_path + '.partial'
-    recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path), background=True)
+    recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path), background=True,
+                               compression=session.setup.values['record_compression'])
     try:
         for name, kind, qos in topics.values():
             recorder.add_topic(name, kind, qos)
