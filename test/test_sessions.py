@@ -246,6 +246,29 @@ def test_byte_templates_equal_the_field_by_field_encoding(make_sim):
                 cdr.marker_array(specs, stamp, 'base_link')
 
 
+def test_a_live_frame_prefix_change_renames_the_bones_on_the_next_tf(make_sim):
+    # The pipeline holds its /tf layout; a frame_prefix change must lay it out again.
+    from rclpy.serialization import deserialize_message
+    from tf2_msgs.msg import TFMessage
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    sim = make_sim()
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(sim.skeleton, sim.rig, fabrics,
+                           default_values(fabrics['tweed_jacket']))
+    names, pos = joint_state_content(sim.skeleton.joint_names, 'walk', 0.0)
+    frames = []
+    for k, prefix in enumerate(('', 'left/')):
+        pipe.apply({'frame_prefix': prefix})
+        stamp = 10 ** 9 + k * 10 ** 7
+        _, outputs = pipe.on_joint_state(JointStateContent(stamp, names, pos), stamp)
+        frames.append(deserialize_message(dict(outputs)['tf'], TFMessage).transforms[0])
+    assert [f.child_frame_id for f in frames] == ['jacket_r00_c00', 'left/jacket_r00_c00']
+
+
 def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_path):
     # The replay writes through a thread: same records in the same order, so the same bytes.
     from jacket_cloth_ros.recording.writer import SessionRecorder

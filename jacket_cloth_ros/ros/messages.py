@@ -46,12 +46,13 @@ def stamp_msg(stamp_ns):
 
 def tf_message(bones, stamp_ns, prefix=''):
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    return _tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(bones.poses,
-                                                                                stamp_ns)
+    return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(bones.poses,
+                                                                               stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
-def _tf_template(names, parents, prefix):
+def tf_template(names, parents, prefix):
+    """The TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
     return cdr.TfTemplate(names, parents, prefix)
 
 

@@ -54,9 +54,15 @@ class SessionPipeline:
         self._last_marker = None
         self._last_diag = None
         self._marker_reset = True
+        self._tf = self._tf_template()
         # Load the encoders' compiled parts now rather than on the first input's outputs.
-        messages.tf_message(self.sim.bones(), 0, self.values['frame_prefix'])
+        self._tf.encode(self.sim.bones().poses, 0)
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True)
+
+    def _tf_template(self):
+        # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
+        return messages.tf_template(tuple(self.sim.bone_names), tuple(self.sim.bone_parents),
+                                    self.values['frame_prefix'])
 
     def _fabric(self):
         return fabric_from(self.fabrics[self.values['fabric']], self.values)
@@ -70,6 +76,8 @@ class SessionPipeline:
             self.sim.set_fabric(self._fabric())
         if 'world_joint' in changes:
             self.sim.parser.set_world_joint(self.values['world_joint'])
+        if 'frame_prefix' in changes:
+            self._tf = self._tf_template()
 
     def note_latency(self, ns):
         """The live node's time from a JointState's arrival to its /tf going out."""
@@ -92,7 +100,7 @@ class SessionPipeline:
         bones = self.sim.bones()
         if not bones.finite:
             return []            # never a NaN on /tf (the simulation resets itself on one)
-        out = [('tf', messages.tf_message(bones, stamp_ns, self.values['frame_prefix']))]
+        out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
         rate = self.values['markers_rate']
         if rate > 0 and _due(self._last_marker, stamp_ns, rate):
             self._last_marker = stamp_ns
