@@ -46,11 +46,13 @@ def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    ``compression``: a key of COMPRESSIONS. ``background``: the MCAP records and their
-    compression are made by a writer thread, in
-    the order they were handed over (the same file). The replay uses it: the compiled steps
-    release the GIL, so the file is written on the second core meanwhile. A write error then
-    shows at the next call or at ``close()``.
+    ``compression``: a key of COMPRESSIONS; zstd, the smallest files, unless told (the node
+    and the replay pass the record_compression parameter).
+
+    ``background``: the MCAP records and their compression are made by a writer thread, in the
+    order they were handed over (the same file). The replay uses it: the compiled steps release
+    the GIL, so the file is written on the second core meanwhile. A write error then shows at
+    the next call or at ``close()``.
     """
 
     def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False,
