@@ -144,12 +144,6 @@ def _to_link(t, position, rotation, local_position, local_rotation):
 
 
 @njit(cache=True)
-def quats_from_matrices(rotations, out):
-    for b in range(rotations.shape[0]):
-        quat_from_matrix(rotations[b], out[b])
-
-
-@njit(cache=True)
 def twist_angle(rotation, axis):
     """The twist part of ``rotation`` about the unit ``axis`` (swing-twist split), radians."""
     w = np.sqrt(max(0.0, 1.0 + rotation[0, 0] + rotation[1, 1] + rotation[2, 2])) / 2

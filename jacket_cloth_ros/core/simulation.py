@@ -198,7 +198,8 @@ class JacketSimulation:
                    rig.pin_below, rig.pin_below_local, rig.pin_weight,
                    rig.collider_links, rig.collider_centers, rig.collider_rotations,
                    rig.collider_radii, rig.capsule_links, rig.capsule_ends, rig.capsule_radii,
-                   rig.plane_links, rig.plane_points, rig.plane_normals, rig.free, rig.con_a, rig.con_b, rig.con_rest))
+                   rig.plane_links, rig.plane_points, rig.plane_normals, rig.free, rig.con_a,
+                   rig.con_b, rig.con_rest))
 
     def _tuned_arrays(self):
         """The fabric's and parameters' values in step_kernel.advance's order."""
@@ -290,14 +291,12 @@ class JacketSimulation:
                                  rig.pin_below_local, rig.pin_weight, top, ref)
         return top, ref
 
-    def _solve_layer(self, links, full=True):
-        return self.rig.layer.solve(links, full) if self.rig.layer else None
-
     @property
     def layer(self):
         """M1/M2 bones for the current skeleton pose (solved once per pose, on demand)."""
         if self._layer is None or self._layer[0] is not self.links:
-            self._layer = (self.links, self._solve_layer(self.links))
+            self._layer = (self.links, self.rig.layer.solve(self.links) if self.rig.layer
+                           else None)
         return self._layer[1]
 
     def hood_anchor(self, links):

@@ -105,10 +105,17 @@ def hood_step(links, hood_link, pivot, length, p, pp, acc, dt, damping):
 
 
 @njit(cache=True)
+def _lost_per(share, exponent):
+    """simulation.per_step of one share: lost per design step, as lost per step ``exponent``
+    times as long."""
+    return share if exponent == 1.0 else 1.0 - (1.0 - share) ** exponent
+
+
+@njit(cache=True)
 def _per_substep(share, exponent, out):
     """simulation.per_step into ``out``: a share lost per design step, per shorter step."""
     for i in range(share.shape[0]):
-        out[i] = share[i] if exponent == 1.0 else 1.0 - (1.0 - share[i]) ** exponent
+        out[i] = _lost_per(share[i], exponent)
 
 
 @njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
@@ -156,8 +163,7 @@ def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns,
     damp = np.empty(nv)
     damp_for = 0
     contact_damp = 0.0
-    hood_damp = hood_damping if design_exponent == 1.0 else (
-        1.0 - (1.0 - hood_damping) ** design_exponent)
+    hood_damp = _lost_per(hood_damping, design_exponent)
     dt = dt_ns * 1e-9
     for step in range(n):
         last = step == n - 1
@@ -214,8 +220,7 @@ def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns,
         if substeps != damp_for:
             e = design_exponent / substeps
             _per_substep(damping, e, damp)
-            contact_damp = contact_damping if e == 1.0 else (
-                1.0 - (1.0 - contact_damping) ** e)
+            contact_damp = _lost_per(contact_damping, e)
             damp_for = substeps
         collider_poses(links, collider_links, centers_local, rotations_local, capsule_links,
                        capsule_ends, centers, axes, cap_a, cap_b)

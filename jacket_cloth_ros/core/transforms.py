@@ -75,11 +75,6 @@ def quat_slerp(q0, q1, t):
     return (np.sin((1 - t) * theta) * q0 + np.sin(t * theta) * q1) / s
 
 
-def rotation_angle(r):
-    """Angle (rad) of a 3x3 rotation."""
-    return float(np.arccos(np.clip((np.trace(r) - 1.0) * 0.5, -1.0, 1.0)))
-
-
 def make_transform(rotation=None, translation=None):
     t = np.eye(4)
     if rotation is not None:
