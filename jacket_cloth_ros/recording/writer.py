@@ -14,9 +14,9 @@ import queue
 import threading
 
 import yaml
-from mcap.writer import CompressionType, Writer
 
 from .definitions import ros2msg_schema
+from .mcap_file import McapWriter
 
 SESSION_CONFIG = 'jacket_cloth_session'     # the MCAP metadata record of a session's setup
 _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
@@ -27,8 +27,7 @@ CHUNK_BYTES = 8 * 1024 * 1024
 # Chunk compression by name (the node's record_compression parameter). lz4 makes files about
 # 1.4x zstd's, but a second's chunk compresses in well under half the time, and the node does it
 # in the callback that closes the chunk: lower latency windows (README, bench speed).
-COMPRESSIONS = {'lz4': CompressionType.LZ4, 'zstd': CompressionType.ZSTD,
-                'none': CompressionType.NONE}
+COMPRESSIONS = {'lz4': 'lz4', 'zstd': 'zstd', 'none': ''}
 
 
 def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
@@ -63,8 +62,8 @@ class SessionRecorder:
         self.path = path
         self._name = final_name or os.path.basename(path)     # as the bag will know it
         self._file = open(path, 'wb')
-        self._writer = Writer(self._file, chunk_size=CHUNK_BYTES,
-                              compression=COMPRESSIONS[compression])
+        self._writer = McapWriter(self._file, compression=COMPRESSIONS[compression],
+                                  chunk_bytes=CHUNK_BYTES)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}
@@ -118,7 +117,10 @@ class SessionRecorder:
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
-        self._do(self._write, topic, bytes(data), stamp_ns)
+        if self._queue is None:
+            self._write(topic, data, stamp_ns)      # copied into the chunk right away
+        else:
+            self._do(self._write, topic, bytes(data), stamp_ns)   # the caller may reuse data
 
     def _write(self, topic, data, stamp_ns):
         self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,

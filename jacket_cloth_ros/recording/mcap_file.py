@@ -1,0 +1,208 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A chunked MCAP writer whose per-message path is one struct pack and one buffer append.
+
+Why not ``mcap.writer.Writer``: it builds a ``Message`` record object and writes it field by
+field through a BytesIO, about 20 us a message here, which made the recording 61-86 us of each
+replayed input (a 60 Hz walk: JointState, /tf, markers every other input). The rare records
+(header, schemas, channels, chunk and summary records) still come from ``mcap.records``, so
+the file layout is the library's; only messages and their chunk are packed here.
+"""
+
+import struct
+import zlib
+
+from mcap.data_stream import RecordBuilder
+from mcap.opcode import Opcode
+from mcap.records import (
+    Channel, ChunkIndex, DataEnd, Footer, Header, Metadata, MetadataIndex,
+    Schema, Statistics, SummaryOffset)
+
+try:
+    import lz4.frame
+except ImportError:             # the mcap package's own fallbacks: the codec is optional
+    lz4 = None
+try:
+    import zstandard
+except ImportError:
+    zstandard = None
+
+MAGIC = b'\x89MCAP0\r\n'
+_MESSAGE = struct.Struct('<BQHIQQ')         # opcode, length, channel, sequence, log, publish
+_CHUNK_HEAD = struct.Struct('<BQQQQI')      # opcode, length, start, end, size, crc
+_FOOTER_HEAD = struct.Struct('<BQQQ')
+
+
+def _compressor(name):
+    if name == 'lz4':
+        if lz4 is None:
+            raise ValueError('lz4 compression needs the lz4 package')
+        return lz4.frame.compress
+    if name == 'zstd':
+        if zstandard is None:
+            raise ValueError('zstd compression needs the zstandard package')
+        # Level 1, not the library's 3: 1.57 against 2.40 ms a 1.2 MB chunk of a replayed walk,
+        # 0.243 against 0.240 of its size (one run).
+        return zstandard.ZstdCompressor(level=1).compress
+    if name == '':
+        return None
+    raise ValueError(f'unknown MCAP compression {name!r} (lz4, zstd or "")')
+
+
+def _message_index(channel_id, records):
+    """A MessageIndex record: (log time, offset in the chunk) of each message, one pack."""
+    flat = [value for record in records for value in record]
+    return (struct.pack('<BQHI', Opcode.MESSAGE_INDEX, 6 + 8 * len(flat), channel_id,
+                        8 * len(flat))
+            + struct.pack(f'<{len(flat)}Q', *flat))
+
+
+class McapWriter:
+    """Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
+    summary (schemas, channels, statistics, chunk and metadata indexes) and the footer."""
+
+    def __init__(self, stream, compression='lz4', chunk_bytes=8 * 1024 * 1024):
+        self._stream = stream
+        self._compression = compression
+        self._compress = _compressor(compression)
+        self._chunk_bytes = chunk_bytes
+        self._records = RecordBuilder()
+        self._schemas = []
+        self._channels = []
+        self._chunk_indexes = []
+        self._metadata_indexes = []
+        self._channel_counts = {}
+        self._messages = 0
+        self._start = self._end = 0
+        self._new_chunk()
+
+    def _new_chunk(self):
+        self._chunk = bytearray()
+        self._index = {}                    # channel id -> [(log time, offset in chunk), ...]
+        self._chunk_start = self._chunk_end = None
+
+    def _emit(self):
+        self._stream.write(self._records.end())
+
+    def start(self, profile='', library='jacket_cloth_ros'):
+        self._stream.write(MAGIC)
+        Header(profile=profile, library=library).write(self._records)
+        self._emit()
+
+    def register_schema(self, name, encoding, data):
+        schema = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
+        self._schemas.append(schema)
+        schema.write(self._records)
+        self._emit()
+        return schema.id
+
+    def register_channel(self, topic, message_encoding, schema_id, metadata=None):
+        channel = Channel(id=len(self._channels) + 1, topic=topic, schema_id=schema_id,
+                          message_encoding=message_encoding, metadata=dict(metadata or {}))
+        self._channels.append(channel)
+        self._channel_counts[channel.id] = 0
+        channel.write(self._records)
+        self._emit()
+        return channel.id
+
+    def add_message(self, channel_id, log_time, data, publish_time, sequence=0):
+        chunk = self._chunk
+        offset = len(chunk)
+        chunk += _MESSAGE.pack(Opcode.MESSAGE, 22 + len(data), channel_id, sequence, log_time,
+                               publish_time)
+        chunk += data
+        index = self._index.get(channel_id)
+        if index is None:
+            index = self._index[channel_id] = []
+        index.append((log_time, offset))
+        self._channel_counts[channel_id] += 1
+        if self._chunk_start is None:
+            self._chunk_start = self._chunk_end = log_time
+        elif log_time < self._chunk_start:
+            self._chunk_start = log_time
+        elif log_time > self._chunk_end:
+            self._chunk_end = log_time
+        if len(chunk) > self._chunk_bytes:
+            self._finish_chunk()
+
+    def add_metadata(self, name, data):
+        offset = self._stream.tell()
+        Metadata(name=name, metadata=dict(data)).write(self._records)
+        self._metadata_indexes.append(
+            MetadataIndex(offset=offset, length=self._records.count, name=name))
+        self._emit()
+
+    def flush(self):
+        """Close the chunk in progress (if any) into the file and flush the stream."""
+        self._finish_chunk()
+        self._stream.flush()
+
+    def _finish_chunk(self):
+        if self._chunk_start is None:
+            return
+        raw = self._chunk                   # the codecs and the file take the buffer as it is
+        packed = self._compress(raw) if self._compress else raw
+        compression = self._compression.encode()
+        start = self._stream.tell()
+        length = 8 + 8 + 8 + 4 + 4 + len(compression) + 8 + len(packed)
+        self._stream.write(_CHUNK_HEAD.pack(Opcode.CHUNK, length, self._chunk_start,
+                                            self._chunk_end, len(raw), zlib.crc32(raw)))
+        self._stream.write(struct.pack('<I', len(compression)) + compression)
+        self._stream.write(struct.pack('<Q', len(packed)))
+        self._stream.write(packed)
+        indexes_at = self._stream.tell()
+        offsets = {}
+        indexes = bytearray()
+        for channel_id, records in self._index.items():
+            offsets[channel_id] = indexes_at + len(indexes)
+            indexes += _message_index(channel_id, records)
+        self._stream.write(indexes)
+        self._chunk_indexes.append(ChunkIndex(
+            message_start_time=self._chunk_start, message_end_time=self._chunk_end,
+            chunk_start_offset=start, chunk_length=9 + length,
+            message_index_offsets=offsets, message_index_length=len(indexes),
+            compression=self._compression, compressed_size=len(packed),
+            uncompressed_size=len(raw)))
+        if self._messages == 0:
+            self._start = self._chunk_start
+        self._start = min(self._start, self._chunk_start)
+        self._end = max(self._end, self._chunk_end)
+        self._messages += sum(len(r) for r in self._index.values())
+        self._new_chunk()
+
+    def finish(self):
+        """Write the last chunk, the summary and the footer; the stream stays open."""
+        self._finish_chunk()
+        DataEnd(data_section_crc=0).write(self._records)
+        self._emit()
+        summary_start = self._stream.tell()
+        summary = RecordBuilder()
+        offsets = []
+
+        def group(opcode, records):
+            begin = summary.count
+            for record in records:
+                record.write(summary)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=summary_start + begin,
+                                         group_length=summary.count - begin))
+
+        group(Opcode.SCHEMA, self._schemas)
+        group(Opcode.CHANNEL, self._channels)
+        group(Opcode.STATISTICS, [Statistics(
+            message_count=self._messages, schema_count=len(self._schemas),
+            channel_count=len(self._channels), attachment_count=0,
+            metadata_count=len(self._metadata_indexes), chunk_count=len(self._chunk_indexes),
+            message_start_time=self._start, message_end_time=self._end,
+            channel_message_counts=dict(self._channel_counts))])
+        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
+        group(Opcode.METADATA_INDEX, self._metadata_indexes)
+        offsets_start = summary_start + summary.count
+        for offset in offsets:
+            offset.write(summary)
+        data = summary.end()
+        crc = zlib.crc32(_FOOTER_HEAD.pack(Opcode.FOOTER, 20, summary_start, offsets_start),
+                         zlib.crc32(data))
+        self._stream.write(data)
+        Footer(summary_start=summary_start, summary_offset_start=offsets_start,
+               summary_crc=crc).write(self._records)
+        self._emit()
+        self._stream.write(MAGIC)
