@@ -284,8 +284,11 @@ def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_
         files.append(path.read_bytes())
     assert files[0] == files[1] and len(files[0]) > 10_000
     broken = SessionRecorder(str(tmp_path / 'broken.mcap'), background=True)
-    broken.write('/not_added', b'\0' * 8, 1)          # no such topic: fails in the thread
-    with pytest.raises(KeyError):
+    broken.add_topic('/joint_states', 'sensor_msgs/msg/JointState')
+    broken._writer._compress = lambda raw: 1 / 0      # a codec failing in the writer thread
+    for k in range(30):                                 # three chunks (flushed once a second)
+        broken.write('/joint_states', b'\0' * 100, k * 10 ** 8)
+    with pytest.raises(ZeroDivisionError):
         broken.close()
 
 

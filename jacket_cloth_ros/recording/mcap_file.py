@@ -58,14 +58,21 @@ def _message_index(channel_id, records):
 
 class McapWriter:
     """Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
-    summary (schemas, channels, statistics, chunk and metadata indexes) and the footer."""
+    summary (schemas, channels, statistics, chunk and metadata indexes) and the footer.
 
-    def __init__(self, stream, compression='lz4', chunk_bytes=8 * 1024 * 1024):
+    Messages are packed in the caller's thread. Everything that touches the stream (a closed
+    chunk's compression, CRC and write; the other records) goes through ``run(work, *args)``,
+    which runs it now by default; a recorder can pass one that hands it to a writer thread in
+    order, so the caller never waits for a chunk's compression.
+    """
+
+    def __init__(self, stream, compression='lz4', chunk_bytes=8 * 1024 * 1024, run=None):
         self._stream = stream
         self._compression = compression
         self._compress = _compressor(compression)
         self._chunk_bytes = chunk_bytes
-        self._records = RecordBuilder()
+        self._run = run or (lambda work, *args: work(*args))
+        self._records = RecordBuilder()         # only in ``run``'s work
         self._schemas = []
         self._channels = []
         self._chunk_indexes = []
@@ -80,19 +87,19 @@ class McapWriter:
         self._index = {}                    # channel id -> [(log time, offset in chunk), ...]
         self._chunk_start = self._chunk_end = None
 
-    def _emit(self):
+    def _write_records(self, *records):
+        for record in records:
+            record.write(self._records)
         self._stream.write(self._records.end())
 
     def start(self, profile='', library='jacket_cloth_ros'):
-        self._stream.write(MAGIC)
-        Header(profile=profile, library=library).write(self._records)
-        self._emit()
+        self._run(self._stream.write, MAGIC)
+        self._run(self._write_records, Header(profile=profile, library=library))
 
     def register_schema(self, name, encoding, data):
         schema = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
         self._schemas.append(schema)
-        schema.write(self._records)
-        self._emit()
+        self._run(self._write_records, schema)
         return schema.id
 
     def register_channel(self, topic, message_encoding, schema_id, metadata=None):
@@ -100,8 +107,7 @@ class McapWriter:
                           message_encoding=message_encoding, metadata=dict(metadata or {}))
         self._channels.append(channel)
         self._channel_counts[channel.id] = 0
-        channel.write(self._records)
-        self._emit()
+        self._run(self._write_records, channel)
         return channel.id
 
     def add_message(self, channel_id, log_time, data, publish_time, sequence=0):
@@ -122,58 +128,72 @@ class McapWriter:
         elif log_time > self._chunk_end:
             self._chunk_end = log_time
         if len(chunk) > self._chunk_bytes:
-            self._finish_chunk()
+            self._close_chunk()
 
     def add_metadata(self, name, data):
+        self._run(self._write_metadata, Metadata(name=name, metadata=dict(data)))
+
+    def _write_metadata(self, metadata):
         offset = self._stream.tell()
-        Metadata(name=name, metadata=dict(data)).write(self._records)
+        metadata.write(self._records)
         self._metadata_indexes.append(
-            MetadataIndex(offset=offset, length=self._records.count, name=name))
-        self._emit()
+            MetadataIndex(offset=offset, length=self._records.count, name=metadata.name))
+        self._stream.write(self._records.end())
 
     def flush(self):
         """Close the chunk in progress (if any) into the file and flush the stream."""
-        self._finish_chunk()
-        self._stream.flush()
+        self._close_chunk()
+        self._run(self._stream.flush)
 
-    def _finish_chunk(self):
+    def _close_chunk(self):
         if self._chunk_start is None:
             return
-        raw = self._chunk                   # the codecs and the file take the buffer as it is
+        start, end = self._chunk_start, self._chunk_end
+        self._start = start if self._messages == 0 else min(self._start, start)
+        self._end = max(self._end, end)
+        self._messages += sum(len(r) for r in self._index.values())
+        self._run(self._write_chunk, self._chunk, self._index, start, end)
+        self._new_chunk()
+
+    def _write_chunk(self, raw, message_indexes, start, end):
         packed = self._compress(raw) if self._compress else raw
         compression = self._compression.encode()
-        start = self._stream.tell()
+        at = self._stream.tell()
         length = 8 + 8 + 8 + 4 + 4 + len(compression) + 8 + len(packed)
-        self._stream.write(_CHUNK_HEAD.pack(Opcode.CHUNK, length, self._chunk_start,
-                                            self._chunk_end, len(raw), zlib.crc32(raw)))
+        self._stream.write(_CHUNK_HEAD.pack(Opcode.CHUNK, length, start, end, len(raw),
+                                            zlib.crc32(raw)))
         self._stream.write(struct.pack('<I', len(compression)) + compression)
         self._stream.write(struct.pack('<Q', len(packed)))
         self._stream.write(packed)
         indexes_at = self._stream.tell()
         offsets = {}
         indexes = bytearray()
-        for channel_id, records in self._index.items():
+        for channel_id, records in message_indexes.items():
             offsets[channel_id] = indexes_at + len(indexes)
             indexes += _message_index(channel_id, records)
         self._stream.write(indexes)
         self._chunk_indexes.append(ChunkIndex(
-            message_start_time=self._chunk_start, message_end_time=self._chunk_end,
-            chunk_start_offset=start, chunk_length=9 + length,
-            message_index_offsets=offsets, message_index_length=len(indexes),
-            compression=self._compression, compressed_size=len(packed),
-            uncompressed_size=len(raw)))
-        if self._messages == 0:
-            self._start = self._chunk_start
-        self._start = min(self._start, self._chunk_start)
-        self._end = max(self._end, self._chunk_end)
-        self._messages += sum(len(r) for r in self._index.values())
-        self._new_chunk()
+            message_start_time=start, message_end_time=end, chunk_start_offset=at,
+            chunk_length=9 + length, message_index_offsets=offsets,
+            message_index_length=len(indexes), compression=self._compression,
+            compressed_size=len(packed), uncompressed_size=len(raw)))
 
     def finish(self):
-        """Write the last chunk, the summary and the footer; the stream stays open."""
-        self._finish_chunk()
-        DataEnd(data_section_crc=0).write(self._records)
-        self._emit()
+        """Write the last chunk, the summary and the footer (through ``run``, after all else);
+        the stream stays open."""
+        self._close_chunk()
+        statistics = Statistics(
+            message_count=self._messages, schema_count=len(self._schemas),
+            channel_count=len(self._channels), attachment_count=0,
+            metadata_count=0, chunk_count=0, message_start_time=self._start,
+            message_end_time=self._end, channel_message_counts=dict(self._channel_counts))
+        self._run(self._write_summary, statistics)
+
+    def _write_summary(self, statistics):
+        # The chunk and metadata counts are the writer side's: complete only here.
+        statistics.chunk_count = len(self._chunk_indexes)
+        statistics.metadata_count = len(self._metadata_indexes)
+        self._write_records(DataEnd(data_section_crc=0))
         summary_start = self._stream.tell()
         summary = RecordBuilder()
         offsets = []
@@ -187,12 +207,7 @@ class McapWriter:
 
         group(Opcode.SCHEMA, self._schemas)
         group(Opcode.CHANNEL, self._channels)
-        group(Opcode.STATISTICS, [Statistics(
-            message_count=self._messages, schema_count=len(self._schemas),
-            channel_count=len(self._channels), attachment_count=0,
-            metadata_count=len(self._metadata_indexes), chunk_count=len(self._chunk_indexes),
-            message_start_time=self._start, message_end_time=self._end,
-            channel_message_counts=dict(self._channel_counts))])
+        group(Opcode.STATISTICS, [statistics])
         group(Opcode.CHUNK_INDEX, self._chunk_indexes)
         group(Opcode.METADATA_INDEX, self._metadata_indexes)
         offsets_start = summary_start + summary.count
@@ -202,7 +217,6 @@ class McapWriter:
         crc = zlib.crc32(_FOOTER_HEAD.pack(Opcode.FOOTER, 20, summary_start, offsets_start),
                          zlib.crc32(data))
         self._stream.write(data)
-        Footer(summary_start=summary_start, summary_offset_start=offsets_start,
-               summary_crc=crc).write(self._records)
-        self._emit()
+        self._write_records(Footer(summary_start=summary_start,
+                                   summary_offset_start=offsets_start, summary_crc=crc))
         self._stream.write(MAGIC)

@@ -48,10 +48,12 @@ class SessionRecorder:
     ``compression``: a key of COMPRESSIONS; zstd, the smallest files, unless told (the node
     and the replay pass the record_compression parameter).
 
-    ``background``: the MCAP records and their compression are made by a writer thread, in the
-    order they were handed over (the same file). The replay uses it: the compiled steps release
-    the GIL, so the file is written on the second core meanwhile. A write error then shows at
-    the next call or at ``close()``.
+    ``background``: messages are still packed into the open chunk by the caller, but each
+    closed chunk's compression and write (and every other record) is done by a writer thread,
+    in order (the same file). The replay uses it: compression and file writes release the GIL,
+    so they run on the second core. One hand-over per chunk: handing over each message cost
+    the replay more CPU in thread switches than the writing itself. A write error then shows
+    at the next chunk or at ``close()``.
     """
 
     def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False,
@@ -62,8 +64,13 @@ class SessionRecorder:
         self.path = path
         self._name = final_name or os.path.basename(path)     # as the bag will know it
         self._file = open(path, 'wb')
+        self._queue = self._thread = self._error = None
+        if background:
+            self._queue = queue.SimpleQueue()
+            self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
+            self._thread.start()
         self._writer = McapWriter(self._file, compression=COMPRESSIONS[compression],
-                                  chunk_bytes=CHUNK_BYTES)
+                                  chunk_bytes=CHUNK_BYTES, run=self._do)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}
@@ -73,11 +80,7 @@ class SessionRecorder:
         self._last = None
         self._flush_period = flush_period_ns
         self._last_flush = None
-        self._queue = self._thread = self._error = None
-        if background:
-            self._queue = queue.SimpleQueue()
-            self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
-            self._thread.start()
+        self._closed = False
 
     def _do(self, work, *args):
         """Run ``work`` now, or hand it to the writer thread (in order)."""
@@ -100,9 +103,6 @@ class SessionRecorder:
                     self._error = e
 
     def add_topic(self, topic, type_name, qos_yaml=None):
-        self._do(self._add_topic, topic, type_name, qos_yaml)
-
-    def _add_topic(self, topic, type_name, qos_yaml):
         if topic in self._channels:
             return
         if type_name not in self._schemas:
@@ -117,12 +117,7 @@ class SessionRecorder:
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
-        if self._queue is None:
-            self._write(topic, data, stamp_ns)      # copied into the chunk right away
-        else:
-            self._do(self._write, topic, bytes(data), stamp_ns)   # the caller may reuse data
-
-    def _write(self, topic, data, stamp_ns):
+        """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
         self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,
                                  data=data, publish_time=stamp_ns,
                                  sequence=self._counts[topic])
@@ -137,23 +132,26 @@ class SessionRecorder:
 
     def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
         """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
-        self._do(self._writer.add_metadata, SESSION_CONFIG, {
+        self._writer.add_metadata(SESSION_CONFIG, {
             'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
             'parameters_json': json.dumps(parameters, sort_keys=True)})
 
     def close(self):
-        if self._thread is not None:
-            self._queue.put(None)
-            self._thread.join()
-            self._thread = None
-            if self._error is not None:
-                self._file.close()
-                raise self._error
-        if self._file.closed:
+        if self._closed:
             return
-        self._writer.add_metadata('rosbag2', {'serialized_metadata': self._bag_metadata()})
-        self._writer.finish()
-        self._file.close()
+        self._closed = True
+        try:
+            if self._error is None:
+                self._writer.add_metadata('rosbag2',
+                                          {'serialized_metadata': self._bag_metadata()})
+                self._writer.finish()
+        finally:
+            if self._thread is not None:
+                self._queue.put(None)
+                self._thread.join()
+            self._file.close()
+        if self._error is not None:
+            raise self._error
 
     def _bag_metadata(self):
         start = self._first or 0
