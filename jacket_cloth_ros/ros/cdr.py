@@ -236,9 +236,11 @@ class MarkerTemplate(_Template):
         super().__init__(w, stamps)
         self._dst, self._src = np.concatenate(dst), np.concatenate(src)  # the mesh has points
 
-    def encode(self, poses, points, stamp_ns):
-        """``poses`` (pose_rows, 10) and ``points`` (any, 3), as messages.marker_values."""
-        self._f64[self._dst] = np.concatenate((poses.ravel(), points.ravel()))[self._src]
+    def encode(self, fill, arguments, stamp_ns):
+        """The values written by ``fill(*arguments, src, dst, doubles)``: it makes the pose and
+        point tables (as messages.marker_values) and scatters ``doubles[dst] = tables[src]``
+        (marker_kernel.fill_markers)."""
+        fill(*arguments, self._src, self._dst, self._f64)
         return self._bytes(stamp_ns)
 
 

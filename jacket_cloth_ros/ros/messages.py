@@ -110,16 +110,19 @@ def marker_layout(rig, layer_bones, reset):
 def marker_values(sim):
     """(poses, points): the pose table (marker_kernel.shape_poses) and the point table (the
     cloth's vertices, the hood's anchor and particle, the layer bones' pivots, their tips)."""
-    c = sim.collider_frames(sim.links)
-    poses = np.empty((marker_kernel.shape_count(sim.rig), marker_kernel.POSE_WIDTH))
-    marker_kernel.shape_poses(c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b,
-                              c.capsule_radii, c.plane_points, c.plane_normals, sim.hood_p,
-                              poses)
-    anchor, _ = sim.hood_anchor(sim.links)
-    parts = [sim.x, anchor[None], sim.hood_p[None]]
-    if sim.layer is not None:
-        parts += [sim.layer.positions, sim.layer.tips]
-    return poses, np.concatenate(parts)
+    table, rows = marker_kernel.marker_table(*_marker_arguments(sim))
+    width = marker_kernel.POSE_WIDTH
+    return table[:rows * width].reshape(rows, width), table[rows * width:].reshape(-1, 3)
+
+
+def _marker_arguments(sim):
+    rig, layer = sim.rig, sim.layer
+    empty = np.empty((0, 3))
+    return (sim.links, sim.root, rig.collider_links, rig.collider_centers,
+            rig.collider_rotations, rig.collider_radii, rig.capsule_links, rig.capsule_ends,
+            rig.capsule_radii, rig.plane_links, rig.plane_points, rig.plane_normals,
+            rig.hood.link, rig.hood.pivot, sim.x, sim.hood_p,
+            empty if layer is None else layer.positions, empty if layer is None else layer.tips)
 
 
 def _layer_bones(sim):
@@ -144,8 +147,7 @@ def marker_specs(sim, reset=False):
 def marker_array(sim, stamp_ns, frame, reset=False):
     """The MarkerArray's CDR bytes: its values written into a template laid out once."""
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
-    poses, points = marker_values(sim)
-    return template.encode(poses, points, stamp_ns)
+    return template.encode(marker_kernel.fill_markers, _marker_arguments(sim), stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
