@@ -118,14 +118,15 @@ class SessionRecorder:
 
     def write(self, topic, data, stamp_ns):
         """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
-        self._writer.add_message(channel_id=self._channels[topic], log_time=stamp_ns,
-                                 data=data, publish_time=stamp_ns,
-                                 sequence=self._counts[topic])
-        self._counts[topic] += 1
+        sequence = self._counts[topic]          # positional: this runs for every message
+        self._writer.add_message(self._channels[topic], stamp_ns, data, stamp_ns, sequence)
+        self._counts[topic] = sequence + 1
         if self._first is None:
-            self._first = self._last_flush = stamp_ns
-        self._first = min(self._first, stamp_ns)
-        self._last = stamp_ns if self._last is None else max(self._last, stamp_ns)
+            self._first = self._last = self._last_flush = stamp_ns
+        elif stamp_ns > self._last:
+            self._last = stamp_ns
+        elif stamp_ns < self._first:
+            self._first = stamp_ns
         if abs(stamp_ns - self._last_flush) >= self._flush_period:
             self._writer.flush()
             self._last_flush = stamp_ns
