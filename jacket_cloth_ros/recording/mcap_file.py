@@ -2,7 +2,7 @@
 """A chunked MCAP writer whose per-message path is one struct pack and one buffer append.
 
 Why not ``mcap.writer.Writer``: it builds a ``Message`` record object and writes it field by
-field through a BytesIO, about 20 us a message here, which made the recording 61-86 us of each
+field through a BytesIO, which made the recording 61 (uncompressed) to 86 us (lz4) of each
 replayed input (a 60 Hz walk: JointState, /tf, markers every other input). The rare records
 (header, schemas, channels, chunk and summary records) still come from ``mcap.records``, so
 the file layout is the library's; only messages and their chunk are packed here.
