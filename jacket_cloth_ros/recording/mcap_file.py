@@ -77,9 +77,8 @@ class McapWriter:
         self._channels = []
         self._chunk_indexes = []
         self._metadata_indexes = []
-        self._channel_counts = {}
-        self._messages = 0
-        self._start = self._end = 0
+        self.counts = {}                        # channel id -> its messages so far
+        self._start = self._end = None          # log times of the closed chunks' messages
         self._new_chunk()
 
     def _new_chunk(self):
@@ -106,7 +105,7 @@ class McapWriter:
         channel = Channel(id=len(self._channels) + 1, topic=topic, schema_id=schema_id,
                           message_encoding=message_encoding, metadata=dict(metadata or {}))
         self._channels.append(channel)
-        self._channel_counts[channel.id] = 0
+        self.counts[channel.id] = 0
         self._run(self._write_records, channel)
         return channel.id
 
@@ -120,7 +119,7 @@ class McapWriter:
         if index is None:
             index = self._index[channel_id] = []
         index.append((log_time, offset))
-        self._channel_counts[channel_id] += 1
+        self.counts[channel_id] += 1
         if self._chunk_start is None:
             self._chunk_start = self._chunk_end = log_time
         elif log_time < self._chunk_start:
@@ -129,6 +128,14 @@ class McapWriter:
             self._chunk_end = log_time
         if len(chunk) > self._chunk_bytes:
             self._close_chunk()
+
+    def time_range(self):
+        """(first, last) log time of the messages so far, or None before the first."""
+        spans = [s for s in ((self._start, self._end), (self._chunk_start, self._chunk_end))
+                 if s[0] is not None]
+        if not spans:
+            return None
+        return min(s[0] for s in spans), max(s[1] for s in spans)
 
     def add_metadata(self, name, data):
         self._run(self._write_metadata, Metadata(name=name, metadata=dict(data)))
@@ -149,9 +156,7 @@ class McapWriter:
         if self._chunk_start is None:
             return
         start, end = self._chunk_start, self._chunk_end
-        self._start = start if self._messages == 0 else min(self._start, start)
-        self._end = max(self._end, end)
-        self._messages += sum(len(r) for r in self._index.values())
+        self._start, self._end = self.time_range()
         self._run(self._write_chunk, self._chunk, self._index, start, end)
         self._new_chunk()
 
@@ -182,11 +187,12 @@ class McapWriter:
         """Write the last chunk, the summary and the footer (through ``run``, after all else);
         the stream stays open."""
         self._close_chunk()
+        first, last = self.time_range() or (0, 0)
         statistics = Statistics(
-            message_count=self._messages, schema_count=len(self._schemas),
+            message_count=sum(self.counts.values()), schema_count=len(self._schemas),
             channel_count=len(self._channels), attachment_count=0,
-            metadata_count=0, chunk_count=0, message_start_time=self._start,
-            message_end_time=self._end, channel_message_counts=dict(self._channel_counts))
+            metadata_count=0, chunk_count=0, message_start_time=first,
+            message_end_time=last, channel_message_counts=dict(self.counts))
         self._run(self._write_summary, statistics)
 
     def _write_summary(self, statistics):

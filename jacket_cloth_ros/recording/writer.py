@@ -74,10 +74,7 @@ class SessionRecorder:
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}
-        self._counts = {}
         self._types = {}
-        self._first = None
-        self._last = None
         self._flush_period = flush_period_ns
         self._last_flush = None
         self._closed = False
@@ -113,21 +110,15 @@ class SessionRecorder:
             topic=topic, message_encoding='cdr', schema_id=self._schemas[type_name],
             metadata={'offered_qos_profiles': qos_yaml or qos_profile_yaml(),
                       'topic_type_hash': ''})
-        self._counts[topic] = 0
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
         """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
-        sequence = self._counts[topic]          # positional: this runs for every message
-        self._writer.add_message(self._channels[topic], stamp_ns, data, stamp_ns, sequence)
-        self._counts[topic] = sequence + 1
-        if self._first is None:
-            self._first = self._last = self._last_flush = stamp_ns
-        elif stamp_ns > self._last:
-            self._last = stamp_ns
-        elif stamp_ns < self._first:
-            self._first = stamp_ns
-        if abs(stamp_ns - self._last_flush) >= self._flush_period:
+        channel = self._channels[topic]         # positional: this runs for every message
+        self._writer.add_message(channel, stamp_ns, data, stamp_ns, self._writer.counts[channel])
+        if self._last_flush is None:
+            self._last_flush = stamp_ns
+        elif abs(stamp_ns - self._last_flush) >= self._flush_period:
             self._writer.flush()
             self._last_flush = stamp_ns
 
@@ -155,19 +146,20 @@ class SessionRecorder:
             raise self._error
 
     def _bag_metadata(self):
-        start = self._first or 0
+        start, last = self._writer.time_range() or (0, 0)
+        counts = {t: self._writer.counts[c] for t, c in self._channels.items()}
         meta = {'rosbag2_bagfile_information': {
             'version': 9,
             'storage_identifier': 'mcap',
             'relative_file_paths': [self._name],
-            'duration': {'nanoseconds': (self._last or 0) - start},
+            'duration': {'nanoseconds': last - start},
             'starting_time': {'nanoseconds_since_epoch': start},
-            'message_count': sum(self._counts.values()),
+            'message_count': sum(counts.values()),
             'topics_with_message_count': [
                 {'topic_metadata': {'name': t, 'type': self._types[t],
                                     'serialization_format': 'cdr',
                                     'offered_qos_profiles': '', 'type_description_hash': ''},
-                 'message_count': n} for t, n in self._counts.items()],
+                 'message_count': n} for t, n in counts.items()],
             'compression_format': '', 'compression_mode': '',
             'custom_data': {}, 'ros_distro': os.environ.get('ROS_DISTRO', 'kilted'),
         }}

@@ -10,7 +10,7 @@ them.
 import numpy as np
 
 from ..core.kernel_cache import njit
-from ..core.pose_kernel import collider_poses, quat_from_matrix
+from ..core.pose_kernel import _transform_point, collider_poses, quat_from_matrix
 from ..core.step_kernel import plane_poses
 
 POSE_WIDTH = 10
@@ -109,10 +109,7 @@ def marker_table(links, root, collider_links, centers_local, rotations_local, ra
     table[:rows * POSE_WIDTH] = poses.ravel()
     points = table[rows * POSE_WIDTH:].reshape((n + 2 + 2 * k, 3))
     points[:n] = x
-    t = links[hood_link]
-    for i in range(3):                      # the hood's anchor: its pivot on its link
-        points[n, i] = (t[i, 0] * hood_pivot[0] + t[i, 1] * hood_pivot[1]
-                        + t[i, 2] * hood_pivot[2] + t[i, 3])
+    _transform_point(links[hood_link], hood_pivot, points[n])    # the hood's anchor
     points[n + 1] = hood_p
     points[n + 2:n + 2 + k] = layer_pos
     points[n + 2 + k:] = layer_tips
