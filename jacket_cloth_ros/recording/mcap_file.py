@@ -30,6 +30,7 @@ MAGIC = b'\x89MCAP0\r\n'
 _MESSAGE = struct.Struct('<BQHIQQ')         # opcode, length, channel, sequence, log, publish
 _CHUNK_HEAD = struct.Struct('<BQQQQI')      # opcode, length, start, end, size, crc
 _FOOTER_HEAD = struct.Struct('<BQQQ')
+_FIRST_CHUNK_BUFFER = 1 << 20               # grows (doubling) to the largest chunk seen
 
 
 def _compressor(name):
@@ -79,10 +80,16 @@ class McapWriter:
         self._metadata_indexes = []
         self.counts = {}                        # channel id -> its messages so far
         self._start = self._end = None          # log times of the closed chunks' messages
+        # Chunk buffers are kept and reused: a fresh bytearray grown message by message cost
+        # 6 page faults per replayed input (its pages, mapped anew each second). A buffer goes
+        # back to ``_spare`` once its chunk is written (list append and pop: atomic).
+        self._spare = []
+        self._chunk = None
         self._new_chunk()
 
     def _new_chunk(self):
-        self._chunk = bytearray()
+        self._chunk = self._spare.pop() if self._spare else bytearray(_FIRST_CHUNK_BUFFER)
+        self._used = 0                      # bytes of ``_chunk`` holding this chunk's records
         self._index = {}                    # channel id -> [(log time, offset in chunk), ...]
         self._chunk_start = self._chunk_end = None
 
@@ -110,11 +117,14 @@ class McapWriter:
         return channel.id
 
     def add_message(self, channel_id, log_time, data, publish_time, sequence=0):
-        chunk = self._chunk
-        offset = len(chunk)
-        chunk += _MESSAGE.pack(Opcode.MESSAGE, 22 + len(data), channel_id, sequence, log_time,
-                               publish_time)
-        chunk += data
+        offset = self._used
+        end = offset + _MESSAGE.size + len(data)
+        if end > len(self._chunk):
+            self._chunk += bytes(max(end, 2 * len(self._chunk)) - len(self._chunk))
+        _MESSAGE.pack_into(self._chunk, offset, Opcode.MESSAGE, 22 + len(data), channel_id,
+                           sequence, log_time, publish_time)
+        self._chunk[offset + _MESSAGE.size:end] = data
+        self._used = end
         index = self._index.get(channel_id)
         if index is None:
             index = self._index[channel_id] = []
@@ -126,7 +136,7 @@ class McapWriter:
             self._chunk_start = log_time
         elif log_time > self._chunk_end:
             self._chunk_end = log_time
-        if len(chunk) > self._chunk_bytes:
+        if end > self._chunk_bytes:
             self._close_chunk()
 
     def time_range(self):
@@ -157,10 +167,15 @@ class McapWriter:
             return
         start, end = self._chunk_start, self._chunk_end
         self._start, self._end = self.time_range()
-        self._run(self._write_chunk, self._chunk, self._index, start, end)
+        self._run(self._write_chunk, self._chunk, self._used, self._index, start, end)
         self._new_chunk()
 
-    def _write_chunk(self, raw, message_indexes, start, end):
+    def _write_chunk(self, buffer, used, message_indexes, start, end):
+        with memoryview(buffer) as view, view[:used] as raw:
+            self._write_chunk_records(raw, message_indexes, start, end)
+        self._spare.append(buffer)
+
+    def _write_chunk_records(self, raw, message_indexes, start, end):
         packed = self._compress(raw) if self._compress else raw
         compression = self._compression.encode()
         at = self._stream.tell()
