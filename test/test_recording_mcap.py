@@ -78,3 +78,28 @@ def test_chunk_and_message_indexes_point_at_their_records():
 def test_an_unknown_compression_is_refused():
     with pytest.raises(ValueError, match='brotli'):
         McapWriter(io.BytesIO(), compression='brotli')
+
+
+def test_chunk_buffers_grow_and_are_reused_without_mixing_chunks():
+    # Buffers are reused once written; a deferred ``run`` (as the recorder's writer thread)
+    # writes chunks after later ones are filled, and a message can outgrow the buffer.
+    out, deferred = io.BytesIO(), []
+    w = McapWriter(out, compression='lz4', chunk_bytes=3 << 20,
+                   run=lambda work, *args: deferred.append((work, args)))
+    w.start()
+    channel = w.register_channel('/big', 'cdr', 0)
+    sizes = [10, 3 << 20, 5, 200_000, 7, 1 << 20, 3]
+    for i, size in enumerate(sizes):
+        w.add_message(channel, 100 + i, bytes([i + 1]) * size, 100 + i, sequence=i)
+        if i % 2:
+            w.flush()
+            if i == 3:                     # the first chunks' buffers come back for reuse
+                for work, args in deferred:
+                    work(*args)
+                deferred.clear()
+    w.finish()
+    for work, args in deferred:
+        work(*args)
+    got = [(m.sequence, m.data) for _, _, m in SeekingReader(
+        io.BytesIO(out.getvalue()), validate_crcs=True).iter_messages()]
+    assert got == [(i, bytes([i + 1]) * size) for i, size in enumerate(sizes)]
