@@ -3,6 +3,7 @@
 
 import io
 import struct
+import zlib
 
 import pytest
 from mcap.reader import NonSeekingReader, SeekingReader
@@ -50,6 +51,10 @@ def test_mcap_readers_get_every_message_back_with_crcs_checked(compression):
     assert summary.channels[2].metadata == {'k': '1'}
     assert [m.name for m in SeekingReader(io.BytesIO(data)).iter_metadata()] == ['session']
     assert data.endswith(b'\x89MCAP0\r\n')
+    # The footer's summary CRC covers the summary and the footer up to itself (MCAP spec).
+    footer = len(data) - 8 - 29
+    summary_start, _, crc = struct.unpack_from('<QQI', data, footer + 9)
+    assert zlib.crc32(data[summary_start:footer + 25]) == crc != 0
 
 
 def test_chunk_and_message_indexes_point_at_their_records():

@@ -9,6 +9,7 @@ the file layout is the library's; only messages and their chunk are packed here.
 """
 
 import struct
+import tempfile
 import zlib
 
 from mcap.data_stream import RecordBuilder
@@ -76,7 +77,10 @@ class McapWriter:
         self._records = RecordBuilder()         # only in ``run``'s work
         self._schemas = []
         self._channels = []
-        self._chunk_indexes = []
+        # The summary's chunk index, one record a chunk, waits in an unnamed temporary file
+        # until finish(): held in memory, a session grew the node by 1.5 MB an hour.
+        self._chunk_index_file = tempfile.TemporaryFile()
+        self._chunk_count = 0
         self._metadata_indexes = []
         self.counts = {}                        # channel id -> its messages so far
         self._start = self._end = None          # log times of the closed chunks' messages
@@ -192,11 +196,13 @@ class McapWriter:
             offsets[channel_id] = indexes_at + len(indexes)
             indexes += _message_index(channel_id, records)
         self._stream.write(indexes)
-        self._chunk_indexes.append(ChunkIndex(
+        ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=at,
             chunk_length=9 + length, message_index_offsets=offsets,
             message_index_length=len(indexes), compression=self._compression,
-            compressed_size=len(packed), uncompressed_size=len(raw)))
+            compressed_size=len(packed), uncompressed_size=len(raw)).write(self._records)
+        self._chunk_index_file.write(self._records.end())
+        self._chunk_count += 1
 
     def finish(self):
         """Write the last chunk, the summary and the footer (through ``run``, after all else);
@@ -212,32 +218,41 @@ class McapWriter:
 
     def _write_summary(self, statistics):
         # The chunk and metadata counts are the writer side's: complete only here.
-        statistics.chunk_count = len(self._chunk_indexes)
+        statistics.chunk_count = self._chunk_count
         statistics.metadata_count = len(self._metadata_indexes)
         self._write_records(DataEnd(data_section_crc=0))
         summary_start = self._stream.tell()
-        summary = RecordBuilder()
         offsets = []
+        crc = 0
 
-        def group(opcode, records):
-            begin = summary.count
+        def put(data):
+            nonlocal crc
+            crc = zlib.crc32(data, crc)
+            self._stream.write(data)
+
+        def group(opcode, records=(), spilled=None):
+            begin = self._stream.tell()
             for record in records:
-                record.write(summary)
-            offsets.append(SummaryOffset(group_opcode=opcode, group_start=summary_start + begin,
-                                         group_length=summary.count - begin))
+                record.write(self._records)
+            put(self._records.end())
+            if spilled is not None:
+                spilled.seek(0)
+                while block := spilled.read(1 << 20):
+                    put(block)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=begin,
+                                         group_length=self._stream.tell() - begin))
 
         group(Opcode.SCHEMA, self._schemas)
         group(Opcode.CHANNEL, self._channels)
         group(Opcode.STATISTICS, [statistics])
-        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
+        group(Opcode.CHUNK_INDEX, spilled=self._chunk_index_file)
         group(Opcode.METADATA_INDEX, self._metadata_indexes)
-        offsets_start = summary_start + summary.count
+        self._chunk_index_file.close()
+        offsets_start = self._stream.tell()
         for offset in offsets:
-            offset.write(summary)
-        data = summary.end()
-        crc = zlib.crc32(_FOOTER_HEAD.pack(Opcode.FOOTER, 20, summary_start, offsets_start),
-                         zlib.crc32(data))
-        self._stream.write(data)
+            offset.write(self._records)
+        put(self._records.end())
+        crc = zlib.crc32(_FOOTER_HEAD.pack(Opcode.FOOTER, 20, summary_start, offsets_start), crc)
         self._write_records(Footer(summary_start=summary_start,
                                    summary_offset_start=offsets_start, summary_crc=crc))
         self._stream.write(MAGIC)
