@@ -100,13 +100,11 @@ def marker_table(links, root, collider_links, centers_local, rotations_local, ra
     plane_poses(links, root, plane_links, plane_points_local, plane_normals_local, plane_p,
                 plane_n)
     rows = centers.shape[0] + 3 * cap_a.shape[0] + plane_p.shape[0] + 1
-    poses = np.empty((rows, POSE_WIDTH))
-    shape_poses(centers, axes, radii, cap_a, cap_b, capsule_radii, plane_p, plane_n, hood_p,
-                poses)
     n = x.shape[0]
     k = layer_pos.shape[0]
     table = np.empty(rows * POSE_WIDTH + 3 * (n + 2 + 2 * k))
-    table[:rows * POSE_WIDTH] = poses.ravel()
+    shape_poses(centers, axes, radii, cap_a, cap_b, capsule_radii, plane_p, plane_n, hood_p,
+                table[:rows * POSE_WIDTH].reshape((rows, POSE_WIDTH)))     # posed in place
     points = table[rows * POSE_WIDTH:].reshape((n + 2 + 2 * k, 3))
     points[:n] = x
     _transform_point(links[hood_link], hood_pivot, points[n])    # the hood's anchor
