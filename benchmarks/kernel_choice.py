@@ -21,6 +21,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from jacket_cloth_ros.core import kernel  # noqa: E402
+from jacket_cloth_ros.core.bundles import copied  # noqa: E402
+from jacket_cloth_ros.core.kernel_cache import FixedTypes  # noqa: E402
 from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
@@ -93,21 +95,22 @@ def run(steps):
     # Every step's kernel inputs as the simulation made them (120 Hz steps, 60 Hz inputs).
     captured = captured_steps(skeleton, rig, load_fabric('tweed_jacket'), 'showcase',
                               steps / 120.0 + 0.1)[:steps]
-    real_step = kernel.cloth_step
+    real_step = FixedTypes(kernel.cloth_step)       # typed once, as the simulation calls it
     numba_ns, numpy_ns, diff = [], [], []
     for args in captured:
-        a = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
+        a = copied(args)
         t0 = time.perf_counter_ns()
         real_step(*a)
         numba_ns.append(time.perf_counter_ns() - t0)
-        b = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
-        (x, xp, free, acc, damping, contact, cdamp, dt, ca, cb, rest, stiff, it, centers, axes,
-         radii, _, _, _, _, _, ref, maxd, *_) = b
+        cloth, colliders, tuning, state, control, now, _ = copied(args)
+        x = state.x
         t0 = time.perf_counter_ns()
-        numpy_step(x, xp, free, acc, damping, contact, cdamp, dt, ca, cb, rest, stiff, it,
-                   groups, centers, axes, radii, ref, maxd, rows_of_vertical)
+        numpy_step(x, state.xp, cloth.free, control.acc, control.damping, state.contact,
+                   control.contact_damping, control.dt, cloth.con_a, cloth.con_b,
+                   cloth.con_rest, tuning.stiffness, tuning.iterations, groups, now.centers,
+                   now.axes, colliders.radii, now.ref, tuning.max_distance, rows_of_vertical)
         numpy_ns.append(time.perf_counter_ns() - t0)
-        diff.append(np.abs(x - a[0]).max())
+        diff.append(np.abs(x - a[3].x).max())
     return rig, len(groups), np.median(numba_ns), np.median(numpy_ns), np.array(diff)
 
 

@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+# Every call of a kernel typed once (kernel_cache.FixedTypes) is checked against those types.
+os.environ['JACKET_CLOTH_CHECK_TYPES'] = '1'
 # A domain of our own so a demo or another test run on the machine does not cross talk.
 DOMAIN_ID = 60 + os.getpid() % 40
 

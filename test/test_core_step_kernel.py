@@ -2,6 +2,7 @@
 """The compiled step (step_kernel.advance) does what the step did as numpy and separate parts."""
 
 import numpy as np
+import pytest
 
 from jacket_cloth_ros.core import kernel, step_kernel
 from jacket_cloth_ros.core.simulation import DESIGN_RATE, per_step
@@ -53,8 +54,8 @@ def _reference_steps(sim, a, b, n):
         kernel.cloth_step(*sim.kernel_arguments(
             links, root, ref, gravity + sim.wind_scale[:, None] * wind,
             per_step(sim.damping, e), float(per_step(f.contact_damping, e)), dt))
-        sim._hood_step(links, gravity + f.wind_scale * wind, dt,
-                       float(per_step(f.hood_damping, e)))
+        sim.hood_step(links, gravity + f.wind_scale * wind, dt,
+                      float(per_step(f.hood_damping, e)))
 
 
 def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):
@@ -100,7 +101,35 @@ def test_every_module_with_cached_kernels_is_marked_by_all_kernel_files():
     package = pathlib.Path(kernel_cache.__file__).parent.parent
     with_kernels = {str(p) for p in package.rglob('*.py')
                     if re.search(r'^@njit', p.read_text(), re.MULTILINE)}
-    assert with_kernels == set(kernel_cache.KERNEL_FILES)
+    # bundles.py holds no kernel, but the compiled code depends on its fields' order.
+    bundles = str(package / 'core' / 'bundles.py')
+    assert with_kernels | {bundles} == set(kernel_cache.KERNEL_FILES)
     for path in with_kernels:
         text = pathlib.Path(path).read_text()
         assert 'kernel_cache import njit' in text and 'from numba import njit' not in text, path
+
+
+def test_fixed_types_refuses_a_call_whose_types_changed():
+    # The entry point of a kernel typed once would read a changed argument as the old type.
+    from jacket_cloth_ros.core.kernel_cache import CHECK_TYPES, FixedTypes
+    assert CHECK_TYPES                      # conftest checks every call in the tests
+    call = FixedTypes(step_kernel.lost_per_each)
+    out = np.empty(3)
+    call(np.full(3, 0.5), 0.5, out)
+    assert out == pytest.approx(1 - 0.5 ** 0.5)
+    with pytest.raises(TypeError, match='argument types changed'):
+        call(np.full(3, 1, dtype=np.int64), 0.5, out)
+
+
+def test_the_compiled_step_is_typed_once_whatever_values_the_parameters_take(make_sim, skeleton):
+    # Bundles fix every dtype: ints where floats are meant, a live change and a rig without
+    # the optional parts still give the one signature the step was compiled for.
+    sim = make_sim()
+    inputs = clip_inputs(skeleton, 'walk', 0.3)
+    for k, (stamp, names, pos) in enumerate(inputs):
+        if k == 5:
+            sim.set_params(sim.params.with_values(wind=(1, 0, 0), wind_gust=1, gravity=10,
+                                                  quality_tolerance=0, substeps=2))
+        assert not sim.process(stamp, names, pos).warnings
+    assert len(step_kernel.advance.signatures) == 1
+    assert sim._advance_kernel._types is not None          # typed, then called directly

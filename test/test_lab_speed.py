@@ -55,9 +55,9 @@ def test_steal_is_read_from_proc_stat():
 def test_the_floor_node_runs_one_bare_kernel_step_per_message(skeleton):
     # The floor's kernel share is measured in the floor node itself: one cloth step a call.
     steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'), 'run', 0.2)
-    before = [s[0].copy() for s in steps]
+    before = [s[3].x.copy() for s in steps]       # the state bundle's cloth
     step = kernel_stepper(steps)
     step()
     step()
-    moved = [not np.array_equal(s[0], b) for s, b in zip(steps, before)]
+    moved = [not np.array_equal(s[3].x, b) for s, b in zip(steps, before)]
     assert moved[:2] == [True, True] and not any(moved[2:])

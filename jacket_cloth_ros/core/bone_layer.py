@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .bundles import layer_model
 from .config import ConfigError
 from .pose_kernel import solve_layer
 from .transforms import apply_transform
@@ -60,12 +61,6 @@ class LayerPose:
     below: np.ndarray       # (2,4,4) left and right bones below the pads, (0,4,4) if none
 
 
-# A rig without a layer, as solve_layer takes it: no sleeves, no pads, nothing solved.
-NO_LAYER = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3)),
-            np.zeros(0), np.zeros(0), 0, np.zeros((0, 3)), np.zeros(0, dtype=np.int64),
-            np.zeros((0, 3)), np.zeros(0), np.zeros(0), DOWN, 0.0)
-
-
 class BoneLayer:
     """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section)."""
 
@@ -92,10 +87,11 @@ class BoneLayer:
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
         self.parents = [s.link for s in self.sleeves] * 2 + [self.upper_link] * 2 * len(self.pads)
         self.parent_index = np.array(self.parents, dtype=np.int64)
-        self._packed = self._arrays()
-        self._rest_gap = 0.0
+        self.rest_gap = 0.0
+        self.model = layer_model(self)
         if self.pads:
-            self._rest_gap = self.pad_ends_gap(rest)
+            self.rest_gap = self.pad_ends_gap(rest)
+            self.model = layer_model(self)
 
     def _load_upper(self, upper, skeleton, where):
         self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
@@ -122,25 +118,6 @@ class BoneLayer:
         first = 2 * len(self.sleeves)
         return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
 
-    def _arrays(self):
-        """The layer as the arrays pose_kernel.solve_layer takes (all but the rest gap)."""
-        s, p = self.sleeves, self.pads
-        return (np.array([x.link for x in s], dtype=np.int64),
-                np.array([x.end_link for x in s], dtype=np.int64),
-                np.array([x.axis for x in s]).reshape(-1, 3),
-                np.array([x.length for x in s], dtype=float),
-                np.array([x.twist_share for x in s], dtype=float),
-                self.upper_link if p else 0,
-                np.array([x.pivot for x in p], dtype=float).reshape(-1, 3),
-                np.array([x.aim_link for x in p], dtype=np.int64),
-                np.array([x.aim for x in p], dtype=float).reshape(-1, 3),
-                np.array([x.length for x in p], dtype=float),
-                np.array([x.below_length for x in p], dtype=float), DOWN)
-
-    def kernel_arrays(self):
-        """The layer as pose_kernel.solve_layer takes it, rest gap included."""
-        return self._packed + (self._rest_gap,)
-
     def solve(self, links, full=True):
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
@@ -150,5 +127,5 @@ class BoneLayer:
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
-        solve_layer(links, *self._packed, self._rest_gap, full, rot, pos, tips, below)
+        solve_layer(links, self.model, full, rot, pos, tips, below)
         return LayerPose(self.names, self.parent_index, rot, pos, tips, below)

@@ -329,21 +329,33 @@ def _normalise_rows(normals):
 
 
 @njit(cache=True)
-def cloth_step(x, xp, free, acc, damping, contact, contact_damping, dt,
-               ca, cb, rest, stiffness, iterations,
-               centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
-               ref, max_distance, limit_mode, upper, lower, vrest, anchor, tether,
-               solver, substeps, compliance, lam, pin_from, tolerance,
-               centers0, axes0, cap_a0, cap_b0, plane_p0, plane_n0, ref0):
-    """One fixed step of the jacket cloth, in ``substeps`` equal substeps ("Small Steps").
+def cloth_step(cloth, colliders, tuning, state, control, now, before):
+    """One fixed step of the jacket cloth, in ``control.substeps`` equal substeps ("Small
+    Steps"). Takes core.bundles: ClothModel, ColliderModel, Tuning, ClothState, StepControl,
+    and Posed twice.
 
-    ``damping`` and ``contact_damping`` are per substep. The pinned vertices, the colliders and
-    the M11 references are given where they are at the end of the step; with substeps they move
-    there in equal parts from where they were at its start (``pin_from``, ``*0``). Colliders
-    that jumped ahead a whole step would push cloth out at the substep's speed, many times the
-    body's (the depenetration pop of Small Steps).
+    ``control.damping`` and ``contact_damping`` are per substep. The pinned vertices, the
+    colliders and the M11 references are given where they are at the end of the step
+    (``now``); with substeps they move there in equal parts from where they were at its
+    start (``control.pin_from``, ``before``). Colliders that jumped ahead a whole step would
+    push cloth out at the substep's speed, many times the body's (the depenetration pop of
+    Small Steps).
     Returns (deepest push-out, vertices limited by M11, relaxation sweeps run).
     """
+    x, xp, contact, lam = state.x, state.xp, state.contact, state.lam
+    free, ca, cb, rest = cloth.free, cloth.con_a, cloth.con_b, cloth.con_rest
+    upper, lower, vrest = cloth.vert_a, cloth.vert_b, cloth.vert_rest
+    anchor, tether = cloth.tether_anchor, cloth.tether_length
+    radii, cap_r = colliders.radii, colliders.capsule_radii
+    stiffness, iterations, compliance = tuning.stiffness, tuning.iterations, tuning.compliance
+    max_distance, limit_mode, solver = tuning.max_distance, tuning.limit_mode, tuning.solver
+    tolerance = tuning.sweep_tolerance
+    acc, damping, contact_damping = control.acc, control.damping, control.contact_damping
+    dt, substeps, pin_from = control.dt, control.substeps, control.pin_from
+    centers, axes, cap_a, cap_b = now.centers, now.axes, now.cap_a, now.cap_b
+    plane_p, plane_n, ref = now.plane_p, now.plane_n, now.ref
+    centers0, axes0, cap_a0, cap_b0 = before.centers, before.axes, before.cap_a, before.cap_b
+    plane_p0, plane_n0, ref0 = before.plane_p, before.plane_n, before.ref
     deepest = 0.0
     limited = 0
     sweeps = 0

@@ -14,14 +14,18 @@ import functools
 import hashlib
 import os
 
-from numba import njit
+from numba import njit, typeof
 from numba.core import caching
+from numba.core.typing.typeof import Purpose
 
-__all__ = ['njit', 'kernels_stamp']
+__all__ = ['njit', 'kernels_stamp', 'FixedTypes']
+
+# Set (the tests set it) to type every call again and fail on a type that changed.
+CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
-    'core/kernel.py', 'core/pose_kernel.py', 'core/step_kernel.py', 'core/inputs.py',
+    'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py', 'core/inputs.py',
     'ros/cdr.py', 'ros/marker_kernel.py'))
 
 
@@ -69,3 +73,39 @@ _LOCATORS = caching.CacheImpl._locator_classes
 for _locator in (PackageUserWideLocator, PackageInTreeLocator, PackageUserDirLocator):
     if _locator not in _LOCATORS:           # ends in numba's order, before numba's own
         _LOCATORS.insert(0, _locator)
+
+
+class FixedTypes:
+    """A compiled kernel called with arguments whose types never change, typed once.
+
+    numba types every argument of every call; for named tuples it does so in Python, which
+    costs more than the call itself. Here the first call goes through numba's dispatcher
+    (compiling or loading, and checking the types), and later calls go straight to the
+    entry point compiled for those types. The bundles (core.bundles) fix every dtype and
+    layout, so the types stay the same; :meth:`retype` is for an owner that rebuilt one, and
+    ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call.
+    """
+
+    def __init__(self, dispatcher):
+        self.dispatcher = dispatcher
+        self._entry = None
+        self._types = None
+
+    def retype(self):
+        """Type the next call again (an argument bundle was rebuilt)."""
+        self._entry = None
+
+    def __call__(self, *args):
+        if self._entry is not None:
+            if CHECK_TYPES:
+                types = tuple(typeof(a, Purpose.argument) for a in args)
+                if types != self._types:
+                    raise TypeError(f'{self.dispatcher.__name__}: argument types changed '
+                                    f'from {self._types} to {types}')
+            return self._entry(*args)
+        result = self.dispatcher(*args)
+        types = tuple(typeof(a, Purpose.argument) for a in args)
+        overload = self.dispatcher.overloads.get(types)
+        if overload is not None:           # else numba converted an argument: keep typing
+            self._entry, self._types = overload.entry_point, types
+        return result

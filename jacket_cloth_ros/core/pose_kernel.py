@@ -39,8 +39,11 @@ def _transform_point(t, p, out):
 
 
 @njit(cache=True)
-def forward_kinematics(origin, axis, kind, var, mult, offset, parent, q, world):
-    """Link transforms into ``world`` (L,4,4), root frame; links in breadth-first order."""
+def forward_kinematics(skeleton, q, world):
+    """Link transforms of a bundles.SkeletonModel into ``world`` (L,4,4), root frame; links
+    in breadth-first order."""
+    origin, axis, kind, var = skeleton.origin, skeleton.axis, skeleton.kind, skeleton.var
+    mult, offset, parent = skeleton.mult, skeleton.offset, skeleton.parent
     world[0] = np.eye(4)
     local = np.empty((4, 4))
     m = np.empty((3, 3))
@@ -166,11 +169,15 @@ def twist_angle(rotation, axis):
 
 
 @njit(cache=True)
-def solve_layer(links, sleeve_link, sleeve_end, sleeve_axis, sleeve_length, sleeve_share,
-                upper, pad_pivot, pad_aim_link, pad_aim, pad_length, pad_below_length,
-                down, rest_gap, full, rot, pos, tips, below):
-    """M1 sleeves and M2 pads (see bone_layer.BoneLayer.solve): bones into rot/pos/tips in
-    the layer's order when ``full``, and always the bones below the pads into ``below``."""
+def solve_layer(links, layer, full, rot, pos, tips, below):
+    """M1 sleeves and M2 pads of a bundles.LayerModel (see bone_layer.BoneLayer.solve): bones
+    into rot/pos/tips in the layer's order when ``full``, and always the bones below the pads
+    into ``below``."""
+    sleeve_link, sleeve_end, sleeve_axis = layer.sleeve_link, layer.sleeve_end, layer.sleeve_axis
+    sleeve_length, sleeve_share, upper = layer.sleeve_length, layer.sleeve_share, layer.upper
+    pad_pivot, pad_aim_link, pad_aim = layer.pad_pivot, layer.pad_aim_link, layer.pad_aim
+    pad_length, pad_below_length = layer.pad_length, layer.pad_below_length
+    down, rest_gap = layer.down, layer.rest_gap
     n_s = sleeve_link.shape[0]
     b = 0
     m = np.empty((3, 3))
@@ -230,13 +237,16 @@ def solve_layer(links, sleeve_link, sleeve_end, sleeve_axis, sleeve_length, slee
 
 
 @njit(cache=True)
-def skinned_pose(links, pin_link, pin_local, reference_link, reference_local, below,
-                 pin_below, pin_below_local, pin_weight, top, ref):
-    """M6 pinned top row and M11 reference points (see JacketSimulation._skinned_pose).
+def skinned_pose(links, cloth, below, top, ref):
+    """M6 pinned top row and M11 reference points of a bundles.ClothModel (see
+    JacketSimulation._skinned_pose).
 
     The top row rides its link, blended towards the M2 bones below the pads (``below``, none
     when empty); each column's reference points are lifted with its top vertex.
     """
+    pin_link, pin_local = cloth.pin_link, cloth.pin_local
+    reference_link, reference_local = cloth.reference_link, cloth.reference_local
+    pin_below, pin_below_local, pin_weight = cloth.pin_below, cloth.pin_below_local, cloth.pin_weight
     cols = pin_local.shape[0]
     carried = np.empty(3)
     held = np.empty(3)
@@ -257,9 +267,12 @@ def skinned_pose(links, pin_link, pin_local, reference_link, reference_local, be
 
 
 @njit(cache=True)
-def collider_poses(links, links_of, centers_local, rotations_local, capsule_links,
-                   capsule_ends, centers, axes, cap_a, cap_b):
-    """M10 ellipsoids (centre, axes as columns) and capsule ends on their links."""
+def collider_poses(links, colliders, posed):
+    """M10 ellipsoids (centre, axes as columns) and capsule ends of a bundles.ColliderModel on
+    their links, into a bundles.Posed."""
+    links_of, centers_local, rotations_local = colliders.links, colliders.centers, colliders.rotations
+    capsule_links, capsule_ends = colliders.capsule_links, colliders.capsule_ends
+    centers, axes, cap_a, cap_b = posed.centers, posed.axes, posed.cap_a, posed.cap_b
     for e in range(centers.shape[0]):
         t = links[links_of[e]]
         _transform_point(t, centers_local[e], centers[e])

@@ -17,8 +17,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import kernel, pose_kernel, step_kernel
-from .bone_layer import LayerPose, NO_LAYER
+from .bone_layer import LayerPose
+from .bundles import (
+    ClothState, Motion, StepControl, StepOutput, Tuning, floats, model_of, posed_like)
 from .inputs import InputParser, InputRejected, Sample, root_jump
+from .kernel_cache import FixedTypes
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
@@ -37,10 +40,13 @@ AUTO_SWEEP_SHARE = 0.03
 
 
 def per_step(share, exponent):
-    """A share lost per design step, as the share lost in a step ``exponent`` times as long."""
-    if exponent == 1.0:
-        return share
-    return 1.0 - (1.0 - np.asarray(share, dtype=float)) ** exponent
+    """A share lost per design step, as the share lost in a step ``exponent`` times as long
+    (the compiled step's formula: step_kernel.lost_per)."""
+    if np.ndim(share) == 0:
+        return step_kernel.lost_per(float(share), float(exponent))
+    out = np.empty(np.shape(share))
+    step_kernel.lost_per_each(floats(share), float(exponent), out)
+    return out
 
 
 def xpbd_compliance(stiffness, iterations):
@@ -92,11 +98,8 @@ class SimParams:
 
         A function of the step's stamp only, so a replay sees exactly the live wind.
         """
-        if self.wind_gust == 0.0:
-            return np.asarray(self.wind, dtype=float)
-        phase = 2 * np.pi * (t_ns * 1e-9) / self.wind_gust_period
-        gust = 0.6 * np.sin(phase) + 0.4 * np.sin(2.7 * phase + 1.3)
-        return np.asarray(self.wind, dtype=float) * (1.0 + self.wind_gust * gust)
+        return np.asarray(self.wind, dtype=float) * step_kernel.gust_scale(
+            int(t_ns), float(self.wind_gust), float(self.wind_gust_period))
 
 
 @dataclass
@@ -173,12 +176,12 @@ class JacketSimulation:
         self.overruns = 0
         self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
-        self._fixed = self._fixed_arrays()
+        self.model = model_of(skeleton, rig)
         # Colliders and M11 references where the last step ended: substeps start from them.
-        self._before = np.zeros(1, dtype=np.bool_)
-        c = self.collider_frames(self.links)
-        self._frames_before = (c.centers, c.axes, c.capsule_a, c.capsule_b, c.plane_points,
-                               c.plane_normals, np.zeros((n, 3)))
+        self._started = np.zeros(1, dtype=np.bool_)
+        self._before = posed_like(self.model.colliders, n)
+        self._advance_kernel = FixedTypes(step_kernel.advance)
+        self._cloth_kernel = FixedTypes(kernel.cloth_step)
         layer_names = rig.layer.names if rig.layer else []
         layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
         root = skeleton.link_names[0]
@@ -189,39 +192,28 @@ class JacketSimulation:
                              + layer_parents)
         self._warm_up()
 
-    def _fixed_arrays(self):
-        """The skeleton's and rig's arrays in step_kernel.advance's order (set at start)."""
-        sk, rig = self.skeleton, self.rig
-        layer = rig.layer.kernel_arrays() if rig.layer else NO_LAYER
-        return ((sk.origin, sk.axis, sk.kind, sk.var, sk.mult, sk.offset, sk.parent) + layer
-                + (rig.pin_link, rig.pin_local, rig.reference_link, rig.reference_local,
-                   rig.pin_below, rig.pin_below_local, rig.pin_weight,
-                   rig.collider_links, rig.collider_centers, rig.collider_rotations,
-                   rig.collider_radii, rig.capsule_links, rig.capsule_ends, rig.capsule_radii,
-                   rig.plane_links, rig.plane_points, rig.plane_normals, rig.free, rig.con_a,
-                   rig.con_b, rig.con_rest))
-
-    def _tuned_arrays(self):
-        """The fabric's and parameters' values in step_kernel.advance's order."""
-        p, f, rig = self.params, self.fabric, self.rig
-        return (self.stiffness, f.iterations, self.max_distance, STRETCH_LIMITS[p.stretch_limit],
-                rig.vert_a, rig.vert_b, rig.vert_rest, rig.tether_anchor, rig.tether_length,
-                SOLVERS[p.solver], p.substeps, p.quality_tolerance,
-                AUTO_SWEEP_SHARE * p.quality_tolerance, self.compliance, self._lam,
-                self.damping, f.contact_damping, f.hood_damping, DESIGN_RATE / p.sim_rate,
-                self.world_share, f.world_share, self.wind_scale, f.wind_scale, p.gravity,
-                np.asarray(p.wind, dtype=float), p.wind_gust, p.wind_gust_period,
-                self.rig.hood.link, self.rig.hood.pivot, self.rig.hood.length)
+    def _tuning(self):
+        """The fabric's and parameters' values as the compiled step takes them."""
+        p, f = self.params, self.fabric
+        return Tuning(
+            floats(self.stiffness), int(f.iterations), floats(self.compliance),
+            floats(self.max_distance), STRETCH_LIMITS[p.stretch_limit], SOLVERS[p.solver],
+            int(p.substeps), float(p.quality_tolerance),
+            float(AUTO_SWEEP_SHARE * p.quality_tolerance), floats(self.damping),
+            float(f.contact_damping), float(f.hood_damping), float(DESIGN_RATE / p.sim_rate),
+            floats(self.world_share), float(f.world_share), floats(self.wind_scale),
+            float(f.wind_scale), float(p.gravity), floats(p.wind), float(p.wind_gust),
+            float(p.wind_gust_period))
 
     def _warm_up(self):
         """Load (or compile) the kernels now, not on the first input, which would stall it."""
         saved = (self.x.copy(), self.xp.copy(), self.contact.copy(), self.hood_p.copy(),
                  self.hood_pp.copy(), self.root.copy(), self._lam.copy(), self.links,
-                 self._layer, self._before.copy(), [a.copy() for a in self._frames_before])
+                 self._layer, self._started.copy(), [a.copy() for a in self._before])
         still = Sample(0, np.zeros(len(self.skeleton.joint_names)), np.eye(4),
                        np.array([0.0, 0.0, 0.0, 1.0]))
         # The first inputs also load the parser's, the reset's, the jump test's and the
-        # bones' kernels (76 and 41 ms on a warm machine, one run): load them here too.
+        # bones' kernels, which would stall them: load them here too.
         parser = InputParser(self.skeleton, self.parser.world_joint)
         parser.parse(0, self.skeleton.joint_names, still.q)
         root_jump(still.root, still.root, still.root_quat, still.root_quat)
@@ -231,10 +223,9 @@ class JacketSimulation:
         self.t_sim = 0
         self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
         (self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root, lam,
-         self.links, self._layer, before, frames) = saved
-        # In place: self._tuned and self._frames_before hold these very arrays.
-        self._lam[:], self._before[:] = lam, before
-        for kept, was in zip(self._frames_before, frames):
+         self.links, self._layer, started, frames) = saved
+        self._lam[:], self._started[:] = lam, started
+        for kept, was in zip(self._before, frames):
             kept[:] = was
         self.t_sim = None
 
@@ -264,7 +255,7 @@ class JacketSimulation:
         self.compliance = xpbd_compliance(self.stiffness, f.iterations)
         self._lam = np.zeros(len(self.stiffness))
         self.dt_ns = int(round(1e9 / self.params.sim_rate))
-        self._tuned = self._tuned_arrays()
+        self.tuning = self._tuning()
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links, layer=None):
@@ -286,9 +277,7 @@ class JacketSimulation:
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
         top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
-        pose_kernel.skinned_pose(links, rig.pin_link, rig.pin_local, rig.reference_link,
-                                 rig.reference_local, below, rig.pin_below,
-                                 rig.pin_below_local, rig.pin_weight, top, ref)
+        pose_kernel.skinned_pose(links, self.model.cloth, below, top, ref)
         return top, ref
 
     @property
@@ -406,41 +395,45 @@ class JacketSimulation:
         """``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call: the skeleton
         interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth and M8 (see
         step_kernel.advance). Returns its stats."""
-        links = np.empty_like(self.links)
         layer = self.rig.layer
         k = len(layer.names) if layer else 0
-        rot, pos, tips = np.empty((k, 3, 3)), np.empty((k, 3)), np.empty((k, 3))
-        below = np.empty((len(layer.pads) if layer else 0, 4, 4))
-        stats = np.zeros(step_kernel.STAT_SLOTS)
-        self.t_sim = step_kernel.advance(
-            a.q, b.q, a.root_quat, b.root_quat, a.root[:3, 3].copy(), b.root[:3, 3].copy(),
-            a.stamp_ns, b.stamp_ns - a.stamp_ns, self.t_sim, self.dt_ns, n, *self._fixed,
-            *self._tuned, self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
-            links, self._before, self._frames_before, rot, pos, tips, below, stats)
-        self.links = links
-        self._layer = (links, LayerPose(layer.names, layer.parent_index, rot, pos, tips, below)
+        out = StepOutput(np.empty_like(self.links), np.empty((k, 3, 3)), np.empty((k, 3)),
+                         np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
+                         np.zeros(step_kernel.STAT_SLOTS))
+        motion = Motion(a.q, b.q, a.root_quat, b.root_quat, floats(a.root[:3, 3]),
+                        floats(b.root[:3, 3]), int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns),
+                        int(self.t_sim), int(self.dt_ns), int(n))
+        self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
+                                          motion, out)
+        self.links = out.links
+        self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
+                                            out.layer_pos, out.layer_tips, out.below)
                        if layer else None)
-        return stats
+        return out.stats
+
+    @property
+    def state(self):
+        """The cloth, hood and root as the compiled steps move them (the very arrays)."""
+        return ClothState(self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
+                          self._lam, self._started)
 
     def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt):
         """One kernel step of the current state at this skeleton pose, no substeps (the
         reset's settling step); its colliders and references are where the next step's
         substeps start from."""
-        c = self.collider_frames(links, root)
-        out = kernel.cloth_step(*self.kernel_arguments(links, root, ref, acc, damping,
-                                                       contact_damping, dt, c))
-        for kept, now in zip(self._frames_before, (c.centers, c.axes, c.capsule_a, c.capsule_b,
-                                                   c.plane_points, c.plane_normals, ref)):
+        args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
+        out = self._cloth_kernel(*args)
+        for kept, now in zip(self._before, args[-1]):
             kept[:] = now
-        self._before[0] = True
+        self._started[0] = True
         return out
 
     def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
-                         contact_damping=None, dt=None, colliders=None):
-        """kernel.cloth_step's arguments for one step of the current state without substeps;
+                         contact_damping=None, dt=None):
+        """kernel.cloth_step's bundles for one step of the current state without substeps;
         by default at the current pose with the fabric's forces (the lab times the kernel on
         them)."""
-        p, rig, f = self.params, self.rig, self.fabric
+        p, f = self.params, self.fabric
         links = self.links if links is None else links
         root = self.root if root is None else root
         if ref is None:
@@ -452,41 +445,36 @@ class JacketSimulation:
         e = DESIGN_RATE / p.sim_rate
         damping = per_step(self.damping, e) if damping is None else damping
         if contact_damping is None:
-            contact_damping = float(per_step(f.contact_damping, e))
+            contact_damping = per_step(f.contact_damping, e)
         dt = self.dt_ns * 1e-9 if dt is None else dt
-        c = self.collider_frames(links, root) if colliders is None else colliders
-        return (self.x, self.xp, rig.free, acc, damping, self.contact, contact_damping, dt,
-                rig.con_a, rig.con_b, rig.con_rest, self.stiffness, f.iterations,
-                c.centers, c.axes, c.radii, c.capsule_a, c.capsule_b, c.capsule_radii,
-                c.plane_points, c.plane_normals, ref, self.max_distance,
-                STRETCH_LIMITS[p.stretch_limit], rig.vert_a, rig.vert_b, rig.vert_rest,
-                rig.tether_anchor, rig.tether_length, SOLVERS[p.solver], 1,
-                self.compliance, self._lam, self.x, AUTO_SWEEP_SHARE * p.quality_tolerance,
-                c.centers, c.axes, c.capsule_a, c.capsule_b, c.plane_points, c.plane_normals,
-                ref)
+        now = self._posed(links, root, ref)
+        control = StepControl(floats(acc), floats(damping), float(contact_damping), float(dt),
+                              1, self.x)
+        return (self.model.cloth, self.model.colliders, self.tuning, self.state, control, now,
+                now)
 
-    def _hood_step(self, links, acc, dt, damping):
+    def hood_step(self, links, acc, dt, damping):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
-        hood = self.rig.hood
-        step_kernel.hood_step(links, hood.link, hood.pivot, hood.length, self.hood_p,
-                              self.hood_pp, np.asarray(acc, dtype=float), dt, damping)
+        step_kernel.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
+                              float(dt), float(damping))
+
+    def _posed(self, links, root, ref=None):
+        """Colliders (and M11 references, zero if not given) in the simulation frame."""
+        now = posed_like(self.model.colliders, self.rig.n)
+        pose_kernel.collider_poses(links, self.model.colliders, now)
+        step_kernel.plane_poses(links, root, self.model.colliders, now)
+        if ref is not None:
+            now.ref[:] = ref
+        return now
 
     def collider_frames(self, links, root=None):
         """Every collider in the simulation frame, for the kernel and the markers.
 
         Planes fixed in the world (the floor) need the root's world pose ``root``.
         """
-        rig = self.rig
-        centers, axes = np.empty_like(rig.collider_centers), np.empty_like(rig.collider_rotations)
-        cap_a, cap_b = np.empty((len(rig.capsule_links), 3)), np.empty((len(rig.capsule_links), 3))
-        pose_kernel.collider_poses(links, rig.collider_links, rig.collider_centers,
-                                   rig.collider_rotations, rig.capsule_links, rig.capsule_ends,
-                                   centers, axes, cap_a, cap_b)
-        points, normals = np.empty_like(rig.plane_points), np.empty_like(rig.plane_normals)
-        step_kernel.plane_poses(links, self.root if root is None else root, rig.plane_links,
-                                rig.plane_points, rig.plane_normals, points, normals)
-        return Colliders(centers, axes, rig.collider_radii, cap_a, cap_b,
-                         rig.capsule_radii, points, normals)
+        c = self._posed(links, self.root if root is None else root)
+        return Colliders(c.centers, c.axes, self.rig.collider_radii, c.cap_a, c.cap_b,
+                         self.rig.capsule_radii, c.plane_p, c.plane_n)
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):

@@ -13,6 +13,7 @@ import numpy as np
 from urdf_parser_py import urdf
 
 from .config import ConfigError
+from .bundles import floats, skeleton_model
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -90,6 +91,7 @@ class Skeleton:
             self.mult[k] = j.mimic.multiplier if j.mimic.multiplier is not None else 1.0
             self.offset[k] = j.mimic.offset if j.mimic.offset is not None else 0.0
         self.joint_index = index
+        self.model = skeleton_model(self)
 
     def link(self, name, where='rig'):
         if name not in self.link_index:
@@ -100,6 +102,5 @@ class Skeleton:
     def forward(self, q):
         """Link transforms (L,4,4) in the root link's frame for joint values q (J,)."""
         world = np.empty((len(self.link_names), 4, 4))
-        forward_kinematics(self.origin, self.axis, self.kind, self.var, self.mult, self.offset,
-                           self.parent, np.asarray(q, dtype=float), world)
+        forward_kinematics(self.model, floats(q), world)
         return world

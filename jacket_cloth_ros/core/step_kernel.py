@@ -13,6 +13,7 @@ between inputs). Here the step is the same sequence of the same compiled parts:
 
 import numpy as np
 
+from .bundles import Posed, StepControl
 from .kernel_cache import njit
 from .kernel import cloth_step
 from .pose_kernel import (
@@ -73,8 +74,11 @@ def relative_move(new, old, delta):
 
 
 @njit(cache=True)
-def plane_poses(links, root, plane_links, points_local, normals_local, points, normals):
-    """Planes on their links; a plane fixed in the world (link < 0) seen from ``root``."""
+def plane_poses(links, root, colliders, posed):
+    """Planes of a bundles.ColliderModel on their links into a bundles.Posed; a plane fixed in
+    the world (link < 0) seen from ``root``."""
+    plane_links, points_local = colliders.plane_links, colliders.plane_points
+    normals_local, points, normals = colliders.plane_normals, posed.plane_p, posed.plane_n
     frame = np.empty((4, 4))
     for k in range(points.shape[0]):
         if plane_links[k] < 0:
@@ -88,8 +92,10 @@ def plane_poses(links, root, plane_links, points_local, normals_local, points, n
 
 
 @njit(cache=True)
-def hood_step(links, hood_link, pivot, length, p, pp, acc, dt, damping):
-    """M8: one Verlet particle on a rod of fixed ``length`` from the hood bone's centre."""
+def hood_step(links, cloth, p, pp, acc, dt, damping):
+    """M8: one Verlet particle on a rod of fixed length from the hood bone's centre (the
+    hood of a bundles.ClothModel)."""
+    hood_link, pivot, length = cloth.hood_link, cloth.hood_pivot, cloth.hood_length
     anchor = np.empty(3)
     _transform_point(links[hood_link], pivot, anchor)
     d = np.empty(3)
@@ -105,47 +111,35 @@ def hood_step(links, hood_link, pivot, length, p, pp, acc, dt, damping):
 
 
 @njit(cache=True)
-def _lost_per(share, exponent):
-    """simulation.per_step of one share: lost per design step, as lost per step ``exponent``
-    times as long."""
+def lost_per(share, exponent):
+    """A share lost per design step, as the share lost in a step ``exponent`` times as long
+    (fabrics are tuned at simulation.DESIGN_RATE)."""
     return share if exponent == 1.0 else 1.0 - (1.0 - share) ** exponent
 
 
 @njit(cache=True)
-def _per_substep(share, exponent, out):
-    """simulation.per_step into ``out``: a share lost per design step, per shorter step."""
+def lost_per_each(share, exponent, out):
+    """lost_per of each share into ``out``."""
     for i in range(share.shape[0]):
-        out[i] = _lost_per(share[i], exponent)
+        out[i] = lost_per(share[i], exponent)
 
 
 @njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
-def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns, n,
-            origin, axis, kind, var, mult, offset, parent,
-            sleeve_link, sleeve_end, sleeve_axis, sleeve_length, sleeve_share, upper,
-            pad_pivot, pad_aim_link, pad_aim, pad_length, pad_below_length, down, rest_gap,
-            pin_link, pin_local, reference_link, reference_local, pin_below, pin_below_local,
-            pin_weight,
-            collider_links, centers_local, rotations_local, radii, capsule_links, capsule_ends,
-            capsule_radii, plane_links, plane_points_local, plane_normals_local,
-            free, con_a, con_b, con_rest, stiffness, iterations, max_distance, limit_mode,
-            vert_a, vert_b, vert_rest, tether_anchor, tether_length, solver, max_substeps,
-            quality_tolerance, sweep_tolerance, compliance, lam,
-            damping, contact_damping, hood_damping, design_exponent,
-            world_share, hood_world_share, wind_scale, hood_wind_scale, gravity, wind, gust,
-            gust_period,
-            hood_link, hood_pivot, hood_length,
-            x, xp, contact, hood_p, hood_pp, root, links, before, frames_before,
-            layer_rot, layer_pos, layer_tips, below, stats):
-    """``n`` fixed steps from sample a towards sample b (as JacketSimulation._step did them).
+def advance(model, tuning, state, before, motion, out):
+    """``motion.steps`` fixed steps from sample a towards sample b (core.bundles: Model,
+    Tuning, ClothState, Posed, Motion, StepOutput).
 
-    The state (x, xp, contact, hood_p, hood_pp, root, links, the frames the last step ended
-    with, ``lam``) is updated in place; ``links`` and the layer arrays end with the last
-    step's pose (the layer solved in full at that step only). ``stats`` accumulates the
-    report's figures. Returns the time of the last step (ns).
+    ``state`` is moved in place; ``before`` holds the colliders and references where the
+    last step ended and is moved on to this one's end; ``out.links`` and the layer arrays
+    end with the last step's pose (the layer solved in full at that step only).
+    ``out.stats`` accumulates the report's figures. Returns the time of the last step (ns).
     """
-    cols = pin_local.shape[0]
+    cloth, colliders = model.cloth, model.colliders
+    x, xp, hood_p, hood_pp, root = state.x, state.xp, state.hood_p, state.hood_pp, state.root
+    links, stats, below = out.links, out.stats, out.below
+    cols = cloth.pin_local.shape[0]
     nv = x.shape[0]
-    q = np.empty(q_a.shape[0])
+    q = np.empty(motion.q_a.shape[0])
     quat = np.empty(4)
     new_root = np.eye(4)
     delta = np.empty((4, 4))
@@ -153,100 +147,111 @@ def advance(q_a, q_b, quat_a, quat_b, pos_a, pos_b, stamp_a, span, t_sim, dt_ns,
     gravity_l, wind_l = np.empty(3), np.empty(3)
     acc = np.empty((nv, 3))
     hood_acc = np.empty(3)
-    top, ref = np.empty((cols, 3)), np.empty((nv, 3))
-    centers, axes = np.empty(centers_local.shape), np.empty(rotations_local.shape)
-    cap_a = np.empty((capsule_links.shape[0], 3))
-    cap_b = np.empty((capsule_links.shape[0], 3))
-    plane_p = np.empty(plane_points_local.shape)
-    plane_n = np.empty(plane_normals_local.shape)
-    c_centers, c_axes, c_cap_a, c_cap_b, c_plane_p, c_plane_n, c_ref = frames_before
+    top = np.empty((cols, 3))
+    k_caps = colliders.capsule_links.shape[0]
+    now = Posed(np.empty(colliders.centers.shape), np.empty(colliders.rotations.shape),
+                np.empty((k_caps, 3)), np.empty((k_caps, 3)),
+                np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
+                np.empty((nv, 3)))
     damp = np.empty(nv)
     damp_for = 0
     contact_damp = 0.0
-    hood_damp = _lost_per(hood_damping, design_exponent)
+    hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
+    dt_ns = motion.dt_ns
     dt = dt_ns * 1e-9
-    for step in range(n):
-        last = step == n - 1
+    t_sim = motion.t_sim
+    gust, wind = tuning.gust, tuning.wind
+    for step in range(motion.steps):
+        last = step == motion.steps - 1
         t_sim += dt_ns
         # M7: the skeleton between the two samples at this step's time.
-        w = min(1.0, max(0.0, (t_sim - stamp_a) / span))
+        w = min(1.0, max(0.0, (t_sim - motion.stamp_a) / motion.span))
         for k in range(q.shape[0]):
-            q[k] = q_a[k] + w * (q_b[k] - q_a[k])
-        quat_slerp(quat_a, quat_b, w, quat)
+            q[k] = motion.q_a[k] + w * (motion.q_b[k] - motion.q_a[k])
+        quat_slerp(motion.quat_a, motion.quat_b, w, quat)
         quat_matrix(quat, new_root)
         for k in range(3):
-            new_root[k, 3] = pos_a[k] + w * (pos_b[k] - pos_a[k])
-        forward_kinematics(origin, axis, kind, var, mult, offset, parent, q, links)
+            new_root[k, 3] = motion.pos_a[k] + w * (motion.pos_b[k] - motion.pos_a[k])
+        forward_kinematics(model.skeleton, q, links)
         # M14: the character moved through the world by `delta` (old local -> new local); a
         # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         relative_move(new_root, root, delta)
-        share_world_motion(delta, x, world_share)
-        share_world_motion(delta, xp, world_share)
+        share_world_motion(delta, x, tuning.world_share)
+        share_world_motion(delta, xp, tuning.world_share)
         for point in (hood_p, hood_pp):
             _transform_point(delta, point, moved)
             for k in range(3):
-                point[k] += hood_world_share * (moved[k] - point[k])
+                point[k] += tuning.hood_world_share * (moved[k] - point[k])
         root[:] = new_root
         # Gravity and wind (M4, gusts a function of the step's time) in the local frame.
-        scale = 1.0
-        if gust != 0.0:
-            phase = 2 * np.pi * (t_sim * 1e-9) / gust_period
-            scale = 1.0 + gust * (0.6 * np.sin(phase) + 0.4 * np.sin(2.7 * phase + 1.3))
+        scale = gust_scale(t_sim, gust, tuning.gust_period)
         for k in range(3):
-            gravity_l[k] = -gravity * root[2, k]
+            gravity_l[k] = -tuning.gravity * root[2, k]
             wind_l[k] = scale * (root[0, k] * wind[0] + root[1, k] * wind[1]
                                  + root[2, k] * wind[2])
         for i in range(nv):
             for k in range(3):
-                acc[i, k] = gravity_l[k] + wind_scale[i] * wind_l[k]
+                acc[i, k] = gravity_l[k] + tuning.wind_scale[i] * wind_l[k]
         # M2 then M6: the upper jacket is solved, the pinned top row follows it.
-        solve_layer(links, sleeve_link, sleeve_end, sleeve_axis, sleeve_length, sleeve_share,
-                    upper, pad_pivot, pad_aim_link, pad_aim, pad_length, pad_below_length,
-                    down, rest_gap, last, layer_rot, layer_pos, layer_tips, below)
-        skinned_pose(links, pin_link, pin_local, reference_link, reference_local, below,
-                     pin_below, pin_below_local, pin_weight, top, ref)
+        solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
+                    below)
+        skinned_pose(links, cloth, below, top, now.ref)
         # Substeps: as set, or in the automatic quality mode as few as keep the pinned row's
         # move per substep under the tolerance.
-        substeps = max_substeps
-        if quality_tolerance > 0.0 and max_substeps > 1:
+        substeps = tuning.max_substeps
+        if tuning.quality_tolerance > 0.0 and substeps > 1:
             move = 0.0
             for c in range(cols):
                 for k in range(3):
                     move = max(move, abs(top[c, k] - x[c, k]))
-            substeps = int(min(max_substeps, max(1, np.ceil(move / quality_tolerance))))
+            substeps = int(min(substeps, max(1, np.ceil(move / tuning.quality_tolerance))))
         pin_from = x.copy() if substeps > 1 else x
         x[:cols] = top
         xp[:cols] = top
         if substeps != damp_for:
-            e = design_exponent / substeps
-            _per_substep(damping, e, damp)
-            contact_damp = _lost_per(contact_damping, e)
+            e = tuning.design_exponent / substeps
+            lost_per_each(tuning.damping, e, damp)
+            contact_damp = lost_per(tuning.contact_damping, e)
             damp_for = substeps
-        collider_poses(links, collider_links, centers_local, rotations_local, capsule_links,
-                       capsule_ends, centers, axes, cap_a, cap_b)
-        plane_poses(links, root, plane_links, plane_points_local, plane_normals_local,
-                    plane_p, plane_n)
-        if not before[0]:              # no step before: substeps start where this one ends
-            c_centers[:], c_axes[:], c_cap_a[:], c_cap_b[:] = centers, axes, cap_a, cap_b
-            c_plane_p[:], c_plane_n[:], c_ref[:] = plane_p, plane_n, ref
+        collider_poses(links, colliders, now)
+        plane_poses(links, root, colliders, now)
+        if not state.started[0]:        # no step before: substeps start where this one ends
+            _copy_posed(now, before)
         deepest, limited, sweeps = cloth_step(
-            x, xp, free, acc, damp, contact, contact_damp, dt, con_a, con_b, con_rest,
-            stiffness, iterations, centers, axes, radii, cap_a, cap_b, capsule_radii,
-            plane_p, plane_n, ref, max_distance, limit_mode, vert_a, vert_b, vert_rest,
-            tether_anchor, tether_length, solver, substeps, compliance, lam, pin_from,
-            sweep_tolerance, c_centers, c_axes, c_cap_a, c_cap_b, c_plane_p, c_plane_n, c_ref)
+            cloth, colliders, tuning, state,
+            StepControl(acc, damp, contact_damp, dt, substeps, pin_from), now, before)
         # Where the next step's substeps start from: this step's end.
-        c_centers[:], c_axes[:], c_cap_a[:], c_cap_b[:] = centers, axes, cap_a, cap_b
-        c_plane_p[:], c_plane_n[:], c_ref[:] = plane_p, plane_n, ref
-        before[0] = True
+        _copy_posed(now, before)
+        state.started[0] = True
         stats[DEEPEST] = max(stats[DEEPEST], deepest)
         stats[LIMITED] += limited
         stats[SWEEPS] += sweeps
         stats[SUBSTEPS] += substeps
         for k in range(3):
-            hood_acc[k] = gravity_l[k] + hood_wind_scale * wind_l[k]
-        hood_step(links, hood_link, hood_pivot, hood_length, hood_p, hood_pp, hood_acc, dt,
-                  hood_damp)
-    if n > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
+            hood_acc[k] = gravity_l[k] + tuning.hood_wind_scale * wind_l[k]
+        hood_step(links, cloth, hood_p, hood_pp, hood_acc, dt, hood_damp)
+    if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         stats[NON_FINITE] = 1.0
     return t_sim
+
+
+@njit(cache=True)
+def _copy_posed(src, dst):
+    """Every array of one bundles.Posed into another's."""
+    dst.centers[:] = src.centers
+    dst.axes[:] = src.axes
+    dst.cap_a[:] = src.cap_a
+    dst.cap_b[:] = src.cap_b
+    dst.plane_p[:] = src.plane_p
+    dst.plane_n[:] = src.plane_n
+    dst.ref[:] = src.ref
+
+
+@njit(cache=True)
+def gust_scale(t_ns, gust, period):
+    """The wind's factor at a step's time: two slow incommensurate gusts of relative size
+    ``gust`` (1 without). A function of the stamp only, so a replay sees the live wind."""
+    if gust == 0.0:
+        return 1.0
+    phase = 2 * np.pi * (t_ns * 1e-9) / period
+    return 1.0 + gust * (0.6 * np.sin(phase) + 0.4 * np.sin(2.7 * phase + 1.3))

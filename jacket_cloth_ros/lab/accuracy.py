@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core import kernel
+from ..core.bundles import ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning
 from ..core.simulation import (
     AUTO_SWEEP_SHARE, DESIGN_RATE, SOLVERS, STRETCH_LIMITS, JacketSimulation, SimParams, per_step,
     xpbd_compliance)
@@ -244,7 +245,7 @@ def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
     angle, rod = np.empty(n + 1), np.empty(n + 1)
     angle[0], rod[0] = th, L
     for k in range(1, n + 1):
-        sim._hood_step(links, np.array([0.0, 0.0, -g]), dt, 0.0)
+        sim.hood_step(links, np.array([0.0, 0.0, -g]), dt, 0.0)
         d = sim.hood_p - anchor
         angle[k], rod[k] = math.atan2(d[0], -d[2]), np.linalg.norm(d)
     # Crossings of the vertical in the same direction, linearly interpolated, bound the cycles.
@@ -287,18 +288,23 @@ def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.
     total = (n - 1) * spacing
     exact_bottom = np.array([0.0, 0.0, -total])
     settled_at, steps = None, int(round(seconds / dt))
-    axes = np.zeros((0, 3, 3))
     far = x.copy()                       # no M11: references anywhere, bound of a kilometre
-    pins = x.copy()                      # the pinned top vertex never moves
+    ints = np.zeros(0, dtype=np.int64)
+    cloth = ClothModel(0, x[:1].copy(), ints, none3, ints, none3, np.zeros(0), free, ca, cb,
+                       rest, np.arange(n - 1), np.arange(1, n), np.full(n - 1, spacing),
+                       np.zeros(n, dtype=np.int64), np.arange(n) * spacing, 0, np.zeros(3), 0.0)
+    colliders = ColliderModel(ints, none3, np.zeros((0, 3, 3)), none3, ints,
+                              np.zeros((0, 2, 3)), np.zeros(0), ints, none3, none3)
+    tuning = Tuning(stiffness, method.iterations, compliance, np.full(n, 1e3),
+                    STRETCH_LIMITS[method.stretch_limit], SOLVERS[method.solver],
+                    method.substeps, 0.0, method.tolerance * AUTO_SWEEP_SHARE, np.zeros(n), 0.0,
+                    0.0, 1.0, np.zeros(n), 0.0, np.zeros(n), 0.0, gravity, np.zeros(3), 0.0, 1.0)
+    state = ClothState(x, xp, np.zeros(n, dtype=np.bool_), np.zeros(3), np.zeros(3), np.eye(4),
+                       np.zeros(len(ca)), np.ones(1, dtype=np.bool_))
+    control = StepControl(acc, damping, 0.0, dt, method.substeps, x.copy())  # top never moves
+    posed = Posed(none3, np.zeros((0, 3, 3)), none3, none3, none3, none3, far)
     for k in range(steps):
-        kernel.cloth_step(
-            x, xp, free, acc, damping, np.zeros(n, dtype=np.bool_), 0.0, dt, ca, cb, rest,
-            stiffness, method.iterations, none3, axes, none3, none3, none3, np.zeros(0),
-            none3, none3, far, np.full(n, 1e3), STRETCH_LIMITS[method.stretch_limit],
-            np.arange(n - 1), np.arange(1, n), np.full(n - 1, spacing),
-            np.zeros(n, dtype=np.int64), np.arange(n) * spacing, SOLVERS[method.solver],
-            method.substeps, compliance, np.zeros(len(ca)), pins,
-            method.tolerance * AUTO_SWEEP_SHARE, none3, axes, none3, none3, none3, none3, far)
+        kernel.cloth_step(cloth, colliders, tuning, state, control, posed, posed)
         off = np.linalg.norm(x[-1] - exact_bottom)
         if off > 0.01:
             settled_at = None

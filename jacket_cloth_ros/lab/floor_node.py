@@ -29,6 +29,7 @@ def kernel_stepper(steps=None):
     """A callable running one bare kernel step per call, cycling through ``steps`` (kernel
     arguments; by default the shipped rig's, captured from a walk). Each state moves on."""
     from ..core import kernel
+    from ..core.kernel_cache import FixedTypes
     if steps is None:
         from ..core.fabric import load_fabric
         from ..core.rig import load_rig
@@ -37,9 +38,10 @@ def kernel_stepper(steps=None):
         skeleton = _character()
         steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
     turn = [0]
+    cloth_step = FixedTypes(kernel.cloth_step)      # typed once, as the simulation calls it
 
     def step():
-        kernel.cloth_step(*steps[turn[0] % len(steps)])
+        cloth_step(*steps[turn[0] % len(steps)])
         turn[0] += 1
     return step
 

@@ -32,6 +32,8 @@ import time
 import numpy as np
 
 from ..core import kernel
+from ..core.bundles import copied
+from ..core.kernel_cache import FixedTypes
 from ..core.config import shipped
 from ..core.fabric import load_fabric, load_fabrics
 from ..core.simulation import JacketSimulation
@@ -101,19 +103,19 @@ def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
     captured = []
     for stamp, names, pos in clip_inputs(skeleton, clip, seconds):
         sim.process(stamp, names, pos)
-        captured.append([a.copy() if isinstance(a, np.ndarray) else a
-                         for a in sim.kernel_arguments()])
+        captured.append(copied(sim.kernel_arguments()))
     return captured[2:]             # past the reset and the first step after it
 
 
 def kernel_step_ns(steps, repeat=3):
     """Median time of the kernel on each captured state (copies made outside the timing)."""
     times = []
+    step = FixedTypes(kernel.cloth_step)        # typed once, as the simulation calls it
     for _ in range(repeat):
         for args in steps:
-            a = [v.copy() if isinstance(v, np.ndarray) else v for v in args]
+            a = copied(args)
             t0 = time.perf_counter_ns()
-            kernel.cloth_step(*a)
+            step(*a)
             times.append(time.perf_counter_ns() - t0)
     return float(np.median(times))
 

@@ -1,14 +1,15 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The poses of the collider and hood markers, compiled.
 
-Why compiled: worked out in numpy, one marker per collider, they cost about 150 us of CPU per
-MarkerArray (measured in a replay profile), more than a cloth step. One row per solid marker:
+Why compiled: worked out in numpy, one marker per collider, they cost more than a cloth step
+per MarkerArray (docs/performance.md). One row per solid marker:
 position (3), orientation (x, y, z, w) and scale (3), in the order messages.marker_layout lists
 them.
 """
 
 import numpy as np
 
+from ..core.bundles import Posed
 from ..core.kernel_cache import njit
 from ..core.pose_kernel import _transform_point, collider_poses, quat_from_matrix
 from ..core.step_kernel import plane_poses
@@ -83,50 +84,41 @@ def _z_to(d, q):
 
 
 @njit(cache=True, nogil=True)
-def marker_table(links, root, collider_links, centers_local, rotations_local, radii,
-                 capsule_links, capsule_ends, capsule_radii, plane_links, plane_points_local,
-                 plane_normals_local, hood_link, hood_pivot, x, hood_p, layer_pos, layer_tips):
-    """The pose table (shape_poses' rows: the colliders on ``links``, the hood particle) and
-    the point table (the cloth's vertices, the hood's anchor and particle, the layer bones'
-    pivots, their tips), flattened one after the other. Returns (table, pose rows)."""
-    centers = np.empty(centers_local.shape)
-    axes = np.empty(rotations_local.shape)
-    cap_a = np.empty((capsule_links.shape[0], 3))
-    cap_b = np.empty((capsule_links.shape[0], 3))
-    collider_poses(links, collider_links, centers_local, rotations_local, capsule_links,
-                   capsule_ends, centers, axes, cap_a, cap_b)
-    plane_p = np.empty(plane_points_local.shape)
-    plane_n = np.empty(plane_normals_local.shape)
-    plane_poses(links, root, plane_links, plane_points_local, plane_normals_local, plane_p,
-                plane_n)
-    rows = centers.shape[0] + 3 * cap_a.shape[0] + plane_p.shape[0] + 1
-    n = x.shape[0]
-    k = layer_pos.shape[0]
-    table = np.empty(rows * POSE_WIDTH + 3 * (n + 2 + 2 * k))
-    shape_poses(centers, axes, radii, cap_a, cap_b, capsule_radii, plane_p, plane_n, hood_p,
+def marker_table(model, scene):
+    """The pose table (shape_poses' rows: the colliders of a bundles.Model on the scene's
+    links, the hood particle) and the point table (the cloth's vertices, the hood's anchor and
+    particle, the layer bones' pivots, their tips), flattened one after the other. Returns
+    (table, pose rows)."""
+    colliders, x, hood_p = model.colliders, scene.x, scene.hood_p
+    k_caps = colliders.capsule_links.shape[0]
+    nv = x.shape[0]
+    posed = Posed(np.empty(colliders.centers.shape), np.empty(colliders.rotations.shape),
+                  np.empty((k_caps, 3)), np.empty((k_caps, 3)),
+                  np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
+                  np.empty((0, 3)))
+    collider_poses(scene.links, colliders, posed)
+    plane_poses(scene.links, scene.root, colliders, posed)
+    rows = posed.centers.shape[0] + 3 * k_caps + posed.plane_p.shape[0] + 1
+    k = scene.layer_pos.shape[0]
+    table = np.empty(rows * POSE_WIDTH + 3 * (nv + 2 + 2 * k))
+    shape_poses(posed.centers, posed.axes, colliders.radii, posed.cap_a, posed.cap_b,
+                colliders.capsule_radii, posed.plane_p, posed.plane_n, hood_p,
                 table[:rows * POSE_WIDTH].reshape((rows, POSE_WIDTH)))     # posed in place
-    points = table[rows * POSE_WIDTH:].reshape((n + 2 + 2 * k, 3))
-    points[:n] = x
-    _transform_point(links[hood_link], hood_pivot, points[n])    # the hood's anchor
-    points[n + 1] = hood_p
-    points[n + 2:n + 2 + k] = layer_pos
-    points[n + 2 + k:] = layer_tips
+    points = table[rows * POSE_WIDTH:].reshape((nv + 2 + 2 * k, 3))
+    points[:nv] = x
+    cloth = model.cloth
+    _transform_point(scene.links[cloth.hood_link], cloth.hood_pivot, points[nv])  # hood anchor
+    points[nv + 1] = hood_p
+    points[nv + 2:nv + 2 + k] = scene.layer_pos
+    points[nv + 2 + k:] = scene.layer_tips
     return table, rows
 
 
 @njit(cache=True, nogil=True)
-def fill_markers(links, root, collider_links, centers_local, rotations_local, radii,
-                 capsule_links, capsule_ends, capsule_radii, plane_links, plane_points_local,
-                 plane_normals_local, hood_link, hood_pivot, x, hood_p, layer_pos, layer_tips,
-                 src, dst, out):
-    """marker_table, then cdr.MarkerTemplate's scatter ``out[dst] = table[src]``, in one call.
-
-    Why: as separate numpy and compiled calls, a MarkerArray cost 27 us back to back but 111
-    us in a node that sleeps between inputs (caches cold), measured per call in one run.
-    """
-    table, _ = marker_table(links, root, collider_links, centers_local, rotations_local,
-                            radii, capsule_links, capsule_ends, capsule_radii, plane_links,
-                            plane_points_local, plane_normals_local, hood_link, hood_pivot, x,
-                            hood_p, layer_pos, layer_tips)
+def fill_markers(model, scene, src, dst, out):
+    """marker_table, then cdr.MarkerTemplate's scatter ``out[dst] = table[src]``, in one call:
+    as separate numpy and compiled calls they cost several times as much in a node that
+    sleeps between inputs (caches cold)."""
+    table, _ = marker_table(model, scene)
     for i in range(dst.shape[0]):
         out[dst[i]] = table[src[i]]

@@ -7,12 +7,18 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import cdr, marker_kernel
+from ..core.bundles import Scene, floats
+from ..core.kernel_cache import FixedTypes
 
 # visualization_msgs/Marker constants
 SPHERE, CUBE, CYLINDER, LINE_LIST, TRIANGLE_LIST = 2, 1, 3, 5, 11
 ADD, DELETEALL = 0, 3
 # diagnostic_msgs/DiagnosticStatus levels
 OK, WARN = 0, 1
+
+# Every scene's bundles have the same types, so the marker kernel is typed once.
+_FILL_MARKERS = FixedTypes(marker_kernel.fill_markers)
+_MARKER_TABLE = FixedTypes(marker_kernel.marker_table)
 
 MARKER_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
 TWEED = (0.42, 0.33, 0.24, 0.9)
@@ -110,19 +116,17 @@ def marker_layout(rig, layer_bones, reset):
 def marker_values(sim):
     """(poses, points): the pose table (marker_kernel.shape_poses) and the point table (the
     cloth's vertices, the hood's anchor and particle, the layer bones' pivots, their tips)."""
-    table, rows = marker_kernel.marker_table(*_marker_arguments(sim))
+    table, rows = _MARKER_TABLE(*_marker_arguments(sim))
     width = marker_kernel.POSE_WIDTH
     return table[:rows * width].reshape(rows, width), table[rows * width:].reshape(-1, 3)
 
 
 def _marker_arguments(sim):
-    rig, layer = sim.rig, sim.layer
+    layer = sim.layer
     empty = np.empty((0, 3))
-    return (sim.links, sim.root, rig.collider_links, rig.collider_centers,
-            rig.collider_rotations, rig.collider_radii, rig.capsule_links, rig.capsule_ends,
-            rig.capsule_radii, rig.plane_links, rig.plane_points, rig.plane_normals,
-            rig.hood.link, rig.hood.pivot, sim.x, sim.hood_p,
-            empty if layer is None else layer.positions, empty if layer is None else layer.tips)
+    return (sim.model, Scene(sim.links, sim.root, sim.x, sim.hood_p,
+                             empty if layer is None else floats(layer.positions),
+                             empty if layer is None else floats(layer.tips)))
 
 
 def _layer_bones(sim):
@@ -147,7 +151,7 @@ def marker_specs(sim, reset=False):
 def marker_array(sim, stamp_ns, frame, reset=False):
     """The MarkerArray's CDR bytes: its values written into a template laid out once."""
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
-    return template.encode(marker_kernel.fill_markers, _marker_arguments(sim), stamp_ns)
+    return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
