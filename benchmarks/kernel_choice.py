@@ -25,7 +25,7 @@ from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
-from jacket_cloth_ros.lab.speed import Yardstick, captured_steps, limit_source  # noqa: E402
+from jacket_cloth_lab.speed import Yardstick, captured_steps, limit_source  # noqa: E402
 
 
 def colours(ca, cb, n):

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth bench``: every method's error against its measured cost, per motion clip.
+"""``jacket_cloth_lab bench``: every method's error against its measured cost, per motion clip.
 
 For each clip the lab computes the converged reference (``accuracy.reference``), then runs the
 sweep (methods x iterations x substeps x step) through ``JacketSimulation.process`` and times
@@ -16,10 +16,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..core.config import load_yaml, shipped
-from ..core.fabric import load_fabric
-from ..core.rig import Rig
-from ..core.skeleton import Skeleton
+from jacket_cloth_ros.core.config import load_yaml, shipped
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.core.skeleton import Skeleton
 from . import accuracy
 from .accuracy import SHIPPED, Method
 

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth bench speed``: each cost as a ratio, measured in one run on this machine.
+"""``jacket_cloth_lab bench speed``: each cost as a ratio, measured in one run on this machine.
 
 - kernel: one cloth step of the shipped rig (``lab.bench.rig_at_grid``) against the compiled
   yardstick ``../shared/limit/cloth_ref.c`` at the same grid and iterations (built here when
@@ -31,10 +31,10 @@ import time
 
 import numpy as np
 
-from ..core import kernel
-from ..core.config import shipped
-from ..core.fabric import load_fabric, load_fabrics
-from ..core.simulation import JacketSimulation
+from jacket_cloth_ros.core import kernel
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.fabric import load_fabric, load_fabrics
+from jacket_cloth_ros.core.simulation import JacketSimulation
 from .accuracy import clip_inputs
 from .bench import _character, rig_at_grid
 
@@ -143,9 +143,9 @@ def input_vs_kernel(skeleton, seconds=10.0, paced_s=3.0):
     processes evict its code and data. ``paced`` is the same pipeline fed at 120 Hz with the
     wait slept away: the cost a live node's callback sees.
     """
-    from ..ros.parameters import default_values
-    from ..ros.pipeline import SessionPipeline
-    from ..tools.cli import clip_messages
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.tools.cli import clip_messages
     fabrics = load_fabrics()
     rig = rig_at_grid(skeleton, 9, 12)
     pipe = SessionPipeline(skeleton, rig, fabrics, default_values(fabrics['tweed_jacket']),
@@ -195,8 +195,8 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     from std_msgs.msg import String
     from tf2_msgs.msg import TFMessage
 
-    from ..ros.node import LATCHED
-    from ..tools.cli import clip_messages
+    from jacket_cloth_ros.ros.node import LATCHED
+    from jacket_cloth_ros.tools.cli import clip_messages
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=domain)
@@ -305,7 +305,7 @@ def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
     domain = 40 + os.getpid() % 50
     node_cmd = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
                 '-p', f'record:={os.path.join(record_dir, "speed_session.mcap")}']
-    floor_cmd = [sys.executable, '-m', 'jacket_cloth_ros.lab.floor_node']
+    floor_cmd = [sys.executable, '-m', 'jacket_cloth_lab.floor_node']
     alone = live_node(skeleton, node_cmd, seconds, domain)
     runs = []
     for r in range(rounds):
@@ -346,10 +346,10 @@ def replay_scaling(skeleton, lengths, folder):
     """Replay throughput (simulated s per s) for sessions of each length (s)."""
     from rclpy.serialization import serialize_message
 
-    from ..recording.writer import SessionRecorder, qos_profile_yaml
-    from ..tools.cli import clip_messages
-    from ..tools.replay import replay
-    from ..tools.session import load_session
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.tools.cli import clip_messages
+    from jacket_cloth_ros.tools.replay import replay
+    from jacket_cloth_ros.tools.session import load_session
     rows = []
     for length in lengths:
         src = os.path.join(folder, f'clip_{length:g}.mcap')
@@ -376,10 +376,10 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     from rclpy.parameter import Parameter
     from rclpy.serialization import serialize_message
 
-    from ..recording.reader import count_messages
-    from ..ros.node import JacketClothNode
-    from ..tools.cli import _joint_state
-    from ..motion.clips import joint_state_content
+    from jacket_cloth_ros.recording.reader import count_messages
+    from jacket_cloth_ros.ros.node import JacketClothNode
+    from jacket_cloth_ros.tools.cli import _joint_state
+    from jacket_cloth_ros.motion.clips import joint_state_content
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=97)

@@ -7,7 +7,7 @@ from jacket_cloth_ros.core import kernel, step_kernel
 from jacket_cloth_ros.core.simulation import DESIGN_RATE, per_step
 from jacket_cloth_ros.core.transforms import (
     apply_transform, invert_transform, make_transform, quat_slerp, quat_to_matrix)
-from jacket_cloth_ros.lab.accuracy import clip_inputs
+from jacket_cloth_lab.accuracy import clip_inputs
 
 
 def test_compiled_slerp_and_rotation_equal_the_numpy_ones():
