@@ -145,7 +145,7 @@ def input_vs_kernel(skeleton, seconds=10.0, paced_s=3.0):
     """
     from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
-    from jacket_cloth_ros.tools.cli import clip_messages
+    from jacket_cloth_ros.motion.messages import clip_messages
     fabrics = load_fabrics()
     rig = rig_at_grid(skeleton, 9, 12)
     pipe = SessionPipeline(skeleton, rig, fabrics, default_values(fabrics['tweed_jacket']),
@@ -196,7 +196,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     from tf2_msgs.msg import TFMessage
 
     from jacket_cloth_ros.ros.node import LATCHED
-    from jacket_cloth_ros.tools.cli import clip_messages
+    from jacket_cloth_ros.motion.messages import clip_messages
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=domain)
@@ -347,7 +347,7 @@ def replay_scaling(skeleton, lengths, folder):
     from rclpy.serialization import serialize_message
 
     from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
-    from jacket_cloth_ros.tools.cli import clip_messages
+    from jacket_cloth_ros.motion.messages import clip_messages
     from jacket_cloth_ros.tools.replay import replay
     from jacket_cloth_ros.tools.session import load_session
     rows = []
@@ -378,8 +378,8 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
 
     from jacket_cloth_ros.recording.reader import count_messages
     from jacket_cloth_ros.ros.node import JacketClothNode
-    from jacket_cloth_ros.tools.cli import _joint_state
     from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.motion.messages import joint_state_message
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=97)
@@ -395,7 +395,8 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
         for k in range(n):                 # the gait repeats; the walker goes on
             t = k / RATE
             names, pos = joint_state_content(skeleton.joint_names, 'walk', t)
-            raw = serialize_message(_joint_state(names, pos, 10 ** 10 + int(round(t * 1e9))))
+            raw = serialize_message(
+                joint_state_message(names, pos, 10 ** 10 + int(round(t * 1e9))))
             t0 = time.thread_time_ns()
             node._on_joint_state(raw, {})
             costs.append(time.thread_time_ns() - t0)

@@ -13,8 +13,8 @@ import time
 
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
-from ..motion.clips import (
-    ALL_CLIPS, clip_length, joint_state_content, segment_at, showcase_highlights)
+from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
+from ..motion.messages import clip_messages
 
 
 class ToolError(Exception):
@@ -26,27 +26,6 @@ def _skeleton(urdf_path=None):
     path = urdf_path or shipped('character.urdf')
     with open(path, encoding='utf-8') as f:
         return Skeleton(f.read()), path
-
-
-def _joint_state(names, positions, stamp_ns):
-    from sensor_msgs.msg import JointState
-    msg = JointState()
-    msg.header.stamp.sec = int(stamp_ns // 1_000_000_000)
-    msg.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
-    msg.name = names
-    msg.position = [float(p) for p in positions]
-    return msg
-
-
-def clip_messages(skeleton, clip, rate, duration, start_ns, world_joint='world_joint'):
-    """(stamp_ns, JointState) of a clip sampled at ``rate`` Hz from ``start_ns``."""
-    n = int(round(duration * rate))
-    for k in range(n + 1):
-        t = k / rate
-        names, pos = joint_state_content(skeleton.joint_names, clip, t % clip_length(clip)
-                                         if duration > clip_length(clip) else t, world_joint)
-        stamp = start_ns + int(round(t * 1e9))
-        yield stamp, _joint_state(names, pos, stamp)
 
 
 def cmd_motion(args):
