@@ -22,11 +22,11 @@ import numpy as np
 
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.geometry import grid_triangles
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.motion.clips import joint_state_content
-from jacket_cloth_ros.ros.messages import grid_triangles
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
