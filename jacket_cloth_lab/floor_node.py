@@ -32,9 +32,9 @@ def kernel_stepper(steps=None):
     if steps is None:
         from jacket_cloth_ros.core.fabric import load_fabric
         from jacket_cloth_ros.core.rig import load_rig
-        from .bench import _character
+        from jacket_cloth_ros.core.skeleton import load_shipped_character
         from .speed import captured_steps
-        skeleton = _character()
+        skeleton = load_shipped_character()
         steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
     turn = [0]
 

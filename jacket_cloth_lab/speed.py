@@ -32,11 +32,11 @@ import time
 import numpy as np
 
 from jacket_cloth_ros.core import kernel
-from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric, load_fabrics
 from jacket_cloth_ros.core.simulation import JacketSimulation
+from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
 from .accuracy import clip_inputs
-from .bench import _character, rig_at_grid
+from .bench import rig_at_grid
 
 LIMIT_SOURCE = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'shared', 'limit',
                             'cloth_ref.c')
@@ -222,8 +222,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     pub = node.create_publisher(JointState, 'joint_states',
                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     description = node.create_publisher(String, '/robot_description', LATCHED)
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        description.publish(String(data=f.read()))
+    description.publish(String(data=shipped_character_urdf()))
     # One walk: until every first /tf (30 s and more on a cold start) made as it is sent,
     # then the measured part made beforehand.
     walk = clip_messages(skeleton, 'walk', RATE, start_limit_s + seconds + 3.0, 10 ** 10)
@@ -383,8 +382,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=97)
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        urdf = f.read()
+    urdf = shipped_character_urdf()
     node = JacketClothNode(context=ctx, parameter_overrides=[
         Parameter('record', value=path), Parameter('robot_description', value=urdf)])
     windows = []
@@ -425,7 +423,7 @@ def _rss_mb():
 # -- the command -----------------------------------------------------------------------------
 
 def run(quick, out_dir, say=print, endurance_s=None):
-    skeleton = _character()
+    skeleton = load_shipped_character()
     os.makedirs(out_dir, exist_ok=True)
     source = limit_source()
     yardstick = Yardstick(source) if source and not quick else None

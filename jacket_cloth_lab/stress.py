@@ -20,12 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.geometry import grid_triangles
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
-from jacket_cloth_ros.core.skeleton import Skeleton
+from jacket_cloth_ros.core.skeleton import load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content
 from .accuracy import deepest_inside
 
@@ -177,8 +176,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
 
 def stress(methods=METHODS, loop_s=60.0):
     """Every method on every scene: {(scene, method): (verdict, figures)}."""
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        skeleton = Skeleton(f.read())
+    skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     out = {}
     for scene in scenes(skeleton, loop_s):

@@ -10,18 +10,16 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 # A domain of our own so a demo or another test run on the machine does not cross talk.
 DOMAIN_ID = 60 + os.getpid() % 40
 
-from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams  # noqa: E402
-from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf  # noqa: E402
 from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
 
 
 @pytest.fixture(scope='session')
 def urdf_text():
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        return f.read()
+    return shipped_character_urdf()
 
 
 @pytest.fixture(scope='session')

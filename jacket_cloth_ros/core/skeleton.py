@@ -12,7 +12,7 @@ import contextlib
 import numpy as np
 from urdf_parser_py import urdf
 
-from .config import ConfigError
+from .config import ConfigError, shipped
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -103,3 +103,14 @@ class Skeleton:
         forward_kinematics(self.origin, self.axis, self.kind, self.var, self.mult, self.offset,
                            self.parent, np.asarray(q, dtype=float), world)
         return world
+
+
+def shipped_character_urdf():
+    """The shipped character's URDF text (config/character.urdf): the node's fallback."""
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        return f.read()
+
+
+def load_shipped_character():
+    """The shipped character as a Skeleton, for the tools and the lab."""
+    return Skeleton(shipped_character_urdf())

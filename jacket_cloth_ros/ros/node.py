@@ -24,7 +24,7 @@ from visualization_msgs.msg import MarkerArray
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
-from ..core.skeleton import Skeleton
+from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr, messages
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
@@ -119,8 +119,8 @@ class JacketClothNode(Node):
     def _use_shipped_character(self):
         self._fallback.cancel()                 # once, even if the shipped one fails to load
         if self.pipeline is None:
-            with open(shipped('character.urdf'), encoding='utf-8') as f:
-                self._load_model(f.read(), 'the shipped character (config/character.urdf)')
+            self._load_model(shipped_character_urdf(),
+                             'the shipped character (config/character.urdf)')
 
     def _load_model(self, urdf, source):
         skeleton = Skeleton(urdf)
