@@ -244,7 +244,7 @@ def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
     angle, rod = np.empty(n + 1), np.empty(n + 1)
     angle[0], rod[0] = th, L
     for k in range(1, n + 1):
-        sim._hood_step(links, np.array([0.0, 0.0, -g]), dt, 0.0)
+        sim.hood_step(links, np.array([0.0, 0.0, -g]), dt, 0.0)
         d = sim.hood_p - anchor
         angle[k], rod[k] = math.atan2(d[0], -d[2]), np.linalg.norm(d)
     # Crossings of the vertical in the same direction, linearly interpolated, bound the cycles.

@@ -396,7 +396,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
             raw = serialize_message(
                 joint_state_message(names, pos, 10 ** 10 + int(round(t * 1e9))))
             t0 = time.thread_time_ns()
-            node._on_joint_state(raw, {})
+            node.on_joint_state(raw, {})
             costs.append(time.thread_time_ns() - t0)
             if (k + 1) % per_window == 0:
                 windows.append({'simulated_s': (k + 1) / RATE, 'rss_mb': _rss_mb(),

@@ -53,8 +53,8 @@ def _reference_steps(sim, a, b, n):
         kernel.cloth_step(*sim.kernel_arguments(
             links, root, ref, gravity + sim.wind_scale[:, None] * wind,
             per_step(sim.damping, e), float(per_step(f.contact_damping, e)), dt))
-        sim._hood_step(links, gravity + f.wind_scale * wind, dt,
-                       float(per_step(f.hood_damping, e)))
+        sim.hood_step(links, gravity + f.wind_scale * wind, dt,
+                      float(per_step(f.hood_damping, e)))
 
 
 def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):

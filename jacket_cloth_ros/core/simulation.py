@@ -465,7 +465,7 @@ class JacketSimulation:
                 c.centers, c.axes, c.capsule_a, c.capsule_b, c.plane_points, c.plane_normals,
                 ref)
 
-    def _hood_step(self, links, acc, dt, damping):
+    def hood_step(self, links, acc, dt, damping):
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
         hood = self.rig.hood
         step_kernel.hood_step(links, hood.link, hood.pivot, hood.length, self.hood_p,

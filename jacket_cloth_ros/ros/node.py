@@ -141,7 +141,7 @@ class JacketClothNode(Node):
             self._description = self._fallback = None
         self._write_session_config()
         # Subscribed only now: a publisher that waits for us knows we can simulate.
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state,
+        self.create_subscription(JointState, 'joint_states', self.on_joint_state,
                                  qos_profile_sensor_data, raw=True)
         self.get_logger().info(
             f'character {skeleton.name!r} from {source}: {len(skeleton.joint_names)} joints, '
@@ -242,7 +242,17 @@ class JacketClothNode(Node):
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
 
-    def _on_joint_state(self, raw, info):
+    def on_joint_state(self, raw, info):
+        """One serialized JointState in (the joint_states callback): simulate, publish, record.
+
+        Public so a harness can feed the node without DDS, as the lab's endurance run does.
+
+        Args:
+            raw (bytes): the CDR-serialized message.
+            info (dict): rclpy's message info; its ``received_timestamp`` (ns, system clock)
+                starts the latency, else (``{}``) now does. It has no default because rclpy
+                passes the info only to a callback that needs a second argument.
+        """
         # Latency counts from the message's arrival in this process (the rmw's receive time,
         # system clock), so time queued behind other callbacks is in it; without one, from now.
         arrived = info.get('received_timestamp') or time.time_ns()
