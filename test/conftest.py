@@ -39,6 +39,17 @@ def make_sim(skeleton, rig):
     return make
 
 
+def clip_inputs(skeleton, clip, seconds, start_s=10.0, rate=60.0):
+    """(stamp_ns, names, positions) of ``clip`` at ``rate`` Hz for ``seconds``, as the lab's
+    ``accuracy.clip_inputs``: the product's tests do not depend on the lab."""
+    out = []
+    for k in range(int(round(seconds * rate))):
+        t = k / rate
+        names, pos = joint_state_content(skeleton.joint_names, clip, t)
+        out.append((int(round((start_s + t) * 1e9)), names, pos))
+    return out
+
+
 def stepwise(sim, clip, rate, duration, start_s=10.0):
     """Feed a clip to a simulation at ``rate`` Hz, yielding each input's report."""
     for k in range(int(round(duration * rate)) + 1):
