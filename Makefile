@@ -62,13 +62,13 @@ test: $(READY)
 
 # The lab's full modes (minutes; `make test` runs their quick modes).
 bench: $(READY)
-	$(PY) -m jacket_cloth_ros bench --out out/bench
+	$(PY) -m jacket_cloth_lab bench --out out/bench
 
 bench-speed: $(READY)
-	$(PY) -m jacket_cloth_ros bench speed --out out/bench_speed
+	$(PY) -m jacket_cloth_lab bench speed --out out/bench_speed
 
 stress: $(READY)
-	$(PY) -m jacket_cloth_ros stress --out out/stress
+	$(PY) -m jacket_cloth_lab stress --out out/stress
 
 # Why the cloth step is compiled: the same step in numpy, and the C yardstick if it is here.
 bench-kernel: $(READY)

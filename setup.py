@@ -7,7 +7,9 @@ package_name = 'jacket_cloth_ros'
 setup(
     name=package_name,
     version='0.1.0',
-    packages=find_packages(exclude=['test', 'test.*']),
+    # Only the product is installed: the lab (jacket_cloth_lab) runs from a source checkout
+    # (make bench) and nothing in jacket_cloth_ros imports it.
+    packages=find_packages(include=[package_name, package_name + '.*']),
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

@@ -23,11 +23,10 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from jacket_cloth_ros.core import kernel  # noqa: E402
 from jacket_cloth_ros.core.bundles import copied  # noqa: E402
 from jacket_cloth_ros.core.kernel_cache import FixedTypes  # noqa: E402
-from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
-from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
-from jacket_cloth_ros.lab.speed import Yardstick, captured_steps, limit_source  # noqa: E402
+from jacket_cloth_ros.core.skeleton import load_shipped_character  # noqa: E402
+from jacket_cloth_lab.speed import Yardstick, captured_steps, limit_source  # noqa: E402
 
 
 def colours(ca, cb, n):
@@ -85,8 +84,7 @@ def numpy_step(x, xp, free, acc, damping, contact, contact_damping, dt, ca, cb, 
 
 
 def run(steps):
-    with open(shipped('character.urdf'), encoding='utf-8') as fh:
-        skeleton = Skeleton(fh.read())
+    skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     groups = colours(rig.con_a, rig.con_b, rig.n)
     C = rig.cols

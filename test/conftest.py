@@ -12,18 +12,16 @@ os.environ['JACKET_CLOTH_CHECK_TYPES'] = '1'
 # A domain of our own so a demo or another test run on the machine does not cross talk.
 DOMAIN_ID = 60 + os.getpid() % 40
 
-from jacket_cloth_ros.core.config import shipped  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams  # noqa: E402
-from jacket_cloth_ros.core.skeleton import Skeleton  # noqa: E402
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf  # noqa: E402
 from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
 
 
 @pytest.fixture(scope='session')
 def urdf_text():
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        return f.read()
+    return shipped_character_urdf()
 
 
 @pytest.fixture(scope='session')
@@ -41,6 +39,17 @@ def make_sim(skeleton, rig):
     def make(fabric='tweed_jacket', **params):
         return JacketSimulation(skeleton, rig, load_fabric(fabric), SimParams(**params))
     return make
+
+
+def clip_inputs(skeleton, clip, seconds, start_s=10.0, rate=60.0):
+    """(stamp_ns, names, positions) of ``clip`` at ``rate`` Hz for ``seconds``, as the lab's
+    ``accuracy.clip_inputs``: the product's tests do not depend on the lab."""
+    out = []
+    for k in range(int(round(seconds * rate))):
+        t = k / rate
+        names, pos = joint_state_content(skeleton.joint_names, clip, t)
+        out.append((int(round((start_s + t) * 1e9)), names, pos))
+    return out
 
 
 def stepwise(sim, clip, rate, duration, start_s=10.0):

@@ -1,13 +1,13 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The lab: stability where methods fail (quick mode of `jacket_cloth stress`)."""
+"""The lab: stability where methods fail (quick mode of `jacket_cloth_lab stress`)."""
 
 import json
 
 import numpy as np
 import pytest
 
-from jacket_cloth_ros.lab.stress import run_scene, scenes
-from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_lab.stress import run_scene, scenes
+from jacket_cloth_lab.cli import main
 
 
 @pytest.fixture(scope='module')

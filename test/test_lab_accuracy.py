@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The lab's accuracy side: references, the default's bounds, `jacket_cloth bench --quick`."""
+"""The lab's accuracy side: references, the default's bounds, `jacket_cloth_lab bench --quick`."""
 
 import json
 from dataclasses import replace
@@ -10,10 +10,10 @@ import pytest
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core import step_kernel
 from jacket_cloth_ros.core.simulation import DESIGN_RATE, JacketSimulation, SimParams, per_step
-from jacket_cloth_ros.lab import accuracy
-from jacket_cloth_ros.lab.accuracy import SHIPPED, Method
-from jacket_cloth_ros.lab.bench import rig_at_grid
-from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_lab import accuracy
+from jacket_cloth_lab.accuracy import SHIPPED, Method
+from jacket_cloth_lab.bench import rig_at_grid
+from jacket_cloth_lab.cli import main
 
 QUICK_REFERENCE = replace(accuracy.REFERENCE, sim_rate=960.0, iterations=32)
 

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""`jacket_cloth bench speed --quick`: the figures exist, and nothing is lost on the way.
+"""`jacket_cloth_lab bench speed --quick`: the figures exist, and nothing is lost on the way.
 
 Speed targets are ratios printed by the benchmark, not asserted here (a shared machine is too
 noisy for timed tests); what is asserted is what must hold on any machine.
@@ -11,9 +11,9 @@ import numpy as np
 
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
-from jacket_cloth_ros.lab.floor_node import kernel_stepper
-from jacket_cloth_ros.lab.speed import _cpu_s, _cpu_ticks, captured_steps, endurance
-from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_lab.floor_node import kernel_stepper
+from jacket_cloth_lab.speed import _cpu_s, _cpu_ticks, captured_steps, endurance
+from jacket_cloth_lab.cli import main
 
 
 def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):

@@ -137,7 +137,7 @@ def test_latency_counts_from_the_messages_arrival_in_the_process(harness):
     msg = JointState(name=list(names), position=[float(p) for p in pos])
     msg.header.stamp.sec = 101
     waited = {'received_timestamp': time.time_ns() - 50_000_000}
-    h.node._on_joint_state(serialize_message(msg), waited)
+    h.node.on_joint_state(serialize_message(msg), waited)
     assert h.node.pipeline._latencies[-1] >= 50_000_000
 
 

@@ -74,3 +74,32 @@ def test_launch_file_is_valid_python_with_a_launch_description():
         tree = ast.parse(f.read())
     assert 'generate_launch_description' in {n.name for n in tree.body
                                              if isinstance(n, ast.FunctionDef)}
+
+
+def _imported_modules(tree):
+    """Absolute module names a module imports, and one-word strings, which may name a module
+    to import_module or ``python -m`` (prose mentioning one is not a leak)."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            yield from (alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            yield node.module
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            yield node.value.strip()
+
+
+def test_the_product_never_imports_the_lab():
+    # The lab depends on the product, never the other way, so an install can leave it out.
+    leaks = []
+    for path in glob(os.path.join(ROOT, 'jacket_cloth_ros', '**', '*.py'), recursive=True):
+        with open(path, encoding='utf-8') as f:
+            tree = ast.parse(f.read(), path)
+        leaks += [f'{os.path.relpath(path, ROOT)}: {name}' for name in _imported_modules(tree)
+                  if name.split('.')[0] == 'jacket_cloth_lab']
+    assert not leaks, leaks
+
+
+def test_an_install_leaves_the_lab_out(installed):
+    site = glob(os.path.join(str(installed), 'lib', 'python3*', 'site-packages'))[0]
+    assert os.path.isdir(os.path.join(site, 'jacket_cloth_ros', 'motion'))
+    assert not os.path.exists(os.path.join(site, 'jacket_cloth_lab'))

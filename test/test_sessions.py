@@ -307,7 +307,7 @@ from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.ros import cdr, marker_kernel
 from jacket_cloth_ros.ros.parameters import default_values
 from jacket_cloth_ros.ros.pipeline import SessionPipeline
-from jacket_cloth_ros.tools.cli import clip_messages
+from jacket_cloth_ros.motion.messages import clip_messages
 sk = Skeleton(open(shipped('character.urdf')).read())
 fabrics = load_fabrics()
 pipe = SessionPipeline(sk, load_rig(sk), fabrics, default_values(fabrics['tweed_jacket']))

@@ -12,6 +12,7 @@ import pytest
 from conftest import DOMAIN_ID
 
 from jacket_cloth_ros.motion.clips import ALL_CLIPS, clip_length, pose
+from jacket_cloth_ros.motion.messages import clip_messages
 from jacket_cloth_ros.recording.reader import RecordingError, read_messages
 from jacket_cloth_ros.tools.cli import main
 
@@ -27,6 +28,18 @@ def test_every_clip_is_continuous(skeleton):
                 jumps += 1
             prev = now
         assert jumps == (1 if clip in ('teleport', 'showcase') else 0), clip   # the 10 m jump
+
+
+def test_clip_messages_are_stamped_from_the_start_and_loop_a_clip_past_its_end(skeleton):
+    length = clip_length('walk')
+    msgs = list(clip_messages(skeleton, 'walk', 30.0, length + 1.0, 5 * 10 ** 9))
+    assert len(msgs) == int(round((length + 1.0) * 30)) + 1
+    for stamp, msg in msgs[:3]:
+        assert stamp == msg.header.stamp.sec * 10 ** 9 + msg.header.stamp.nanosec
+    assert msgs[0][0] == 5 * 10 ** 9 and msgs[1][0] - msgs[0][0] == round(1e9 / 30)
+    first, again = msgs[0][1], msgs[int(round(length * 30))][1]
+    assert list(first.name[:len(skeleton.joint_names)]) == list(skeleton.joint_names)
+    assert list(first.position) == list(again.position)         # looped back to its start
 
 
 def test_motion_to_file_then_errors_are_one_line(tmp_path, capsys):

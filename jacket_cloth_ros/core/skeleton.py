@@ -12,8 +12,8 @@ import contextlib
 import numpy as np
 from urdf_parser_py import urdf
 
-from .config import ConfigError
 from .bundles import floats, skeleton_model
+from .config import ConfigError, shipped
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -104,3 +104,14 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def shipped_character_urdf():
+    """The shipped character's URDF text (config/character.urdf): the node's fallback."""
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        return f.read()
+
+
+def load_shipped_character():
+    """The shipped character as a Skeleton, for the tools and the lab."""
+    return Skeleton(shipped_character_urdf())

@@ -6,6 +6,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import Scene, floats
 from ..core.kernel_cache import FixedTypes
@@ -60,30 +61,6 @@ def tf_message(bones, stamp_ns, prefix=''):
 def tf_template(names, parents, prefix):
     """The TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
     return cdr.TfTemplate(names, parents, prefix)
-
-
-@functools.lru_cache(maxsize=8)
-def grid_triangles(rows, cols):
-    """Vertex indices of the cloth mesh: two triangles per grid quad."""
-    tri = []
-    for r in range(rows - 1):
-        for c in range(cols - 1):
-            a, b, d, e = r * cols + c, r * cols + c + 1, (r + 1) * cols + c, (r + 1) * cols + c + 1
-            tri += [a, d, b, b, d, e]
-    return np.array(tri)
-
-
-@functools.lru_cache(maxsize=8)
-def grid_lines(rows, cols):
-    lines = []
-    for r in range(rows):
-        for c in range(cols):
-            i = r * cols + c
-            if c + 1 < cols:
-                lines += [i, i + 1]
-            if r + 1 < rows:
-                lines += [i, i + cols]
-    return np.array(lines)
 
 
 @functools.lru_cache(maxsize=8)

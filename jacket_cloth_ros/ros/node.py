@@ -24,7 +24,7 @@ from visualization_msgs.msg import MarkerArray
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
-from ..core.skeleton import Skeleton
+from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr, messages
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
@@ -119,8 +119,8 @@ class JacketClothNode(Node):
     def _use_shipped_character(self):
         self._fallback.cancel()                 # once, even if the shipped one fails to load
         if self.pipeline is None:
-            with open(shipped('character.urdf'), encoding='utf-8') as f:
-                self._load_model(f.read(), 'the shipped character (config/character.urdf)')
+            self._load_model(shipped_character_urdf(),
+                             'the shipped character (config/character.urdf)')
 
     def _load_model(self, urdf, source):
         skeleton = Skeleton(urdf)
@@ -141,7 +141,7 @@ class JacketClothNode(Node):
             self._description = self._fallback = None
         self._write_session_config()
         # Subscribed only now: a publisher that waits for us knows we can simulate.
-        self.create_subscription(JointState, 'joint_states', self._on_joint_state,
+        self.create_subscription(JointState, 'joint_states', self.on_joint_state,
                                  qos_profile_sensor_data, raw=True)
         self.get_logger().info(
             f'character {skeleton.name!r} from {source}: {len(skeleton.joint_names)} joints, '
@@ -242,7 +242,17 @@ class JacketClothNode(Node):
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
 
-    def _on_joint_state(self, raw, info):
+    def on_joint_state(self, raw, info):
+        """One serialized JointState in (the joint_states callback): simulate, publish, record.
+
+        Public so a harness can feed the node without DDS, as the lab's endurance run does.
+
+        Args:
+            raw (bytes): the CDR-serialized message.
+            info (dict): rclpy's message info; its ``received_timestamp`` (ns, system clock)
+                starts the latency, else (``{}``) now does. It has no default because rclpy
+                passes the info only to a callback that needs a second argument.
+        """
         # Latency counts from the message's arrival in this process (the rmw's receive time,
         # system clock), so time queued behind other callbacks is in it; without one, from now.
         arrived = info.get('received_timestamp') or time.time_ns()

@@ -13,8 +13,8 @@ import time
 
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
-from ..motion.clips import (
-    ALL_CLIPS, clip_length, joint_state_content, segment_at, showcase_highlights)
+from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
+from ..motion.messages import clip_messages
 
 
 class ToolError(Exception):
@@ -26,27 +26,6 @@ def _skeleton(urdf_path=None):
     path = urdf_path or shipped('character.urdf')
     with open(path, encoding='utf-8') as f:
         return Skeleton(f.read()), path
-
-
-def _joint_state(names, positions, stamp_ns):
-    from sensor_msgs.msg import JointState
-    msg = JointState()
-    msg.header.stamp.sec = int(stamp_ns // 1_000_000_000)
-    msg.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
-    msg.name = names
-    msg.position = [float(p) for p in positions]
-    return msg
-
-
-def clip_messages(skeleton, clip, rate, duration, start_ns, world_joint='world_joint'):
-    """(stamp_ns, JointState) of a clip sampled at ``rate`` Hz from ``start_ns``."""
-    n = int(round(duration * rate))
-    for k in range(n + 1):
-        t = k / rate
-        names, pos = joint_state_content(skeleton.joint_names, clip, t % clip_length(clip)
-                                         if duration > clip_length(clip) else t, world_joint)
-        stamp = start_ns + int(round(t * 1e9))
-        yield stamp, _joint_state(names, pos, stamp)
 
 
 def cmd_motion(args):
@@ -167,44 +146,6 @@ def cmd_analyze(args):
     return 0
 
 
-def cmd_stress(args):
-    from ..lab.stress import METHODS, stress, write_matrix
-    methods = tuple(args.methods.split(',')) if args.methods else METHODS
-    unknown = [m for m in methods if m not in METHODS]
-    if unknown:
-        raise ToolError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(METHODS)})')
-    loop = 3600.0 if args.full else args.loop
-    results = stress(methods, loop_s=loop)
-    write_matrix(results, args.out, methods)
-    failed = sorted({s for (s, m), (v, _) in results.items() if v != 'holds'})
-    print(f'{os.path.join(args.out, "stress.md")}: {len(results)} runs, '
-          f'{sum(v == "holds" for v, _ in results.values())} hold'
-          + (f'; failures in: {", ".join(failed)}' if failed else ''))
-    return 0
-
-
-def cmd_bench(args):
-    args.out = args.out or ('out/bench_speed' if args.what == 'speed' else 'out/bench')
-    if args.what == 'speed':
-        from ..lab.speed import main as speed_main
-        return speed_main(args)
-    from ..lab.bench import CLIPS, bench, write
-    clips = tuple(args.clips.split(',')) if args.clips else (('walk',) if args.quick else CLIPS)
-    unknown = [c for c in clips if c not in CLIPS]
-    if unknown:
-        raise ToolError(f'unknown clip(s) {", ".join(unknown)} (clips: {", ".join(CLIPS)})')
-    seconds = args.seconds or (1.0 if args.quick else 3.0)
-    results = bench(clips, quick=args.quick, seconds=seconds,
-                    progress=lambda text: print(text, flush=True))
-    write(results, args.out)
-    default = [r for c in results['clips'].values() for r in c['rows']
-               if r['label'] == results['default']]
-    print(f'{os.path.join(args.out, "bench.md")}: {len(clips)} clip(s); the default\'s hem '
-          f'error RMS {max(r["hem_rms_m"] for r in default) * 1e3:.1f} mm at worst, '
-          f'{max(r["cost_ms_per_s"] for r in default):.0f} ms per simulated s')
-    return 0
-
-
 def cmd_demo(args):
     """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
     from ..tools.picture import render_filmstrip
@@ -291,22 +232,6 @@ def build_parser():
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
-    st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
-    st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
-    st.add_argument('--methods', default=None, help='comma-separated (default: all)')
-    st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')
-    st.add_argument('--full', action='store_true', help='an hour of looped walk')
-    st.set_defaults(func=cmd_stress)
-    b = sub.add_parser('bench', help='accuracy against measured cost per clip (or: bench speed)')
-    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed'),
-                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit')
-    b.add_argument('--out', default=None, help='output folder (default: out/bench[_speed])')
-    b.add_argument('--quick', action='store_true', help='a few methods on one short clip')
-    b.add_argument('--clips', default=None, help='comma-separated motion clips')
-    b.add_argument('--seconds', type=float, default=None, help='length of each clip')
-    b.add_argument('--endurance', type=float, default=None,
-                   help='speed: simulated s through the node (default 600; 3600 for the hour)')
-    b.set_defaults(func=cmd_bench)
     return p
 
 

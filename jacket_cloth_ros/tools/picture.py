@@ -21,10 +21,10 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from ..core.fabric import load_fabric  # noqa: E402
+from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import read_messages  # noqa: E402
-from ..ros.messages import grid_triangles  # noqa: E402
 
 VIEWS = (('side', 0, 'x (m, forward)'), ('front', 1, 'y (m, left)'))
 

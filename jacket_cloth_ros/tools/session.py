@@ -18,7 +18,7 @@ from rclpy.serialization import deserialize_message
 from ..core.config import ConfigError, parse_yaml, shipped
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
-from ..core.skeleton import Skeleton
+from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
@@ -87,8 +87,7 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
     recorded = recording.metadata.get(SESSION_CONFIG, {})
     urdf_text = _read_text(urdf, 'URDF') if urdf else recorded.get('urdf')
     if not urdf_text:
-        with open(shipped('character.urdf'), encoding='utf-8') as f:
-            urdf_text = f.read()
+        urdf_text = shipped_character_urdf()
     skeleton = Skeleton(urdf_text)
     rig_yaml = _read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or _read_text(
         shipped('jacket_rig.yaml'), 'rig')

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth bench``: every method's error against its measured cost, per motion clip.
+"""``jacket_cloth_lab bench``: every method's error against its measured cost, per motion clip.
 
 For each clip the lab computes the converged reference (``accuracy.reference``), then runs the
 sweep (methods x iterations x substeps x step) through ``JacketSimulation.process`` and times
@@ -16,10 +16,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..core.config import load_yaml, shipped
-from ..core.fabric import load_fabric
-from ..core.rig import Rig
-from ..core.skeleton import Skeleton
+from jacket_cloth_ros.core.config import load_yaml, shipped
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.core.skeleton import load_shipped_character
 from . import accuracy
 from .accuracy import SHIPPED, Method
 
@@ -75,11 +75,6 @@ def rig_at_grid(skeleton, cols, rows, colliders=None):
     return Rig(data, skeleton, where=f'shipped rig at {cols}x{rows}')
 
 
-def _character():
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        return Skeleton(f.read())
-
-
 def pareto_front(rows):
     """Indices of the rows no other row beats on both cost and hem error."""
     order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'],
@@ -96,7 +91,7 @@ def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jac
           progress=None):
     """Run everything; a JSON-ready dict of results."""
     say = progress or (lambda text: None)
-    skeleton = _character()
+    skeleton = load_shipped_character()
     fabric = load_fabric(fabric_name)
     rig = rig_at_grid(skeleton, 9, 12)
     ref_method = replace(accuracy.REFERENCE, sim_rate=960.0, iterations=32) if quick \

@@ -21,12 +21,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core import kernel
-from ..core.bundles import ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning
-from ..core.simulation import (
+from jacket_cloth_ros.core import kernel
+from jacket_cloth_ros.core.bundles import (
+    ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning)
+from jacket_cloth_ros.core.simulation import (
     AUTO_SWEEP_SHARE, DESIGN_RATE, SOLVERS, STRETCH_LIMITS, JacketSimulation, SimParams, per_step,
     xpbd_compliance)
-from ..motion.clips import joint_state_content
+from jacket_cloth_ros.motion.clips import joint_state_content
 
 CLIP_RATE = 60.0                 # Hz of the lab's JointState
 HEM_SAMPLES = 33                 # points along the hem curve, so grids of any width compare

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The floor of `jacket_cloth bench speed`: the least an rclpy node can do per JointState.
+"""The floor of `jacket_cloth_lab bench speed`: the least an rclpy node can do per JointState.
 
 It receives the JointState stream as the real node does (raw bytes, sensor-data QoS) and
 republishes one pre-built TFMessage with as many bones as the shipped rig: no simulation, no
@@ -20,7 +20,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 
-from ..ros.cdr import TfTemplate
+from jacket_cloth_ros.ros.cdr import TfTemplate
 
 BONES = 68          # the shipped rig's bones on /tf
 
@@ -28,14 +28,14 @@ BONES = 68          # the shipped rig's bones on /tf
 def kernel_stepper(steps=None):
     """A callable running one bare kernel step per call, cycling through ``steps`` (kernel
     arguments; by default the shipped rig's, captured from a walk). Each state moves on."""
-    from ..core import kernel
-    from ..core.kernel_cache import FixedTypes
+    from jacket_cloth_ros.core import kernel
+    from jacket_cloth_ros.core.kernel_cache import FixedTypes
     if steps is None:
-        from ..core.fabric import load_fabric
-        from ..core.rig import load_rig
-        from .bench import _character
+        from jacket_cloth_ros.core.fabric import load_fabric
+        from jacket_cloth_ros.core.rig import load_rig
+        from jacket_cloth_ros.core.skeleton import load_shipped_character
         from .speed import captured_steps
-        skeleton = _character()
+        skeleton = load_shipped_character()
         steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
     turn = [0]
     cloth_step = FixedTypes(kernel.cloth_step)      # typed once, as the simulation calls it

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth bench speed``: each cost as a ratio, measured in one run on this machine.
+"""``jacket_cloth_lab bench speed``: each cost as a ratio, measured in one run on this machine.
 
 - kernel: one cloth step of the shipped rig (``lab.bench.rig_at_grid``) against the compiled
   yardstick ``../shared/limit/cloth_ref.c`` at the same grid and iterations (built here when
@@ -31,14 +31,14 @@ import time
 
 import numpy as np
 
-from ..core import kernel
-from ..core.bundles import copied
-from ..core.kernel_cache import FixedTypes
-from ..core.config import shipped
-from ..core.fabric import load_fabric, load_fabrics
-from ..core.simulation import JacketSimulation
+from jacket_cloth_ros.core import kernel
+from jacket_cloth_ros.core.bundles import copied
+from jacket_cloth_ros.core.kernel_cache import FixedTypes
+from jacket_cloth_ros.core.fabric import load_fabric, load_fabrics
+from jacket_cloth_ros.core.simulation import JacketSimulation
+from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
 from .accuracy import clip_inputs
-from .bench import _character, rig_at_grid
+from .bench import rig_at_grid
 
 LIMIT_SOURCE = os.path.join(os.path.dirname(__file__), '..', '..', '..', 'shared', 'limit',
                             'cloth_ref.c')
@@ -145,9 +145,9 @@ def input_vs_kernel(skeleton, seconds=10.0, paced_s=3.0):
     processes evict its code and data. ``paced`` is the same pipeline fed at 120 Hz with the
     wait slept away: the cost a live node's callback sees.
     """
-    from ..ros.parameters import default_values
-    from ..ros.pipeline import SessionPipeline
-    from ..tools.cli import clip_messages
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.motion.messages import clip_messages
     fabrics = load_fabrics()
     rig = rig_at_grid(skeleton, 9, 12)
     pipe = SessionPipeline(skeleton, rig, fabrics, default_values(fabrics['tweed_jacket']),
@@ -197,8 +197,8 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     from std_msgs.msg import String
     from tf2_msgs.msg import TFMessage
 
-    from ..ros.node import LATCHED
-    from ..tools.cli import clip_messages
+    from jacket_cloth_ros.ros.node import LATCHED
+    from jacket_cloth_ros.motion.messages import clip_messages
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=domain)
@@ -224,8 +224,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     pub = node.create_publisher(JointState, 'joint_states',
                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     description = node.create_publisher(String, '/robot_description', LATCHED)
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        description.publish(String(data=f.read()))
+    description.publish(String(data=shipped_character_urdf()))
     # One walk: until every first /tf (30 s and more on a cold start) made as it is sent,
     # then the measured part made beforehand.
     walk = clip_messages(skeleton, 'walk', RATE, start_limit_s + seconds + 3.0, 10 ** 10)
@@ -307,7 +306,7 @@ def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
     domain = 40 + os.getpid() % 50
     node_cmd = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
                 '-p', f'record:={os.path.join(record_dir, "speed_session.mcap")}']
-    floor_cmd = [sys.executable, '-m', 'jacket_cloth_ros.lab.floor_node']
+    floor_cmd = [sys.executable, '-m', 'jacket_cloth_lab.floor_node']
     alone = live_node(skeleton, node_cmd, seconds, domain)
     runs = []
     for r in range(rounds):
@@ -348,10 +347,10 @@ def replay_scaling(skeleton, lengths, folder):
     """Replay throughput (simulated s per s) for sessions of each length (s)."""
     from rclpy.serialization import serialize_message
 
-    from ..recording.writer import SessionRecorder, qos_profile_yaml
-    from ..tools.cli import clip_messages
-    from ..tools.replay import replay
-    from ..tools.session import load_session
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.motion.messages import clip_messages
+    from jacket_cloth_ros.tools.replay import replay
+    from jacket_cloth_ros.tools.session import load_session
     rows = []
     for length in lengths:
         src = os.path.join(folder, f'clip_{length:g}.mcap')
@@ -378,15 +377,14 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     from rclpy.parameter import Parameter
     from rclpy.serialization import serialize_message
 
-    from ..recording.reader import count_messages
-    from ..ros.node import JacketClothNode
-    from ..tools.cli import _joint_state
-    from ..motion.clips import joint_state_content
+    from jacket_cloth_ros.recording.reader import count_messages
+    from jacket_cloth_ros.ros.node import JacketClothNode
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.motion.messages import joint_state_message
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=97)
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        urdf = f.read()
+    urdf = shipped_character_urdf()
     node = JacketClothNode(context=ctx, parameter_overrides=[
         Parameter('record', value=path), Parameter('robot_description', value=urdf)])
     windows = []
@@ -397,9 +395,10 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
         for k in range(n):                 # the gait repeats; the walker goes on
             t = k / RATE
             names, pos = joint_state_content(skeleton.joint_names, 'walk', t)
-            raw = serialize_message(_joint_state(names, pos, 10 ** 10 + int(round(t * 1e9))))
+            raw = serialize_message(
+                joint_state_message(names, pos, 10 ** 10 + int(round(t * 1e9))))
             t0 = time.thread_time_ns()
-            node._on_joint_state(raw, {})
+            node.on_joint_state(raw, {})
             costs.append(time.thread_time_ns() - t0)
             if (k + 1) % per_window == 0:
                 windows.append({'simulated_s': (k + 1) / RATE, 'rss_mb': _rss_mb(),
@@ -426,7 +425,7 @@ def _rss_mb():
 # -- the command -----------------------------------------------------------------------------
 
 def run(quick, out_dir, say=print, endurance_s=None):
-    skeleton = _character()
+    skeleton = load_shipped_character()
     os.makedirs(out_dir, exist_ok=True)
     source = limit_source()
     yardstick = Yardstick(source) if source and not quick else None

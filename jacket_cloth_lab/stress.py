@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth stress``: the scenes where cloth methods fail, run for every method.
+"""``jacket_cloth_lab stress``: the scenes where cloth methods fail, run for every method.
 
 Each scene feeds the shipped character's JointState to the simulation core (the same
 ``JacketSimulation.process`` the node calls), then one and a half seconds of standing still,
@@ -20,13 +20,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.config import shipped
-from ..core.fabric import load_fabric
-from ..core.rig import load_rig
-from ..core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
-from ..core.skeleton import Skeleton
-from ..motion.clips import joint_state_content
-from ..ros.messages import grid_triangles
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.geometry import grid_triangles
+from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
+from jacket_cloth_ros.core.skeleton import load_shipped_character
+from jacket_cloth_ros.motion.clips import joint_state_content
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
@@ -177,8 +176,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
 
 def stress(methods=METHODS, loop_s=60.0):
     """Every method on every scene: {(scene, method): (verdict, figures)}."""
-    with open(shipped('character.urdf'), encoding='utf-8') as f:
-        skeleton = Skeleton(f.read())
+    skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     out = {}
     for scene in scenes(skeleton, loop_s):

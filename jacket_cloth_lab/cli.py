@@ -1,0 +1,92 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``python -m jacket_cloth_lab``: the lab's benchmarks, apart from the product's command.
+
+Every failure ends in one readable line on stderr and a non-zero exit, never a traceback.
+"""
+
+import argparse
+import os
+import sys
+
+from jacket_cloth_ros.core.config import ConfigError
+
+PROG = 'python -m jacket_cloth_lab'
+
+
+class LabError(Exception):
+    """A failure to report in one line."""
+
+
+def cmd_stress(args):
+    from .stress import METHODS, stress, write_matrix
+    methods = tuple(args.methods.split(',')) if args.methods else METHODS
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(METHODS)})')
+    loop = 3600.0 if args.full else args.loop
+    results = stress(methods, loop_s=loop)
+    write_matrix(results, args.out, methods)
+    failed = sorted({s for (s, m), (v, _) in results.items() if v != 'holds'})
+    print(f'{os.path.join(args.out, "stress.md")}: {len(results)} runs, '
+          f'{sum(v == "holds" for v, _ in results.values())} hold'
+          + (f'; failures in: {", ".join(failed)}' if failed else ''))
+    return 0
+
+
+def cmd_bench(args):
+    args.out = args.out or ('out/bench_speed' if args.what == 'speed' else 'out/bench')
+    if args.what == 'speed':
+        from .speed import main as speed_main
+        return speed_main(args)
+    from .bench import CLIPS, bench, write
+    clips = tuple(args.clips.split(',')) if args.clips else (('walk',) if args.quick else CLIPS)
+    unknown = [c for c in clips if c not in CLIPS]
+    if unknown:
+        raise LabError(f'unknown clip(s) {", ".join(unknown)} (clips: {", ".join(CLIPS)})')
+    seconds = args.seconds or (1.0 if args.quick else 3.0)
+    results = bench(clips, quick=args.quick, seconds=seconds,
+                    progress=lambda text: print(text, flush=True))
+    write(results, args.out)
+    default = [r for c in results['clips'].values() for r in c['rows']
+               if r['label'] == results['default']]
+    print(f'{os.path.join(args.out, "bench.md")}: {len(clips)} clip(s); the default\'s hem '
+          f'error RMS {max(r["hem_rms_m"] for r in default) * 1e3:.1f} mm at worst, '
+          f'{max(r["cost_ms_per_s"] for r in default):.0f} ms per simulated s')
+    return 0
+
+
+def build_parser():
+    p = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest='command', required=True)
+    st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
+    st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
+    st.add_argument('--methods', default=None, help='comma-separated (default: all)')
+    st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')
+    st.add_argument('--full', action='store_true', help='an hour of looped walk')
+    st.set_defaults(func=cmd_stress)
+    b = sub.add_parser('bench', help='accuracy against measured cost per clip (or: bench speed)')
+    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed'),
+                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit')
+    b.add_argument('--out', default=None, help='output folder (default: out/bench[_speed])')
+    b.add_argument('--quick', action='store_true', help='a few methods on one short clip')
+    b.add_argument('--clips', default=None, help='comma-separated motion clips')
+    b.add_argument('--seconds', type=float, default=None, help='length of each clip')
+    b.add_argument('--endurance', type=float, default=None,
+                   help='speed: simulated s through the node (default 600; 3600 for the hour)')
+    b.set_defaults(func=cmd_bench)
+    return p
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (LabError, ConfigError, ValueError, OSError) as e:
+        print(f'{PROG} {args.command}: {e}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())

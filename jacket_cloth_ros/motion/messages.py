@@ -1,0 +1,60 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""sensor_msgs/JointState messages of the built-in clips, for the motion source and the lab.
+
+sensor_msgs is imported when a message is built, so the clips and the ``jacket_cloth`` help
+work without a ROS 2 install.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Iterator, Sequence, Tuple
+
+from .clips import clip_length, joint_state_content
+
+if TYPE_CHECKING:           # for the annotations only: the skeleton is the caller's
+    from ..core.skeleton import Skeleton
+
+
+def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_ns: int):
+    """A ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
+
+    Args:
+        names: joint names, in the order of ``positions``.
+        positions: one value per name (rad or m).
+        stamp_ns: the header stamp, in nanoseconds.
+
+    Returns:
+        sensor_msgs.msg.JointState: header.stamp, name and position set; no velocity or effort.
+    """
+    from sensor_msgs.msg import JointState
+    msg = JointState()
+    msg.header.stamp.sec = int(stamp_ns // 1_000_000_000)
+    msg.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+    msg.name = list(names)
+    msg.position = [float(p) for p in positions]
+    return msg
+
+
+def clip_messages(skeleton: Skeleton, clip: str, rate: float, duration: float, start_ns: int,
+                  world_joint: str = 'world_joint') -> Iterator[Tuple[int, object]]:
+    """A clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
+
+    Args:
+        skeleton: the character whose joints the messages name (its ``joint_names``).
+        clip: a name of ``clips.ALL_CLIPS``.
+        rate: messages per second (Hz).
+        duration: seconds; longer than the clip, the clip loops.
+        start_ns: the first message's stamp, in nanoseconds.
+        world_joint: the prefix of the root's variables (``world_joint/x`` ...).
+
+    Yields:
+        (int, sensor_msgs.msg.JointState): the stamp in nanoseconds and the message, from
+        ``start_ns`` to ``start_ns + duration`` inclusive.
+    """
+    n = int(round(duration * rate))
+    for k in range(n + 1):
+        t = k / rate
+        names, pos = joint_state_content(skeleton.joint_names, clip, t % clip_length(clip)
+                                         if duration > clip_length(clip) else t, world_joint)
+        stamp = start_ns + int(round(t * 1e9))
+        yield stamp, joint_state_message(names, pos, stamp)
