@@ -93,7 +93,7 @@ def run(steps):
     # Every step's kernel inputs as the simulation made them (120 Hz steps, 60 Hz inputs).
     captured = captured_steps(skeleton, rig, load_fabric('tweed_jacket'), 'showcase',
                               steps / 120.0 + 0.1)[:steps]
-    real_step = FixedTypes(kernel.cloth_step)       # typed once, as the simulation calls it
+    real_step = FixedTypes(kernel.cloth_step, check=False)  # typed once, as the simulation
     numba_ns, numpy_ns, diff = [], [], []
     for args in captured:
         a = copied(args)

@@ -22,10 +22,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from jacket_cloth_ros.core import kernel
+from jacket_cloth_ros.core.kernel import Solver, StretchLimit
 from jacket_cloth_ros.core.bundles import (
     ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning)
 from jacket_cloth_ros.core.simulation import (
-    AUTO_SWEEP_SHARE, DESIGN_RATE, SOLVERS, STRETCH_LIMITS, JacketSimulation, SimParams, per_step,
+    AUTO_SWEEP_SHARE, DESIGN_RATE, JacketSimulation, SimParams, per_step,
     xpbd_compliance)
 from jacket_cloth_ros.motion.clips import joint_state_content
 
@@ -297,7 +298,8 @@ def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.
     colliders = ColliderModel(ints, none3, np.zeros((0, 3, 3)), none3, ints,
                               np.zeros((0, 2, 3)), np.zeros(0), ints, none3, none3)
     tuning = Tuning(stiffness, method.iterations, compliance, np.full(n, 1e3),
-                    STRETCH_LIMITS[method.stretch_limit], SOLVERS[method.solver],
+                    int(StretchLimit.parse(method.stretch_limit, 'stretch_limit')),
+                    int(Solver.parse(method.solver, 'solver')),
                     method.substeps, 0.0, method.tolerance * AUTO_SWEEP_SHARE, np.zeros(n), 0.0,
                     0.0, 1.0, np.zeros(n), 0.0, np.zeros(n), 0.0, gravity, np.zeros(3), 0.0, 1.0)
     state = ClothState(x, xp, np.zeros(n, dtype=np.bool_), np.zeros(3), np.zeros(3), np.eye(4),

@@ -111,7 +111,7 @@ def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
 def kernel_step_ns(steps, repeat=3):
     """Median time of the kernel on each captured state (copies made outside the timing)."""
     times = []
-    step = FixedTypes(kernel.cloth_step)        # typed once, as the simulation calls it
+    step = FixedTypes(kernel.cloth_step, check=False)   # typed once, as the simulation does
     for _ in range(repeat):
         for args in steps:
             a = copied(args)

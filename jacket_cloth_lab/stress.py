@@ -23,7 +23,8 @@ import numpy as np
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.geometry import grid_triangles
 from jacket_cloth_ros.core.rig import load_rig
-from jacket_cloth_ros.core.simulation import STRETCH_LIMITS, JacketSimulation, SimParams
+from jacket_cloth_ros.core.kernel import StretchLimit
+from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content
 from .accuracy import deepest_inside
@@ -35,7 +36,7 @@ VERTICAL_BOUND = 0.10
 RECOVER_M = 0.15
 RATE = 60.0
 CALM_S = 1.5
-METHODS = tuple(STRETCH_LIMITS)          # how the vertical stretch is removed (none first)
+METHODS = StretchLimit.names()           # how the vertical stretch is removed (none first)
 
 
 @dataclass

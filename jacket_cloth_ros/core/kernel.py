@@ -12,6 +12,7 @@ constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out i
 
 import numpy as np
 
+from .choices import Choice
 from .kernel_cache import njit
 
 # Fused multiply-add, reciprocals and signless zeros only: no 'nnan'/'ninf', which would let
@@ -290,10 +291,24 @@ def tethers(x, free, anchor, length):
     return moved
 
 
-# How the vertical stretch left by the iterative solve is removed (SimParams.stretch_limit).
-LIMIT_NONE, LIMIT_HARD_PASS, LIMIT_TETHERS = 0, 1, 2
-# The constraint solver (SimParams.solver): the article's relaxation, or XPBD.
-SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = 0, 1
+class StretchLimit(Choice):
+    """How the vertical stretch left by the iterative solve is removed (stretch_limit)."""
+
+    NONE = 0
+    HARD_PASS = 1       # M12
+    TETHERS = 2         # long-range attachments
+
+
+class Solver(Choice):
+    """The constraint solver (solver): the article's relaxation, or XPBD."""
+
+    GAUSS_SEIDEL = 0
+    XPBD = 1
+
+
+# The compiled code compares plain integers.
+LIMIT_NONE, LIMIT_HARD_PASS, LIMIT_TETHERS = (int(m) for m in StretchLimit)
+SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = (int(m) for m in Solver)
 
 
 @njit(cache=True)

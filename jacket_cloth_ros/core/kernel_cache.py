@@ -83,11 +83,12 @@ class FixedTypes:
     (compiling or loading, and checking the types), and later calls go straight to the
     entry point compiled for those types. The bundles (core.bundles) fix every dtype and
     layout, so the types stay the same; :meth:`retype` is for an owner that rebuilt one, and
-    ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call.
+    ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call (``check`` False: never, for timing).
     """
 
-    def __init__(self, dispatcher):
+    def __init__(self, dispatcher, check=None):
         self.dispatcher = dispatcher
+        self._check = CHECK_TYPES if check is None else check
         self._entry = None
         self._types = None
 
@@ -97,7 +98,7 @@ class FixedTypes:
 
     def __call__(self, *args):
         if self._entry is not None:
-            if CHECK_TYPES:
+            if self._check:
                 types = tuple(typeof(a, Purpose.argument) for a in args)
                 if types != self._types:
                     raise TypeError(f'{self.dispatcher.__name__}: argument types changed '

@@ -22,14 +22,12 @@ from .bundles import (
     ClothState, Motion, StepControl, StepOutput, Tuning, floats, model_of, posed_like)
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
+from .params import SimParams
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
 _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)), np.zeros((0, 3)),
                            np.zeros((0, 3)), _NO_BELOW)
-STRETCH_LIMITS = {'none': kernel.LIMIT_NONE, 'hard_pass': kernel.LIMIT_HARD_PASS,
-                  'tethers': kernel.LIMIT_TETHERS}
-SOLVERS = {'gauss_seidel': kernel.SOLVER_GAUSS_SEIDEL, 'xpbd': kernel.SOLVER_XPBD}
 # Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
 # their stiffness is what one step of this length does (see per_step and xpbd_compliance).
 DESIGN_RATE = 120.0
@@ -61,45 +59,6 @@ def xpbd_compliance(stiffness, iterations):
     with np.errstate(divide='ignore'):
         alpha = 2.0 * (1.0 - k) / np.maximum(k, 1e-12) / DESIGN_RATE ** 2
     return alpha
-
-
-@dataclass(frozen=True)
-class SimParams:
-    sim_rate: float = 120.0            # Hz, M7
-    max_steps_per_input: int = 12
-    gravity: float = 9.81              # m/s^2, along the world frame's -z
-    wind: tuple = (0.0, 0.0, 0.0)      # m/s^2 in the world frame, M4
-    wind_gust: float = 0.0             # relative amplitude of the wind's variation over time
-    wind_gust_period: float = 3.0      # s, of the slowest gust component
-    stretch_limit: str = 'hard_pass'   # M12 'hard_pass', 'tethers' (long-range attachments), 'none'
-    solver: str = 'gauss_seidel'       # M5 relaxation 'gauss_seidel' (the article) or 'xpbd'
-    substeps: int = 1                  # equal substeps per step ("Small Steps"); the most, in auto
-    quality_tolerance: float = 0.0     # m; > 0: automatic quality mode (see JacketSimulation)
-    reset_gap: float = 1.0             # s: a longer gap between stamps resets the cloth
-    teleport_distance: float = 1.0     # m of world motion between two samples that is a jump
-    teleport_angle_deg: float = 90.0   # deg of world turn between two samples that is a jump
-
-    def __post_init__(self):
-        if self.stretch_limit not in STRETCH_LIMITS:
-            raise ValueError(f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}, '
-                             f'not {self.stretch_limit!r}')
-        if self.solver not in SOLVERS:
-            raise ValueError(f'solver must be one of {", ".join(SOLVERS)}, not {self.solver!r}')
-        if not 1 <= self.substeps <= 64:
-            raise ValueError(f'substeps must be 1 to 64, not {self.substeps}')
-        if self.quality_tolerance < 0:
-            raise ValueError('quality_tolerance must be >= 0 m (0 turns the automatic mode off)')
-
-    def with_values(self, **changes):
-        return replace(self, **changes)
-
-    def wind_at(self, t_ns):
-        """Wind at a step's time: the set vector, varied by two slow incommensurate gusts.
-
-        A function of the step's stamp only, so a replay sees exactly the live wind.
-        """
-        return np.asarray(self.wind, dtype=float) * step_kernel.gust_scale(
-            int(t_ns), float(self.wind_gust), float(self.wind_gust_period))
 
 
 @dataclass
@@ -197,7 +156,7 @@ class JacketSimulation:
         p, f = self.params, self.fabric
         return Tuning(
             floats(self.stiffness), int(f.iterations), floats(self.compliance),
-            floats(self.max_distance), STRETCH_LIMITS[p.stretch_limit], SOLVERS[p.solver],
+            floats(self.max_distance), int(p.stretch_limit_mode), int(p.solver_mode),
             int(p.substeps), float(p.quality_tolerance),
             float(AUTO_SWEEP_SHARE * p.quality_tolerance), floats(self.damping),
             float(f.contact_damping), float(f.hood_damping), float(DESIGN_RATE / p.sim_rate),

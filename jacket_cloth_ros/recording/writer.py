@@ -15,6 +15,7 @@ import threading
 
 import yaml
 
+from ..core.choices import Choice
 from .definitions import ros2msg_schema
 from .mcap_file import McapWriter
 
@@ -24,10 +25,21 @@ _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
 # chunk until close (the MCAP summary), and 512 KB chunks (four a second at 120 Hz with
 # markers) grew the node by 10 MB an hour (bench speed --endurance 3600).
 CHUNK_BYTES = 8 * 1024 * 1024
-# Chunk compression by name (the node's record_compression parameter). lz4 makes files about
-# 1.4x zstd's, but a second's chunk compresses in well under half the time, and the node does it
-# in the callback that closes the chunk: lower latency windows (README, bench speed).
-COMPRESSIONS = {'lz4': 'lz4', 'zstd': 'zstd', 'none': ''}
+
+
+class Compression(Choice):
+    """MCAP chunk compression (the record_compression parameter). lz4 is the node's default:
+    its files are larger than zstd's, but the node compresses the closing chunk in its own
+    callback, and lz4 does that in a fraction of zstd's time (docs/performance.md)."""
+
+    NONE = 0
+    LZ4 = 1
+    ZSTD = 2
+
+    @property
+    def mcap_name(self) -> str:
+        """The name the MCAP chunk record carries ('' for none)."""
+        return '' if self is Compression.NONE else self.name.lower()
 
 
 def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
@@ -45,7 +57,7 @@ def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    ``compression``: a key of COMPRESSIONS; zstd, the smallest files, unless told (the node
+    ``compression``: a Compression name; zstd, the smallest files, unless told (the node
     and the replay pass the record_compression parameter).
 
     ``background``: messages are still packed into the open chunk by the caller, but each
@@ -69,7 +81,7 @@ class SessionRecorder:
             self._queue = queue.SimpleQueue()
             self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
             self._thread.start()
-        self._writer = McapWriter(self._file, compression=COMPRESSIONS[compression],
+        self._writer = McapWriter(self._file, compression=Compression.parse(compression, 'compression').mcap_name,
                                   chunk_bytes=CHUNK_BYTES, run=self._do)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}

@@ -3,19 +3,32 @@
 
 from dataclasses import fields
 
-import numpy as np
-
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rcl_interfaces.msg import ParameterType as T
 
 from ..core.fabric import FABRIC_RANGES, Fabric
-from ..core.simulation import SOLVERS, STRETCH_LIMITS, SimParams
-from ..recording.writer import COMPRESSIONS
+from ..core.params import SIM_FIELDS, SimParams, check_sim_value
+from ..recording.writer import Compression
+
+# The ROS parameter type of each SimParams field's Python type.
+_ROS_TYPES = {float: T.PARAMETER_DOUBLE, int: T.PARAMETER_INTEGER, str: T.PARAMETER_STRING,
+              tuple: T.PARAMETER_DOUBLE_ARRAY}
+
+
+def _sim_parameters():
+    """Every SimParams field as a parameter: the simulation's table (core.params) is the one
+    source of their defaults, ranges and descriptions."""
+    out = {}
+    for name, f in SIM_FIELDS.items():
+        kind = _ROS_TYPES[f.type]
+        default = list(f.default) if isinstance(f.default, tuple) else f.default
+        rng = f.metadata['range'] if kind != T.PARAMETER_DOUBLE_ARRAY else None
+        out[name] = (kind, default, rng, False, f.metadata['doc'])
+    return out
+
 
 # Parameters that map onto SimParams; the rest are the node's own or read at start.
-SIM_KEYS = ('sim_rate', 'max_steps_per_input', 'gravity', 'wind', 'wind_gust',
-            'wind_gust_period', 'stretch_limit', 'solver', 'substeps', 'quality_tolerance',
-            'reset_gap', 'teleport_distance', 'teleport_angle_deg')
+SIM_KEYS = tuple(SIM_FIELDS)
 
 # name: (type, default, (lo, hi) or None, read_only, description)
 NODE_PARAMETERS = {
@@ -29,34 +42,7 @@ NODE_PARAMETERS = {
     'fabric_file': (T.PARAMETER_STRING, '', None, True, 'fabric presets YAML; empty: shipped'),
     'fabric': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
                'fabric preset (M16); its values seed the fabric.* parameters'),
-    'sim_rate': (T.PARAMETER_DOUBLE, 120.0, (30.0, 1000.0), False,
-                 'fixed simulation rate in Hz (M7), whatever the input rate'),
-    'max_steps_per_input': (T.PARAMETER_INTEGER, 12, (1, 100), False,
-                            'cap on steps per JointState so a hitch cannot snowball'),
-    'gravity': (T.PARAMETER_DOUBLE, 9.81, (0.0, 50.0), False, 'm/s^2 along -z of the world'),
-    'wind': (T.PARAMETER_DOUBLE_ARRAY, [0.0, 0.0, 0.0], None, False,
-             'wind acceleration [x, y, z] in m/s^2 in the world frame (M4)'),
-    'wind_gust': (T.PARAMETER_DOUBLE, 0.0, (0.0, 1.0), False,
-                  'relative amplitude of the wind varying over time (0: steady)'),
-    'wind_gust_period': (T.PARAMETER_DOUBLE, 3.0, (0.1, 600.0), False,
-                         's, period of the slowest gust'),
-    'stretch_limit': (T.PARAMETER_STRING, 'hard_pass', None, False,
-                      'what removes vertical stretch: hard_pass (M12, exact rest lengths), '
-                      'tethers (long-range attachments) or none'),
-    'solver': (T.PARAMETER_STRING, 'gauss_seidel', None, False,
-               'constraint solver: gauss_seidel (the article, stiffness per sweep) or xpbd '
-               '(compliance, the same softness at any rate and iteration count)'),
-    'substeps': (T.PARAMETER_INTEGER, 1, (1, 64), False,
-                 'equal substeps per simulation step; with quality_tolerance, the most used'),
-    'quality_tolerance': (T.PARAMETER_DOUBLE, 0.0, (0.0, 0.5), False,
-                          'm; > 0: automatic quality mode, fewer sweeps and substeps when the '
-                          'motion is calm; 0: fabric.iterations and substeps every step'),
-    'reset_gap': (T.PARAMETER_DOUBLE, 1.0, (0.05, 60.0), False,
-                  'a gap between stamps longer than this (s) resets the cloth'),
-    'teleport_distance': (T.PARAMETER_DOUBLE, 1.0, (0.01, 1000.0), False,
-                          'world move between two inputs (m) treated as a teleport: reset'),
-    'teleport_angle_deg': (T.PARAMETER_DOUBLE, 90.0, (1.0, 180.0), False,
-                           'world turn between two inputs (deg) treated as a jump: reset'),
+    **_sim_parameters(),
     'world_joint': (T.PARAMETER_STRING, 'world_joint', None, False,
                     'name of the floating virtual joint whose <name>/trans_x..rot_w variables '
                     'in the JointState carry the character pose in the world'),
@@ -68,7 +54,7 @@ NODE_PARAMETERS = {
                'MCAP path to record the session to; empty: no recording'),
     'record_compression': (T.PARAMETER_STRING, 'lz4', None, False,
                            'MCAP chunk compression of the next recording: lz4 (fast, the '
-                           'default), zstd (files about 0.7x the size) or none'),
+                           'default), zstd (smaller files) or none'),
 }
 
 
@@ -103,17 +89,11 @@ def default_values(fabric):
 
 def check_value(name, value):
     """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''."""
-    if name == 'wind':
-        v = list(value) if hasattr(value, '__len__') and not isinstance(value, str) else None
-        if (v is None or len(v) != 3 or any(isinstance(e, bool) for e in v)
-                or not all(isinstance(e, (int, float)) for e in v) or not np.isfinite(v).all()):
-            return 'wind must be 3 finite numbers [x, y, z]'
-    if name == 'stretch_limit' and value not in STRETCH_LIMITS:
-        return f'stretch_limit must be one of {", ".join(STRETCH_LIMITS)}'
-    if name == 'solver' and value not in SOLVERS:
-        return f'solver must be one of {", ".join(SOLVERS)}'
-    if name == 'record_compression' and value not in COMPRESSIONS:
-        return f'record_compression must be one of {", ".join(COMPRESSIONS)}'
+    if name in SIM_FIELDS:
+        reason = check_sim_value(name, value)
+        return f'{name} {reason}' if reason else ''
+    if name == 'record_compression' and str(value).upper() not in Compression.__members__:
+        return f'record_compression must be one of {", ".join(Compression.names())}'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     if name == 'world_joint' and not value:

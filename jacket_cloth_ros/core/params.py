@@ -1,0 +1,114 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The simulation's parameters: each one's default, range and meaning, defined once here.
+
+The node declares a ROS parameter for every field of :class:`SimParams` (ros/parameters.py
+adds the node's own), the offline tools take the same ones with ``-p``, and the compiled step
+reads them through ``bundles.Tuning`` (built in ``JacketSimulation._tuning``). To add one: a
+field here, a field of Tuning and its value in ``_tuning``, then use it in the kernel.
+"""
+
+import math
+from dataclasses import dataclass, field, fields, replace
+
+import numpy as np
+
+from .kernel import Solver, StretchLimit
+from .step_kernel import gust_scale
+
+
+def _param(default, doc, lo=None, hi=None, choices=None):
+    """A parameter's field: its default, meaning, range (inclusive) or choices."""
+    return field(default=default, metadata={'doc': doc, 'range': None if lo is None else (lo, hi),
+                                            'choices': choices})
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """The simulation's parameters (all change live without a reset)."""
+
+    sim_rate: float = _param(120.0, 'fixed simulation rate in Hz (M7), whatever the input rate',
+                             10.0, 4000.0)
+    max_steps_per_input: int = _param(
+        12, 'cap on steps per JointState so a hitch cannot snowball', 1, 100)
+    gravity: float = _param(9.81, 'm/s^2 along -z of the world', 0.0, 50.0)
+    wind: tuple = _param((0.0, 0.0, 0.0),
+                         'wind acceleration [x, y, z] in m/s^2 in the world frame (M4)',
+                         -1000.0, 1000.0)
+    wind_gust: float = _param(0.0, 'relative amplitude of the wind varying over time '
+                              '(0: steady)', 0.0, 1.0)
+    wind_gust_period: float = _param(3.0, 's, period of the slowest gust', 0.1, 600.0)
+    stretch_limit: str = _param(
+        'hard_pass', 'what removes vertical stretch: hard_pass (M12, exact rest lengths), '
+        'tethers (long-range attachments) or none', choices=StretchLimit)
+    solver: str = _param(
+        'gauss_seidel', 'constraint solver: gauss_seidel (the article, stiffness per sweep) or '
+        'xpbd (compliance, the same softness at any rate and iteration count)', choices=Solver)
+    substeps: int = _param(1, 'equal substeps per simulation step; with quality_tolerance, the '
+                           'most used', 1, 64)
+    quality_tolerance: float = _param(
+        0.0, 'm; > 0: automatic quality mode, fewer sweeps and substeps when the motion is '
+        'calm; 0: fabric.iterations and substeps every step', 0.0, 0.5)
+    reset_gap: float = _param(1.0, 'a gap between stamps longer than this (s) resets the cloth',
+                              0.05, 60.0)
+    teleport_distance: float = _param(
+        1.0, 'world move between two inputs (m) treated as a teleport: reset', 0.01, 1000.0)
+    teleport_angle_deg: float = _param(
+        90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
+
+    def __post_init__(self):
+        for name, value in self.__dict__.items():
+            reason = check_sim_value(name, value)
+            if reason:
+                raise ValueError(f'{name} {reason}')
+
+    def with_values(self, **changes) -> 'SimParams':
+        """A copy with ``changes`` (validated)."""
+        return replace(self, **changes)
+
+    def wind_at(self, t_ns: int) -> np.ndarray:
+        """Wind at a step's time: the set vector, varied by two slow incommensurate gusts.
+
+        A function of the step's stamp only, so a replay sees exactly the live wind.
+        """
+        return np.asarray(self.wind, dtype=float) * gust_scale(
+            int(t_ns), float(self.wind_gust), float(self.wind_gust_period))
+
+    @property
+    def stretch_limit_mode(self) -> StretchLimit:
+        return StretchLimit.parse(self.stretch_limit, 'stretch_limit')
+
+    @property
+    def solver_mode(self) -> Solver:
+        return Solver.parse(self.solver, 'solver')
+
+
+SIM_FIELDS = {f.name: f for f in fields(SimParams)}
+
+
+def check_sim_value(name: str, value) -> str:
+    """Why ``value`` is not valid for SimParams field ``name``, or ''."""
+    meta = SIM_FIELDS[name].metadata
+    if meta['choices'] is not None:
+        return '' if str(value).upper() in meta['choices'].__members__ else (
+            f'must be one of {", ".join(meta["choices"].names())}, not {value!r}')
+    default = SIM_FIELDS[name].default
+    if isinstance(default, tuple):
+        try:
+            v = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            return f'must be {len(default)} numbers'
+        if v.shape != (len(default),) or not np.isfinite(v).all():
+            return f'must be {len(default)} finite numbers'
+        values = v.tolist()
+    elif isinstance(value, bool) or not isinstance(value, (int, float)):
+        return f'must be a number, not {value!r}'
+    elif isinstance(default, int) and not float(value).is_integer():
+        return f'must be a whole number, not {value!r}'
+    elif not math.isfinite(value):
+        return f'must be finite, not {value!r}'
+    else:
+        values = [value]
+    lo, hi = meta['range']
+    if any(not lo <= v <= hi for v in values):
+        return f'{value!r} is outside [{lo}, {hi}]'
+    return ''
