@@ -197,6 +197,8 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert not bad.successful and h.node.sim.params.sim_rate == 120.0
     bad = h.node.set_parameters([Parameter('wind', value=[1.0, 2.0])])[0]
     assert not bad.successful and 'wind' in bad.reason
+    bad = h.node.set_parameters([Parameter('wind', value=[1e308, 1e308, 1e308])])[0]
+    assert not bad.successful and 'outside' in bad.reason     # physically absurd: refused
     bad = h.node.set_parameters([Parameter('stretch_limit', value='glue')])[0]
     assert not bad.successful and 'hard_pass' in bad.reason
     bad = h.node.set_parameters([Parameter('record_compression', value='gzip')])[0]

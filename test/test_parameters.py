@@ -1,0 +1,82 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Every parameter's default, range and meaning has one source (core.params and the node's
+table); the shipped YAML, the README and the ROS declarations must agree with it."""
+
+import os
+import re
+
+import pytest
+import yaml
+
+from jacket_cloth_ros.core.params import SIM_FIELDS, SimParams
+from jacket_cloth_ros.ros.parameters import NODE_PARAMETERS, check_value, parse_override
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _readme_rows():
+    """{name: (default cell, range cell)} of the README's parameter table."""
+    with open(os.path.join(ROOT, 'README.md'), encoding='utf-8') as f:
+        text = f.read()
+    rows = re.findall(r'^\| `([a-z_.<>]+)` \| ([^|]*) \| ([^|]*) \|', text, re.MULTILINE)
+    return {name: (default.strip(), rng.strip()) for name, default, rng in rows}
+
+
+def _cell(value):
+    if isinstance(value, str):
+        return f'`{value}`' if value else "`''`"
+    if isinstance(value, list):
+        return '`[' + ', '.join(f'{v:g}' for v in value) + ']`'
+    return repr(value)
+
+
+def test_the_node_declares_every_simulation_parameter_with_its_default_and_range():
+    for name, f in SIM_FIELDS.items():
+        kind, default, rng, read_only, text = NODE_PARAMETERS[name]
+        assert (tuple(default) if isinstance(default, list) else default) == f.default, name
+        assert text == f.metadata['doc'] and not read_only
+        if not isinstance(f.default, tuple):
+            assert rng == f.metadata['range'], name
+
+
+def test_the_shipped_parameter_file_holds_the_defaults_under_any_namespace():
+    with open(os.path.join(ROOT, 'config', 'node_params.yaml'), encoding='utf-8') as f:
+        data = yaml.safe_load(f)
+    assert list(data) == ['/**']          # a node name key is ignored under a namespace
+    for name, value in data['/**']['ros__parameters'].items():
+        assert value == NODE_PARAMETERS[name][1], name
+
+
+def test_the_readme_table_lists_every_parameter_with_its_default_and_range():
+    rows = _readme_rows()
+    for name, (kind, default, rng, read_only, text) in NODE_PARAMETERS.items():
+        assert name in rows, f'README parameter table lacks {name}'
+        cell, range_cell = rows[name]
+        assert cell == _cell(default), (name, cell)
+        if rng is not None:
+            assert range_cell.startswith(f'{rng[0]:g}–{rng[1]:g}'), (name, range_cell)
+        if read_only:
+            assert 'start' in range_cell, name
+    for name, f in SIM_FIELDS.items():
+        if f.metadata['choices'] is not None:
+            assert rows[name][1] == ', '.join(f'`{c}`' for c in f.metadata['choices'].names())
+
+
+@pytest.mark.parametrize('name, value', [
+    ('sim_rate', 5.0), ('sim_rate', float('nan')), ('wind', [1e308, 0.0, 0.0]),
+    ('wind', [0.0, 0.0]), ('stretch_limit', 'bogus'), ('solver', 'bogus'),
+    ('record_compression', 'gzip'), ('substeps', 65)])
+def test_one_check_refuses_a_bad_value_with_its_reason_everywhere(name, value):
+    reason = check_value(name, value)
+    assert reason.startswith(name), reason
+    with pytest.raises(ValueError, match=name):
+        if name in SIM_FIELDS:
+            SimParams(**{name: value})
+        else:
+            raise ValueError(reason)
+
+
+def test_overrides_take_the_same_ranges():
+    assert parse_override('sim_rate:=240', {'sim_rate': 120.0}) == ('sim_rate', 240.0)
+    with pytest.raises(ValueError, match='outside'):
+        parse_override('sim_rate:=5', {'sim_rate': 120.0})
