@@ -1,10 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The compiled cloth step (numba), the hot loop of the simulation.
 
-Chosen by measurement (`make bench-kernel`, one run on the 2-core machine, 9x12 grid, 545
-constraints in 13 colours): a numpy port that relaxes colour by colour took 30x the numba
-kernel's median step and 40x the C yardstick's; the kernel took 1.3x the yardstick. At these
-sizes per-call overhead, not arithmetic, decides. Order within a step, as in the article and the
+Compiled because at these sizes per-call overhead, not arithmetic, decides: a numpy port that
+relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md). Order within a step, as in the article and the
 yardstick: Verlet (M4) with per-vertex damping (M13, M15), Gauss-Seidel sweeps over both
 constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out in ellipsoid space
 (M10) plus capsules and planes, maximum distance (M11), and the top-down hard vertical pass (M12).
@@ -44,8 +42,7 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
     the automatic quality mode. Returns the sweeps run.
     """
     # Each end's share (stiffness over the number of free ends, 0 when pinned), once per call:
-    # the sweeps then run without branches and with one division per constraint (relaxation
-    # 45 -> 26 us on the 9x12 rig with the wider interleave of rig.interleaved_order).
+    # the sweeps then run without branches and with one division per constraint.
     wa, wb = np.empty(ca.shape[0]), np.empty(ca.shape[0])
     for j in range(ca.shape[0]):
         fa, fb = free[ca[j]], free[cb[j]]
@@ -190,7 +187,7 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
         for _ in range(MAX_COLLISION_PASSES):
             pushed = False
             # The ellipsoid test is written out here: as a helper taking six arrays it was
-            # not inlined, and the call alone made this loop 5x slower (36 against 6 us, 9x12).
+            # not inlined, and the call alone made this loop several times slower.
             for e in range(ne):
                 p0 = x[i, 0] - centers[e, 0]
                 p1 = x[i, 1] - centers[e, 1]
@@ -410,10 +407,9 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
         if limit_mode == LIMIT_HARD_PASS:
             hard_vertical_pass(x, upper, lower, vrest)
             # The pass moves lower vertices without looking at the body; run last, it left
-            # cloth up to 5 cm inside a collider in `jacket_cloth stress` (a 0.5 s hitch, a
-            # 12 Hz step). A last push-out keeps it outside; only the verticals of the
-            # vertices it moves lose their exact length (about 3 of 99 per step on the
-            # showcase).
+            # cloth inside a collider in the lab's stress scenes (a hitch, an oversized step).
+            # A last push-out keeps it outside; only the verticals of the few vertices it
+            # moves lose their exact length (docs/method.md).
             collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
                     contact)
     if substeps > 1:        # leave the frames exactly where the step ends (lerp rounds)

@@ -61,9 +61,8 @@ def interleaved_order(a, b, window=4):
     before it (the earliest such constraint comes next).
 
     Each projection then no longer waits for the one before it to store its vertex, so the CPU
-    overlaps their square roots and divisions: half the relaxation time on the 9x12 rig (`make
-    bench-speed`) with a window of 2; 4 took another 15% off the whole step (cloth step A/B,
-    one run: 45.6 against 50.7 us); the order stays top-down to within a few constraints.
+    overlaps their square roots and divisions (docs/performance.md); the order stays top-down
+    to within a few constraints.
     """
     left = list(range(len(a)))
     order, recent = [], []

@@ -2,10 +2,9 @@
 """All fixed steps of one input in one compiled call (numba): JacketSimulation._advance.
 
 Why one call: with each part compiled on its own (pose_kernel, kernel.cloth_step), the Python
-between them still cost about three times the 50 us cloth step per step (profiled replay: 190
-us per step), and a live node that sleeps between inputs pays it again with cold caches
-(measured: the same pipeline took 474 us per input in a tight loop, 811 us with an 8 ms sleep
-between inputs). Here the step is the same sequence of the same compiled parts:
+between them still cost several times the cloth step, and a live node that sleeps between
+inputs pays it again with cold caches (docs/performance.md). Here the step is the same
+sequence of the same compiled parts:
 
   interpolate the skeleton (M7) -> forward kinematics -> M14 world share -> M1/M2 layer ->
   M6 pinned row and M11 references -> colliders (M10) -> cloth (kernel.cloth_step) -> M8 hood.

@@ -37,7 +37,7 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 # rclpy gives each publisher and subscription two QoS event handlers (incompatible QoS, type),
 # and its executor visits every one on every wake-up. joint_states and /tf keep theirs, as a
 # mismatch there must be heard; markers, diagnostics and wind go without (the peer's side
-# warns too). Measured: 0.905-0.965x the node's CPU per message (README, bench speed).
+# warns too), which lowers the node's CPU per message (docs/performance.md).
 NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
