@@ -118,8 +118,10 @@ def test_analyze_writes_the_report_charts_and_filmstrip(clip, tmp_path, capsys):
     assert (both / 'filmstrip_2.png').exists()
 
 
-def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', seconds=1.0):
-    """A plain MCAP written by mcap_ros2's own writer, not ours."""
+def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', seconds=1.0,
+                          log_delay_ns=0):
+    """A plain MCAP written by mcap_ros2's own writer, not ours; ``log_delay_ns``: log times
+    later than the stamps (as a recorder's receive time)."""
     with open(path, 'wb') as f:
         w = Ros2Writer(f)
         schema = w.register_msgdef('sensor_msgs/msg/JointState',
@@ -131,8 +133,98 @@ def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', sec
             w.write_message(topic, schema, {
                 'header': {'stamp': {'sec': t // 10**9, 'nanosec': t % 10**9}, 'frame_id': ''},
                 'name': skeleton_names, 'position': pos, 'velocity': [], 'effort': []},
-                log_time=t, publish_time=t)
+                log_time=t + log_delay_ns, publish_time=t + log_delay_ns)
         w.finish()
+
+
+def _node_recording(path, stamps, clip='walk', rate=60.0):
+    """A session recorded by the node's rules, without DDS (ros/node.py _on_joint_state): each
+    JointState is written as it arrives, at its header stamp, then the pipeline's outputs.
+    ``stamps``: the header stamps in arrival order; the k-th carries the clip at k / rate."""
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    from jacket_cloth_ros.ros.cdr import JointStateReader
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
+    texts = {}
+    for name in ('character.urdf', 'jacket_rig.yaml', 'fabrics.yaml'):
+        with open(shipped(name), encoding='utf-8') as f:
+            texts[name] = f.read()
+    skeleton = Skeleton(texts['character.urdf'])
+    fabrics = load_fabrics()
+    values = default_values(fabrics['tweed_jacket'])
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values)
+    topics = session_topics()
+    recorder = SessionRecorder(str(path), compression='lz4')
+    for topic, kind, qos in topics.values():
+        recorder.add_topic(topic, kind, qos)
+    recorder.add_session_config(texts['character.urdf'], texts['jacket_rig.yaml'],
+                                texts['fabrics.yaml'], values)
+    reader = JointStateReader()
+    for k, stamp in enumerate(stamps):
+        names, pos = joint_state_content(skeleton.joint_names, clip, k / rate)
+        msg = JointState(name=names, position=[float(p) for p in pos])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        raw = serialize_message(msg)
+        recorder.write(topics['joint_states'][0], raw, stamp)
+        _, outputs = pipeline.on_joint_state(reader.read(raw), stamp)
+        for key, out in outputs:
+            recorder.write(topics[key][0], out, stamp)
+    recorder.close()
+    return pipeline
+
+
+def _topic_in_file_order(path, topic):
+    with open(path, 'rb') as f:
+        return [(m.log_time, m.data) for _, c, m in make_reader(f).iter_messages(
+            log_time_order=False) if c.topic == topic]
+
+
+def test_a_session_whose_stamps_go_back_replays_to_the_same_tf(tmp_path, capsys):
+    # The node drops a repeated stamp and one a little back, and resets on one far back; the
+    # replay must feed the inputs in the order they were recorded, not sorted by log time.
+    step = 1_000_000_000 // 60
+    stamps = [100 * 10 ** 9 + k * step for k in range(60)]
+    stamps += [stamps[-1] - 5_000_000, stamps[-1]]                  # dropped: back, repeated
+    stamps += [stamps[59] + k * step for k in range(1, 31)]
+    stamps += [50 * 10 ** 9 + k * step for k in range(40)]         # far back: a reset
+    live = _node_recording(tmp_path / 'live.mcap', stamps)
+    assert live.dropped == 2 and live.sim.resets == 2
+    out = tmp_path / 'replayed.mcap'
+    assert _replay(tmp_path / 'live.mcap', out) == 0
+    recorded = _topic_in_file_order(tmp_path / 'live.mcap', '/tf')
+    assert len(recorded) == len(stamps) - 2
+    assert _topic_in_file_order(out, '/tf') == recorded
+    assert '2 dropped' in capsys.readouterr().out
+    assert main(['analyze', str(tmp_path / 'live.mcap'), '--out', str(tmp_path / 'an')]) == 0
+    report = json.loads((tmp_path / 'an' / 'report.json').read_text())
+    assert report['replay_matches_recording'] is True
+    assert report['recorded_tf_compared'] == len(recorded) and report['dropped_inputs'] == 2
+
+
+def test_replay_takes_time_from_the_header_stamp_not_the_log_time(tmp_path):
+    # A recorder's log time is when it received a message; the node simulates to the stamp.
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    urdf = shipped('examples/mannequin.urdf')
+    rig = shipped('examples/mannequin_rig.yaml')
+    with open(urdf, encoding='utf-8') as f:
+        names = list(Skeleton(f.read()).joint_names)
+    late = tmp_path / 'late.mcap'
+    _foreign_joint_states(late, names, log_delay_ns=54_000_000)
+    out = tmp_path / 'out.mcap'
+    assert main(['replay', str(late), '-o', str(out), '--urdf', urdf, '--rig', rig]) == 0
+    stamps = [5_000_000_000 + k * 20_000_000 for k in range(50)]
+    assert [t for t, _ in _topic_in_file_order(out, '/robot/joint_states')] == stamps
+    tf = _topic_in_file_order(out, '/tf')
+    assert [t for t, _ in tf] == stamps
+    # The header stamp inside each /tf transform (after the CDR and sequence heads).
+    assert [int.from_bytes(d[8:12], 'little') * 10 ** 9 + int.from_bytes(d[12:16], 'little')
+            for _, d in tf] == stamps
 
 
 def test_foreign_mcap_and_rosbag2_directory_of_another_skeleton(tmp_path):

@@ -17,6 +17,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import run_session  # noqa: E402
 
@@ -29,11 +30,13 @@ class SessionFigures:
 
     def __init__(self, session, moments):
         self.session = session
-        stamps = [e[0] for e in session.events if e[2] == 'joint_states']
-        self.t0, t1 = stamps[0], stamps[-1]
+        self.t0, t1 = session.stamp_range()
         self.targets = list(np.linspace(self.t0, t1, moments + 2)[1:-1].astype(np.int64))
-        self.recorded_tf = {m.log_time: m.data for m in session.recording.messages
-                            if m.topic == '/tf'}
+        # The node's /tf (a file with its set-up), in the order it was published: the n-th
+        # re-simulated /tf must equal the n-th recorded one (stamps can repeat after a reset).
+        recording = session.recording
+        self.recorded_tf = [m.data for m in recording.messages if m.topic == '/tf'] \
+            if SESSION_CONFIG in recording.metadata else []
         self.rows = []
         self.frames = []
         self.reset_reasons = []
@@ -54,10 +57,10 @@ class SessionFigures:
         if not tf:
             self.nonfinite += 1
         else:
-            self.published += 1
-            if stamp in self.recorded_tf:
+            if self.published < len(self.recorded_tf):
                 self.tf_compared += 1
-                self.tf_equal += self.recorded_tf[stamp] == tf[0]
+                self.tf_equal += self.recorded_tf[self.published] == tf[0]
+            self.published += 1
         vert, horiz = sim.strain()
         rig = sim.rig
         ref = sim.reference_points(sim.links, sim.layer)
@@ -101,11 +104,16 @@ class SessionFigures:
             'hem_offset_m': {'max': float(a[:, 7].max()) if len(a) else 0.0,
                              'mean': float(a[:, 7].mean()) if len(a) else 0.0},
             'hood_swing_deg': {'max': float(a[:, 8].max()) if len(a) else 0.0},
-            'replay_matches_recording': (self.tf_equal == self.tf_compared)
-            if self.tf_compared else None,
+            'replay_matches_recording': self._matches() if self.tf_compared else None,
             'recorded_tf_compared': self.tf_compared,
             'parameters': {k: values[k] for k in REPORTED_PARAMETERS if k in values},
         }
+
+    def _matches(self):
+        """Every compared /tf equal, and as many as recorded unless the file was cut short."""
+        counted = self.published == len(self.recorded_tf) or \
+            not self.session.recording.complete
+        return self.tf_equal == self.tf_compared and counted
 
 
 def _series_chart(path, series, columns, title):

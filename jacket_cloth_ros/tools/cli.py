@@ -142,7 +142,8 @@ def cmd_replay(args):
     session = _session(args)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
-    span = (session.events[-1][0] - session.events[0][0]) * 1e-9
+    first, last = session.stamp_range()
+    span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
           f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
           f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
