@@ -4,6 +4,7 @@
 Live-versus-replay equality needs the node over DDS: it is in test_node.py.
 """
 
+import io
 import json
 import os
 import shutil
@@ -11,6 +12,7 @@ import shutil
 import numpy as np
 import pytest
 import yaml
+from mcap.data_stream import ReadDataStream
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from mcap_ros2.writer import Writer as Ros2Writer
@@ -306,6 +308,51 @@ def test_truncated_recording_gives_its_readable_part_with_a_warning(clip, tmp_pa
     assert 'cut short' in captured.err
     n = int(captured.out.split(': ')[1].split(' JointState')[0])
     assert 0 < n < 181
+
+
+def _flip_in_first_chunk(src, dst, cut=None):
+    """A copy of ``src`` with one byte flipped in its first chunk's data where the chunk still
+    decompresses (only its CRC tells), optionally cut short."""
+    import dataclasses
+    from mcap.records import Chunk
+    from mcap.stream_reader import get_chunk_data_stream
+    data = bytearray(src.read_bytes())
+    with open(src, 'rb') as f:
+        index = make_reader(f).get_summary().chunk_indexes[0]
+    f = io.BytesIO(bytes(data[index.chunk_start_offset + 9:]))
+    chunk = Chunk.read(ReadDataStream(f))
+    start = index.chunk_start_offset + 9 + f.tell() - len(chunk.data)
+    for k in range(len(chunk.data) // 2, len(chunk.data)):
+        flipped = bytearray(chunk.data)
+        flipped[k] ^= 0x20
+        try:
+            get_chunk_data_stream(dataclasses.replace(chunk, data=bytes(flipped)))
+        except Exception:  # noqa: BLE001 - a flip the codec notices: try the next byte
+            continue
+        data[start + k] ^= 0x20
+        break
+    dst.write_bytes(bytes(data[:cut]))
+
+
+@pytest.mark.parametrize('compression', ['none', 'lz4'])
+def test_a_damaged_chunk_is_an_error_naming_the_file_and_nothing_is_replayed(
+        clip, tmp_path, capsys, compression):
+    full = tmp_path / 'full.mcap'
+    assert _replay(clip, full, '-p', f'record_compression:={compression}') == 0
+    flipped = tmp_path / 'flipped.mcap'
+    _flip_in_first_chunk(full, flipped)
+    assert flipped.read_bytes() != full.read_bytes()
+    out = tmp_path / 'out.mcap'
+    capsys.readouterr()
+    err = _one_line_error(capsys, ['replay', str(flipped), '-o', str(out)])
+    assert err.startswith(f'jacket_cloth replay: {flipped}: damaged file') and 'CRC' in err
+    assert not out.exists() and not os.path.exists(str(out) + '.partial')
+    assert 'damaged file' in _one_line_error(capsys, ['analyze', str(flipped), '--out',
+                                                      str(tmp_path / 'an')])
+    # Cut short as well (no summary: the records are streamed): still damage, not a cut.
+    both = tmp_path / 'flipped_and_cut.mcap'
+    _flip_in_first_chunk(full, both, cut=len(full.read_bytes()) * 3 // 4)
+    assert 'damaged file' in _one_line_error(capsys, ['replay', str(both), '-o', str(out)])
 
 
 def test_a_partial_output_never_replaces_the_file(clip, tmp_path, capsys, monkeypatch):
