@@ -252,6 +252,31 @@ def test_foreign_mcap_and_rosbag2_directory_of_another_skeleton(tmp_path):
     assert report['frames'] == 50 and report['nonfinite_count'] == 0
 
 
+def test_analyze_of_a_session_whose_every_input_is_dropped_says_so(tmp_path, capsys):
+    # Every JointState non-finite: the node drops them all; the report says so, no traceback.
+    path = tmp_path / 'nan.mcap'
+    with open(path, 'wb') as f:
+        w = Ros2Writer(f)
+        schema = w.register_msgdef('sensor_msgs/msg/JointState',
+                                   ros2msg_schema('sensor_msgs/msg/JointState'))
+        for k in range(20):
+            t = 5_000_000_000 + k * 20_000_000
+            w.write_message('/joint_states', schema, {
+                'header': {'stamp': {'sec': t // 10**9, 'nanosec': t % 10**9}, 'frame_id': ''},
+                'name': ['spine_pitch'], 'position': [float('nan')], 'velocity': [],
+                'effort': []}, log_time=t, publish_time=t)
+        w.finish()
+    out = tmp_path / 'an'
+    capsys.readouterr()
+    assert main(['analyze', str(path), '--out', str(out)]) == 0
+    captured = capsys.readouterr()
+    assert 'Traceback' not in captured.err
+    assert '0 frames (20 of 20 inputs dropped), nothing simulated' in captured.out
+    report = json.loads((out / 'report.json').read_text())
+    assert (report['inputs'], report['dropped_inputs'], report['frames']) == (20, 20, 0)
+    assert report['filmstrip'] is None and 'filmstrip: none' in (out / 'summary.md').read_text()
+
+
 def _one_line_error(capsys, argv):
     assert main(argv) == 1
     err = capsys.readouterr().err.strip()

@@ -161,7 +161,7 @@ def analyze(sessions, out_dir, names=None, moments=6):
             draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
                            'bones (navy); dashed blue: skinned hem and hood')
-        reports[-1]['filmstrip'] = strip
+        reports[-1]['filmstrip'] = strip if figures.frames else None
     for chart, (columns, title) in CHARTS.items():
         _series_chart(os.path.join(out_dir, chart), series, columns, title)
     if len(reports) == 1:
@@ -203,8 +203,27 @@ def _summary(names, reports):
     lines += ['', 'Step times were measured in this run, one session after the other; '
               'compare them as ratios, not across runs.', '',
               'Charts: ' + ', '.join(f'[{c}]({c})' for c in sorted(CHARTS)) + '; filmstrip: '
-              + ', '.join(f'[{r["filmstrip"]}]({r["filmstrip"]})' for r in reports), '']
+              + ', '.join(f'[{r["filmstrip"]}]({r["filmstrip"]})' if r['filmstrip'] else 'none'
+                          for r in reports), '']
     return '\n'.join(lines)
+
+
+def summary_line(report):
+    """The one line the command prints: per session, frames, strain and step time, or how
+    many inputs were dropped when none was simulated."""
+    parts = []
+    for r in report.get('sessions', [report]):
+        text = f'{os.path.basename(r["file"])} {r["frames"]} frames'
+        if r['dropped_inputs']:
+            text += f' ({r["dropped_inputs"]} of {r["inputs"]} inputs dropped)'
+        median = r['step_time_us']['median']
+        if median is None:
+            text += ', nothing simulated'
+        else:
+            text += (f', vertical strain {r["max_vertical_strain"]:.3f}, step {median:.0f} us '
+                     'median')
+        parts.append(text)
+    return '; '.join(parts)
 
 
 def _pair(t):

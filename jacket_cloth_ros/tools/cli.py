@@ -151,7 +151,7 @@ def cmd_replay(args):
 
 
 def cmd_analyze(args):
-    from .analyze import analyze
+    from .analyze import analyze, summary_line
     if len(args.input) > 1 and not args.compare:
         raise ToolError('several sessions: add --compare to lay them side by side')
     report_path = os.path.join(args.out, 'report.json')
@@ -161,10 +161,7 @@ def cmd_analyze(args):
     for path in args.input:
         sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
     report = analyze(sessions, args.out, moments=args.moments)
-    print(f'{os.path.join(args.out, "report.json")}: '
-          + '; '.join(f'{os.path.basename(r["file"])} {r["frames"]} frames, vertical strain '
-                      f'{r["max_vertical_strain"]:.3f}, step {r["step_time_us"]["median"]:.0f}'
-                      ' us median' for r in report.get('sessions', [report])))
+    print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 
 
