@@ -320,6 +320,38 @@ def test_broken_files_are_one_line_errors(clip, tmp_path, capsys):
     assert _replay(clip, existing, '--force') == 0 and existing.stat().st_size > 1000
 
 
+def test_bad_bag_metadata_and_set_up_files_are_one_line_errors_naming_the_file(clip, tmp_path,
+                                                                              capsys):
+    out = tmp_path / 'out.mcap'
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'bag_0.mcap')
+    meta = bag / 'metadata.yaml'
+    for text in (b'rosbag2_bagfile_information: {storage_identifier: [mcap\n  x: 1\n',
+                 b'rosbag2_bagfile_information: 5\n', b'\x89PNG\r\n\x1a\n\xff\xfe',
+                 b'rosbag2_bagfile_information: {storage_identifier: mcap}\n'):
+        meta.write_bytes(text)
+        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(out)])
+        assert f'{meta}: not a rosbag2 metadata file' in err, err
+    # An empty or binary URDF or rig never stands for the shipped one; errors name the file.
+    empty = tmp_path / 'empty.urdf'
+    empty.write_text('')
+    binary = tmp_path / 'binary.yaml'
+    binary.write_bytes(bytes(range(256)))
+    for option, path, what in (('--urdf', empty, 'empty file'), ('--urdf', binary, 'UTF-8'),
+                               ('--rig', binary, 'UTF-8')):
+        for argv in (['replay', str(clip), '-o', str(out)],
+                     ['analyze', str(clip), '--out', str(tmp_path / 'an')]):
+            err = _one_line_error(capsys, argv + [option, str(path)])
+            assert str(path) in err and what in err, err
+    assert not out.exists()
+    err = _one_line_error(capsys, ['motion', '--urdf', str(empty), '-o', str(out)])
+    assert f'URDF {empty}: empty file' in err
+    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
+                                   '--rig', str(binary)])
+    assert str(binary) in err and 'UTF-8' in err
+
+
 def test_truncated_recording_gives_its_readable_part_with_a_warning(clip, tmp_path, capsys):
     full = tmp_path / 'full.mcap'
     assert _replay(clip, full) == 0

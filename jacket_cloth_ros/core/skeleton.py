@@ -12,7 +12,7 @@ import contextlib
 import numpy as np
 from urdf_parser_py import urdf
 
-from .config import ConfigError
+from .config import ConfigError, read_text
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -103,3 +103,22 @@ class Skeleton:
         forward_kinematics(self.origin, self.axis, self.kind, self.var, self.mult, self.offset,
                            self.parent, np.asarray(q, dtype=float), world)
         return world
+
+
+def skeleton_from(text, where):
+    """The skeleton of a URDF's text read from a file; every error names it (``where``, e.g.
+    'URDF path'), an empty file too: it never means the shipped character."""
+    if not text.strip():
+        raise ConfigError(f'{where}: empty file')
+    try:
+        return Skeleton(text)
+    except ConfigError as e:
+        message = str(e)
+        if message.startswith('URDF: '):
+            message = f'{where}: ' + message[len('URDF: '):]
+        raise ConfigError(message) from None
+
+
+def load_skeleton(path):
+    """The skeleton of a URDF file; errors name the file."""
+    return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')

@@ -55,8 +55,14 @@ def mcap_files(path):
             if storage != 'mcap':
                 raise RecordingError(f'{path}: bag storage is {storage!r}; only mcap is read')
             files = [os.path.join(path, p) for p in info['relative_file_paths']]
-        except (yaml.YAMLError, KeyError, TypeError) as e:
-            raise RecordingError(f'{path}: unreadable metadata.yaml ({e})') from None
+        except (OSError, ValueError, yaml.YAMLError, KeyError, TypeError, AttributeError) as e:
+            if isinstance(e, RecordingError):
+                raise
+            # The YAML parser's messages span lines (a caret under the bad column): one line.
+            text = ' '.join(str(e).split()) or type(e).__name__
+            if isinstance(e, KeyError):
+                text = f'no {text}'
+            raise RecordingError(f'{meta}: not a rosbag2 metadata file ({text})') from None
     else:
         files = sorted(os.path.join(path, p) for p in os.listdir(path) if p.endswith('.mcap'))
     if not files:

@@ -22,10 +22,9 @@ class ToolError(Exception):
 
 
 def _skeleton(urdf_path=None):
-    from ..core.skeleton import Skeleton
+    from ..core.skeleton import load_skeleton
     path = urdf_path or shipped('character.urdf')
-    with open(path, encoding='utf-8') as f:
-        return Skeleton(f.read()), path
+    return load_skeleton(path), path
 
 
 def _joint_state(names, positions, stamp_ns):

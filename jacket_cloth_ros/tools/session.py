@@ -16,10 +16,10 @@ from rcl_interfaces.msg import ParameterEvent
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
 
-from ..core.config import ConfigError, parse_yaml, shipped
+from ..core.config import ConfigError, parse_yaml, read_text, shipped
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
-from ..core.skeleton import Skeleton
+from ..core.skeleton import Skeleton, skeleton_from
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
@@ -56,14 +56,6 @@ class SessionInput:
         return min(stamps), max(stamps)
 
 
-def _read_text(path, what):
-    try:
-        with open(path, encoding='utf-8') as f:
-            return f.read()
-    except OSError as e:
-        raise ConfigError(f'{what} {path}: cannot read ({e.strerror})') from None
-
-
 def joint_state_topic(recording, topic=None):
     """The recording's JointState topic: the one asked for, else the only one there is."""
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
@@ -91,15 +83,16 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
     recording = read_recording(path)
     topic = joint_state_topic(recording, topic)
     recorded = recording.metadata.get(SESSION_CONFIG, {})
-    urdf_text = _read_text(urdf, 'URDF') if urdf else recorded.get('urdf')
-    if not urdf_text:
-        with open(shipped('character.urdf'), encoding='utf-8') as f:
-            urdf_text = f.read()
-    skeleton = Skeleton(urdf_text)
-    rig_yaml = _read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or _read_text(
+    if urdf:        # a file given: its own errors, an empty one too, never the shipped one
+        urdf_text = read_text(urdf, 'URDF')
+        skeleton = skeleton_from(urdf_text, f'URDF {urdf}')
+    else:
+        urdf_text = recorded.get('urdf') or read_text(shipped('character.urdf'), 'URDF')
+        skeleton = Skeleton(urdf_text)
+    rig_yaml = read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or read_text(
         shipped('jacket_rig.yaml'), 'rig')
     rig_obj = Rig(parse_yaml(rig_yaml, rig or 'the rig'), skeleton, where=rig or 'rig')
-    fabrics_yaml = recorded.get('fabrics_yaml') or _read_text(shipped('fabrics.yaml'), 'fabrics')
+    fabrics_yaml = recorded.get('fabrics_yaml') or read_text(shipped('fabrics.yaml'), 'fabrics')
     fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, 'fabrics'), 'fabrics')
     recorded_values = json.loads(recorded.get('parameters_json', '{}'))
     preset = fabric or recorded_values.get('fabric', 'tweed_jacket')
