@@ -320,8 +320,8 @@ def test_broken_files_are_one_line_errors(clip, tmp_path, capsys):
     assert _replay(clip, existing, '--force') == 0 and existing.stat().st_size > 1000
 
 
-def test_bad_bag_metadata_and_set_up_files_are_one_line_errors_naming_the_file(clip, tmp_path,
-                                                                              capsys):
+def test_bad_bag_metadata_and_set_up_files_are_one_line_errors_naming_the_file(
+        clip, tmp_path, capsys):
     out = tmp_path / 'out.mcap'
     bag = tmp_path / 'bag'
     bag.mkdir()
@@ -519,3 +519,77 @@ print(sorted(loaded() - before))
     out = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == '[]', out
+
+
+def test_outputs_are_regular_files_and_never_an_input_even_with_force(clip, tmp_path, capsys):
+    import stat
+    src = tmp_path / 'in.mcap'
+    shutil.copy(clip, src)
+    kept = src.read_bytes()
+    link = tmp_path / 'link.mcap'
+    link.symlink_to(src)
+    hard = tmp_path / 'hard.mcap'
+    os.link(src, hard)
+    for out in (src, link, hard):
+        err = _one_line_error(capsys, ['replay', str(src), '-o', str(out), '--force'])
+        assert f'{out} is the input {src}' in err, err
+    err = _one_line_error(capsys, ['picture', str(src), '-o', str(src), '--force'])
+    assert 'is the input' in err
+    urdf = tmp_path / 'character.urdf'
+    shutil.copy(shipped('character.urdf'), urdf)
+    err = _one_line_error(capsys, ['motion', '--urdf', str(urdf), '-o', str(urdf), '--force'])
+    assert 'is the input' in err
+    assert src.read_bytes() == kept and urdf.read_text() == open(shipped('character.urdf')).read()
+    # A pipe (as a device: /dev/full was replaced by a regular file) or a folder is refused.
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    folder = tmp_path / 'folder'
+    folder.mkdir()
+    for out in (fifo, folder):
+        for argv in (['replay', str(src), '-o', str(out), '--force'],
+                     ['motion', '-o', str(out), '--force'],
+                     ['picture', str(src), '-o', str(out), '--force']):
+            assert 'not a regular file' in _one_line_error(capsys, argv)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and folder.is_dir()
+    # analyze --out: a folder, not an input's, and its files regular files.
+    err = _one_line_error(capsys, ['analyze', str(src), '--out', str(src), '--force'])
+    assert f'{src} is not a folder' in err
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'bag_0.mcap')
+    err = _one_line_error(capsys, ['analyze', str(bag), '--out', str(bag), '--force'])
+    assert f'{bag} is the input {bag}' in err
+    err = _one_line_error(capsys, ['analyze', str(bag), '--out', str(bag / 'an')])
+    assert 'inside the input folder' in err
+    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(bag / 'out.mcap')])
+    assert 'inside the input folder' in err
+    assert os.listdir(bag) == ['bag_0.mcap']
+    an = tmp_path / 'an'
+    an.mkdir()
+    os.mkfifo(an / 'strain.png')
+    err = _one_line_error(capsys, ['analyze', str(src), '--out', str(an), '--force'])
+    assert 'strain.png is not a regular file' in err
+
+
+def test_a_forced_output_is_replaced_only_by_a_complete_file(clip, tmp_path, capsys,
+                                                             monkeypatch):
+    from jacket_cloth_ros.tools import cli
+    out = tmp_path / 'walk.mcap'
+    out.write_bytes(b'keep me')
+
+    def boom(*args, **kwargs):
+        raise OSError('disk full')
+        yield
+    monkeypatch.setattr(cli, 'clip_messages', boom)
+    assert 'disk full' in _one_line_error(capsys, ['motion', '-o', str(out), '--force'])
+    assert out.read_bytes() == b'keep me' and os.listdir(tmp_path) == ['walk.mcap']
+    monkeypatch.undo()
+    assert main(['motion', '--duration', '1', '-o', str(out), '--force']) == 0
+    assert out.stat().st_size > 1000 and os.listdir(tmp_path) == ['walk.mcap']
+    assert out.stat().st_mode & 0o777 == 0o666 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -146,6 +146,13 @@ CHARTS = {
 }
 
 
+def output_names(count):
+    """The files ``analyze`` writes into its folder for ``count`` sessions."""
+    strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
+                                                   for k in range(1, count + 1)]
+    return ['report.json', 'summary.md'] + sorted(CHARTS) + strips
+
+
 def analyze(sessions, out_dir, names=None, moments=6):
     """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
     os.makedirs(out_dir, exist_ok=True)
