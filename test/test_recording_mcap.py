@@ -108,3 +108,27 @@ def test_chunk_buffers_grow_and_are_reused_without_mixing_chunks():
     got = [(m.sequence, m.data) for _, _, m in SeekingReader(
         io.BytesIO(out.getvalue()), validate_crcs=True).iter_messages()]
     assert got == [(i, bytes([i + 1]) * size) for i, size in enumerate(sizes)]
+
+
+def test_the_reader_refuses_damage_and_keeps_the_readable_part_of_a_cut(tmp_path):
+    from jacket_cloth_ros.recording.reader import RecordingError, read_recording
+    data, sent = _written('')
+    path = tmp_path / 'x.mcap'
+    path.write_bytes(data)
+    assert len(read_recording(str(path)).messages) == len(sent)
+    summary = SeekingReader(io.BytesIO(data)).get_summary()
+    first = summary.chunk_indexes[0]
+    footer = len(data) - 8 - 29
+    summary_start = struct.unpack_from('<Q', data, footer + 9)[0]
+    for at in (first.chunk_start_offset + first.chunk_length - 20,     # a message's bytes
+               summary_start + 30):                                    # the summary's
+        bad = bytearray(data)
+        bad[at] ^= 0x01
+        path.write_bytes(bytes(bad))
+        with pytest.raises(RecordingError, match='damaged file'):
+            read_recording(str(path))
+    # Cut inside the last chunk: no summary, the chunks before it are read, no error.
+    last = summary.chunk_indexes[-1]
+    path.write_bytes(data[:last.chunk_start_offset + last.chunk_length // 2])
+    cut = read_recording(str(path))
+    assert not cut.complete and 0 < len(cut.messages) < len(sent)

@@ -4,6 +4,7 @@
 Live-versus-replay equality needs the node over DDS: it is in test_node.py.
 """
 
+import io
 import json
 import os
 import shutil
@@ -11,6 +12,7 @@ import shutil
 import numpy as np
 import pytest
 import yaml
+from mcap.data_stream import ReadDataStream
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from mcap_ros2.writer import Writer as Ros2Writer
@@ -118,8 +120,10 @@ def test_analyze_writes_the_report_charts_and_filmstrip(clip, tmp_path, capsys):
     assert (both / 'filmstrip_2.png').exists()
 
 
-def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', seconds=1.0):
-    """A plain MCAP written by mcap_ros2's own writer, not ours."""
+def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', seconds=1.0,
+                          log_delay_ns=0):
+    """A plain MCAP written by mcap_ros2's own writer, not ours; ``log_delay_ns``: log times
+    later than the stamps (as a recorder's receive time)."""
     with open(path, 'wb') as f:
         w = Ros2Writer(f)
         schema = w.register_msgdef('sensor_msgs/msg/JointState',
@@ -131,8 +135,98 @@ def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', sec
             w.write_message(topic, schema, {
                 'header': {'stamp': {'sec': t // 10**9, 'nanosec': t % 10**9}, 'frame_id': ''},
                 'name': skeleton_names, 'position': pos, 'velocity': [], 'effort': []},
-                log_time=t, publish_time=t)
+                log_time=t + log_delay_ns, publish_time=t + log_delay_ns)
         w.finish()
+
+
+def _node_recording(path, stamps, clip='walk', rate=60.0):
+    """A session recorded by the node's rules, without DDS (ros/node.py _on_joint_state): each
+    JointState is written as it arrives, at its header stamp, then the pipeline's outputs.
+    ``stamps``: the header stamps in arrival order; the k-th carries the clip at k / rate."""
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    from jacket_cloth_ros.ros.cdr import JointStateReader
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
+    texts = {}
+    for name in ('character.urdf', 'jacket_rig.yaml', 'fabrics.yaml'):
+        with open(shipped(name), encoding='utf-8') as f:
+            texts[name] = f.read()
+    skeleton = Skeleton(texts['character.urdf'])
+    fabrics = load_fabrics()
+    values = default_values(fabrics['tweed_jacket'])
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values)
+    topics = session_topics()
+    recorder = SessionRecorder(str(path), compression='lz4')
+    for topic, kind, qos in topics.values():
+        recorder.add_topic(topic, kind, qos)
+    recorder.add_session_config(texts['character.urdf'], texts['jacket_rig.yaml'],
+                                texts['fabrics.yaml'], values)
+    reader = JointStateReader()
+    for k, stamp in enumerate(stamps):
+        names, pos = joint_state_content(skeleton.joint_names, clip, k / rate)
+        msg = JointState(name=names, position=[float(p) for p in pos])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        raw = serialize_message(msg)
+        recorder.write(topics['joint_states'][0], raw, stamp)
+        _, outputs = pipeline.on_joint_state(reader.read(raw), stamp)
+        for key, out in outputs:
+            recorder.write(topics[key][0], out, stamp)
+    recorder.close()
+    return pipeline
+
+
+def _topic_in_file_order(path, topic):
+    with open(path, 'rb') as f:
+        return [(m.log_time, m.data) for _, c, m in make_reader(f).iter_messages(
+            log_time_order=False) if c.topic == topic]
+
+
+def test_a_session_whose_stamps_go_back_replays_to_the_same_tf(tmp_path, capsys):
+    # The node drops a repeated stamp and one a little back, and resets on one far back; the
+    # replay must feed the inputs in the order they were recorded, not sorted by log time.
+    step = 1_000_000_000 // 60
+    stamps = [100 * 10 ** 9 + k * step for k in range(60)]
+    stamps += [stamps[-1] - 5_000_000, stamps[-1]]                  # dropped: back, repeated
+    stamps += [stamps[59] + k * step for k in range(1, 31)]
+    stamps += [50 * 10 ** 9 + k * step for k in range(40)]         # far back: a reset
+    live = _node_recording(tmp_path / 'live.mcap', stamps)
+    assert live.dropped == 2 and live.sim.resets == 2
+    out = tmp_path / 'replayed.mcap'
+    assert _replay(tmp_path / 'live.mcap', out) == 0
+    recorded = _topic_in_file_order(tmp_path / 'live.mcap', '/tf')
+    assert len(recorded) == len(stamps) - 2
+    assert _topic_in_file_order(out, '/tf') == recorded
+    assert '2 dropped' in capsys.readouterr().out
+    assert main(['analyze', str(tmp_path / 'live.mcap'), '--out', str(tmp_path / 'an')]) == 0
+    report = json.loads((tmp_path / 'an' / 'report.json').read_text())
+    assert report['replay_matches_recording'] is True
+    assert report['recorded_tf_compared'] == len(recorded) and report['dropped_inputs'] == 2
+
+
+def test_replay_takes_time_from_the_header_stamp_not_the_log_time(tmp_path):
+    # A recorder's log time is when it received a message; the node simulates to the stamp.
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    urdf = shipped('examples/mannequin.urdf')
+    rig = shipped('examples/mannequin_rig.yaml')
+    with open(urdf, encoding='utf-8') as f:
+        names = list(Skeleton(f.read()).joint_names)
+    late = tmp_path / 'late.mcap'
+    _foreign_joint_states(late, names, log_delay_ns=54_000_000)
+    out = tmp_path / 'out.mcap'
+    assert main(['replay', str(late), '-o', str(out), '--urdf', urdf, '--rig', rig]) == 0
+    stamps = [5_000_000_000 + k * 20_000_000 for k in range(50)]
+    assert [t for t, _ in _topic_in_file_order(out, '/robot/joint_states')] == stamps
+    tf = _topic_in_file_order(out, '/tf')
+    assert [t for t, _ in tf] == stamps
+    # The header stamp inside each /tf transform (after the CDR and sequence heads).
+    assert [int.from_bytes(d[8:12], 'little') * 10 ** 9 + int.from_bytes(d[12:16], 'little')
+            for _, d in tf] == stamps
 
 
 def test_foreign_mcap_and_rosbag2_directory_of_another_skeleton(tmp_path):
@@ -156,6 +250,31 @@ def test_foreign_mcap_and_rosbag2_directory_of_another_skeleton(tmp_path):
                  '--urdf', urdf, '--rig', rig]) == 0
     report = json.loads((tmp_path / 'an' / 'report.json').read_text())
     assert report['frames'] == 50 and report['nonfinite_count'] == 0
+
+
+def test_analyze_of_a_session_whose_every_input_is_dropped_says_so(tmp_path, capsys):
+    # Every JointState non-finite: the node drops them all; the report says so, no traceback.
+    path = tmp_path / 'nan.mcap'
+    with open(path, 'wb') as f:
+        w = Ros2Writer(f)
+        schema = w.register_msgdef('sensor_msgs/msg/JointState',
+                                   ros2msg_schema('sensor_msgs/msg/JointState'))
+        for k in range(20):
+            t = 5_000_000_000 + k * 20_000_000
+            w.write_message('/joint_states', schema, {
+                'header': {'stamp': {'sec': t // 10**9, 'nanosec': t % 10**9}, 'frame_id': ''},
+                'name': ['spine_pitch'], 'position': [float('nan')], 'velocity': [],
+                'effort': []}, log_time=t, publish_time=t)
+        w.finish()
+    out = tmp_path / 'an'
+    capsys.readouterr()
+    assert main(['analyze', str(path), '--out', str(out)]) == 0
+    captured = capsys.readouterr()
+    assert 'Traceback' not in captured.err
+    assert '0 frames (20 of 20 inputs dropped), nothing simulated' in captured.out
+    report = json.loads((out / 'report.json').read_text())
+    assert (report['inputs'], report['dropped_inputs'], report['frames']) == (20, 20, 0)
+    assert report['filmstrip'] is None and 'filmstrip: none' in (out / 'summary.md').read_text()
 
 
 def _one_line_error(capsys, argv):
@@ -201,6 +320,38 @@ def test_broken_files_are_one_line_errors(clip, tmp_path, capsys):
     assert _replay(clip, existing, '--force') == 0 and existing.stat().st_size > 1000
 
 
+def test_bad_bag_metadata_and_set_up_files_are_one_line_errors_naming_the_file(
+        clip, tmp_path, capsys):
+    out = tmp_path / 'out.mcap'
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'bag_0.mcap')
+    meta = bag / 'metadata.yaml'
+    for text in (b'rosbag2_bagfile_information: {storage_identifier: [mcap\n  x: 1\n',
+                 b'rosbag2_bagfile_information: 5\n', b'\x89PNG\r\n\x1a\n\xff\xfe',
+                 b'rosbag2_bagfile_information: {storage_identifier: mcap}\n'):
+        meta.write_bytes(text)
+        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(out)])
+        assert f'{meta}: not a rosbag2 metadata file' in err, err
+    # An empty or binary URDF or rig never stands for the shipped one; errors name the file.
+    empty = tmp_path / 'empty.urdf'
+    empty.write_text('')
+    binary = tmp_path / 'binary.yaml'
+    binary.write_bytes(bytes(range(256)))
+    for option, path, what in (('--urdf', empty, 'empty file'), ('--urdf', binary, 'UTF-8'),
+                               ('--rig', binary, 'UTF-8')):
+        for argv in (['replay', str(clip), '-o', str(out)],
+                     ['analyze', str(clip), '--out', str(tmp_path / 'an')]):
+            err = _one_line_error(capsys, argv + [option, str(path)])
+            assert str(path) in err and what in err, err
+    assert not out.exists()
+    err = _one_line_error(capsys, ['motion', '--urdf', str(empty), '-o', str(out)])
+    assert f'URDF {empty}: empty file' in err
+    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
+                                   '--rig', str(binary)])
+    assert str(binary) in err and 'UTF-8' in err
+
+
 def test_truncated_recording_gives_its_readable_part_with_a_warning(clip, tmp_path, capsys):
     full = tmp_path / 'full.mcap'
     assert _replay(clip, full) == 0
@@ -214,6 +365,51 @@ def test_truncated_recording_gives_its_readable_part_with_a_warning(clip, tmp_pa
     assert 'cut short' in captured.err
     n = int(captured.out.split(': ')[1].split(' JointState')[0])
     assert 0 < n < 181
+
+
+def _flip_in_first_chunk(src, dst, cut=None):
+    """A copy of ``src`` with one byte flipped in its first chunk's data where the chunk still
+    decompresses (only its CRC tells), optionally cut short."""
+    import dataclasses
+    from mcap.records import Chunk
+    from mcap.stream_reader import get_chunk_data_stream
+    data = bytearray(src.read_bytes())
+    with open(src, 'rb') as f:
+        index = make_reader(f).get_summary().chunk_indexes[0]
+    f = io.BytesIO(bytes(data[index.chunk_start_offset + 9:]))
+    chunk = Chunk.read(ReadDataStream(f))
+    start = index.chunk_start_offset + 9 + f.tell() - len(chunk.data)
+    for k in range(len(chunk.data) // 2, len(chunk.data)):
+        flipped = bytearray(chunk.data)
+        flipped[k] ^= 0x20
+        try:
+            get_chunk_data_stream(dataclasses.replace(chunk, data=bytes(flipped)))
+        except Exception:  # noqa: BLE001 - a flip the codec notices: try the next byte
+            continue
+        data[start + k] ^= 0x20
+        break
+    dst.write_bytes(bytes(data[:cut]))
+
+
+@pytest.mark.parametrize('compression', ['none', 'lz4'])
+def test_a_damaged_chunk_is_an_error_naming_the_file_and_nothing_is_replayed(
+        clip, tmp_path, capsys, compression):
+    full = tmp_path / 'full.mcap'
+    assert _replay(clip, full, '-p', f'record_compression:={compression}') == 0
+    flipped = tmp_path / 'flipped.mcap'
+    _flip_in_first_chunk(full, flipped)
+    assert flipped.read_bytes() != full.read_bytes()
+    out = tmp_path / 'out.mcap'
+    capsys.readouterr()
+    err = _one_line_error(capsys, ['replay', str(flipped), '-o', str(out)])
+    assert err.startswith(f'jacket_cloth replay: {flipped}: damaged file') and 'CRC' in err
+    assert not out.exists() and not os.path.exists(str(out) + '.partial')
+    assert 'damaged file' in _one_line_error(capsys, ['analyze', str(flipped), '--out',
+                                                      str(tmp_path / 'an')])
+    # Cut short as well (no summary: the records are streamed): still damage, not a cut.
+    both = tmp_path / 'flipped_and_cut.mcap'
+    _flip_in_first_chunk(full, both, cut=len(full.read_bytes()) * 3 // 4)
+    assert 'damaged file' in _one_line_error(capsys, ['replay', str(both), '-o', str(out)])
 
 
 def test_a_partial_output_never_replaces_the_file(clip, tmp_path, capsys, monkeypatch):
@@ -323,3 +519,77 @@ print(sorted(loaded() - before))
     out = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == '[]', out
+
+
+def test_outputs_are_regular_files_and_never_an_input_even_with_force(clip, tmp_path, capsys):
+    import stat
+    src = tmp_path / 'in.mcap'
+    shutil.copy(clip, src)
+    kept = src.read_bytes()
+    link = tmp_path / 'link.mcap'
+    link.symlink_to(src)
+    hard = tmp_path / 'hard.mcap'
+    os.link(src, hard)
+    for out in (src, link, hard):
+        err = _one_line_error(capsys, ['replay', str(src), '-o', str(out), '--force'])
+        assert f'{out} is the input {src}' in err, err
+    err = _one_line_error(capsys, ['picture', str(src), '-o', str(src), '--force'])
+    assert 'is the input' in err
+    urdf = tmp_path / 'character.urdf'
+    shutil.copy(shipped('character.urdf'), urdf)
+    err = _one_line_error(capsys, ['motion', '--urdf', str(urdf), '-o', str(urdf), '--force'])
+    assert 'is the input' in err
+    assert src.read_bytes() == kept and urdf.read_text() == open(shipped('character.urdf')).read()
+    # A pipe (as a device: /dev/full was replaced by a regular file) or a folder is refused.
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    folder = tmp_path / 'folder'
+    folder.mkdir()
+    for out in (fifo, folder):
+        for argv in (['replay', str(src), '-o', str(out), '--force'],
+                     ['motion', '-o', str(out), '--force'],
+                     ['picture', str(src), '-o', str(out), '--force']):
+            assert 'not a regular file' in _one_line_error(capsys, argv)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and folder.is_dir()
+    # analyze --out: a folder, not an input's, and its files regular files.
+    err = _one_line_error(capsys, ['analyze', str(src), '--out', str(src), '--force'])
+    assert f'{src} is not a folder' in err
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'bag_0.mcap')
+    err = _one_line_error(capsys, ['analyze', str(bag), '--out', str(bag), '--force'])
+    assert f'{bag} is the input {bag}' in err
+    err = _one_line_error(capsys, ['analyze', str(bag), '--out', str(bag / 'an')])
+    assert 'inside the input folder' in err
+    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(bag / 'out.mcap')])
+    assert 'inside the input folder' in err
+    assert os.listdir(bag) == ['bag_0.mcap']
+    an = tmp_path / 'an'
+    an.mkdir()
+    os.mkfifo(an / 'strain.png')
+    err = _one_line_error(capsys, ['analyze', str(src), '--out', str(an), '--force'])
+    assert 'strain.png is not a regular file' in err
+
+
+def test_a_forced_output_is_replaced_only_by_a_complete_file(clip, tmp_path, capsys,
+                                                             monkeypatch):
+    from jacket_cloth_ros.tools import cli
+    out = tmp_path / 'walk.mcap'
+    out.write_bytes(b'keep me')
+
+    def boom(*args, **kwargs):
+        raise OSError('disk full')
+        yield
+    monkeypatch.setattr(cli, 'clip_messages', boom)
+    assert 'disk full' in _one_line_error(capsys, ['motion', '-o', str(out), '--force'])
+    assert out.read_bytes() == b'keep me' and os.listdir(tmp_path) == ['walk.mcap']
+    monkeypatch.undo()
+    assert main(['motion', '--duration', '1', '-o', str(out), '--force']) == 0
+    assert out.stat().st_size > 1000 and os.listdir(tmp_path) == ['walk.mcap']
+    assert out.stat().st_mode & 0o777 == 0o666 & ~_umask()
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

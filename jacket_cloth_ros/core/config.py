@@ -39,12 +39,25 @@ def parse_yaml(text, where):
     return data
 
 
+def read_text(path, what):
+    """A configuration file's text; the error names the file (``what``: 'URDF', 'rig', ...)."""
+    try:
+        with open(path, encoding='utf-8') as f:
+            return f.read()
+    except OSError as e:
+        raise ConfigError(f'{what} {path}: cannot read ({e.strerror})') from None
+    except UnicodeDecodeError as e:
+        raise ConfigError(f'{what} {path}: not a UTF-8 text file (byte {e.start})') from None
+
+
 def load_yaml(path):
     try:
         with open(path, encoding='utf-8') as f:
             data = yaml.safe_load(f)
     except OSError as e:
         raise ConfigError(f'{path}: cannot read ({e.strerror})') from None
+    except UnicodeDecodeError as e:
+        raise ConfigError(f'{path}: not a UTF-8 text file (byte {e.start})') from None
     except yaml.YAMLError as e:
         raise ConfigError(f'{path}: not valid YAML ({e})'.replace('\n', ' ')) from None
     if not isinstance(data, dict):

@@ -13,7 +13,7 @@ import numpy as np
 from urdf_parser_py import urdf
 
 from .bundles import floats, skeleton_model
-from .config import ConfigError, shipped
+from .config import ConfigError, read_text, shipped
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -115,3 +115,22 @@ def shipped_character_urdf():
 def load_shipped_character():
     """The shipped character as a Skeleton, for the tools and the lab."""
     return Skeleton(shipped_character_urdf())
+
+
+def skeleton_from(text, where):
+    """The skeleton of a URDF's text read from a file; every error names it (``where``, e.g.
+    'URDF path'), an empty file too: it never means the shipped character."""
+    if not text.strip():
+        raise ConfigError(f'{where}: empty file')
+    try:
+        return Skeleton(text)
+    except ConfigError as e:
+        message = str(e)
+        if message.startswith('URDF: '):
+            message = f'{where}: ' + message[len('URDF: '):]
+        raise ConfigError(message) from None
+
+
+def load_skeleton(path):
+    """The skeleton of a URDF file; errors name the file."""
+    return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')

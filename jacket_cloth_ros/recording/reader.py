@@ -6,15 +6,17 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 """
 
 import os
+import struct
+import zlib
 from dataclasses import dataclass, field
 
 import yaml
-from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
+from mcap.stream_reader import CRCValidationError, StreamReader
 
 MAGIC = b'\x89MCAP0\r\n'
+_FOOTER_SIZE = 1 + 8 + 8 + 8 + 4        # opcode, length, summary start, offsets start, CRC
 
 
 class RecordingError(ValueError):
@@ -53,8 +55,14 @@ def mcap_files(path):
             if storage != 'mcap':
                 raise RecordingError(f'{path}: bag storage is {storage!r}; only mcap is read')
             files = [os.path.join(path, p) for p in info['relative_file_paths']]
-        except (yaml.YAMLError, KeyError, TypeError) as e:
-            raise RecordingError(f'{path}: unreadable metadata.yaml ({e})') from None
+        except (OSError, ValueError, yaml.YAMLError, KeyError, TypeError, AttributeError) as e:
+            if isinstance(e, RecordingError):
+                raise
+            # The YAML parser's messages span lines (a caret under the bad column): one line.
+            text = ' '.join(str(e).split()) or type(e).__name__
+            if isinstance(e, KeyError):
+                text = f'no {text}'
+            raise RecordingError(f'{meta}: not a rosbag2 metadata file ({text})') from None
     else:
         files = sorted(os.path.join(path, p) for p in os.listdir(path) if p.endswith('.mcap'))
     if not files:
@@ -101,42 +109,84 @@ def _read_file(path, topics, out):
         if f.read(8) != MAGIC:
             raise RecordingError(f'{path}: not an MCAP file')
         f.seek(0)
+        reader = make_reader(f, validate_crcs=True)
         try:
-            reader = make_reader(f)
             summary = reader.get_summary()
-            if summary is None:
-                raise McapError('no summary')
-            for schema, channel, message in reader.iter_messages(topics=topics,
-                                                                 log_time_order=False):
-                out.messages.append(_recorded(schema, channel, message))
-            for channel in summary.channels.values():
-                schema = summary.schemas.get(channel.schema_id)
-                out.topics[channel.topic] = schema.name if schema else ''
-            for m in reader.iter_metadata():
-                out.metadata[m.name] = dict(m.metadata)
+        except Exception:  # noqa: BLE001 - no footer or summary (cut short): stream it below
+            summary = None
+        if summary is not None and summary.chunk_indexes:
+            _check_summary_crc(f, path)
+            # A complete file: whatever fails from here on is damage, never "cut short".
+            try:
+                for schema, channel, message in reader.iter_messages(topics=topics,
+                                                                     log_time_order=False):
+                    out.messages.append(_recorded(schema, channel, message))
+                for channel in summary.channels.values():
+                    schema = summary.schemas.get(channel.schema_id)
+                    out.topics[channel.topic] = schema.name if schema else ''
+                for m in reader.iter_metadata():
+                    out.metadata[m.name] = dict(m.metadata)
+            except Exception as e:  # noqa: BLE001 - any kind means the same: a damaged file
+                raise _damaged(path, e) from None
             return
-        except Exception:  # noqa: BLE001 - no summary or index (cut short): stream it below
-            pass
-        # No usable summary (a killed writer): stream the records up to the last readable one.
-        f.seek(0)
-        schemas, channels = {}, {}
-        try:
-            for record in StreamReader(f, skip_magic=False).records:
-                if isinstance(record, Schema):
-                    schemas[record.id] = record
-                elif isinstance(record, Channel):
-                    channels[record.id] = record
-                    schema = schemas.get(record.schema_id)
-                    out.topics[record.topic] = schema.name if schema else ''
-                elif isinstance(record, Metadata):
-                    out.metadata[record.name] = dict(record.metadata)
-                elif isinstance(record, Message):
-                    channel = channels.get(record.channel_id)
-                    if channel is not None and (topics is None or channel.topic in topics):
-                        out.messages.append(_recorded(schemas.get(channel.schema_id), channel,
-                                                      record))
-        except Exception:  # noqa: BLE001 - everything after the cut is unreadable by design
-            out.complete = False
+        _stream_file(f, path, topics, out)
+
+
+def _stream_file(f, path, topics, out):
+    """Read the records in order; a read that fails at the end of the file is a cut (a killed
+    writer: its readable part is kept), one that fails before it is damage."""
+    size = os.fstat(f.fileno()).st_size
+    f.seek(0)
+    schemas, channels = {}, {}
+    try:
+        for record in StreamReader(f, skip_magic=False, validate_crcs=True).records:
+            if isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                channels[record.id] = record
+                schema = schemas.get(record.schema_id)
+                out.topics[record.topic] = schema.name if schema else ''
+            elif isinstance(record, Metadata):
+                out.metadata[record.name] = dict(record.metadata)
+            elif isinstance(record, Message):
+                channel = channels.get(record.channel_id)
+                if channel is not None and (topics is None or channel.topic in topics):
+                    out.messages.append(_recorded(schemas.get(channel.schema_id), channel,
+                                                  record))
+    except Exception as e:  # noqa: BLE001 - a cut and damage raise alike; where tells them apart
+        if f.tell() < size:
+            raise _damaged(path, e) from None
+        out.complete = False
+
+
+def _check_summary_crc(f, path):
+    """The footer's CRC over the summary (MCAP spec), which the mcap reader does not check."""
+    f.seek(-(_FOOTER_SIZE + len(MAGIC)), os.SEEK_END)
+    footer_at = f.tell()
+    summary_start, _, crc = struct.unpack('<QQI', f.read(_FOOTER_SIZE)[9:])
+    if crc == 0 or not 0 < summary_start <= footer_at:
+        return
+    f.seek(summary_start)
+    actual = 0
+    left = footer_at + _FOOTER_SIZE - 4 - summary_start
+    while left > 0:
+        block = f.read(min(left, 1 << 20))
+        if not block:
+            break
+        actual = zlib.crc32(block, actual)
+        left -= len(block)
+    if actual != crc:
+        raise RecordingError(f'{path}: damaged file: its summary fails its CRC check; '
+                             'nothing read')
+
+
+def _damaged(path, error):
+    if isinstance(error, CRCValidationError):
+        return RecordingError(f'{path}: damaged file: a chunk fails its CRC check (its bytes '
+                              'changed after it was written); nothing read')
+    text = str(error).strip().splitlines()
+    return RecordingError(f'{path}: damaged file ({text[0] if text else type(error).__name__});'
+                          ' nothing read')
 
 
 def _recorded(schema, channel, message):

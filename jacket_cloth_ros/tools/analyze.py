@@ -17,6 +17,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import run_session  # noqa: E402
 
@@ -29,11 +30,13 @@ class SessionFigures:
 
     def __init__(self, session, moments):
         self.session = session
-        stamps = [e[0] for e in session.events if e[2] == 'joint_states']
-        self.t0, t1 = stamps[0], stamps[-1]
+        self.t0, t1 = session.stamp_range()
         self.targets = list(np.linspace(self.t0, t1, moments + 2)[1:-1].astype(np.int64))
-        self.recorded_tf = {m.log_time: m.data for m in session.recording.messages
-                            if m.topic == '/tf'}
+        # The node's /tf (a file with its set-up), in the order it was published: the n-th
+        # re-simulated /tf must equal the n-th recorded one (stamps can repeat after a reset).
+        recording = session.recording
+        self.recorded_tf = [m.data for m in recording.messages if m.topic == '/tf'] \
+            if SESSION_CONFIG in recording.metadata else []
         self.rows = []
         self.frames = []
         self.reset_reasons = []
@@ -54,10 +57,10 @@ class SessionFigures:
         if not tf:
             self.nonfinite += 1
         else:
-            self.published += 1
-            if stamp in self.recorded_tf:
+            if self.published < len(self.recorded_tf):
                 self.tf_compared += 1
-                self.tf_equal += self.recorded_tf[stamp] == tf[0]
+                self.tf_equal += self.recorded_tf[self.published] == tf[0]
+            self.published += 1
         vert, horiz = sim.strain()
         rig = sim.rig
         ref = sim.reference_points(sim.links, sim.layer)
@@ -101,11 +104,16 @@ class SessionFigures:
             'hem_offset_m': {'max': float(a[:, 7].max()) if len(a) else 0.0,
                              'mean': float(a[:, 7].mean()) if len(a) else 0.0},
             'hood_swing_deg': {'max': float(a[:, 8].max()) if len(a) else 0.0},
-            'replay_matches_recording': (self.tf_equal == self.tf_compared)
-            if self.tf_compared else None,
+            'replay_matches_recording': self._matches() if self.tf_compared else None,
             'recorded_tf_compared': self.tf_compared,
             'parameters': {k: values[k] for k in REPORTED_PARAMETERS if k in values},
         }
+
+    def _matches(self):
+        """Every compared /tf equal, and as many as recorded unless the file was cut short."""
+        counted = self.published == len(self.recorded_tf) or \
+            not self.session.recording.complete
+        return self.tf_equal == self.tf_compared and counted
 
 
 def _series_chart(path, series, columns, title):
@@ -138,6 +146,13 @@ CHARTS = {
 }
 
 
+def output_names(count):
+    """The files ``analyze`` writes into its folder for ``count`` sessions."""
+    strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
+                                                   for k in range(1, count + 1)]
+    return ['report.json', 'summary.md'] + sorted(CHARTS) + strips
+
+
 def analyze(sessions, out_dir, names=None, moments=6):
     """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
     os.makedirs(out_dir, exist_ok=True)
@@ -153,7 +168,7 @@ def analyze(sessions, out_dir, names=None, moments=6):
             draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
                            'bones (navy); dashed blue: skinned hem and hood')
-        reports[-1]['filmstrip'] = strip
+        reports[-1]['filmstrip'] = strip if figures.frames else None
     for chart, (columns, title) in CHARTS.items():
         _series_chart(os.path.join(out_dir, chart), series, columns, title)
     if len(reports) == 1:
@@ -195,8 +210,27 @@ def _summary(names, reports):
     lines += ['', 'Step times were measured in this run, one session after the other; '
               'compare them as ratios, not across runs.', '',
               'Charts: ' + ', '.join(f'[{c}]({c})' for c in sorted(CHARTS)) + '; filmstrip: '
-              + ', '.join(f'[{r["filmstrip"]}]({r["filmstrip"]})' for r in reports), '']
+              + ', '.join(f'[{r["filmstrip"]}]({r["filmstrip"]})' if r['filmstrip'] else 'none'
+                          for r in reports), '']
     return '\n'.join(lines)
+
+
+def summary_line(report):
+    """The one line the command prints: per session, frames, strain and step time, or how
+    many inputs were dropped when none was simulated."""
+    parts = []
+    for r in report.get('sessions', [report]):
+        text = f'{os.path.basename(r["file"])} {r["frames"]} frames'
+        if r['dropped_inputs']:
+            text += f' ({r["dropped_inputs"]} of {r["inputs"]} inputs dropped)'
+        median = r['step_time_us']['median']
+        if median is None:
+            text += ', nothing simulated'
+        else:
+            text += (f', vertical strain {r["max_vertical_strain"]:.3f}, step {median:.0f} us '
+                     'median')
+        parts.append(text)
+    return '; '.join(parts)
 
 
 def _pair(t):

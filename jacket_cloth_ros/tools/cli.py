@@ -22,10 +22,9 @@ class ToolError(Exception):
 
 
 def _skeleton(urdf_path=None):
-    from ..core.skeleton import Skeleton
+    from ..core.skeleton import load_skeleton
     path = urdf_path or shipped('character.urdf')
-    with open(path, encoding='utf-8') as f:
-        return Skeleton(f.read()), path
+    return load_skeleton(path), path
 
 
 def cmd_motion(args):
@@ -72,33 +71,34 @@ def cmd_motion(args):
 def _motion_to_file(args, skeleton, duration):
     from rclpy.serialization import serialize_message
     from ..recording.writer import SessionRecorder, qos_profile_yaml
-    _check_output(args.output, args.force)
-    rec = SessionRecorder(args.output)
-    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
-    count = 0
-    for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
-                                    int(args.start * 1e9), args.world_joint):
-        rec.write('/joint_states', serialize_message(msg), stamp)
-        count += 1
-    rec.close()
+    from .outputs import replacing
+    _check_output(args.output, args.force, [args.urdf])
+    with replacing(args.output) as tmp:
+        rec = SessionRecorder(tmp, final_name=os.path.basename(args.output))
+        rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        count = 0
+        for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
+                                        int(args.start * 1e9), args.world_joint):
+            rec.write('/joint_states', serialize_message(msg), stamp)
+            count += 1
+        rec.close()
     print(f'wrote {count} JointState messages of {args.clip!r} to {args.output}')
     return 0
 
 
-def _check_output(path, force):
-    if os.path.exists(path) and not force:
-        raise ToolError(f'{path} exists (use --force to overwrite)')
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ToolError(f'folder {folder} does not exist')
+def _check_output(path, force, inputs=()):
+    from .outputs import check_output
+    check_output(path, force, inputs)
 
 
 def cmd_picture(args):
     from ..tools.picture import render_filmstrip
+    from .outputs import replacing
     skeleton, _ = _skeleton(args.urdf)
-    _check_output(args.output, args.force)
+    _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     rig = load_rig(skeleton, args.rig)
-    render_filmstrip(args.input, args.output, skeleton, moments=args.moments, rig=rig)
+    with replacing(args.output) as tmp:
+        render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig)
     print(args.output)
     return 0
 
@@ -117,11 +117,12 @@ def _session(args):
 
 def cmd_replay(args):
     from .replay import replay
-    _check_output(args.output, args.force)
+    _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     session = _session(args)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
-    span = (session.events[-1][0] - session.events[0][0]) * 1e-9
+    first, last = session.stamp_range()
+    span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
           f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
           f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
@@ -129,20 +130,17 @@ def cmd_replay(args):
 
 
 def cmd_analyze(args):
-    from .analyze import analyze
+    from .analyze import analyze, output_names, summary_line
+    from .outputs import check_output_folder
     if len(args.input) > 1 and not args.compare:
         raise ToolError('several sessions: add --compare to lay them side by side')
-    report_path = os.path.join(args.out, 'report.json')
-    if os.path.exists(report_path) and not args.force:
-        raise ToolError(f'{report_path} exists (use --force to overwrite)')
+    check_output_folder(args.out, output_names(len(args.input)), args.force,
+                        list(args.input) + [args.urdf, args.rig])
     sessions = []
     for path in args.input:
         sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
     report = analyze(sessions, args.out, moments=args.moments)
-    print(f'{os.path.join(args.out, "report.json")}: '
-          + '; '.join(f'{os.path.basename(r["file"])} {r["frames"]} frames, vertical strain '
-                      f'{r["max_vertical_strain"]:.3f}, step {r["step_time_us"]["median"]:.0f}'
-                      ' us median' for r in report.get('sessions', [report])))
+    print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 
 
@@ -153,6 +151,7 @@ def cmd_demo(args):
     session = os.path.join(args.out, 'session.mcap')
     picture = os.path.join(args.out, 'filmstrip.png')
     for path in (session, picture):
+        _check_output(path, True)           # a device or folder there is refused, not removed
         if os.path.exists(path):
             os.remove(path)
     # The node (a child) and the motion source (this process) meet in one local domain.

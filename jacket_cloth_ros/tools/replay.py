@@ -10,29 +10,28 @@ import os
 import time
 
 from ..recording.writer import SessionRecorder
+from .outputs import replacing
 from .session import output_topics, run_session
 
 
 def replay(session, out_path):
     """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
     topics = output_topics(session)
-    tmp = out_path + '.partial'
-    recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path), background=True,
-                               compression=session.setup.values['record_compression'])
-    try:
-        for name, kind, qos in topics.values():
-            recorder.add_topic(name, kind, qos)
-        setup = session.setup
-        recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
-                                    setup.values)
-        started = time.perf_counter()
-        pipeline = run_session(
-            session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data, stamp))
-        recorder.close()                    # the writer thread's backlog is part of the time
-        took = time.perf_counter() - started
-        os.replace(tmp, out_path)           # a failed replay leaves no half-written output
-    finally:
-        recorder.close()
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    with replacing(out_path) as tmp:        # a failed replay leaves no half-written output
+        recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path), background=True,
+                                   compression=session.setup.values['record_compression'])
+        try:
+            for name, kind, qos in topics.values():
+                recorder.add_topic(name, kind, qos)
+            setup = session.setup
+            recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
+                                        setup.values)
+            started = time.perf_counter()
+            pipeline = run_session(
+                session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data,
+                                                                      stamp))
+            recorder.close()                # the writer thread's backlog is part of the time
+            took = time.perf_counter() - started
+        finally:
+            recorder.close()
     return pipeline, took

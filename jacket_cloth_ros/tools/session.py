@@ -9,16 +9,17 @@ the shipped one fits the skeleton.
 """
 
 import json
+import struct
 from dataclasses import dataclass
 
 from rcl_interfaces.msg import ParameterEvent
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
 
-from ..core.config import ConfigError, parse_yaml, shipped
+from ..core.config import ConfigError, parse_yaml, read_text, shipped
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
-from ..core.skeleton import Skeleton, shipped_character_urdf
+from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
@@ -49,13 +50,10 @@ class SessionInput:
     setup: SessionSetup
     warnings: list = None        # one line each, for the user
 
-
-def _read_text(path, what):
-    try:
-        with open(path, encoding='utf-8') as f:
-            return f.read()
-    except OSError as e:
-        raise ConfigError(f'{what} {path}: cannot read ({e.strerror})') from None
+    def stamp_range(self):
+        """(first, last) JointState header stamp in ns: the span the session covers."""
+        stamps = [e[0] for e in self.events if e[2] == 'joint_states']
+        return min(stamps), max(stamps)
 
 
 def joint_state_topic(recording, topic=None):
@@ -85,14 +83,16 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
     recording = read_recording(path)
     topic = joint_state_topic(recording, topic)
     recorded = recording.metadata.get(SESSION_CONFIG, {})
-    urdf_text = _read_text(urdf, 'URDF') if urdf else recorded.get('urdf')
-    if not urdf_text:
-        urdf_text = shipped_character_urdf()
-    skeleton = Skeleton(urdf_text)
-    rig_yaml = _read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or _read_text(
+    if urdf:        # a file given: its own errors, an empty one too, never the shipped one
+        urdf_text = read_text(urdf, 'URDF')
+        skeleton = skeleton_from(urdf_text, f'URDF {urdf}')
+    else:
+        urdf_text = recorded.get('urdf') or shipped_character_urdf()
+        skeleton = Skeleton(urdf_text)
+    rig_yaml = read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or read_text(
         shipped('jacket_rig.yaml'), 'rig')
     rig_obj = Rig(parse_yaml(rig_yaml, rig or 'the rig'), skeleton, where=rig or 'rig')
-    fabrics_yaml = recorded.get('fabrics_yaml') or _read_text(shipped('fabrics.yaml'), 'fabrics')
+    fabrics_yaml = recorded.get('fabrics_yaml') or read_text(shipped('fabrics.yaml'), 'fabrics')
     fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, 'fabrics'), 'fabrics')
     recorded_values = json.loads(recorded.get('parameters_json', '{}'))
     preset = fabric or recorded_values.get('fabric', 'tweed_jacket')
@@ -138,18 +138,31 @@ def _check_joints(session):
     return []
 
 
+def _header_stamp(raw):
+    """The stamp (ns) of the std_msgs/Header that starts a CDR message, or None if the bytes
+    cannot hold one."""
+    raw = bytes(raw[:12])
+    if len(raw) < 12 or raw[0] != 0 or raw[1] not in (0, 1):
+        return None
+    sec, nanosec = struct.unpack_from('<iI' if raw[1] else '>iI', raw, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
 def _events(recording, topic):
-    """JointState, wind and parameter changes in stamp order; at one stamp the JointState first
-    (the node records a change at the stamp of the input before it)."""
+    """JointState, wind and parameter changes in recorded order: the order they were written,
+    which is the order the node received them (log times can go back, or differ from the
+    stamps). A JointState carries its header stamp, the time the node simulates to; the others
+    their log time, for information only (run_session stamps them as the node does)."""
     events = []
-    for m in recording.messages:
+    for order, m in enumerate(recording.messages):
         if m.topic == topic:
-            events.append((m.log_time, 0, 'joint_states', m.data))
+            stamp = _header_stamp(m.data)
+            events.append((m.log_time if stamp is None else stamp, order, 'joint_states',
+                           m.data))
         elif m.type_name == PARAMETER_EVENT:
-            events.append((m.log_time, 1, 'parameter_events', m.data))
+            events.append((m.log_time, order, 'parameter_events', m.data))
         elif m.type_name == WIND and m.topic.endswith('/wind'):
-            events.append((m.log_time, 1, 'wind', m.data))
-    events.sort(key=lambda e: (e[0], e[1]))
+            events.append((m.log_time, order, 'wind', m.data))
     if not any(e[2] == 'joint_states' for e in events):
         raise RecordingError(f'{recording.path}: {topic} has no messages')
     return events
@@ -184,6 +197,7 @@ def run_session(session, sink=None, probe=None, timing=False):
             except DECODE_ERRORS as e:
                 raise RecordingError(f'{session.recording.path}: a {session.topic} message at '
                                      f'{stamp} ns does not decode as JointState ({e})') from None
+            stamp = msg.stamp_ns            # the node's time: the header stamp, never log time
             report, outputs = pipeline.on_joint_state(msg, stamp)
             if sink:
                 sink('joint_states', data, stamp)
@@ -192,8 +206,13 @@ def run_session(session, sink=None, probe=None, timing=False):
             if probe:
                 probe(pipeline, report, stamp, outputs)
         else:
+            # Stamped as the node records them: at the last accepted input's stamp.
+            last = pipeline.sim.last
             if kind == 'parameter_events':
                 pipeline.apply(_parameter_changes(data, pipeline.values))
+                stamp = last.stamp_ns if last else 0
+            else:
+                stamp = last.stamp_ns if last else _header_stamp(data) or 0
             if sink:
                 sink(kind, data, stamp)
     return pipeline

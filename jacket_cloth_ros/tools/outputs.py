@@ -1,0 +1,83 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Where the tools write: regular files only, never one of their inputs, none overwritten
+without ``--force``, and a file is replaced only by a complete new one.
+
+Every tool that writes a file checks it here first (replay -o, motion -o, picture -o, the
+files of analyze --out, the demo's), so a device, a folder or the recording being read is
+refused in one line before anything is read or written.
+"""
+
+import contextlib
+import os
+import tempfile
+
+# The process's umask, for giving a finished output the mode a plain open() would have.
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
+
+class OutputError(ValueError):
+    """An output path a tool refuses; the message is one line."""
+
+
+def check_output(path, force, inputs=()):
+    """Refuse ``path`` as an output file unless it is safe to write: its folder exists, it is
+    none of ``inputs`` (files, or bag folders it must not be inside) and, if it exists, it is
+    a regular file and ``force`` is set."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise OutputError(f'folder {folder} does not exist')
+    _not_an_input(path, inputs)
+    if os.path.lexists(path):
+        if not os.path.isfile(path):
+            raise OutputError(f'{path} is not a regular file (a device, folder, pipe or broken '
+                              'link); outputs are regular files')
+        if not force:
+            raise OutputError(f'{path} exists (use --force to overwrite)')
+
+
+def check_output_folder(folder, names, force, inputs=()):
+    """``check_output`` for each of the files ``names`` a tool writes into ``folder`` (made if
+    missing); the folder, if it exists, must be one."""
+    folder = os.fspath(folder)
+    if os.path.lexists(folder) and not os.path.isdir(folder):
+        raise OutputError(f'{folder} is not a folder')
+    _not_an_input(folder, inputs)
+    if not os.path.isdir(folder):
+        return            # made by the tool: nothing in it to overwrite
+    for name in names:
+        check_output(os.path.join(folder, name), force, inputs)
+
+
+def _not_an_input(path, inputs):
+    real = os.path.realpath(path)
+    for given in inputs:
+        if not given or not os.path.exists(given):
+            continue
+        given = os.fspath(given)
+        if os.path.exists(path) and os.path.samefile(path, given):
+            raise OutputError(f'{path} is the input {given}; write the output elsewhere')
+        if os.path.isdir(given) and real.startswith(os.path.join(os.path.realpath(given), '')):
+            raise OutputError(f'{path} is inside the input folder {given}; write the output '
+                              'elsewhere')
+
+
+@contextlib.contextmanager
+def replacing(path):
+    """A temporary path next to ``path`` to write the output to; it becomes ``path`` only when
+    the block ends without an error, so a failed run leaves the old file (or none)."""
+    path = os.fspath(path)
+    folder, name = os.path.split(os.path.abspath(path))
+    # A fresh name (never an existing file, nor an input), ending as the output does so that
+    # writers choosing a format by extension (matplotlib) choose the same.
+    fd, tmp = tempfile.mkstemp(prefix=f'.{name}.', suffix='.partial' + os.path.splitext(name)[1],
+                               dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
