@@ -2,8 +2,8 @@
 """A chunked MCAP writer whose per-message path is one struct pack and one buffer append.
 
 Why not ``mcap.writer.Writer``: it builds a ``Message`` record object and writes it field by
-field through a BytesIO, which made the recording 61 (uncompressed) to 86 us (lz4) of each
-replayed input (a 60 Hz walk: JointState, /tf, markers every other input). The rare records
+field through a BytesIO, which made the recording a large share of each replayed input
+(docs/performance.md). The rare records
 (header, schemas, channels, chunk and summary records) still come from ``mcap.records``, so
 the file layout is the library's; only messages and their chunk are packed here.
 """
@@ -42,8 +42,7 @@ def _compressor(name):
     if name == 'zstd':
         if zstandard is None:
             raise ValueError('zstd compression needs the zstandard package')
-        # Level 1, not the library's 3: 1.57 against 2.40 ms a 1.2 MB chunk of a replayed walk,
-        # 0.243 against 0.240 of its size (one run).
+        # Level 1, not the library's 3: much faster for files hardly larger.
         return zstandard.ZstdCompressor(level=1).compress
     if name == '':
         return None
@@ -78,7 +77,7 @@ class McapWriter:
         self._schemas = []
         self._channels = []
         # The summary's chunk index, one record a chunk, waits in an unnamed temporary file
-        # until finish(): held in memory, a session grew the node by 1.5 MB an hour.
+        # until finish(): held in memory, it grew a long session's node without bound.
         self._chunk_index_file = tempfile.TemporaryFile()
         self._chunk_count = 0
         self._metadata_indexes = []

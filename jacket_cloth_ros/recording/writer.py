@@ -22,8 +22,7 @@ from .mcap_file import McapWriter
 SESSION_CONFIG = 'jacket_cloth_session'     # the MCAP metadata record of a session's setup
 _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
 # Chunks close by the once-a-second flush, not by size: the writer keeps an index entry per
-# chunk until close (the MCAP summary), and 512 KB chunks (four a second at 120 Hz with
-# markers) grew the node by 10 MB an hour (bench speed --endurance 3600).
+# chunk until close (the MCAP summary), and small chunks grew the node's memory by the hour.
 CHUNK_BYTES = 8 * 1024 * 1024
 
 
