@@ -2,6 +2,10 @@
 """Launch jacket_cloth_node with a parameter file and optional session recording.
 
     ros2 launch jacket_cloth_ros jacket_cloth.launch.py record:=/tmp/session.mcap
+    ros2 launch jacket_cloth_ros jacket_cloth.launch.py namespace:=npc1 frame_prefix:=npc1/
+
+Under a namespace the node reads that namespace's joint_states and robot_description; its
+bones go to the shared /tf, kept apart by frame_prefix.
 """
 
 import os
@@ -11,6 +15,7 @@ from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+from launch_ros.parameter_descriptions import ParameterValue
 
 
 def generate_launch_description():
@@ -23,13 +28,24 @@ def generate_launch_description():
                               description='MCAP path to record the session to; empty: off'),
         DeclareLaunchArgument('fabric', default_value='tweed_jacket',
                               description='fabric preset: tweed_jacket, down_jacket, veil'),
+        DeclareLaunchArgument('namespace', default_value='',
+                              description='namespace of the node (one per character)'),
+        DeclareLaunchArgument('frame_prefix', default_value='',
+                              description='prepended to every bone frame id, e.g. npc1/'),
+        DeclareLaunchArgument('use_sim_time', default_value='false',
+                              description='use /clock (the simulation time comes from the '
+                                          'JointState stamps either way)'),
         Node(
             package='jacket_cloth_ros',
             executable='jacket_cloth_node',
             name='jacket_cloth_node',
+            namespace=LaunchConfiguration('namespace'),
             output='screen',
             parameters=[LaunchConfiguration('params_file'),
                         {'record': LaunchConfiguration('record'),
-                         'fabric': LaunchConfiguration('fabric')}],
+                         'fabric': LaunchConfiguration('fabric'),
+                         'frame_prefix': LaunchConfiguration('frame_prefix'),
+                         'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'),
+                                                        value_type=bool)}],
         ),
     ])

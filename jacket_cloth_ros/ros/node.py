@@ -87,8 +87,10 @@ class JacketClothNode(Node):
         if urdf:
             self._load_model(urdf, 'the robot_description parameter')
         else:
+            # Relative, as robot_state_publisher publishes it: under a namespace the node hears
+            # its own character's description, not another's.
             self._description = self.create_subscription(
-                String, '/robot_description', self._on_description, LATCHED)
+                String, 'robot_description', self._on_description, LATCHED)
             self._fallback = self.create_timer(self._p('robot_description_timeout'),
                                                self._use_shipped_character)
 
@@ -112,9 +114,9 @@ class JacketClothNode(Node):
     def _on_description(self, msg):
         if self.pipeline is None:
             try:
-                self._load_model(msg.data, 'the /robot_description topic')
+                self._load_model(msg.data, f'the {self._description.topic_name} topic')
             except ConfigError as e:
-                self.get_logger().error(f'/robot_description rejected: {e}')
+                self.get_logger().error(f'{self._description.topic_name} rejected: {e}')
 
     def _use_shipped_character(self):
         self._fallback.cancel()                 # once, even if the shipped one fails to load

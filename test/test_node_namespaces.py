@@ -1,0 +1,83 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Two characters side by side under two namespaces, over real DDS in one process."""
+
+import time
+
+import rclpy
+from conftest import DOMAIN_ID
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.skeleton import shipped_character_urdf
+from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.ros.node import LATCHED, JacketClothNode
+
+
+def _spin_until(ex, predicate, timeout=20.0):
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, 'timed out'
+        ex.spin_once(timeout_sec=0.02)
+
+
+def test_two_namespaced_characters_each_hear_their_own_description_and_joint_states():
+    # Each namespace has its own robot_state_publisher-style latched description (the shipped
+    # character under /npc1, the mannequin example with other link names under /npc2); the
+    # bones of both go to the one /tf, kept apart by frame_prefix.
+    from rclpy.parameter import Parameter
+    with open(shipped('examples/mannequin.urdf'), encoding='utf-8') as f:
+        mannequin = f.read()
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    ex = SingleThreadedExecutor(context=ctx)
+    try:
+        nodes = {
+            'npc1': JacketClothNode(context=ctx, namespace='/npc1', parameter_overrides=[
+                Parameter('frame_prefix', value='npc1/'),
+                Parameter('robot_description_timeout', value=30.0)]),
+            'npc2': JacketClothNode(context=ctx, namespace='/npc2', parameter_overrides=[
+                Parameter('frame_prefix', value='npc2/'),
+                Parameter('rig_file', value=shipped('examples/mannequin_rig.yaml')),
+                Parameter('robot_description_timeout', value=30.0)])}
+        peer = rclpy.create_node('namespaces_peer', context=ctx)
+        for ns, urdf in (('npc1', shipped_character_urdf()), ('npc2', mannequin)):
+            peer.create_publisher(String, f'/{ns}/robot_description', LATCHED).publish(
+                String(data=urdf))
+        tf, markers = [], {ns: [] for ns in nodes}
+        peer.create_subscription(TFMessage, '/tf', tf.append, 100)
+        for ns in nodes:
+            peer.create_subscription(MarkerArray, f'/{ns}/jacket_cloth_node/markers',
+                                     markers[ns].append, 10)
+        for node in (*nodes.values(), peer):
+            ex.add_node(node)
+        _spin_until(ex, lambda: all(n.sim is not None for n in nodes.values()))
+        assert nodes['npc1'].sim.skeleton.link_names[0] == 'base_link'
+        assert 'Hips' in nodes['npc2'].sim.skeleton.link_names        # the mannequin's own
+        pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in nodes}
+        _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
+        for k in range(6):
+            for ns, node in nodes.items():
+                names, pos = joint_state_content(node.sim.skeleton.joint_names, 'walk', k / 30)
+                msg = JointState(name=list(names), position=[float(p) for p in pos])
+                msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
+                before = node.inputs
+                pubs[ns].publish(msg)
+                _spin_until(ex, lambda: node.inputs > before)
+        _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 12)
+        frames = {t.child_frame_id.split('/')[0] for m in tf for t in m.transforms}
+        assert frames == {'npc1', 'npc2'}
+        for ns, node in nodes.items():
+            assert node.inputs == 6 and node.sim.resets == 1
+            assert {t.header.frame_id for m in tf for t in m.transforms
+                    if t.child_frame_id.startswith(ns)} <= set(node.sim.skeleton.link_names)
+    finally:
+        ex.shutdown()
+        for node in nodes.values():
+            node.close()
+            node.destroy_node()
+        rclpy.shutdown(context=ctx)
