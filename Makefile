@@ -25,7 +25,7 @@ all: test
 
 setup: $(READY)
 
-$(READY): requirements.txt requirements-ros-wheels.txt interfaces/tf2_msgs/CMakeLists.txt
+$(READY): requirements.txt requirements-ros-wheels.txt interfaces/tf2_msgs/CMakeLists.txt setup.py
 	@echo "setup ($(SETUP) ROS 2) into $(VENV) ..."
 ifeq ($(SETUP),wheels)
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -43,6 +43,8 @@ else
 	    || (echo "the sourced ROS 2 lacks rclpy or a message package"; exit 1)
 	$(PIP) install -r requirements.txt
 endif
+	# The package itself, editable: jacket_cloth_node and jacket_cloth become commands of .venv.
+	$(PIP) install --no-deps -e .
 	$(PY) -c "import rclpy, tf2_msgs.msg, numba, mcap, urdf_parser_py" 
 	touch $@
 

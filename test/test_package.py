@@ -103,3 +103,14 @@ def test_an_install_leaves_the_lab_out(installed):
     site = glob(os.path.join(str(installed), 'lib', 'python3*', 'site-packages'))[0]
     assert os.path.isdir(os.path.join(site, 'jacket_cloth_ros', 'motion'))
     assert not os.path.exists(os.path.join(site, 'jacket_cloth_lab'))
+
+
+def test_the_environment_has_the_node_and_the_tools_as_commands():
+    # make installs the package (editable) into .venv, so a machine without ROS starts the
+    # node as `.venv/bin/jacket_cloth_node` instead of guessing a module path.
+    bin_dir = os.path.dirname(sys.executable)
+    for command in ('jacket_cloth_node', 'jacket_cloth'):
+        assert os.access(os.path.join(bin_dir, command), os.X_OK), command
+    done = subprocess.run([os.path.join(bin_dir, 'jacket_cloth'), '--help'],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and 'replay' in done.stdout
