@@ -71,6 +71,56 @@ class CdrWriter:
         return bytes(self.buf)
 
 
+def joint_state(stamp_ns, names, positions, frame_id=''):
+    """sensor_msgs/JointState with names and positions (no velocity, no effort), padding
+    zeroed and nothing after the last field: rclpy's serializer leaves its padding
+    uninitialised and appends bytes that strict readers reject."""
+    w = CdrWriter()
+    w.header(stamp_ns, frame_id)
+    w.u32(len(names))
+    for name in names:
+        w.string(name)
+    w.u32(len(positions))
+    if len(positions):
+        w.f64_array(positions)
+    w.u32(0)                        # velocity
+    w.u32(0)                        # effort
+    return w.bytes()
+
+
+def parameter_event(stamp_ns, node, changed):
+    """rcl_interfaces/ParameterEvent with ``changed`` parameters (rcl_interfaces/Parameter
+    messages), padding zeroed and nothing after the last field (see :func:`joint_state`)."""
+    w = CdrWriter()
+    w.stamp(stamp_ns)
+    w.string(node)
+    w.u32(0)                        # new_parameters
+    w.u32(len(changed))
+    for p in changed:
+        v = p.value
+        w.string(p.name)
+        w.u8(v.type)
+        w.u8(bool(v.bool_value))
+        w.align(8)
+        w.buf += struct.pack('<qd', int(v.integer_value), float(v.double_value))
+        w.string(v.string_value)
+        w.u32(len(v.byte_array_value))
+        w.buf += b''.join(bytes(b) if isinstance(b, bytes) else bytes([b])
+                          for b in v.byte_array_value)
+        w.u32(len(v.bool_array_value))
+        w.buf += bytes(bool(b) for b in v.bool_array_value)
+        for values, code in ((v.integer_array_value, 'q'), (v.double_array_value, 'd')):
+            w.u32(len(values))
+            if len(values):
+                w.align(8)
+                w.buf += struct.pack(f'<{len(values)}{code}', *values)
+        w.u32(len(v.string_array_value))
+        for text in v.string_array_value:
+            w.string(text)
+    w.u32(0)                        # deleted_parameters
+    return w.bytes()
+
+
 def tf_message(names, parents, translations, quaternions, stamp_ns, prefix=''):
     """tf2_msgs/TFMessage: one TransformStamped per bone (field by field; see TfTemplate)."""
     w = CdrWriter()

@@ -12,8 +12,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
-from rclpy.serialization import deserialize_message, serialize_message
-from rcl_interfaces.msg import ParameterEvent, SetParametersResult
+from rclpy.serialization import deserialize_message
+from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from diagnostic_msgs.msg import DiagnosticArray
@@ -26,7 +26,7 @@ from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
-from . import cdr, messages
+from . import cdr
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
 
@@ -171,12 +171,11 @@ class JacketClothNode(Node):
         values = self._values()
         self.pipeline.apply({n: values[n] for n in names})
         # Recorded at the last input's stamp: a replay applies them after the same input.
-        event = ParameterEvent(node=self.get_fully_qualified_name(),
-                               changed_parameters=[p.to_parameter_msg() for p in params])
         last = self.pipeline.sim.last
-        event.stamp = messages.stamp_msg(last.stamp_ns if last else 0)
-        self._record(self._topics['parameter_events'][0], serialize_message(event),
-                     last.stamp_ns if last else 0)
+        stamp = last.stamp_ns if last else 0
+        self._record(self._topics['parameter_events'][0], cdr.parameter_event(
+            stamp, self.get_fully_qualified_name(), [p.to_parameter_msg() for p in params]),
+            stamp)
 
     # -- recording ----------------------------------------------------------------------------
     def _open_recorder(self, path):

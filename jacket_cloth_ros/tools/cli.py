@@ -69,8 +69,8 @@ def cmd_motion(args):
 
 
 def _motion_to_file(args, skeleton, duration):
-    from rclpy.serialization import serialize_message
     from ..recording.writer import SessionRecorder, qos_profile_yaml
+    from ..ros.cdr import joint_state
     from .outputs import replacing
     _check_output(args.output, args.force, [args.urdf])
     with replacing(args.output) as tmp:
@@ -79,7 +79,7 @@ def _motion_to_file(args, skeleton, duration):
         count = 0
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
                                         int(args.start * 1e9), args.world_joint):
-            rec.write('/joint_states', serialize_message(msg), stamp)
+            rec.write('/joint_states', joint_state(stamp, msg.name, msg.position), stamp)
             count += 1
         rec.close()
     print(f'wrote {count} JointState messages of {args.clip!r} to {args.output}')
