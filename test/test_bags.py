@@ -57,3 +57,38 @@ def test_recorded_parameter_events_decode_in_rclpy_and_rosbags(value):
     store = get_typestore(Stores.ROS2_JAZZY)
     decoded = store.deserialize_cdr(data, 'rcl_interfaces/msg/ParameterEvent')
     assert decoded.changed_parameters[0].name == 'p' and decoded.node == expected.node
+
+
+def test_a_bag_folder_is_laid_out_as_rosbag2_does_and_every_reader_opens_it(tmp_path):
+    # Without .mcap the output is a bag folder: NAME/NAME_0.mcap and metadata.yaml (version 9,
+    # with its files and QoS profiles), as `ros2 bag record -s mcap -o NAME` lays it out.
+    import yaml
+    from mcap.reader import make_reader
+    from rosbags.rosbag2 import Reader
+    from jacket_cloth_ros.recording.reader import read_recording
+    clip, bag, single = tmp_path / 'clip.mcap', tmp_path / 'session', tmp_path / 'session.mcap'
+    assert _jacket_cloth('motion', '--clip', 'walk', '--duration', '1', '-o',
+                         str(clip)).returncode == 0
+    for out in (bag, single):
+        assert _jacket_cloth('replay', str(clip), '-o', str(out)).returncode == 0
+    assert sorted(p.name for p in bag.iterdir()) == ['metadata.yaml', 'session_0.mcap']
+    info = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert info['version'] == 9 and info['relative_file_paths'] == ['session_0.mcap']
+    assert info['files'][0]['path'] == 'session_0.mcap'
+    assert info['files'][0]['message_count'] == info['message_count']
+    for topic in info['topics_with_message_count']:
+        qos = topic['topic_metadata']['offered_qos_profiles']
+        assert isinstance(qos, list) and qos[0]['reliability'] in ('reliable', 'best_effort')
+    with Reader(bag) as reader:             # rosbags' rosbag2 reader: folder and metadata
+        assert reader.message_count == info['message_count']
+        decoded = sum(1 for _ in reader.messages())
+    assert decoded == info['message_count']
+    assert _decoded(bag / 'session_0.mcap') == _decoded(single)
+    with open(bag / 'session_0.mcap', 'rb') as f:      # mcap with its CRCs checked
+        assert sum(1 for _ in make_reader(f, validate_crcs=True).iter_messages()) == decoded
+    ours = read_recording(str(bag))
+    assert ours.complete and ours.path == str(bag)
+    # A bag folder is not overwritten without --force, and a plain folder never.
+    assert _jacket_cloth('replay', str(clip), '-o', str(bag)).returncode == 1
+    assert _jacket_cloth('replay', str(clip), '-o', str(bag), '--force').returncode == 0
+    assert (bag / 'metadata.yaml').exists() and not list(tmp_path.glob('.session.*'))

@@ -41,6 +41,12 @@ class Compression(Choice):
         return '' if self is Compression.NONE else self.name.lower()
 
 
+def is_bag_folder(path) -> bool:
+    """Whether a recording path names a rosbag2 bag folder: any path not ending in ``.mcap``
+    (as ``ros2 bag record -o NAME`` makes the folder NAME)."""
+    return not os.fspath(path).endswith('.mcap')
+
+
 def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
     """``offered_qos_profiles`` in the string form of Jazzy and newer."""
     profile = {
@@ -73,19 +79,31 @@ class SessionRecorder:
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
         self.path = path
-        self._name = final_name or os.path.basename(path)     # as the bag will know it
-        self._file = open(path, 'wb')
+        self._folder = None
+        file_path = path
+        if is_bag_folder(path):
+            # As rosbag2 lays a bag out: NAME/NAME_0.mcap and NAME/metadata.yaml.
+            os.mkdir(path)              # an existing folder is refused, as ros2 bag does
+            self._folder = path
+            bag = final_name or os.path.basename(os.path.normpath(path))
+            self._name = f'{bag}_0.mcap'
+            file_path = os.path.join(path, self._name)
+        else:
+            self._name = final_name or os.path.basename(path)     # as the bag will know it
+        self._file = open(file_path, 'wb')
         self._queue = self._thread = self._error = None
         if background:
             self._queue = queue.SimpleQueue()
             self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
             self._thread.start()
-        self._writer = McapWriter(self._file, compression=Compression.parse(compression, 'compression').mcap_name,
-                                  chunk_bytes=CHUNK_BYTES, run=self._do)
+        self._writer = McapWriter(
+            self._file, compression=Compression.parse(compression, 'compression').mcap_name,
+            chunk_bytes=CHUNK_BYTES, run=self._do)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}
         self._types = {}
+        self._qos = {}
         self._flush_period = flush_period_ns
         self._last_flush = None
         self._closed = False
@@ -122,6 +140,7 @@ class SessionRecorder:
             metadata={'offered_qos_profiles': qos_yaml or qos_profile_yaml(),
                       'topic_type_hash': ''})
         self._types[topic] = type_name
+        self._qos[topic] = yaml.safe_load(qos_yaml or qos_profile_yaml())
 
     def write(self, topic, data, stamp_ns):
         """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
@@ -143,10 +162,11 @@ class SessionRecorder:
         if self._closed:
             return
         self._closed = True
+        metadata = None
         try:
             if self._error is None:
-                self._writer.add_metadata('rosbag2',
-                                          {'serialized_metadata': self._bag_metadata()})
+                metadata = self._bag_metadata()
+                self._writer.add_metadata('rosbag2', {'serialized_metadata': metadata})
                 self._writer.finish()
         finally:
             if self._thread is not None:
@@ -155,10 +175,14 @@ class SessionRecorder:
             self._file.close()
         if self._error is not None:
             raise self._error
+        if self._folder is not None:
+            with open(os.path.join(self._folder, 'metadata.yaml'), 'w', encoding='utf-8') as f:
+                f.write(metadata)
 
     def _bag_metadata(self):
         start, last = self._writer.time_range() or (0, 0)
         counts = {t: self._writer.counts[c] for t, c in self._channels.items()}
+        # rosbag2's version 9: the QoS profiles as a list, and the files with their ranges.
         meta = {'rosbag2_bagfile_information': {
             'version': 9,
             'storage_identifier': 'mcap',
@@ -169,9 +193,14 @@ class SessionRecorder:
             'topics_with_message_count': [
                 {'topic_metadata': {'name': t, 'type': self._types[t],
                                     'serialization_format': 'cdr',
-                                    'offered_qos_profiles': '', 'type_description_hash': ''},
+                                    'offered_qos_profiles': self._qos[t],
+                                    'type_description_hash': ''},
                  'message_count': n} for t, n in counts.items()],
             'compression_format': '', 'compression_mode': '',
+            'files': [{'path': self._name,
+                       'starting_time': {'nanoseconds_since_epoch': start},
+                       'duration': {'nanoseconds': last - start},
+                       'message_count': sum(counts.values())}],
             'custom_data': {}, 'ros_distro': os.environ.get('ROS_DISTRO', 'kilted'),
         }}
         return yaml.safe_dump(meta, sort_keys=False)

@@ -51,7 +51,8 @@ NODE_PARAMETERS = {
                      'Hz of ~/markers (by message stamps); 0 turns markers off'),
     'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
     'record': (T.PARAMETER_STRING, '', None, False,
-               'MCAP path to record the session to; empty: no recording'),
+               'where to record the session: an MCAP file (.mcap), else a rosbag2 bag '
+               'folder; empty: no recording'),
     'record_compression': (T.PARAMETER_STRING, 'lz4', None, False,
                            'MCAP chunk compression of the next recording: lz4 (fast, the '
                            'default), zstd (smaller files) or none'),

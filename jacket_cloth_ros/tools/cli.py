@@ -72,9 +72,9 @@ def _motion_to_file(args, skeleton, duration):
     from ..recording.writer import SessionRecorder, qos_profile_yaml
     from ..ros.cdr import joint_state
     from .outputs import replacing
-    _check_output(args.output, args.force, [args.urdf])
-    with replacing(args.output) as tmp:
-        rec = SessionRecorder(tmp, final_name=os.path.basename(args.output))
+    _check_output(args.output, args.force, [args.urdf], recording=True)
+    with replacing(args.output, recording=True) as tmp:
+        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
         rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
         count = 0
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
@@ -86,9 +86,9 @@ def _motion_to_file(args, skeleton, duration):
     return 0
 
 
-def _check_output(path, force, inputs=()):
+def _check_output(path, force, inputs=(), recording=False):
     from .outputs import check_output
-    check_output(path, force, inputs)
+    check_output(path, force, inputs, recording)
 
 
 def cmd_picture(args):
@@ -117,7 +117,7 @@ def _session(args):
 
 def cmd_replay(args):
     from .replay import replay
-    _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
+    _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
     session = _session(args)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
@@ -195,7 +195,8 @@ def build_parser():
     m.add_argument('--clip', default='showcase', choices=ALL_CLIPS)
     m.add_argument('--rate', type=float, default=60.0, help='JointState rate in Hz')
     m.add_argument('--duration', type=float, default=None, help='s (default: the clip)')
-    m.add_argument('--output', '-o', default=None, help='write an MCAP file instead')
+    m.add_argument('--output', '-o', default=None,
+                   help='write a recording instead: an MCAP file (.mcap), else a bag folder')
     m.add_argument('--start', type=float, default=1000.0, help='first stamp (s) in a file')
     m.add_argument('--urdf', default=None, help='the character (default: shipped)')
     m.add_argument('--world-joint', default='world_joint')
@@ -219,7 +220,8 @@ def build_parser():
     f.set_defaults(func=cmd_picture)
     r = sub.add_parser('replay', help='run a recording through the simulation again')
     r.add_argument('input', help='an MCAP file or a rosbag2 bag directory (MCAP storage)')
-    r.add_argument('-o', '--output', required=True, help='the MCAP file to write')
+    r.add_argument('-o', '--output', required=True,
+                   help='the recording: an MCAP file (.mcap), else a rosbag2 bag folder')
     _session_options(r)
     r.add_argument('--force', action='store_true', help='overwrite the output file')
     r.set_defaults(func=cmd_replay)

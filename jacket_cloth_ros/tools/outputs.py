@@ -9,7 +9,10 @@ refused in one line before anything is read or written.
 
 import contextlib
 import os
+import shutil
 import tempfile
+
+from ..recording.writer import is_bag_folder
 
 # The process's umask, for giving a finished output the mode a plain open() would have.
 _UMASK = os.umask(0o022)
@@ -20,16 +23,23 @@ class OutputError(ValueError):
     """An output path a tool refuses; the message is one line."""
 
 
-def check_output(path, force, inputs=()):
+def check_output(path, force, inputs=(), recording=False):
     """Refuse ``path`` as an output file unless it is safe to write: its folder exists, it is
     none of ``inputs`` (files, or bag folders it must not be inside) and, if it exists, it is
-    a regular file and ``force`` is set."""
+    a regular file and ``force`` is set. A ``recording`` not ending in ``.mcap`` is a bag
+    folder (writer.is_bag_folder): if it exists, it must be a bag (with metadata.yaml)."""
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise OutputError(f'folder {folder} does not exist')
     _not_an_input(path, inputs)
-    if os.path.lexists(path):
+    if recording and is_bag_folder(path) and os.path.lexists(path):
+        if os.path.islink(path) or not os.path.isfile(os.path.join(path, 'metadata.yaml')):
+            raise OutputError(f'{path} is not a regular file nor a bag folder (a device, pipe, '
+                              'link or plain folder); recordings are .mcap files or bag folders')
+        if not force:
+            raise OutputError(f'{path} exists (use --force to overwrite)')
+    elif os.path.lexists(path):
         if not os.path.isfile(path):
             raise OutputError(f'{path} is not a regular file (a device, folder, pipe or broken '
                               'link); outputs are regular files')
@@ -64,10 +74,15 @@ def _not_an_input(path, inputs):
 
 
 @contextlib.contextmanager
-def replacing(path):
+def replacing(path, recording=False):
     """A temporary path next to ``path`` to write the output to; it becomes ``path`` only when
-    the block ends without an error, so a failed run leaves the old file (or none)."""
+    the block ends without an error, so a failed run leaves the old file (or none). For a
+    ``recording`` that is a bag folder, the temporary path is a folder's, not yet made."""
     path = os.fspath(path)
+    if recording and is_bag_folder(path):
+        with _replacing_folder(os.path.normpath(path)) as tmp:
+            yield tmp
+        return
     folder, name = os.path.split(os.path.abspath(path))
     # A fresh name (never an existing file, nor an input), ending as the output does so that
     # writers choosing a format by extension (matplotlib) choose the same.
@@ -81,3 +96,18 @@ def replacing(path):
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
+
+
+@contextlib.contextmanager
+def _replacing_folder(path):
+    """``replacing`` for a bag folder: written under a fresh name, then swapped in."""
+    parent, name = os.path.split(os.path.abspath(path))
+    scratch = tempfile.mkdtemp(prefix=f'.{name}.', suffix='.partial', dir=parent)
+    tmp = os.path.join(scratch, name)
+    try:
+        yield tmp
+        if os.path.lexists(path):
+            os.rename(path, os.path.join(scratch, name + '.old'))
+        os.rename(tmp, path)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)

@@ -17,8 +17,9 @@ from .session import output_topics, run_session
 def replay(session, out_path):
     """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
     topics = output_topics(session)
-    with replacing(out_path) as tmp:        # a failed replay leaves no half-written output
-        recorder = SessionRecorder(tmp, final_name=os.path.basename(out_path), background=True,
+    with replacing(out_path, recording=True) as tmp:     # a failed replay leaves no output
+        recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),
+                                   background=True,
                                    compression=session.setup.values['record_compression'])
         try:
             for name, kind, qos in topics.values():
