@@ -45,7 +45,9 @@ else
 endif
 	# The package itself, editable: jacket_cloth_node and jacket_cloth become commands of .venv.
 	$(PIP) install --no-deps -e .
-	$(PY) -c "import rclpy, tf2_msgs.msg, numba, mcap, urdf_parser_py" 
+	$(PY) -c "import rclpy, tf2_msgs.msg, numba, mcap, urdf_parser_py"
+	# Compile the kernels into numba's cache now, so the node's first start takes seconds.
+	$(PY) -m jacket_cloth_ros warm
 	touch $@
 
 demo: $(READY)

@@ -18,7 +18,7 @@ from numba import njit, typeof
 from numba.core import caching
 from numba.core.typing.typeof import Purpose
 
-__all__ = ['njit', 'kernels_stamp', 'FixedTypes']
+__all__ = ['njit', 'kernels_stamp', 'kernels_cached', 'FixedTypes']
 
 # Set (the tests set it) to type every call again and fail on a type that changed.
 CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
@@ -110,3 +110,13 @@ class FixedTypes:
         if overload is not None:           # else numba converted an argument: keep typing
             self._entry, self._types = overload.entry_point, types
         return result
+
+
+def kernels_cached() -> bool:
+    """Whether numba's cache holds the compiled step for the kernel files as they are now
+    (else the next simulation made compiles every kernel, which takes a while)."""
+    from . import step_kernel
+    try:
+        return bool(step_kernel.advance._cache._cache_file._load_index())
+    except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
+        return False

@@ -23,6 +23,7 @@ from visualization_msgs.msg import MarkerArray
 
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
+from ..core.kernel_cache import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
@@ -125,6 +126,11 @@ class JacketClothNode(Node):
                              'the shipped character (config/character.urdf)')
 
     def _load_model(self, urdf, source):
+        if not kernels_cached():
+            self.get_logger().info(
+                'compiling the simulation kernels into numba\'s cache: a first start after an '
+                'install or an edit of a kernel takes about half a minute (`jacket_cloth warm` '
+                'does it ahead)')
         skeleton = Skeleton(urdf)
         rig = load_rig(skeleton, self._p('rig_file') or None)
         pipeline = SessionPipeline(skeleton, rig, self.fabrics, self._values(),

@@ -188,6 +188,14 @@ def cmd_demo(args):
     return 0
 
 
+def cmd_warm(args):
+    from .warm import warm_kernels
+    took, cached = warm_kernels()
+    print(f'kernels {"loaded from the cache" if cached else "compiled and cached"} in '
+          f'{took:.1f} s')
+    return 0
+
+
 def build_parser():
     p = argparse.ArgumentParser(prog='jacket_cloth', description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True)
@@ -233,6 +241,9 @@ def build_parser():
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
+    w = sub.add_parser('warm', help="compile the node's kernels into numba's cache now, so its "
+                       'first start takes seconds (make runs it; after colcon build, once)')
+    w.set_defaults(func=cmd_warm)
     return p
 
 

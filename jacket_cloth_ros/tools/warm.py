@@ -1,0 +1,37 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth warm``: compile every kernel the node uses into numba's cache, ahead.
+
+numba compiles a kernel on its first call and caches it on disk; without this the node's
+first start after an install (or an edit of a kernel file) spends that time before its first
+/tf. ``make`` runs it on set-up; on a ROS install, run it once after ``colcon build``.
+"""
+
+import time
+
+from ..core.fabric import load_fabrics
+from ..core.kernel_cache import kernels_cached
+from ..core.rig import load_rig
+from ..core.skeleton import load_shipped_character
+from ..motion.clips import joint_state_content
+from ..ros import cdr
+from ..ros.parameters import default_values
+from ..ros.pipeline import SessionPipeline
+
+
+def warm_kernels() -> tuple:
+    """Load, or compile and cache, every kernel of the node's per-input path.
+
+    Returns (seconds taken, whether they were cached already).
+    """
+    cached = kernels_cached()
+    started = time.perf_counter()
+    skeleton = load_shipped_character()
+    fabrics = load_fabrics()
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+                               default_values(fabrics['tweed_jacket']))
+    names, positions = joint_state_content(skeleton.joint_names, 'walk', 0.0)
+    for k in range(3):              # a reset, then steps: every output of an input
+        content = cdr.JointStateReader().read(cdr.joint_state(10**9 + k * 10**7, names,
+                                                              positions))
+        pipeline.on_joint_state(content, content.stamp_ns)
+    return time.perf_counter() - started, cached
