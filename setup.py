@@ -15,6 +15,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.*')),
         ('share/' + package_name + '/config/examples', glob('config/examples/*')),
+        ('share/' + package_name + '/config/view', glob('config/view/*')),
         ('share/' + package_name + '/launch', glob('launch_scripts/*.launch.py')),
     ],
     install_requires=['setuptools'],

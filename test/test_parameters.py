@@ -23,6 +23,8 @@ def _readme_rows():
 
 
 def _cell(value):
+    if isinstance(value, bool):
+        return f'`{str(value).lower()}`'
     if isinstance(value, str):
         return f'`{value}`' if value else "`''`"
     if isinstance(value, list):

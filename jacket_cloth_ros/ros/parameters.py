@@ -47,6 +47,11 @@ NODE_PARAMETERS = {
                     'name of the floating virtual joint whose <name>/trans_x..rot_w variables '
                     'in the JointState carry the character pose in the world'),
     'frame_prefix': (T.PARAMETER_STRING, '', None, False, 'prepended to every bone frame id'),
+    'publish_world_tf': (T.PARAMETER_BOOL, False, None, False,
+                         'also publish world_frame -> the URDF root on /tf, from the '
+                         'world_joint variables, so a world fixed frame works in a viewer'),
+    'world_frame': (T.PARAMETER_STRING, 'world', None, False,
+                    'the parent frame of that transform'),
     'markers_rate': (T.PARAMETER_DOUBLE, 30.0, (0.0, 240.0), False,
                      'Hz of ~/markers (by message stamps); 0 turns markers off'),
     'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
@@ -97,8 +102,10 @@ def check_value(name, value):
         return f'record_compression must be one of {", ".join(Compression.names())}'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
-    if name == 'world_joint' and not value:
-        return 'world_joint is empty'
+    if name in ('world_joint', 'world_frame') and not value:
+        return f'{name} is empty'
+    if name == 'world_frame' and value.startswith('/'):
+        return 'frame ids must not start with "/"'
     return ''
 
 

@@ -10,6 +10,7 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 import numpy as np
 
 from ..core.simulation import JacketSimulation
+from ..core.transforms import matrix_to_quat
 from ..recording.writer import qos_profile_yaml
 from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
@@ -55,6 +56,7 @@ class SessionPipeline:
         self._last_diag = None
         self._marker_reset = True
         self._tf = self._tf_template()
+        self._world_tf = None
         # Load the encoders' compiled parts now rather than on the first input's outputs.
         self._tf.encode(self.sim.bones().poses, 0)
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True)
@@ -101,6 +103,8 @@ class SessionPipeline:
         if not bones.finite:
             return []            # never a NaN on /tf (the simulation resets itself on one)
         out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
+        if self.values['publish_world_tf']:
+            out.append(('tf', self._world_transform(stamp_ns)))
         rate = self.values['markers_rate']
         if rate > 0 and _due(self._last_marker, stamp_ns, rate):
             self._last_marker = stamp_ns
@@ -111,6 +115,15 @@ class SessionPipeline:
             self._last_diag = stamp_ns
             out.append(('diagnostics', self._diagnostics(stamp_ns)))
         return out
+
+    def _world_transform(self, stamp_ns):
+        """world_frame -> the URDF root at the last step (the world_joint variables)."""
+        root = self.sim.skeleton.link_names[0]
+        key = (self.values['world_frame'], root)
+        if self._world_tf is None or self._world_tf[0] != key:
+            self._world_tf = (key, messages.tf_template((root,), (key[0],), ''))
+        pose = np.concatenate([self.sim.root[:3, 3], matrix_to_quat(self.sim.root[:3, :3])])
+        return self._world_tf[1].encode(pose[None], stamp_ns)
 
     def _diagnostics(self, stamp_ns):
         sim = self.sim

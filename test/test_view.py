@@ -1,0 +1,85 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A view that opens itself: the world transform on /tf, the shipped RViz config and Foxglove
+layout name what the node publishes."""
+
+import json
+import os
+
+import numpy as np
+import yaml
+from rclpy.serialization import deserialize_message
+from tf2_msgs.msg import TFMessage
+
+from jacket_cloth_ros.core.fabric import load_fabrics
+from jacket_cloth_ros.core.transforms import quat_to_matrix
+from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.ros.cdr import JointStateReader, joint_state
+from jacket_cloth_ros.ros.parameters import NODE_PARAMETERS, default_values
+from jacket_cloth_ros.ros.pipeline import SessionPipeline
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VIEW = os.path.join(ROOT, 'config', 'view')
+
+
+def _tf_messages(skeleton, rig, **values):
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(skeleton, rig, fabrics, {**default_values(fabrics['tweed_jacket']),
+                                                    **values})
+    reader, sent = JointStateReader(), []
+    for k in range(40):                 # the run clip moves the character through the world
+        names, pos = joint_state_content(skeleton.joint_names, 'run', k / 60)
+        content = reader.read(joint_state(10**10 + k * 10**9 // 60, names, pos))
+        _, outputs = pipe.on_joint_state(content, content.stamp_ns)
+        sent.append([deserialize_message(data, TFMessage) for key, data in outputs
+                     if key == 'tf'])
+    return pipe, sent
+
+
+def test_publish_world_tf_puts_the_root_in_the_world_frame(skeleton, rig):
+    _, without = _tf_messages(skeleton, rig)
+    assert all(len(tfs) == 1 for tfs in without)                # off by default
+    pipe, sent = _tf_messages(skeleton, rig, publish_world_tf=True, world_frame='map')
+    world = sent[-1][1].transforms[0]
+    assert (world.header.frame_id, world.child_frame_id) == ('map', skeleton.link_names[0])
+    assert world.header.stamp == sent[-1][0].transforms[0].header.stamp
+    t, q = world.transform.translation, world.transform.rotation
+    root = pipe.sim.root
+    assert np.linalg.norm(root[:3, 3]) > 0.5                    # the character moved
+    assert np.allclose([t.x, t.y, t.z], root[:3, 3], atol=1e-12)
+    assert np.allclose(quat_to_matrix([q.x, q.y, q.z, q.w]), root[:3, :3], atol=1e-9)
+
+
+def test_the_rviz_config_shows_the_node_topics_in_the_world_frame():
+    with open(os.path.join(VIEW, 'jacket_cloth.rviz'), encoding='utf-8') as f:
+        config = yaml.safe_load(f)['Visualization Manager']
+    displays = {d['Class']: d for d in config['Displays']}
+    assert displays['rviz_default_plugins/MarkerArray']['Topic']['Value'] == \
+        '/jacket_cloth_node/markers'
+    assert displays['rviz_default_plugins/RobotModel']['Description Topic']['Value'] == \
+        'robot_description'
+    assert 'rviz_default_plugins/TF' in displays
+    assert config['Global Options']['Fixed Frame'] == NODE_PARAMETERS['world_frame'][1]
+
+
+def test_the_foxglove_layout_shows_the_markers_and_diagnostics():
+    with open(os.path.join(VIEW, 'foxglove_layout.json'), encoding='utf-8') as f:
+        layout = json.load(f)
+    panels = layout['configById']
+    three_d = panels['3D!jacket']
+    assert three_d['topics']['/jacket_cloth_node/markers']['visible']
+    assert any(p.startswith('DiagnosticSummary!') for p in panels)
+
+    def named(node):
+        return [node] if isinstance(node, str) else named(node['first']) + named(node['second'])
+    assert sorted(named(layout['layout'])) == sorted(panels)      # every panel is laid out
+
+
+def test_the_view_launch_uses_the_installed_view_config():
+    import ast
+    path = os.path.join(ROOT, 'launch_scripts', 'jacket_cloth_view.launch.py')
+    with open(path, encoding='utf-8') as f:
+        text = f.read()
+    ast.parse(text)
+    assert "'view', 'jacket_cloth.rviz'" in text and "'publish_world_tf': True" in text
+    with open(os.path.join(ROOT, 'setup.py'), encoding='utf-8') as f:
+        assert "glob('config/view/*')" in f.read()
