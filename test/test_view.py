@@ -83,3 +83,16 @@ def test_the_view_launch_uses_the_installed_view_config():
     assert "'view', 'jacket_cloth.rviz'" in text and "'publish_world_tf': True" in text
     with open(os.path.join(ROOT, 'setup.py'), encoding='utf-8') as f:
         assert "glob('config/view/*')" in f.read()
+
+
+def test_a_session_with_the_world_transform_analyses_as_matching_its_recording(tmp_path):
+    # Two /tf per input: analyze compares each recorded /tf with its re-simulated one.
+    from jacket_cloth_ros.tools.cli import main
+    clip, out = tmp_path / 'clip.mcap', tmp_path / 'replay.mcap'
+    assert main(['motion', '--clip', 'run', '--duration', '1', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(out), '-p', 'publish_world_tf:=true']) == 0
+    assert main(['analyze', str(out), '--out', str(tmp_path / 'report')]) == 0
+    report = json.loads((tmp_path / 'report' / 'report.json').read_text())
+    session = report['sessions'][0] if 'sessions' in report else report
+    assert session['replay_matches_recording'] is True
+    assert session['recorded_tf_compared'] == 2 * session['frames']

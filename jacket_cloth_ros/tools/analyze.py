@@ -43,7 +43,8 @@ class SessionFigures:
         self.tf_compared = 0
         self.tf_equal = 0
         self.nonfinite = 0
-        self.published = 0
+        self.published = 0              # inputs whose bones went out
+        self.tf_sent = 0                # /tf messages, as the node records them
 
     def probe(self, pipeline, report, stamp, outputs):
         sim = pipeline.sim
@@ -57,10 +58,12 @@ class SessionFigures:
         if not tf:
             self.nonfinite += 1
         else:
-            if self.published < len(self.recorded_tf):
-                self.tf_compared += 1
-                self.tf_equal += self.recorded_tf[self.published] == tf[0]
             self.published += 1
+        for data in tf:             # with publish_world_tf, two per input: compare each
+            if self.tf_sent < len(self.recorded_tf):
+                self.tf_compared += 1
+                self.tf_equal += self.recorded_tf[self.tf_sent] == data
+            self.tf_sent += 1
         vert, horiz = sim.strain()
         rig = sim.rig
         ref = sim.reference_points(sim.links, sim.layer)
@@ -111,7 +114,7 @@ class SessionFigures:
 
     def _matches(self):
         """Every compared /tf equal, and as many as recorded unless the file was cut short."""
-        counted = self.published == len(self.recorded_tf) or \
+        counted = self.tf_sent == len(self.recorded_tf) or \
             not self.session.recording.complete
         return self.tf_equal == self.tf_compared and counted
 
