@@ -17,9 +17,15 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..core.measures import Worst, collider_labels, depth_inside, edge_strain  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import run_session  # noqa: E402
+
+# What a viewer sees wrong, per input on the published cloth (core.measures), and the push-out
+# depth found during the steps: each reported as max and p99 over inputs, with where.
+MEASURES = ('vertical_stretch', 'vertical_compression', 'horizontal_stretch', 'inside_m',
+            'push_out_m')
 
 REPORTED_PARAMETERS = ('fabric', 'sim_rate', 'stretch_limit', 'fabric.iterations',
                        'fabric.damping', 'fabric.world_share', 'wind', 'wind_gust')
@@ -38,6 +44,8 @@ class SessionFigures:
         self.recorded_tf = [m.data for m in recording.messages if m.topic == '/tf'] \
             if SESSION_CONFIG in recording.metadata else []
         self.rows = []
+        self.worst = {name: [] for name in MEASURES}        # (time s, Worst) per input
+        self.labels = collider_labels(session.setup.rig)
         self.frames = []
         self.reset_reasons = []
         self.tf_compared = 0
@@ -66,6 +74,14 @@ class SessionFigures:
             self.tf_sent += 1
         vert, horiz = sim.strain()
         rig = sim.rig
+        t = (stamp - self.t0) * 1e-9
+        vs, vc = edge_strain(sim.x, rig.vert_a, rig.vert_b, rig.vert_rest)
+        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
+        hs, _ = edge_strain(sim.x, rig.con_a[h], rig.con_b[h], rig.con_rest[h])
+        inside = depth_inside(sim.x, rig.free, sim.collider_frames(sim.links), self.labels)
+        for name, worst in zip(MEASURES, (vs, vc, hs, inside,
+                                          Worst(report.max_penetration, -1))):
+            self.worst[name].append((t, worst))
         ref = sim.reference_points(sim.links, sim.layer)
         hem = slice((rig.rows - 1) * rig.cols, rig.n)
         anchor, rot = sim.hood_anchor(sim.links)
@@ -110,7 +126,23 @@ class SessionFigures:
             'replay_matches_recording': self._matches() if self.tf_compared else None,
             'recorded_tf_compared': self.tf_compared,
             'parameters': {k: values[k] for k in REPORTED_PARAMETERS if k in values},
+            **{name: self._measure(name, pipeline.sim.rig.cols) for name in MEASURES},
         }
+
+    def _measure(self, name, cols):
+        """{max, p99} over inputs, and when (s), which vertex (row, column) and collider."""
+        series = self.worst[name]
+        if not series:
+            return {'max': 0.0, 'p99': 0.0}
+        values = np.array([w.value for _, w in series])
+        k = int(np.argmax(values))
+        t, worst = series[k]
+        out = {'max': float(values[k]), 'p99': float(np.percentile(values, 99)), 'at_s': t}
+        if worst.vertex >= 0:
+            out['vertex'] = list(divmod(worst.vertex, cols))
+        if worst.collider:
+            out['collider'] = worst.collider
+        return out
 
     def _matches(self):
         """Every compared /tf equal, and as many as recorded unless the file was cut short."""
@@ -197,7 +229,13 @@ def _summary(names, reports):
         ('duration (s)', lambda r: f"{r['duration_s']:.1f}"),
         ('max vertical strain', lambda r: f"{r['max_vertical_strain']:.4f}"),
         ('max horizontal strain', lambda r: f"{r['max_horizontal_strain']:.4f}"),
-        ('max push-out (mm)', lambda r: f"{r['max_penetration_m'] * 1e3:.1f}"),
+        ('vertical stretch max / p99', lambda r: _max_p99(r['vertical_stretch'], 1, '')),
+        ('vertical compression max / p99', lambda r: _max_p99(r['vertical_compression'], 1,
+                                                              '')),
+        ('horizontal stretch max / p99', lambda r: _max_p99(r['horizontal_stretch'], 1, '')),
+        ('inside a collider max / p99 (mm)', lambda r: _max_p99(r['inside_m'], 1e3, '')),
+        ('push-out during a step max / p99 (mm)', lambda r: _max_p99(r['push_out_m'], 1e3,
+                                                                     '')),
         ('M11 vertex-steps moved', lambda r: r['max_distance_exceeded']),
         ('non-finite', lambda r: r['nonfinite_count']),
         ('resets', lambda r: f"{r['resets']} ({'; '.join(r['reset_reasons'])})"),
@@ -240,3 +278,14 @@ def _pair(t):
     if t['median'] is None:
         return 'n/a'
     return f"{t['median']:.1f} / {t['p99']:.1f}"
+
+
+def _max_p99(measure, scale, unit):
+    """'max / p99' of a measure, with where the max was."""
+    where = [f"{measure['at_s']:.2f} s"] if 'at_s' in measure else []
+    if 'vertex' in measure:
+        where.append('row {}, col {}'.format(*measure['vertex']))
+    if 'collider' in measure:
+        where.append(measure['collider'])
+    text = f"{measure['max'] * scale:.4g} / {measure['p99'] * scale:.4g}{unit}"
+    return text + (f" ({', '.join(where)})" if where else '')

@@ -1,0 +1,60 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The report names what it measures: stretch apart from compression, depth inside the body
+apart from the push-out found during a step, each with where it is."""
+
+import json
+
+import numpy as np
+import pytest
+
+from jacket_cloth_ros.core.measures import depth_inside, edge_strain
+from jacket_cloth_ros.core.simulation import Colliders
+
+
+def test_stretch_and_compression_are_measured_apart():
+    x = np.array([[0.0, 0, 0], [0, 0, -1.2], [0, 0, -1.7]])     # rest 1 and 1: +20 %, -50 %
+    a, b, rest = np.array([0, 1]), np.array([1, 2]), np.array([1.0, 1.0])
+    stretch, compression = edge_strain(x, a, b, rest)
+    assert stretch.value == pytest.approx(0.2) and stretch.vertex == 1
+    assert compression.value == pytest.approx(0.5) and compression.vertex == 2
+
+
+def test_depth_inside_names_the_vertex_and_the_collider():
+    none3 = np.zeros((0, 3))
+    colliders = Colliders(np.array([[0.0, 0, 0]]), np.eye(3)[None], np.array([[0.2, 0.1, 0.1]]),
+                          np.array([[1.0, 0, 0]]), np.array([[1.0, 0, 1]]), np.array([0.05]),
+                          np.array([[0.0, 0, -1]]), np.array([[0.0, 0, 1]]))
+    labels = ['torso', 'arm', 'floor']
+    x = np.array([[0.15, 0, 0],          # 5 cm inside the ellipsoid along its long axis
+                  [1.0, 0.02, 0.5],      # 3 cm inside the capsule
+                  [0.0, 0, -1.01],       # 1 cm under the floor
+                  [0.15, 0, 0]])         # as deep, but pinned: not counted
+    free = np.array([True, True, True, False])
+    worst = depth_inside(x, free, colliders, labels)
+    assert worst.value == pytest.approx(0.05) and (worst.vertex, worst.collider) == (0, 'torso')
+    x[0] = [0.3, 0, 0]
+    worst = depth_inside(x, free, colliders, labels)
+    assert worst.value == pytest.approx(0.03) and worst.collider == 'arm'
+    x[1] = [3.0, 0, 0]
+    assert depth_inside(x, free, colliders, labels).collider == 'floor'
+    x[2] = [0.0, 0, -1.0]                # on the surface: not inside
+    assert depth_inside(x, free, colliders, labels).vertex == -1
+    none = Colliders(none3, np.zeros((0, 3, 3)), none3, none3, none3, np.zeros(0), none3, none3)
+    assert depth_inside(x, free, none, []).value == 0.0
+
+
+def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
+    from jacket_cloth_ros.tools.cli import main
+    from jacket_cloth_ros.tools.analyze import MEASURES
+    clip = tmp_path / 'clip.mcap'
+    assert main(['motion', '--clip', 'run', '--duration', '2', '-o', str(clip)]) == 0
+    assert main(['analyze', str(clip), '--out', str(tmp_path / 'out')]) == 0
+    report = json.loads((tmp_path / 'out' / 'report.json').read_text())
+    for name in MEASURES:
+        m = report[name]
+        assert 0.0 <= m['p99'] <= m['max'] and 'at_s' in m, name
+    assert report['vertical_stretch']['max'] > 0.01               # the run stretches the hem
+    assert len(report['vertical_stretch']['vertex']) == 2          # (row, column)
+    assert report['push_out_m']['max'] > report['inside_m']['max']  # pushed out, not left in
+    summary = (tmp_path / 'out' / 'summary.md').read_text()
+    assert 'vertical compression max / p99' in summary and 'inside a collider' in summary
