@@ -309,3 +309,22 @@ def test_rig_regions_scale_the_fabric_where_they_lie(make_sim, rig):
     assert sim.damping[vent & inner] == pytest.approx(0.8 * f.damping)
     assert sim.damping[~vent & inner] == pytest.approx(f.damping)
     assert sim.wind_scale[vent & rig.edge] == pytest.approx(1.4 * f.edge_wind_scale)
+
+
+def test_m12_keeps_each_vertical_at_its_length_and_outside_the_body():
+    # A column hanging over a ball: the straight line from the top vertex runs into it. The
+    # lower vertex turns about the upper one onto the surface at its rest length, instead of
+    # being pulled inside (and a later push-out stretching the edge).
+    from jacket_cloth_ros.core.kernel import hard_vertical_pass_outside
+    x = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.3], [0.0, 0.0, -0.6]])
+    upper, lower, rest = np.array([0, 1]), np.array([1, 2]), np.array([0.2, 0.2])
+    center, radius = np.array([0.05, 0.0, -0.3]), 0.15
+    contact = np.zeros(3, dtype=np.bool_)
+    none3 = np.zeros((0, 3))
+    deepest = hard_vertical_pass_outside(
+        x, upper, lower, rest, contact, center[None], np.eye(3)[None], np.full((1, 3), radius),
+        none3, none3, np.zeros(0), none3, none3)
+    assert deepest > 0.01 and contact[1]
+    lengths = np.linalg.norm(x[upper] - x[lower], axis=1)
+    assert np.allclose(lengths, rest, rtol=1e-3)       # alternating projections: to 0.1 %
+    assert (np.linalg.norm(x[1:] - center, axis=1) >= radius - 1e-9).all()

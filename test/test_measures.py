@@ -53,8 +53,9 @@ def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
     for name in MEASURES:
         m = report[name]
         assert 0.0 <= m['p99'] <= m['max'] and 'at_s' in m, name
-    assert report['vertical_stretch']['max'] > 0.01               # the run stretches the hem
-    assert len(report['vertical_stretch']['vertex']) == 2          # (row, column)
+    assert report['horizontal_stretch']['max'] > 0.01             # the run widens the hem
+    assert len(report['horizontal_stretch']['vertex']) == 2        # (row, column)
+    assert report['vertical_stretch']['max'] <= 0.10               # M12, at every input
     assert report['push_out_m']['max'] > report['inside_m']['max']  # pushed out, not left in
     summary = (tmp_path / 'out' / 'summary.md').read_text()
     assert 'vertical compression max / p99' in summary and 'inside a collider' in summary

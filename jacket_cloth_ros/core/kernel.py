@@ -2,10 +2,12 @@
 """The compiled cloth step (numba), the hot loop of the simulation.
 
 Compiled because at these sizes per-call overhead, not arithmetic, decides: a numpy port that
-relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md). Order within a step, as in the article and the
-yardstick: Verlet (M4) with per-vertex damping (M13, M15), Gauss-Seidel sweeps over both
-constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out in ellipsoid space
-(M10) plus capsules and planes, maximum distance (M11), and the top-down hard vertical pass (M12).
+relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md).
+
+Order within a step, as in the article and the yardstick: Verlet (M4) with per-vertex damping
+(M13, M15), Gauss-Seidel sweeps over both constraint groups (M5), tethers when chosen instead
+of M12, ellipsoid push-out in ellipsoid space (M10) plus capsules and planes, maximum distance
+(M11), and the top-down hard vertical pass (M12), which keeps the cloth outside the colliders.
 """
 
 import numpy as np
@@ -166,6 +168,82 @@ MAX_COLLISION_PASSES = 4
 
 
 @njit(cache=True)
+def _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+              plane_n):
+    """One pass of vertex i against every collider: pushed onto the surface of each it is
+    inside. Returns the deepest push-out, or -1 if it was inside none."""
+    deepest = -1.0
+    for e in range(centers.shape[0]):
+        p0 = x[i, 0] - centers[e, 0]
+        p1 = x[i, 1] - centers[e, 1]
+        p2 = x[i, 2] - centers[e, 2]
+        if p0 * p0 + p1 * p1 + p2 * p2 >= reach2[e]:     # outside the bounding sphere
+            continue
+        q0 = to_unit[e, 0, 0] * p0 + to_unit[e, 0, 1] * p1 + to_unit[e, 0, 2] * p2
+        q1 = to_unit[e, 1, 0] * p0 + to_unit[e, 1, 1] * p1 + to_unit[e, 1, 2] * p2
+        q2 = to_unit[e, 2, 0] * p0 + to_unit[e, 2, 1] * p1 + to_unit[e, 2, 2] * p2
+        r2 = q0 * q0 + q1 * q1 + q2 * q2
+        if r2 >= 1.0 or r2 < 1e-12:
+            continue
+        g = 1.0 / np.sqrt(r2)          # onto the unit sphere, then back
+        s0, s1, s2 = q0 * g, q1 * g, q2 * g
+        n0 = (from_unit[e, 0, 0] * s0 + from_unit[e, 0, 1] * s1
+              + from_unit[e, 0, 2] * s2 + centers[e, 0])
+        n1 = (from_unit[e, 1, 0] * s0 + from_unit[e, 1, 1] * s1
+              + from_unit[e, 1, 2] * s2 + centers[e, 1])
+        n2 = (from_unit[e, 2, 0] * s0 + from_unit[e, 2, 1] * s1
+              + from_unit[e, 2, 2] * s2 + centers[e, 2])
+        m0, m1, m2 = n0 - x[i, 0], n1 - x[i, 1], n2 - x[i, 2]
+        x[i, 0] = n0
+        x[i, 1] = n1
+        x[i, 2] = n2
+        deepest = max(deepest, np.sqrt(m0 * m0 + m1 * m1 + m2 * m2))
+    for k in range(cap_a.shape[0]):
+        deepest = max(deepest, _push_capsule(x, i, cap_a, cap_b, cap_r, k))
+    for k in range(plane_p.shape[0]):
+        deepest = max(deepest, _push_plane(x, i, plane_p, plane_n, k))
+    return deepest
+
+
+# Projections of one vertical edge's lower vertex onto its rest length and out of the body.
+VERTICAL_COLLISION_ITERATIONS = 8
+
+
+@njit(cache=True)
+def hard_vertical_pass_outside(x, upper, lower, rest, contact, centers, axes, radii, cap_a,
+                               cap_b, cap_r, plane_p, plane_n):
+    """M12 that agrees with the colliders: top-down, each lower vertex at its rest length from
+    the upper one and outside the body. Where the straight line runs into a collider, the
+    edge turns about its upper vertex onto the collider's surface (projected alternately onto
+    the length and out of the body), so the column wraps around a lifted thigh at its length
+    instead of being pushed out stretched afterwards. Outside wins where both cannot hold.
+    Returns the deepest push-out."""
+    ne = centers.shape[0]
+    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
+    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
+    deepest = 0.0
+    for j in range(upper.shape[0]):
+        a, b = upper[j], lower[j]
+        for _ in range(VERTICAL_COLLISION_ITERATIONS):
+            d0 = x[a, 0] - x[b, 0]
+            d1 = x[a, 1] - x[b, 1]
+            d2 = x[a, 2] - x[b, 2]
+            length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if length > 1e-9:
+                f = (length - rest[j]) / length
+                x[b, 0] += d0 * f
+                x[b, 1] += d1 * f
+                x[b, 2] += d2 * f
+            depth = _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                              plane_p, plane_n)
+            if depth < 0.0:
+                break
+            contact[b] = True
+            deepest = max(deepest, depth)
+    return deepest
+
+
+@njit(cache=True)
 def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, contact):
     """M10 and beyond: push particles out of ellipsoids, capsules and planes.
 
@@ -185,47 +263,11 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
         # Pushed out of one piece of a split ellipsoid, a particle can land in its overlapping
         # neighbour: test again until a pass moves nothing (bounded: corners may not settle).
         for _ in range(MAX_COLLISION_PASSES):
-            pushed = False
-            # The ellipsoid test is written out here: as a helper taking six arrays it was
-            # not inlined, and the call alone made this loop several times slower.
-            for e in range(ne):
-                p0 = x[i, 0] - centers[e, 0]
-                p1 = x[i, 1] - centers[e, 1]
-                p2 = x[i, 2] - centers[e, 2]
-                if p0 * p0 + p1 * p1 + p2 * p2 >= reach2[e]:     # outside the bounding sphere
-                    continue
-                q0 = to_unit[e, 0, 0] * p0 + to_unit[e, 0, 1] * p1 + to_unit[e, 0, 2] * p2
-                q1 = to_unit[e, 1, 0] * p0 + to_unit[e, 1, 1] * p1 + to_unit[e, 1, 2] * p2
-                q2 = to_unit[e, 2, 0] * p0 + to_unit[e, 2, 1] * p1 + to_unit[e, 2, 2] * p2
-                r2 = q0 * q0 + q1 * q1 + q2 * q2
-                if r2 >= 1.0 or r2 < 1e-12:
-                    continue
-                g = 1.0 / np.sqrt(r2)          # onto the unit sphere, then back
-                s0, s1, s2 = q0 * g, q1 * g, q2 * g
-                n0 = (from_unit[e, 0, 0] * s0 + from_unit[e, 0, 1] * s1
-                      + from_unit[e, 0, 2] * s2 + centers[e, 0])
-                n1 = (from_unit[e, 1, 0] * s0 + from_unit[e, 1, 1] * s1
-                      + from_unit[e, 1, 2] * s2 + centers[e, 1])
-                n2 = (from_unit[e, 2, 0] * s0 + from_unit[e, 2, 1] * s1
-                      + from_unit[e, 2, 2] * s2 + centers[e, 2])
-                m0, m1, m2 = n0 - x[i, 0], n1 - x[i, 1], n2 - x[i, 2]
-                x[i, 0] = n0
-                x[i, 1] = n1
-                x[i, 2] = n2
-                pushed = True
-                deepest = max(deepest, np.sqrt(m0 * m0 + m1 * m1 + m2 * m2))
-            for k in range(cap_a.shape[0]):
-                depth = _push_capsule(x, i, cap_a, cap_b, cap_r, k)
-                if depth >= 0.0:
-                    pushed = True
-                    deepest = max(deepest, depth)
-            for k in range(plane_p.shape[0]):
-                depth = _push_plane(x, i, plane_p, plane_n, k)
-                if depth >= 0.0:
-                    pushed = True
-                    deepest = max(deepest, depth)
-            if not pushed:
+            depth = _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                              plane_p, plane_n)
+            if depth < 0.0:
                 break
+            deepest = max(deepest, depth)
             touching = True
         contact[i] = touching
     return deepest
@@ -405,13 +447,12 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
                                        plane_p, plane_n, contact))
         limited += limit_distance(x, free, ref, max_distance)
         if limit_mode == LIMIT_HARD_PASS:
-            hard_vertical_pass(x, upper, lower, vrest)
-            # The pass moves lower vertices without looking at the body; run last, it left
-            # cloth inside a collider in the lab's stress scenes (a hitch, an oversized step).
-            # A last push-out keeps it outside; only the verticals of the few vertices it
-            # moves lose their exact length (docs/method.md).
-            collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n,
-                    contact)
+            # M12 run last, as the article does, but agreeing with the colliders: a plain
+            # pass pulled cloth into the body and the push-out after it stretched the column
+            # again (docs/method.md).
+            deepest = max(deepest, hard_vertical_pass_outside(
+                x, upper, lower, vrest, contact, centers, axes, radii, cap_a, cap_b, cap_r,
+                plane_p, plane_n))
     if substeps > 1:        # leave the frames exactly where the step ends (lerp rounds)
         centers[:], axes[:], cap_a[:], cap_b[:] = c_to, a_to, ka_to, kb_to
         plane_p[:], plane_n[:], ref[:] = pp_to, pn_to, ref_to
