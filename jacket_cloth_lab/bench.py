@@ -77,8 +77,8 @@ def rig_at_grid(skeleton, cols, rows, colliders=None):
 
 def pareto_front(rows):
     """Indices of the rows no other row beats on both cost and hem error."""
-    order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'],
-                                                   rows[i]['hem_rms_m']))
+    order = sorted(range(len(rows)),
+                   key=lambda i: (rows[i]['cost_ms_per_s'], rows[i]['hem_rms_m']))
     front, best = [], np.inf
     for i in order:
         if rows[i]['hem_rms_m'] < best:
@@ -205,7 +205,8 @@ def markdown(results):
                      f'{c["worst_link_strain"] * 100:.3f} | {_mm(c["bottom_error_m"])} | '
                      f'{settle} |')
     lines += ['', '## Rig detail: converged cloth against the finest grid\'s', '',
-              '| clip | rig | vertices | colliders | default cost ms/s | hem RMS mm | hem max mm |',
+              '| clip | rig | vertices | colliders | default cost ms/s | hem RMS mm '
+              '| hem max mm |',
               '|---' * 7 + '|']
     for d in results['rig_detail']:
         lines.append(f'| {d["clip"]} | {d["rig"]} | {d["vertices"]} | {d["colliders"]} | '

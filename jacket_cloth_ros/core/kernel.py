@@ -2,10 +2,11 @@
 """The compiled cloth step (numba), the hot loop of the simulation.
 
 Compiled because at these sizes per-call overhead, not arithmetic, decides: a numpy port that
-relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md). Order within a step, as in the article and the
-yardstick: Verlet (M4) with per-vertex damping (M13, M15), Gauss-Seidel sweeps over both
-constraint groups (M5), tethers when chosen instead of M12, ellipsoid push-out in ellipsoid space
-(M10) plus capsules and planes, maximum distance (M11), and the top-down hard vertical pass (M12).
+relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md).
+Order within a step, as in the article and the yardstick: Verlet (M4) with per-vertex damping
+(M13, M15), Gauss-Seidel sweeps over both constraint groups (M5), tethers when chosen instead of
+M12, ellipsoid push-out in ellipsoid space (M10) plus capsules and planes, maximum distance (M11),
+and the top-down hard vertical pass (M12).
 """
 
 import numpy as np

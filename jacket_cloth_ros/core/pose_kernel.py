@@ -245,7 +245,8 @@ def skinned_pose(links, cloth, below, top, ref):
     """
     pin_link, pin_local = cloth.pin_link, cloth.pin_local
     reference_link, reference_local = cloth.reference_link, cloth.reference_local
-    pin_below, pin_below_local, pin_weight = cloth.pin_below, cloth.pin_below_local, cloth.pin_weight
+    pin_below, pin_below_local, pin_weight = (cloth.pin_below, cloth.pin_below_local,
+                                              cloth.pin_weight)
     cols = pin_local.shape[0]
     carried = np.empty(3)
     held = np.empty(3)
@@ -269,7 +270,8 @@ def skinned_pose(links, cloth, below, top, ref):
 def collider_poses(links, colliders, posed):
     """M10 ellipsoids (centre, axes as columns) and capsule ends of a bundles.ColliderModel on
     their links, into a bundles.Posed."""
-    links_of, centers_local, rotations_local = colliders.links, colliders.centers, colliders.rotations
+    links_of, centers_local, rotations_local = (colliders.links, colliders.centers,
+                                                colliders.rotations)
     capsule_links, capsule_ends = colliders.capsule_links, colliders.capsule_ends
     centers, axes, cap_a, cap_b = posed.centers, posed.axes, posed.cap_a, posed.cap_b
     for e in range(centers.shape[0]):

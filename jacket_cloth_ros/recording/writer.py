@@ -80,8 +80,9 @@ class SessionRecorder:
             self._queue = queue.SimpleQueue()
             self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
             self._thread.start()
-        self._writer = McapWriter(self._file, compression=Compression.parse(compression, 'compression').mcap_name,
-                                  chunk_bytes=CHUNK_BYTES, run=self._do)
+        self._writer = McapWriter(
+            self._file, compression=Compression.parse(compression, 'compression').mcap_name,
+            chunk_bytes=CHUNK_BYTES, run=self._do)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}

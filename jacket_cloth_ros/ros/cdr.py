@@ -103,7 +103,7 @@ class _Template:
 
     @staticmethod
     def _f64_at(byte_at, count):
-        """Indices of ``count`` doubles from byte offset ``byte_at`` (8-aligned after the header)."""
+        """Indices of ``count`` doubles from byte ``byte_at`` (8-aligned after the header)."""
         return (byte_at - 4) // 8 + np.arange(count)
 
     def _bytes(self, stamp_ns):

@@ -53,8 +53,8 @@ def stamp_msg(stamp_ns):
 
 def tf_message(bones, stamp_ns, prefix=''):
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(bones.poses,
-                                                                               stamp_ns)
+    return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(
+        bones.poses, stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)

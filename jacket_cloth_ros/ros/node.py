@@ -56,7 +56,8 @@ class JacketClothNode(Node):
         if preset not in self.fabrics:
             raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
                               f'(presets: {", ".join(self.fabrics)})')
-        for name, (kind, default, rng, ro, text) in fabric_parameters(self.fabrics[preset]).items():
+        for name, (kind, default, rng, ro, text) in fabric_parameters(
+                self.fabrics[preset]).items():
             self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)

@@ -61,7 +61,8 @@ def joint_state_topic(recording, topic=None):
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
     if topic is not None:
         if topic not in recording.topics:
-            raise RecordingError(f'{recording.path}: no topic {topic} (topics: {listed or "none"})')
+            raise RecordingError(
+                f'{recording.path}: no topic {topic} (topics: {listed or "none"})')
         if recording.topics[topic] != JOINT_STATE:
             raise RecordingError(f'{recording.path}: {topic} is {recording.topics[topic]!r}, '
                                  f'not {JOINT_STATE}')
