@@ -25,17 +25,17 @@ import numpy as np
 
 
 def floats(a) -> np.ndarray:
-    """``a`` as a C-contiguous float64 array (the kernels' float type)."""
+    """Return ``a`` as a C-contiguous float64 array (the kernels' float type)."""
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def ints(a) -> np.ndarray:
-    """``a`` as a C-contiguous int64 array (the kernels' index type)."""
+    """Return ``a`` as a C-contiguous int64 array (the kernels' index type)."""
     return np.ascontiguousarray(a, dtype=np.int64)
 
 
 def flags(a) -> np.ndarray:
-    """``a`` as a C-contiguous boolean array."""
+    """Return ``a`` as a C-contiguous boolean array."""
     return np.ascontiguousarray(a, dtype=np.bool_)
 
 
@@ -218,14 +218,14 @@ class Scene(NamedTuple):
 
 
 def skeleton_model(skeleton) -> SkeletonModel:
-    """The kinematic arrays of a core.skeleton.Skeleton."""
+    """Return the kinematic arrays of a core.skeleton.Skeleton."""
     return SkeletonModel(floats(skeleton.origin), floats(skeleton.axis), ints(skeleton.kind),
                          ints(skeleton.var), floats(skeleton.mult), floats(skeleton.offset),
                          ints(skeleton.parent))
 
 
 def layer_model(layer=None) -> LayerModel:
-    """A core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
+    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
     from .bone_layer import DOWN
     if layer is None:
         return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
@@ -242,7 +242,7 @@ def layer_model(layer=None) -> LayerModel:
 
 
 def cloth_model(rig) -> ClothModel:
-    """A core.rig.Rig's cloth, pins, references and hood."""
+    """Return a core.rig.Rig's cloth, pins, references and hood."""
     return ClothModel(
         int(rig.pin_link), floats(rig.pin_local), ints(rig.reference_link),
         floats(rig.reference_local), ints(rig.pin_below), floats(rig.pin_below_local),
@@ -253,7 +253,7 @@ def cloth_model(rig) -> ClothModel:
 
 
 def collider_model(rig) -> ColliderModel:
-    """A core.rig.Rig's colliders in their links' frames."""
+    """Return a core.rig.Rig's colliders in their links' frames."""
     return ColliderModel(
         ints(rig.collider_links), floats(rig.collider_centers), floats(rig.collider_rotations),
         floats(rig.collider_radii), ints(rig.capsule_links), floats(rig.capsule_ends),
@@ -262,7 +262,7 @@ def collider_model(rig) -> ColliderModel:
 
 
 def model_of(skeleton, rig) -> Model:
-    """The fixed bundle of a skeleton and the rig fitted to it."""
+    """Return the fixed bundle of a skeleton and the rig fitted to it."""
     return Model(skeleton.model, rig.layer.model if rig.layer else layer_model(), cloth_model(rig),
                  collider_model(rig))
 
@@ -276,7 +276,7 @@ def posed_like(colliders: ColliderModel, n: int) -> Posed:
 
 
 def copied(bundle):
-    """A copy of a bundle (nested bundles too) whose arrays are new arrays of the same values."""
+    """Return a copy of a bundle (nested ones too) with new arrays of the same values."""
     if hasattr(bundle, '_fields'):
         return type(bundle)(*(copied(v) for v in bundle))
     if isinstance(bundle, tuple):

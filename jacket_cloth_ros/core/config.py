@@ -11,7 +11,7 @@ class ConfigError(ValueError):
 
 
 def config_dir():
-    """The shipped config folder: the installed share/ folder, else the source tree's."""
+    """Return the shipped config folder: the installed share/ folder, else the source tree's."""
     package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     here = os.path.join(os.path.dirname(package), 'config')     # a source checkout
     if os.path.isfile(os.path.join(here, 'jacket_rig.yaml')):
@@ -40,7 +40,7 @@ def parse_yaml(text, where):
 
 
 def read_text(path, what):
-    """A configuration file's text; the error names the file (``what``: 'URDF', 'rig', ...)."""
+    """Read a configuration file's text; errors name the file (``what``: 'URDF', 'rig', ...)."""
     try:
         with open(path, encoding='utf-8') as f:
             return f.read()

@@ -51,8 +51,10 @@ class InputParser:
         self._plans = {}
 
     def _plan(self, names):
-        """Where each name of a message goes, and the warnings its name list earns: worked out
-        once per distinct name list (a publisher sends the same list every time)."""
+        """Work out where each name of a message goes, and the warnings its name list earns.
+
+        Worked out once per distinct name list (a publisher sends the same list every time).
+        """
         plan = self._plans.get(names)
         if plan is not None:
             return plan
@@ -114,9 +116,11 @@ class InputParser:
 @njit(cache=True)
 def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
                  last_root, last_quat, q, root, quat):
-    """A sample's joint values ``q``, root pose ``root`` and its unit quaternion ``quat`` from
-    one message's positions by its plan; joints and a world pose it leaves out keep their last
-    values. Compiled: in numpy it was a visible share of every input."""
+    """Fill a sample's joint values ``q``, root pose ``root`` and unit quaternion ``quat``.
+
+    From one message's positions by its plan; joints and a world pose it leaves out keep their
+    last values. Compiled: in numpy it was a visible share of every input.
+    """
     for k in range(positions.shape[0]):
         if not np.isfinite(positions[k]):
             return _NON_FINITE
@@ -148,7 +152,8 @@ def root_jump(root_a, root_b, quat_a, quat_b):
 
     The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
     Compiled: in numpy it cost a visible share of every input, more so in a node that
-    sleeps between inputs."""
+    sleeps between inputs.
+    """
     d0 = root_b[0, 3] - root_a[0, 3]
     d1 = root_b[1, 3] - root_a[1, 3]
     d2 = root_b[2, 3] - root_a[2, 3]

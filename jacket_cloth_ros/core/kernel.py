@@ -77,9 +77,11 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
 
 @njit(cache=True)
 def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance):
-    """XPBD (Macklin et al. 2016): compliance instead of stiffness, so the cloth's softness no
-    longer depends on the iteration count or the step; ``lam`` accumulates each constraint's
-    multiplier over the sweeps of one (sub)step. Unit masses. Returns the sweeps run.
+    """Relax the constraints with XPBD (Macklin et al. 2016); return the sweeps run.
+
+    Compliance instead of stiffness, so the cloth's softness no longer depends on the
+    iteration count or the step; ``lam`` accumulates each constraint's multiplier over the
+    sweeps of one (sub)step. Unit masses.
     """
     lam[:] = 0.0
     inv_dt2 = 1.0 / (dt * dt) if dt > 0.0 else 0.0
@@ -116,9 +118,12 @@ def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance
 
 @njit(cache=True)
 def _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2):
-    """Per ellipsoid, once per collision pass over the cloth: the matrix into the space where
-    it is a unit sphere (its axes as rows over its radii), the matrix back, and the squared
-    radius of its bounding sphere. The per-vertex test then multiplies instead of dividing."""
+    """Compute per ellipsoid, once per collision pass, the maps to and from its unit sphere.
+
+    The matrix into the space where it is a unit sphere (its axes as rows over its radii), the
+    matrix back, and the squared radius of its bounding sphere. The per-vertex test then
+    multiplies instead of dividing.
+    """
     for e in range(radii.shape[0]):
         for k in range(3):
             for r in range(3):
@@ -311,7 +316,7 @@ SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = (int(m) for m in Solver)
 
 @njit(cache=True)
 def _lerp(out, a, b, w):
-    """out = a + w (b - a), elementwise over arrays of one shape."""
+    """Set out = a + w (b - a), elementwise over arrays of one shape."""
     fa, fb, fo = a.reshape(-1), b.reshape(-1), out.reshape(-1)
     for i in range(fo.shape[0]):
         fo[i] = fa[i] + w * (fb[i] - fa[i])
@@ -343,9 +348,10 @@ def _normalise_rows(normals):
 
 @njit(cache=True)
 def cloth_step(cloth, colliders, tuning, state, control, now, before):
-    """One fixed step of the jacket cloth, in ``control.substeps`` equal substeps ("Small
-    Steps"). Takes core.bundles: ClothModel, ColliderModel, Tuning, ClothState, StepControl,
-    and Posed twice.
+    """Advance the jacket cloth one fixed step in ``control.substeps`` equal substeps.
+
+    Substeps as in "Small Steps". Takes core.bundles: ClothModel, ColliderModel, Tuning,
+    ClothState, StepControl, and Posed twice.
 
     ``control.damping`` and ``contact_damping`` are per substep. The pinned vertices, the
     colliders and the M11 references are given where they are at the end of the step

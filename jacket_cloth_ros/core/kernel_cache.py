@@ -36,7 +36,7 @@ def _content_hash(path, mtime, size):        # read again only when the file cha
 
 
 def kernels_stamp():
-    """The content hashes of every file holding one of the package's kernels."""
+    """Return the content hashes of every file holding one of the package's kernels."""
     stamps = []
     for path in KERNEL_FILES:
         st = os.stat(path)

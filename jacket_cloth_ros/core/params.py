@@ -17,7 +17,7 @@ from .step_kernel import gust_scale
 
 
 def _param(default, doc, lo=None, hi=None, choices=None):
-    """A parameter's field: its default, meaning, range (inclusive) or choices."""
+    """Make a parameter's field: its default, meaning, range (inclusive) or choices."""
     return field(default=default, metadata={'doc': doc, 'range': None if lo is None else (lo, hi),
                                             'choices': choices})
 
@@ -62,7 +62,7 @@ class SimParams:
                 raise ValueError(f'{name} {reason}')
 
     def with_values(self, **changes) -> 'SimParams':
-        """A copy with ``changes`` (validated)."""
+        """Return a copy with ``changes`` (validated)."""
         return replace(self, **changes)
 
     def wind_at(self, t_ns: int) -> np.ndarray:

@@ -57,12 +57,12 @@ class Hood:
 
 
 def interleaved_order(a, b, window=4):
-    """Gauss-Seidel order, top-down, where no constraint shares a vertex with the ``window``
-    before it (the earliest such constraint comes next).
+    """Return a top-down Gauss-Seidel order that keeps vertex-sharing constraints apart.
 
-    Each projection then no longer waits for the one before it to store its vertex, so the CPU
-    overlaps their square roots and divisions (docs/performance.md); the order stays top-down
-    to within a few constraints.
+    No constraint shares a vertex with the ``window`` before it (the earliest such constraint
+    comes next). Each projection then no longer waits for the one before it to store its vertex,
+    so the CPU overlaps their square roots and divisions (docs/performance.md); the order stays
+    top-down to within a few constraints.
     """
     left = list(range(len(a)))
     order, recent = [], []
@@ -238,8 +238,11 @@ class Rig:
         self.plane_normals = np.array([p.normal for p in self.planes], dtype=float).reshape(-1, 3)
 
     def _skin_top_row(self, rest):
-        """M6 + M2: the pinned top row follows its link and, near the shoulders, the bones
-        below the shoulder pads (weight falls off linearly to zero at ``skin_radius``)."""
+        """M6 + M2: skin the pinned top row to its link and, near the shoulders, the pads' bones.
+
+        Those are the bones below the shoulder pads; their weight falls off linearly to zero at
+        ``skin_radius``.
+        """
         top = self.rest[:self.cols]
         self.pin_weight = np.zeros(self.cols)
         self.pin_below = np.zeros(self.cols, dtype=int)

@@ -38,8 +38,10 @@ AUTO_SWEEP_SHARE = 0.03
 
 
 def per_step(share, exponent):
-    """A share lost per design step, as the share lost in a step ``exponent`` times as long
-    (the compiled step's formula: step_kernel.lost_per)."""
+    """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
+
+    The compiled step's formula: step_kernel.lost_per.
+    """
     if np.ndim(share) == 0:
         return step_kernel.lost_per(float(share), float(exponent))
     out = np.empty(np.shape(share))
@@ -48,9 +50,9 @@ def per_step(share, exponent):
 
 
 def xpbd_compliance(stiffness, iterations):
-    """XPBD compliance (m/N at unit mass) that one design step of XPBD makes as stiff as the
-    article's relaxation makes it with ``stiffness`` per sweep and ``iterations`` sweeps.
+    """Return the XPBD compliance (m/N at unit mass) matching the article's relaxation.
 
+    One design step of XPBD with it is as stiff as ``iterations`` sweeps of ``stiffness``.
     For one constraint between two unit masses, n sweeps of stiffness k correct a share
     k_n = 1 - (1 - k)^n of the error, and XPBD corrects 2 / (2 + alpha / dt^2), so
     alpha = 2 dt^2 (1 - k_n) / k_n with dt = 1 / DESIGN_RATE. Stiffness 1 gives alpha = 0.
@@ -152,7 +154,7 @@ class JacketSimulation:
         self._warm_up()
 
     def _tuning(self):
-        """The fabric's and parameters' values as the compiled step takes them."""
+        """Return the fabric's and parameters' values as the compiled step takes them."""
         p, f = self.params, self.fabric
         return Tuning(
             floats(self.stiffness), int(f.iterations), floats(self.compliance),
@@ -248,7 +250,7 @@ class JacketSimulation:
         return self._layer[1]
 
     def hood_anchor(self, links):
-        """The hood bone's centre and its link's rotation, in the simulation frame."""
+        """Return the hood bone's centre and its link's rotation, in the simulation frame."""
         t = links[self.rig.hood.link]
         return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
 
@@ -330,7 +332,7 @@ class JacketSimulation:
         return ''
 
     def _advance(self, sample, report):
-        """The steps up to ``sample``; False if they left a non-finite cloth or hood."""
+        """Run the steps up to ``sample``; False if they left a non-finite cloth or hood."""
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns
         cap = self.params.max_steps_per_input
@@ -351,9 +353,11 @@ class JacketSimulation:
         return n <= 0 or not stats[step_kernel.NON_FINITE]
 
     def _run_steps(self, a, b, n):
-        """``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call: the skeleton
-        interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth and M8 (see
-        step_kernel.advance). Returns its stats."""
+        """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
+
+        The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
+        and M8 (see step_kernel.advance). Returns its stats.
+        """
         layer = self.rig.layer
         k = len(layer.names) if layer else 0
         out = StepOutput(np.empty_like(self.links), np.empty((k, 3, 3)), np.empty((k, 3)),
@@ -377,9 +381,11 @@ class JacketSimulation:
                           self._lam, self._started)
 
     def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt):
-        """One kernel step of the current state at this skeleton pose, no substeps (the
-        reset's settling step); its colliders and references are where the next step's
-        substeps start from."""
+        """Run one kernel step of the current state at this skeleton pose, no substeps.
+
+        The reset's settling step; its colliders and references are where the next step's
+        substeps start from.
+        """
         args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
         out = self._cloth_kernel(*args)
         for kept, now in zip(self._before, args[-1]):
@@ -389,9 +395,10 @@ class JacketSimulation:
 
     def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
                          contact_damping=None, dt=None):
-        """kernel.cloth_step's bundles for one step of the current state without substeps;
-        by default at the current pose with the fabric's forces (the lab times the kernel on
-        them)."""
+        """Return kernel.cloth_step's bundles for one step of the current state without substeps.
+
+        By default at the current pose with the fabric's forces; the lab times the kernel on them.
+        """
         p, f = self.params, self.fabric
         links = self.links if links is None else links
         root = self.root if root is None else root
@@ -437,7 +444,10 @@ class JacketSimulation:
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self):
-        """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
+        """Return the M9 jacket bones and the M8 hood bone.
+
+        Jacket bones have x down the cloth, y left to right and z = x * y.
+        """
         layer = self.layer
         n = len(self.bone_names)
         poses = np.empty((n, 7))

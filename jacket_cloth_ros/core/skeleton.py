@@ -107,19 +107,22 @@ class Skeleton:
 
 
 def shipped_character_urdf():
-    """The shipped character's URDF text (config/character.urdf): the node's fallback."""
+    """Return the shipped character's URDF text (config/character.urdf): the node's fallback."""
     with open(shipped('character.urdf'), encoding='utf-8') as f:
         return f.read()
 
 
 def load_shipped_character():
-    """The shipped character as a Skeleton, for the tools and the lab."""
+    """Load the shipped character as a Skeleton, for the tools and the lab."""
     return Skeleton(shipped_character_urdf())
 
 
 def skeleton_from(text, where):
-    """The skeleton of a URDF's text read from a file; every error names it (``where``, e.g.
-    'URDF path'), an empty file too: it never means the shipped character."""
+    """Return the skeleton of a URDF's text read from a file.
+
+    Every error names the file (``where``, e.g. 'URDF path'), an empty file too: it never
+    means the shipped character.
+    """
     if not text.strip():
         raise ConfigError(f'{where}: empty file')
     try:
@@ -132,5 +135,5 @@ def skeleton_from(text, where):
 
 
 def load_skeleton(path):
-    """The skeleton of a URDF file; errors name the file."""
+    """Load the skeleton of a URDF file; errors name the file."""
     return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')

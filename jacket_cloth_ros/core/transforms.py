@@ -34,8 +34,10 @@ def quat_to_matrix(q):
 
 
 def cross(a, b):
-    """np.cross for (..., 3) arrays without its axis juggling, which costs more than the
-    product at these sizes."""
+    """Return np.cross of (..., 3) arrays without its axis juggling.
+
+    The juggling costs more than the product at these sizes.
+    """
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
