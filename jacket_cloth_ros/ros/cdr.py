@@ -49,7 +49,7 @@ class CdrWriter:
         self.buf += struct.pack(f'<{len(values)}d', *values)
 
     def f64_array(self, array):
-        """A block of float64 (any shape, row-major), aligned once: a sequence's elements."""
+        """Add a block of float64 (any shape, row-major), aligned once: a sequence's elements."""
         self.align(8)
         self.buf += np.ascontiguousarray(array, dtype='<f8').tobytes()
 
@@ -103,7 +103,7 @@ class _Template:
 
     @staticmethod
     def _f64_at(byte_at, count):
-        """Indices of ``count`` doubles from byte ``byte_at`` (8-aligned after the header)."""
+        """Return ``count`` doubles' indices from byte ``byte_at`` (8-aligned after the header)."""
         return (byte_at - 4) // 8 + np.arange(count)
 
     def _bytes(self, stamp_ns):
@@ -236,9 +236,11 @@ class MarkerTemplate(_Template):
         self._dst, self._src = np.concatenate(dst), np.concatenate(src)  # the mesh has points
 
     def encode(self, fill, arguments, stamp_ns):
-        """The values written by ``fill(*arguments, src, dst, doubles)``: it makes the pose and
-        point tables (as messages.marker_values) and scatters ``doubles[dst] = tables[src]``
-        (marker_kernel.fill_markers)."""
+        """Return the message's bytes with the values ``fill(*arguments, src, dst, doubles)``.
+
+        ``fill`` makes the pose and point tables (as messages.marker_values) and scatters
+        ``doubles[dst] = tables[src]`` (marker_kernel.fill_markers).
+        """
         fill(*arguments, self._src, self._dst, self._f64)
         return self._bytes(stamp_ns)
 
@@ -325,7 +327,7 @@ def _aligned(at, n):
 
 
 def _strings(raw, at):
-    """A CDR sequence<string> at ``at``: (tuple of str, offset after it)."""
+    """Read a CDR sequence<string> at ``at``: (tuple of str, offset after it)."""
     (count,) = struct.unpack_from('<I', raw, at)
     at += 4
     if count > len(raw):

@@ -59,14 +59,17 @@ def tf_message(bones, stamp_ns, prefix=''):
 
 @functools.lru_cache(maxsize=8)
 def tf_template(names, parents, prefix):
-    """The TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
+    """Return the TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
     return cdr.TfTemplate(names, parents, prefix)
 
 
 @functools.lru_cache(maxsize=8)
 def marker_layout(rig, layer_bones, reset):
-    """Every marker of the rig but its varying values: cloth mesh and seams, colliders, hood
-    pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in each namespace first after a reset."""
+    """Lay out every marker of the rig but its varying values.
+
+    Cloth mesh and seams, colliders, hood pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in
+    each namespace first after a reset.
+    """
     out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
            for ns in MARKER_NAMESPACES] if reset else []
     n = rig.n
@@ -91,8 +94,11 @@ def marker_layout(rig, layer_bones, reset):
 
 
 def marker_values(sim):
-    """(poses, points): the pose table (marker_kernel.shape_poses) and the point table (the
-    cloth's vertices, the hood's anchor and particle, the layer bones' pivots, their tips)."""
+    """Return (poses, points): the pose table and the point table.
+
+    The pose table as marker_kernel.shape_poses makes it; the point table holds the cloth's
+    vertices, the hood's anchor and particle, the layer bones' pivots and their tips.
+    """
     table, rows = _MARKER_TABLE(*_marker_arguments(sim))
     width = marker_kernel.POSE_WIDTH
     return table[:rows * width].reshape(rows, width), table[rows * width:].reshape(-1, 3)
@@ -111,7 +117,7 @@ def _layer_bones(sim):
 
 
 def marker_specs(sim, reset=False):
-    """The MarkerArray's markers with their values: what marker_array encodes, readable."""
+    """Return the MarkerArray's markers with their values: what marker_array encodes, readable."""
     poses, points = marker_values(sim)
     out = []
     for m in marker_layout(sim.rig, _layer_bones(sim), reset):
@@ -126,7 +132,7 @@ def marker_specs(sim, reset=False):
 
 
 def marker_array(sim, stamp_ns, frame, reset=False):
-    """The MarkerArray's CDR bytes: its values written into a template laid out once."""
+    """Return the MarkerArray's CDR bytes: its values written into a template laid out once."""
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
     return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
 

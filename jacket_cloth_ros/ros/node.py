@@ -161,7 +161,7 @@ class JacketClothNode(Node):
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
-        """Valid changes act from the next step; the cloth is never reset by them."""
+        """Apply valid changes from the next step; they never reset the cloth."""
         names = {p.name for p in params}
         if 'record' in names:
             self._open_recorder(self._p('record'))
@@ -198,7 +198,7 @@ class JacketClothNode(Node):
         self._write_session_config()
 
     def _write_session_config(self):
-        """The character, rig, fabrics and parameters, so a replay needs only the file."""
+        """Record the character, rig, fabrics and parameters, so a replay needs only the file."""
         if self.recorder is None or self.pipeline is None:
             return
         rig_file = self._p('rig_file') or shipped('jacket_rig.yaml')

@@ -16,8 +16,11 @@ _ROS_TYPES = {float: T.PARAMETER_DOUBLE, int: T.PARAMETER_INTEGER, str: T.PARAME
 
 
 def _sim_parameters():
-    """Every SimParams field as a parameter: the simulation's table (core.params) is the one
-    source of their defaults, ranges and descriptions."""
+    """Return every SimParams field as a parameter.
+
+    The simulation's table (core.params) is the one source of their defaults, ranges and
+    descriptions.
+    """
     out = {}
     for name, f in SIM_FIELDS.items():
         kind = _ROS_TYPES[f.type]
@@ -108,7 +111,7 @@ def sim_params_from(values):
 
 
 def fabric_from(preset, values):
-    """The preset with every ``fabric.<field>`` value applied."""
+    """Return the preset with every ``fabric.<field>`` value applied."""
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
 
 

@@ -17,7 +17,7 @@ from .parameters import SIM_KEYS, fabric_from, sim_params_from
 
 def session_topics(joint_states='/joint_states', wind='/jacket_cloth_node/wind',
                    markers='/jacket_cloth_node/markers'):
-    """A session's topics by key: (name, type, offered QoS as rosbag2 records it).
+    """Return a session's topics by key: (name, type, offered QoS as rosbag2 records it).
 
     Inputs (JointState, wind, parameter changes) and outputs (/tf, markers, diagnostics): the
     node records them all, a replay reads the inputs and writes them all again.
@@ -80,7 +80,7 @@ class SessionPipeline:
             self._tf = self._tf_template()
 
     def note_latency(self, ns):
-        """The live node's time from a JointState's arrival to its /tf going out."""
+        """Note the live node's time from a JointState's arrival to its /tf going out."""
         self._latencies.append(ns)
 
     def on_joint_state(self, msg, stamp_ns):
