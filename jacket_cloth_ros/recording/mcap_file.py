@@ -50,7 +50,7 @@ def _compressor(name):
 
 
 def _message_index(channel_id, records):
-    """A MessageIndex record: (log time, offset in the chunk) of each message, one pack."""
+    """Pack a MessageIndex record: (log time, offset in the chunk) of each message."""
     flat = [value for record in records for value in record]
     return (struct.pack('<BQHI', Opcode.MESSAGE_INDEX, 6 + 8 * len(flat), channel_id,
                         8 * len(flat))
@@ -58,7 +58,9 @@ def _message_index(channel_id, records):
 
 
 class McapWriter:
-    """Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
+    """An MCAP stream writer: chunks of messages, then the summary and the footer.
+
+    Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
     summary (schemas, channels, statistics, chunk and metadata indexes) and the footer.
 
     Messages are packed in the caller's thread. Everything that touches the stream (a closed
@@ -204,8 +206,10 @@ class McapWriter:
         self._chunk_count += 1
 
     def finish(self):
-        """Write the last chunk, the summary and the footer (through ``run``, after all else);
-        the stream stays open."""
+        """Write the last chunk, the summary and the footer (through ``run``, after all else).
+
+        The stream stays open.
+        """
         self._close_chunk()
         first, last = self.time_range() or (0, 0)
         statistics = Statistics(

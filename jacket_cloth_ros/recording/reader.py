@@ -41,7 +41,7 @@ class Recording:
 
 
 def mcap_files(path):
-    """The MCAP files of a recording: the file itself, or a bag directory's files in order."""
+    """Return a recording's MCAP files: the file itself, or a bag directory's files in order."""
     if not os.path.isdir(path):
         if not os.path.exists(path):
             raise RecordingError(f'{path}: no such file or directory')
@@ -86,8 +86,10 @@ class _TopicCounter(dict):
 
 
 def count_messages(path):
-    """Messages per topic and whether the recording is complete, streamed: an hour of
-    session (gigabytes of /tf and markers) is counted without holding it in memory."""
+    """Count messages per topic and tell whether the recording is complete, streamed.
+
+    An hour of session (gigabytes of /tf and markers) is counted without holding it in memory.
+    """
     out = Recording(path, _TopicCounter())
     for one in mcap_files(path):
         _read_file(one, None, out)
@@ -133,8 +135,11 @@ def _read_file(path, topics, out):
 
 
 def _stream_file(f, path, topics, out):
-    """Read the records in order; a read that fails at the end of the file is a cut (a killed
-    writer: its readable part is kept), one that fails before it is damage."""
+    """Read the records in order, telling a cut file from a damaged one.
+
+    A read that fails at the end of the file is a cut (a killed writer: its readable part is
+    kept), one that fails before it is damage.
+    """
     size = os.fstat(f.fileno()).st_size
     f.seek(0)
     schemas, channels = {}, {}
@@ -160,7 +165,7 @@ def _stream_file(f, path, topics, out):
 
 
 def _check_summary_crc(f, path):
-    """The footer's CRC over the summary (MCAP spec), which the mcap reader does not check."""
+    """Check the footer's CRC of the summary (MCAP spec); the mcap reader does not check it."""
     f.seek(-(_FOOTER_SIZE + len(MAGIC)), os.SEEK_END)
     footer_at = f.tell()
     summary_start, _, crc = struct.unpack('<QQI', f.read(_FOOTER_SIZE)[9:])

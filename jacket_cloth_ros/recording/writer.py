@@ -27,9 +27,12 @@ CHUNK_BYTES = 8 * 1024 * 1024
 
 
 class Compression(Choice):
-    """MCAP chunk compression (the record_compression parameter). lz4 is the node's default:
-    its files are larger than zstd's, but the node compresses the closing chunk in its own
-    callback, and lz4 does that in a fraction of zstd's time (docs/performance.md)."""
+    """MCAP chunk compression (the record_compression parameter).
+
+    lz4 is the node's default: its files are larger than zstd's, but the node compresses the
+    closing chunk in its own callback, and lz4 does that in a fraction of zstd's time
+    (docs/performance.md).
+    """
 
     NONE = 0
     LZ4 = 1
@@ -125,7 +128,7 @@ class SessionRecorder:
         self._types[topic] = type_name
 
     def write(self, topic, data, stamp_ns):
-        """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
+        """Copy ``data`` into the open chunk (the caller may reuse its buffer)."""
         channel = self._channels[topic]         # positional: this runs for every message
         self._writer.add_message(channel, stamp_ns, data, stamp_ns, self._writer.counts[channel])
         if self._last_flush is None:
@@ -135,7 +138,7 @@ class SessionRecorder:
             self._last_flush = stamp_ns
 
     def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
-        """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
+        """Add what a replay needs besides the inputs: character, rig, fabrics, parameters."""
         self._writer.add_metadata(SESSION_CONFIG, {
             'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
             'parameters_json': json.dumps(parameters, sort_keys=True)})
