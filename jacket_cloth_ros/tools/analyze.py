@@ -147,7 +147,7 @@ CHARTS = {
 
 
 def output_names(count):
-    """The files ``analyze`` writes into its folder for ``count`` sessions."""
+    """Return the files ``analyze`` writes into its folder for ``count`` sessions."""
     strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
                                                    for k in range(1, count + 1)]
     return ['report.json', 'summary.md'] + sorted(CHARTS) + strips
@@ -216,8 +216,11 @@ def _summary(names, reports):
 
 
 def summary_line(report):
-    """The one line the command prints: per session, frames, strain and step time, or how
-    many inputs were dropped when none was simulated."""
+    """Return the one line the command prints.
+
+    Per session: frames, strain and step time, or how many inputs were dropped when none was
+    simulated.
+    """
     parts = []
     for r in report.get('sessions', [report]):
         text = f'{os.path.basename(r["file"])} {r["frames"]} frames'

@@ -1,10 +1,10 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Where the tools write: regular files only, never one of their inputs, none overwritten
-without ``--force``, and a file is replaced only by a complete new one.
+"""Where the tools write: regular files only, never an input, none overwritten without ``--force``.
 
-Every tool that writes a file checks it here first (replay -o, motion -o, picture -o, the
-files of analyze --out, the demo's), so a device, a folder or the recording being read is
-refused in one line before anything is read or written.
+A file is replaced only by a complete new one. Every tool that writes a file checks it here
+first (replay -o, motion -o, picture -o, the files of analyze --out, the demo's), so a
+device, a folder or the recording being read is refused in one line before anything is
+read or written.
 """
 
 import contextlib
@@ -21,9 +21,11 @@ class OutputError(ValueError):
 
 
 def check_output(path, force, inputs=()):
-    """Refuse ``path`` as an output file unless it is safe to write: its folder exists, it is
-    none of ``inputs`` (files, or bag folders it must not be inside) and, if it exists, it is
-    a regular file and ``force`` is set."""
+    """Refuse ``path`` as an output file unless it is safe to write.
+
+    Its folder exists, it is none of ``inputs`` (files, or bag folders it must not be inside)
+    and, if it exists, it is a regular file and ``force`` is set.
+    """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
@@ -38,8 +40,10 @@ def check_output(path, force, inputs=()):
 
 
 def check_output_folder(folder, names, force, inputs=()):
-    """``check_output`` for each of the files ``names`` a tool writes into ``folder`` (made if
-    missing); the folder, if it exists, must be one."""
+    """Run ``check_output`` for each of the files ``names`` a tool writes into ``folder``.
+
+    The folder is made if missing; if it exists, it must be one.
+    """
     folder = os.fspath(folder)
     if os.path.lexists(folder) and not os.path.isdir(folder):
         raise OutputError(f'{folder} is not a folder')
@@ -65,8 +69,11 @@ def _not_an_input(path, inputs):
 
 @contextlib.contextmanager
 def replacing(path):
-    """A temporary path next to ``path`` to write the output to; it becomes ``path`` only when
-    the block ends without an error, so a failed run leaves the old file (or none)."""
+    """Yield a temporary path next to ``path`` to write the output to.
+
+    It becomes ``path`` only when the block ends without an error, so a failed run leaves the
+    old file (or none).
+    """
     path = os.fspath(path)
     folder, name = os.path.split(os.path.abspath(path))
     # A fresh name (never an existing file, nor an input), ending as the output does so that

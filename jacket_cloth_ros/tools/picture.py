@@ -41,7 +41,7 @@ class Frame:
 
 
 def sim_frame(sim, stamp_ns):
-    """A frame of a running simulation (its current state)."""
+    """Return a frame of a running simulation (its current state)."""
     rig = sim.rig
     layer = sim.layer
     ref = sim.reference_points(sim.links, layer).reshape(rig.rows, rig.cols, 3)
@@ -138,8 +138,11 @@ def draw_filmstrip(frames, skeleton, png_path, t0, labels=None, title=None):
 
 def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None,
                      times=None, rig=None):
-    """Filmstrip of a recording at ``times`` (s from its start) or ``moments`` evenly spaced
-    instants; with ``rig``, the skinned pose is drawn too. Returns the stamps drawn."""
+    """Draw a filmstrip of a recording; return the stamps drawn.
+
+    At ``times`` (s from its start) or ``moments`` evenly spaced instants; with ``rig``, the
+    skinned pose is drawn too.
+    """
     frames, t0 = recorded_frames(mcap_path, skeleton, rig)
     chosen = pick(frames, t0, times, moments)
     draw_filmstrip(chosen, skeleton, png_path, t0, labels, title)

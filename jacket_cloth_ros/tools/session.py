@@ -57,7 +57,7 @@ class SessionInput:
 
 
 def joint_state_topic(recording, topic=None):
-    """The recording's JointState topic: the one asked for, else the only one there is."""
+    """Return the recording's JointState topic: the one asked for, else the only one there is."""
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
     if topic is not None:
         if topic not in recording.topics:
@@ -116,8 +116,10 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
 
 
 def _check_joints(session):
-    """The JointState must speak of this skeleton: none known is an error, some unknown a
-    warning (the node would ignore them too)."""
+    """Check that the JointState speaks of this skeleton.
+
+    None known is an error, some unknown a warning (the node would ignore them too).
+    """
     first = next(e for e in session.events if e[2] == 'joint_states')
     try:
         names = list(JointStateReader().read(first[3]).name)
@@ -140,8 +142,10 @@ def _check_joints(session):
 
 
 def _header_stamp(raw):
-    """The stamp (ns) of the std_msgs/Header that starts a CDR message, or None if the bytes
-    cannot hold one."""
+    """Return the stamp (ns) of the std_msgs/Header that starts a CDR message.
+
+    None if the bytes cannot hold one.
+    """
     raw = bytes(raw[:12])
     if len(raw) < 12 or raw[0] != 0 or raw[1] not in (0, 1):
         return None
@@ -150,10 +154,13 @@ def _header_stamp(raw):
 
 
 def _events(recording, topic):
-    """JointState, wind and parameter changes in recorded order: the order they were written,
-    which is the order the node received them (log times can go back, or differ from the
-    stamps). A JointState carries its header stamp, the time the node simulates to; the others
-    their log time, for information only (run_session stamps them as the node does)."""
+    """Return JointState, wind and parameter changes in recorded order.
+
+    The order they were written, which is the order the node received them (log times can go
+    back, or differ from the stamps). A JointState carries its header stamp, the time the node
+    simulates to; the others their log time, for information only (run_session stamps them as
+    the node does).
+    """
     events = []
     for order, m in enumerate(recording.messages):
         if m.topic == topic:
@@ -182,11 +189,13 @@ def _parameter_changes(data, values):
 
 
 def run_session(session, sink=None, probe=None, timing=False):
-    """Feed a session to a fresh pipeline. ``sink(key, bytes, stamp)`` receives every message
-    the node would record; ``probe(pipeline, report, stamp, outputs)`` sees the state after each
-    input (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step
-    costs into diagnostics as the live node does; a replay file then differs run to run.
-    Returns the pipeline."""
+    """Feed a session to a fresh pipeline; return the pipeline.
+
+    ``sink(key, bytes, stamp)`` receives every message the node would record;
+    ``probe(pipeline, report, stamp, outputs)`` sees the state after each input
+    (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step costs
+    into diagnostics as the live node does; a replay file then differs run to run.
+    """
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
                                timing=timing)
@@ -220,7 +229,7 @@ def run_session(session, sink=None, probe=None, timing=False):
 
 
 def output_topics(session):
-    """The topics a replay writes, named as the node names them (inputs keep their names)."""
+    """Return the topics a replay writes, named as the node names them (inputs keep theirs)."""
     topics = session_topics(joint_states=session.topic)
     for m in session.recording.messages:
         if m.type_name == WIND and m.topic.endswith('/wind'):
