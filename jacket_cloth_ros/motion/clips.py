@@ -126,7 +126,7 @@ def segment_at(name, t):
 
 
 def pose(name, t):
-    """Joint values {name: value} and the root's world pose (x, y, z, qx, qy, qz, qw)."""
+    """Return joint values {name: value} and the root's world pose as x, y, z, qx, qy, qz, qw."""
     if name not in ALL_CLIPS:
         raise ValueError(f'unknown clip {name!r} (clips: {", ".join(ALL_CLIPS)})')
     seg, local_t, base = segment_at(name, t)

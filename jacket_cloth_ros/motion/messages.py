@@ -16,7 +16,7 @@ if TYPE_CHECKING:           # for the annotations only: the skeleton is the call
 
 
 def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_ns: int):
-    """A ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
+    """Make a ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
 
     Args:
         names: joint names, in the order of ``positions``.
@@ -37,7 +37,7 @@ def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_
 
 def clip_messages(skeleton: Skeleton, clip: str, rate: float, duration: float, start_ns: int,
                   world_joint: str = 'world_joint') -> Iterator[Tuple[int, object]]:
-    """A clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
+    """Yield a clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
 
     Args:
         skeleton: the character whose joints the messages name (its ``joint_names``).
