@@ -13,7 +13,7 @@ class Choice(enum.IntEnum):
         return tuple(m.name.lower() for m in cls)
 
     @classmethod
-    def parse(cls, text: str, what: str):
+    def parse(cls, text: str, what: str) -> 'Choice':
         """Return the member named ``text``; else ValueError naming ``what`` and the choices."""
         try:
             return cls[str(text).upper()]

@@ -8,12 +8,18 @@ MoveIt names them: ``<world_joint>/trans_x``, ``trans_y``, ``trans_z``, ``rot_x`
 Carrying it in the JointState keeps body and world motion on one stamp, so replay is exact.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from .kernel_cache import njit
 from .step_kernel import quat_matrix
+
+if TYPE_CHECKING:           # for the annotations only
+    from .skeleton import Skeleton
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
 _OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
@@ -22,7 +28,7 @@ _OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
 class InputRejected(ValueError):
     """The message cannot be used at all; ``code`` names the case for rate-limited logging."""
 
-    def __init__(self, code, text):
+    def __init__(self, code: str, text: str):
         super().__init__(text)
         self.code = code
 
@@ -39,13 +45,13 @@ class Sample:
 class InputParser:
     """Maps names to skeleton joints; holds the last value of joints a message leaves out."""
 
-    def __init__(self, skeleton, world_joint='world_joint'):
+    def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
         self.last_q = np.zeros(len(skeleton.joint_names))
         self.last_root, self.last_quat = np.eye(4), np.array([0.0, 0.0, 0.0, 1.0])
 
-    def set_world_joint(self, name):
+    def set_world_joint(self, name: str) -> None:
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
@@ -90,7 +96,7 @@ class InputParser:
         self._plans[names] = plan
         return plan
 
-    def parse(self, stamp_ns, names, positions):
+    def parse(self, stamp_ns: int, names: Sequence[str], positions: npt.ArrayLike) -> Sample:
         names = tuple(names)
         positions = np.asarray(positions, dtype=float)
         if len(names) == 0 and len(positions) == 0:

@@ -13,10 +13,14 @@ are in place before their first ``@njit(cache=True)``.
 import functools
 import hashlib
 import os
+from typing import TYPE_CHECKING
 
 from numba import njit, typeof
 from numba.core import caching
 from numba.core.typing.typeof import Purpose
+
+if TYPE_CHECKING:           # for the annotations only
+    from numba.core.dispatcher import Dispatcher
 
 __all__ = ['njit', 'kernels_stamp', 'FixedTypes']
 
@@ -35,7 +39,7 @@ def _content_hash(path, mtime, size):        # read again only when the file cha
         return hashlib.sha256(f.read()).digest()
 
 
-def kernels_stamp():
+def kernels_stamp() -> tuple[bytes, ...]:
     """Return the content hashes of every file holding one of the package's kernels."""
     stamps = []
     for path in KERNEL_FILES:
@@ -86,17 +90,17 @@ class FixedTypes:
     ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call (``check`` False: never, for timing).
     """
 
-    def __init__(self, dispatcher, check=None):
+    def __init__(self, dispatcher: 'Dispatcher', check: bool | None = None):
         self.dispatcher = dispatcher
         self._check = CHECK_TYPES if check is None else check
         self._entry = None
         self._types = None
 
-    def retype(self):
+    def retype(self) -> None:
         """Type the next call again (an argument bundle was rebuilt)."""
         self._entry = None
 
-    def __call__(self, *args):
+    def __call__(self, *args: object) -> object:
         if self._entry is not None:
             if self._check:
                 types = tuple(typeof(a, Purpose.argument) for a in args)

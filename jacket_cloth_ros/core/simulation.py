@@ -12,9 +12,12 @@ skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from . import kernel, pose_kernel, step_kernel
 from .bone_layer import LayerPose
@@ -23,6 +26,11 @@ from .bundles import (
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
 from .params import SimParams
+
+if TYPE_CHECKING:           # for the annotations only
+    from .fabric import Fabric
+    from .rig import Rig
+    from .skeleton import Skeleton
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
@@ -37,7 +45,7 @@ DESIGN_RATE = 120.0
 AUTO_SWEEP_SHARE = 0.03
 
 
-def per_step(share, exponent):
+def per_step(share: npt.ArrayLike, exponent: float) -> float | np.ndarray:
     """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
 
     The compiled step's formula: step_kernel.lost_per.
@@ -49,7 +57,7 @@ def per_step(share, exponent):
     return out
 
 
-def xpbd_compliance(stiffness, iterations):
+def xpbd_compliance(stiffness: npt.ArrayLike, iterations: int) -> np.ndarray | float:
     """Return the XPBD compliance (m/N at unit mass) matching the article's relaxation.
 
     One design step of XPBD with it is as stiff as ``iterations`` sweeps of ``stiffness``.
@@ -73,11 +81,11 @@ class Bones:
     finite: bool = True        # False if any number is not (never to be published)
 
     @property
-    def translations(self):
+    def translations(self) -> np.ndarray:
         return self.poses[:, :3]
 
     @property
-    def quaternions(self):
+    def quaternions(self) -> np.ndarray:
         return self.poses[:, 3:]
 
 
@@ -115,7 +123,8 @@ class StepReport:
 class JacketSimulation:
     """Jacket cloth + hood pendulum for one skeleton and rig."""
 
-    def __init__(self, skeleton, rig, fabric, params=SimParams(), world_joint='world_joint'):
+    def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabric: 'Fabric',
+                 params: SimParams = SimParams(), world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.rig = rig
         self.parser = InputParser(skeleton, world_joint)
@@ -191,12 +200,12 @@ class JacketSimulation:
         self.t_sim = None
 
     # -- parameters -------------------------------------------------------------------------
-    def set_fabric(self, fabric):
+    def set_fabric(self, fabric: 'Fabric') -> None:
         """Live change: new parameters act from the next step; the cloth is not reset."""
         self.fabric = fabric
         self._apply_fabric()
 
-    def set_params(self, params):
+    def set_params(self, params: SimParams) -> None:
         self.params = params
         self._apply_fabric()
 
@@ -219,11 +228,12 @@ class JacketSimulation:
         self.tuning = self._tuning()
 
     # -- the skinned pose ---------------------------------------------------------------------
-    def reference_points(self, links, layer=None):
+    def reference_points(self, links: np.ndarray,
+                         layer: LayerPose | None = None) -> np.ndarray:
         """M11: each vertex's rest position carried by its nearest bone (see _skinned_pose)."""
         return self._skinned_pose(links, layer)[1]
 
-    def pinned_points(self, links, layer=None):
+    def pinned_points(self, links: np.ndarray, layer: LayerPose | None = None) -> np.ndarray:
         """M6: where the top row is (see _skinned_pose)."""
         return self._skinned_pose(links, layer)[0]
 
@@ -242,14 +252,14 @@ class JacketSimulation:
         return top, ref
 
     @property
-    def layer(self):
+    def layer(self) -> LayerPose | None:
         """M1/M2 bones for the current skeleton pose (solved once per pose, on demand)."""
         if self._layer is None or self._layer[0] is not self.links:
             self._layer = (self.links, self.rig.layer.solve(self.links) if self.rig.layer
                            else None)
         return self._layer[1]
 
-    def hood_anchor(self, links):
+    def hood_anchor(self, links: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return the hood bone's centre and its link's rotation, in the simulation frame."""
         t = links[self.rig.hood.link]
         return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
@@ -278,7 +288,8 @@ class JacketSimulation:
         self.contact[:] = False
 
     # -- one input ----------------------------------------------------------------------------
-    def process(self, stamp_ns, names, positions):
+    def process(self, stamp_ns: int, names: Sequence[str],
+                positions: npt.ArrayLike) -> StepReport:
         """Advance the simulation to ``stamp_ns`` with one JointState's content."""
         report = StepReport(stamp_ns)
         started = time.perf_counter_ns()
@@ -375,7 +386,7 @@ class JacketSimulation:
         return out.stats
 
     @property
-    def state(self):
+    def state(self) -> ClothState:
         """The cloth, hood and root as the compiled steps move them (the very arrays)."""
         return ClothState(self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
                           self._lam, self._started)
@@ -393,8 +404,10 @@ class JacketSimulation:
         self._started[0] = True
         return out
 
-    def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
-                         contact_damping=None, dt=None):
+    def kernel_arguments(self, links: np.ndarray | None = None, root: np.ndarray | None = None,
+                         ref: np.ndarray | None = None, acc: np.ndarray | None = None,
+                         damping: npt.ArrayLike | None = None,
+                         contact_damping: float | None = None, dt: float | None = None) -> tuple:
         """Return kernel.cloth_step's bundles for one step of the current state without substeps.
 
         By default at the current pose with the fabric's forces; the lab times the kernel on them.
@@ -419,7 +432,7 @@ class JacketSimulation:
         return (self.model.cloth, self.model.colliders, self.tuning, self.state, control, now,
                 now)
 
-    def hood_step(self, links, acc, dt, damping):
+    def hood_step(self, links: np.ndarray, acc: np.ndarray, dt: float, damping: float) -> None:
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
         step_kernel.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
                               float(dt), float(damping))
@@ -433,7 +446,7 @@ class JacketSimulation:
             now.ref[:] = ref
         return now
 
-    def collider_frames(self, links, root=None):
+    def collider_frames(self, links: np.ndarray, root: np.ndarray | None = None) -> Colliders:
         """Every collider in the simulation frame, for the kernel and the markers.
 
         Planes fixed in the world (the floor) need the root's world pose ``root``.
@@ -443,7 +456,7 @@ class JacketSimulation:
                          self.rig.capsule_radii, c.plane_p, c.plane_n)
 
     # -- outputs ------------------------------------------------------------------------------
-    def bones(self):
+    def bones(self) -> Bones:
         """Return the M9 jacket bones and the M8 hood bone.
 
         Jacket bones have x down the cloth, y left to right and z = x * y.
@@ -462,7 +475,7 @@ class JacketSimulation:
             finite = False
         return Bones(self.bone_names, self.bone_parents, poses, finite)
 
-    def strain(self):
+    def strain(self) -> tuple[float, float]:
         """Worst relative stretch of the simulated vertical and horizontal stretch constraints.
 
         The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.

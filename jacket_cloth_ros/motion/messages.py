@@ -12,10 +12,12 @@ from typing import TYPE_CHECKING, Iterator, Sequence, Tuple
 from .clips import clip_length, joint_state_content
 
 if TYPE_CHECKING:           # for the annotations only: the skeleton is the caller's
+    from sensor_msgs.msg import JointState
     from ..core.skeleton import Skeleton
 
 
-def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_ns: int):
+def joint_state_message(names: Sequence[str], positions: Sequence[float],
+                        stamp_ns: int) -> JointState:
     """Make a ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
 
     Args:

@@ -8,6 +8,7 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 import os
 import struct
 import zlib
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import yaml
@@ -40,7 +41,7 @@ class Recording:
     complete: bool = True               # False: cut short, the readable part is here
 
 
-def mcap_files(path):
+def mcap_files(path: str) -> list[str]:
     """Return a recording's MCAP files: the file itself, or a bag directory's files in order."""
     if not os.path.isdir(path):
         if not os.path.exists(path):
@@ -70,7 +71,7 @@ def mcap_files(path):
     return files
 
 
-def read_recording(path, topics=None):
+def read_recording(path: str, topics: Collection[str] | None = None) -> Recording:
     """Every message (optionally of some topics), metadata and topic types of a recording."""
     out = Recording(path, [])
     for one in mcap_files(path):
@@ -85,7 +86,7 @@ class _TopicCounter(dict):
         self[message.topic] = self.get(message.topic, 0) + 1
 
 
-def count_messages(path):
+def count_messages(path: str) -> tuple[dict[str, int], bool]:
     """Count messages per topic and tell whether the recording is complete, streamed.
 
     An hour of session (gigabytes of /tf and markers) is counted without holding it in memory.
@@ -96,7 +97,8 @@ def count_messages(path):
     return dict(out.messages), out.complete
 
 
-def read_messages(path, topics=None):
+def read_messages(path: str,
+                  topics: Collection[str] | None = None) -> tuple[list[RecordedMessage], bool]:
     """All messages (optionally of some topics) in file order; (messages, complete)."""
     rec = read_recording(path, topics)
     return rec.messages, rec.complete

@@ -7,6 +7,8 @@ position (3), orientation (x, y, z, w) and scale (3), in the order messages.mark
 them.
 """
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..core.bundles import Posed
@@ -14,12 +16,15 @@ from ..core.kernel_cache import njit
 from ..core.pose_kernel import _transform_point, collider_poses, quat_from_matrix
 from ..core.step_kernel import plane_poses
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.rig import Rig
+
 POSE_WIDTH = 10
 HOOD_SPHERE = 0.05                 # diameter of the hood particle's sphere, m
 PLANE_SIZE, PLANE_THICKNESS = 2.0, 0.002
 
 
-def shape_count(rig):
+def shape_count(rig: 'Rig') -> int:
     """Rows of shape_poses for ``rig``: ellipsoids, three per capsule, planes, the hood."""
     return len(rig.collider_links) + 3 * len(rig.capsule_links) + len(rig.plane_links) + 1
 

@@ -4,6 +4,7 @@
 import argparse
 import sys
 import time
+from typing import TYPE_CHECKING
 
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
@@ -30,6 +31,9 @@ from . import cdr, messages
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.simulation import JacketSimulation
+
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -45,7 +49,7 @@ NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 class JacketClothNode(Node):
     """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: object):
         super().__init__('jacket_cloth_node', **kwargs)
         for name, (kind, default, rng, ro, text) in NODE_PARAMETERS.items():
             self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
@@ -94,7 +98,7 @@ class JacketClothNode(Node):
                                                self._use_shipped_character)
 
     @property
-    def sim(self):
+    def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
 
     # -- model --------------------------------------------------------------------------------
@@ -214,7 +218,7 @@ class JacketClothNode(Node):
             self.get_logger().error(f'recording stopped: {e}')
             self.recorder = None
 
-    def close(self):
+    def close(self) -> None:
         if self.recorder is not None:
             self.recorder.close()
             self.recorder = None
@@ -243,7 +247,7 @@ class JacketClothNode(Node):
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
 
-    def on_joint_state(self, raw, info):
+    def on_joint_state(self, raw: bytes, info: dict) -> None:
         """One serialized JointState in (the joint_states callback): simulate, publish, record.
 
         Public so a harness can feed the node without DDS, as the lab's endurance run does.
@@ -287,7 +291,7 @@ def _read(path):
         return f.read()
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
         prog='jacket_cloth_node',

@@ -10,6 +10,7 @@ read or written.
 import contextlib
 import os
 import tempfile
+from collections.abc import Iterable, Iterator
 
 # The process's umask, for giving a finished output the mode a plain open() would have.
 _UMASK = os.umask(0o022)
@@ -20,7 +21,8 @@ class OutputError(ValueError):
     """An output path a tool refuses; the message is one line."""
 
 
-def check_output(path, force, inputs=()):
+def check_output(path: str | os.PathLike, force: bool,
+                 inputs: Iterable[str | None] = ()) -> None:
     """Refuse ``path`` as an output file unless it is safe to write.
 
     Its folder exists, it is none of ``inputs`` (files, or bag folders it must not be inside)
@@ -39,7 +41,8 @@ def check_output(path, force, inputs=()):
             raise OutputError(f'{path} exists (use --force to overwrite)')
 
 
-def check_output_folder(folder, names, force, inputs=()):
+def check_output_folder(folder: str | os.PathLike, names: Iterable[str], force: bool,
+                        inputs: Iterable[str | None] = ()) -> None:
     """Run ``check_output`` for each of the files ``names`` a tool writes into ``folder``.
 
     The folder is made if missing; if it exists, it must be one.
@@ -68,7 +71,7 @@ def _not_an_input(path, inputs):
 
 
 @contextlib.contextmanager
-def replacing(path):
+def replacing(path: str | os.PathLike) -> Iterator[str]:
     """Yield a temporary path next to ``path`` to write the output to.
 
     It becomes ``path`` only when the block ends without an error, so a failed run leaves the

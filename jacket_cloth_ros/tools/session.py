@@ -10,6 +10,7 @@ the shipped one fits the skeleton.
 
 import json
 import struct
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from rcl_interfaces.msg import ParameterEvent
@@ -19,8 +20,9 @@ from rclpy.serialization import deserialize_message
 from ..core.config import ConfigError, parse_yaml, read_text, shipped
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
+from ..core.simulation import StepReport
 from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
-from ..recording.reader import RecordingError, read_recording
+from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, parse_override
@@ -50,13 +52,13 @@ class SessionInput:
     setup: SessionSetup
     warnings: list = None        # one line each, for the user
 
-    def stamp_range(self):
+    def stamp_range(self) -> tuple[int, int]:
         """(first, last) JointState header stamp in ns: the span the session covers."""
         stamps = [e[0] for e in self.events if e[2] == 'joint_states']
         return min(stamps), max(stamps)
 
 
-def joint_state_topic(recording, topic=None):
+def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
     """Return the recording's JointState topic: the one asked for, else the only one there is."""
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
     if topic is not None:
@@ -79,7 +81,9 @@ def joint_state_topic(recording, topic=None):
     return found[0]
 
 
-def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=()):
+def load_session(path: str, topic: str | None = None, urdf: str | None = None,
+                 rig: str | None = None, fabric: str | None = None,
+                 overrides: Iterable[str] = ()) -> SessionInput:
     """Read a recording and settle its set-up: recorded values, then the options given."""
     recording = read_recording(path)
     topic = joint_state_topic(recording, topic)
@@ -188,7 +192,9 @@ def _parameter_changes(data, values):
     return changes
 
 
-def run_session(session, sink=None, probe=None, timing=False):
+def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] | None = None,
+                probe: Callable[[SessionPipeline, StepReport, int, list], None] | None = None,
+                timing: bool = False) -> SessionPipeline:
     """Feed a session to a fresh pipeline; return the pipeline.
 
     ``sink(key, bytes, stamp)`` receives every message the node would record;
@@ -228,7 +234,7 @@ def run_session(session, sink=None, probe=None, timing=False):
     return pipeline
 
 
-def output_topics(session):
+def output_topics(session: SessionInput) -> dict[str, tuple[str, str, str]]:
     """Return the topics a replay writes, named as the node names them (inputs keep theirs)."""
     topics = session_topics(joint_states=session.topic)
     for m in session.recording.messages:
