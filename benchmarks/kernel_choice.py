@@ -46,7 +46,7 @@ def colours(ca, cb, n):
 
 def numpy_step(x, xp, free, acc, damping, contact, contact_damping, dt, ca, cb, rest, stiffness,
                iterations, groups, centers, axes, radii, ref, max_distance, rows_of_vertical):
-    """The kernel's step (Verlet, relax, ellipsoids, M11, M12) in vectorised numpy.
+    """Run the kernel's step (Verlet, relax, ellipsoids, M11, M12) in vectorised numpy.
 
     Ellipsoids only: the shipped rig's floor plane is never reached in the showcase clip.
     """
@@ -113,7 +113,7 @@ def run(steps):
 
 
 def limit_ns(rig):
-    """The C yardstick's median step for the same grid, or None if it is not on this machine."""
+    """Return the C yardstick's median step for the same grid, or None if it is not here."""
     source = limit_source()
     if source is None:
         return None

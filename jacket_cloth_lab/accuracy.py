@@ -117,7 +117,7 @@ def edge_classes(rig):
 
 
 def hem_curve(rig, x):
-    """The bottom row as HEM_SAMPLES points evenly spaced in column parameter."""
+    """Return the bottom row as HEM_SAMPLES points evenly spaced in column parameter."""
     hem = x[(rig.rows - 1) * rig.cols:]
     u = np.linspace(0.0, rig.cols - 1, HEM_SAMPLES)
     i = np.minimum(u.astype(int), rig.cols - 2)
@@ -176,7 +176,7 @@ def run(skeleton, rig, fabric, method, inputs):
 
 
 def reference(skeleton, rig, fabric, inputs, method=REFERENCE):
-    """The converged reference and its own error estimate: (trace, Richardson figures).
+    """Run the converged reference; return (trace, Richardson figures) with its error estimate.
 
     The estimate compares the reference with a run at half its step (Richardson).
     """
@@ -227,7 +227,7 @@ def pendulum_period_exact(length, gravity, theta0):
 
 
 def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
-    """The M8 hood released from ``theta0_deg`` with no damping, the skeleton still.
+    """Release the M8 hood from ``theta0_deg`` with no damping, the skeleton still.
 
     Verlet with a projection onto the rod loses energy each step (first order in the step), so
     the amplitude falls from cycle to cycle; each cycle's period is compared with the exact
@@ -264,7 +264,7 @@ def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
 
 
 def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.81):
-    """A column of the cloth, pinned at the top and released horizontal, through the kernel.
+    """Release a column of the cloth, pinned at the top, from horizontal through the kernel.
 
     Its exact equilibrium hangs straight down at its rest length. Returns the stretch of the
     whole column and of its worst link at the end, how far the bottom is from the exact

@@ -34,7 +34,7 @@ PENDULUM = ((60.0, 120.0, 240.0), (10.0, 60.0, 120.0, 170.0))   # rates (Hz) x a
 
 
 def sweep(quick=False):
-    """The methods run on every clip."""
+    """Return the methods run on every clip."""
     if quick:
         return [SHIPPED, Method('gauss_seidel', 'none'), Method('gauss_seidel', 'hard_pass', 2),
                 Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2),
@@ -49,13 +49,13 @@ def sweep(quick=False):
 
 
 def auto_methods(quick=False):
-    """The automatic quality mode at each tolerance, over the default method and budget."""
+    """Return the automatic quality mode at each tolerance, over the default method and budget."""
     tolerances = TOLERANCES[2:3] if quick else TOLERANCES
     return [replace(SHIPPED, tolerance=t, **AUTO_BUDGET) for t in tolerances]
 
 
 def rig_at_grid(skeleton, cols, rows, colliders=None):
-    """The shipped rig with another grid over the same jacket (and optionally fewer colliders).
+    """Return the shipped rig with another grid over the same jacket (optionally fewer colliders).
 
     Row spacing and flare are rescaled so the hem stays where it is; region ranges scale with
     the grid.
@@ -76,9 +76,9 @@ def rig_at_grid(skeleton, cols, rows, colliders=None):
 
 
 def pareto_front(rows):
-    """Indices of the rows no other row beats on both cost and hem error."""
-    order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'],
-                                                   rows[i]['hem_rms_m']))
+    """Return the indices of the rows no other row beats on both cost and hem error."""
+    order = sorted(range(len(rows)),
+                   key=lambda i: (rows[i]['cost_ms_per_s'], rows[i]['hem_rms_m']))
     front, best = [], np.inf
     for i in order:
         if rows[i]['hem_rms_m'] < best:
@@ -205,7 +205,8 @@ def markdown(results):
                      f'{c["worst_link_strain"] * 100:.3f} | {_mm(c["bottom_error_m"])} | '
                      f'{settle} |')
     lines += ['', '## Rig detail: converged cloth against the finest grid\'s', '',
-              '| clip | rig | vertices | colliders | default cost ms/s | hem RMS mm | hem max mm |',
+              '| clip | rig | vertices | colliders | default cost ms/s | hem RMS mm '
+              '| hem max mm |',
               '|---' * 7 + '|']
     for d in results['rig_detail']:
         lines.append(f'| {d["clip"]} | {d["rig"]} | {d["vertices"]} | {d["colliders"]} | '

@@ -26,8 +26,11 @@ BONES = 68          # the shipped rig's bones on /tf
 
 
 def kernel_stepper(steps=None):
-    """A callable running one bare kernel step per call, cycling through ``steps`` (kernel
-    arguments; by default the shipped rig's, captured from a walk). Each state moves on."""
+    """Return a callable running one bare kernel step per call, cycling through ``steps``.
+
+    ``steps`` are kernel arguments; by default the shipped rig's, captured from a walk. Each
+    state moves on.
+    """
     from jacket_cloth_ros.core import kernel
     from jacket_cloth_ros.core.kernel_cache import FixedTypes
     if steps is None:

@@ -78,7 +78,7 @@ class Steal:
 
 
 def limit_source():
-    """The yardstick's source if this checkout sits beside ../shared, else None."""
+    """Return the yardstick's source if this checkout sits beside ../shared, else None."""
     path = os.environ.get('JACKET_CLOTH_LIMIT', os.path.abspath(LIMIT_SOURCE))
     return path if os.path.isfile(path) else None
 
@@ -98,8 +98,11 @@ class Yardstick:
 
 
 def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
-    """The kernel's arguments after each input of a clip: one step of the state and pose the
-    simulation reached there (JacketSimulation.kernel_arguments)."""
+    """Return the kernel's arguments after each input of a clip.
+
+    One step of the state and pose the simulation reached there
+    (JacketSimulation.kernel_arguments).
+    """
     sim = JacketSimulation(skeleton, rig, fabric)
     captured = []
     for stamp, names, pos in clip_inputs(skeleton, clip, seconds):
@@ -139,8 +142,9 @@ def kernel_vs_limit(skeleton, grids=GRIDS, iterations=ITERATIONS, yardstick=None
 
 
 def input_vs_kernel(skeleton, seconds=10.0, paced_s=3.0):
-    """Per JointState at 120 Hz (one step each): the pipeline's CPU time against the bare
-    kernel's time for that step, each the median of its own run.
+    """Time the pipeline's CPU per JointState at 120 Hz against the bare kernel's for that step.
+
+    One step per JointState; each figure is the median of its own run.
 
     Back to back, caches stay warm; a node gets its inputs 8.3 ms apart, and in between other
     processes evict its code and data. ``paced`` is the same pipeline fed at 120 Hz with the
@@ -292,7 +296,7 @@ def live_node(skeleton, command, seconds, domain, start_limit_s=30.0):
 
 
 def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
-    """The node's CPU per message against two floors, each measured the same way:
+    """Measure the node's CPU per message against two floors, each measured the same way.
 
     - ``floor_us``: the floor node with one bare kernel step in each callback, so the kernel
       runs as it does in the node (8 ms apart, after a sleep; the issue's floor);
@@ -332,8 +336,10 @@ def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
 
 
 def cold_start(skeleton, seconds=1.0, warmed=False):
-    """First /tf after start with an empty numba cache: what a fresh install pays once; with
-    ``warmed``, after `jacket_cloth warm` filled that cache (what the set-up does)."""
+    """Time the first /tf after start with an empty numba cache: what a fresh install pays.
+
+    With ``warmed``, after `jacket_cloth warm` filled that cache (what the set-up does).
+    """
     with tempfile.TemporaryDirectory() as cache:
         os.environ['NUMBA_CACHE_DIR'] = cache
         try:
@@ -372,7 +378,7 @@ def replay_scaling(skeleton, lengths, folder):
 
 
 def endurance(skeleton, simulated_s, folder, window_s=60.0):
-    """Simulated motion through the node's JointState callback with recording on.
+    """Simulate motion through the node's JointState callback with recording on.
 
     The real JacketClothNode in this process, fed serialized JointState at 120 Hz stamps as
     fast as it takes them (DDS is skipped: nothing can be lost on the way). Returns resident

@@ -74,7 +74,7 @@ def _with_calm(skeleton, inputs):
 
 
 def scenes(skeleton, loop_s=60.0):
-    """The failure scenes, as JointState content for the shipped character."""
+    """Return the failure scenes, as JointState content for the shipped character."""
     joints = len(skeleton.joint_names)
 
     def turned(names, pos, t):          # 180 degrees about z in one frame, at 1 s
@@ -129,7 +129,7 @@ def _flipped_share(sim):
 
 
 def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
-    """The verdict of one method on one scene: 'holds' or how it failed, and the figures."""
+    """Judge one method on one scene: 'holds' or how it failed, and the figures."""
     fabric = load_fabric(fabric_name).with_values(**scene.fabric)
     params = SimParams(stretch_limit=method, **scene.params)
     sim = JacketSimulation(skeleton, rig, fabric, params)

@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Launch jacket_cloth_node with a parameter file and optional session recording.
 
+Example::
+
     ros2 launch jacket_cloth_ros jacket_cloth.launch.py record:=/tmp/session.mcap
     ros2 launch jacket_cloth_ros jacket_cloth.launch.py namespace:=npc1 frame_prefix:=npc1/
 

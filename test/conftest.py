@@ -42,8 +42,10 @@ def make_sim(skeleton, rig):
 
 
 def clip_inputs(skeleton, clip, seconds, start_s=10.0, rate=60.0):
-    """(stamp_ns, names, positions) of ``clip`` at ``rate`` Hz for ``seconds``, as the lab's
-    ``accuracy.clip_inputs``: the product's tests do not depend on the lab."""
+    """Return (stamp_ns, names, positions) of ``clip`` at ``rate`` Hz for ``seconds``.
+
+    As the lab's ``accuracy.clip_inputs``: the product's tests do not depend on the lab.
+    """
     out = []
     for k in range(int(round(seconds * rate))):
         t = k / rate
@@ -66,6 +68,6 @@ def play(sim, clip, rate, duration, start_s=10.0):
 
 @pytest.fixture
 def rest_input(skeleton):
-    """JointState content of the character standing still at the world origin."""
+    """Return JointState content of the character standing still at the world origin."""
     names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
     return names, np.array(pos)

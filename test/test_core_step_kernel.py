@@ -40,8 +40,10 @@ def _reference_steps(sim, a, b, n):
                               a.root[:3, 3] + w * (b.root[:3, 3] - a.root[:3, 3]))
         links = sim.skeleton.forward(a.q + w * (b.q - a.q))
         delta = invert_transform(root) @ sim.root
-        for points, share in ((sim.x, sim.world_share[:, None]), (sim.xp, sim.world_share[:, None]),
-                              (sim.hood_p[None], f.world_share), (sim.hood_pp[None], f.world_share)):
+        share_x = sim.world_share[:, None]
+        for points, share in ((sim.x, share_x), (sim.xp, share_x),
+                              (sim.hood_p[None], f.world_share),
+                              (sim.hood_pp[None], f.world_share)):
             points += share * (apply_transform(delta, points) - points)
         sim.root, sim.links = root, links
         layer = rig.layer.solve(links)
@@ -62,8 +64,8 @@ def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):
     # 60 Hz inputs at a 120 Hz step: each input interpolates a step between two samples (M7).
     params = dict(wind=(2.0, 1.0, 0.0), wind_gust=0.5)
     fused, reference = make_sim(**params), make_sim(**params)
-    inputs = clip_inputs(skeleton, 'turn', 0.6) + clip_inputs(skeleton, 'dodge', 0.6,
-                                                                   start_s=10.6)
+    inputs = (clip_inputs(skeleton, 'turn', 0.6)
+              + clip_inputs(skeleton, 'dodge', 0.6, start_s=10.6))
     stamp, names, pos = inputs[0]
     for sim in (fused, reference):
         sim.process(stamp, names, pos)

@@ -282,7 +282,8 @@ def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
         assert all(c.message_encoding == 'cdr' and 'reliability' in
                    c.metadata['offered_qos_profiles'] for c in topics.values())
         counts = summary.statistics.channel_message_counts
-        by_topic = {topics_id.topic: counts.get(cid, 0) for cid, topics_id in summary.channels.items()}
+        by_topic = {topics_id.topic: counts.get(cid, 0)
+                    for cid, topics_id in summary.channels.items()}
         assert by_topic['/joint_states'] == sent and by_topic['/tf'] == sent
         metadata = {m.name: m.metadata for m in reader.iter_metadata()}
         assert 'rosbag2' in metadata

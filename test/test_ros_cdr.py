@@ -89,4 +89,5 @@ def test_collider_and_hood_markers_sit_where_the_simulation_has_them():
     anchor, _ = sim.hood_anchor(sim.links)
     assert np.allclose(shown['hood', 0].points, [anchor, sim.hood_p])
     bones = shown['jacket_bones', 0].points
-    assert np.allclose(bones[0::2], sim.layer.positions) and np.allclose(bones[1::2], sim.layer.tips)
+    assert np.allclose(bones[0::2], sim.layer.positions)
+    assert np.allclose(bones[1::2], sim.layer.tips)

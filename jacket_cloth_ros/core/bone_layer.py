@@ -15,13 +15,17 @@ cloth follows the upper jacket as it does in the article.
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .bundles import layer_model
-from .config import ConfigError
+from .config import ConfigError, Section
 from .pose_kernel import solve_layer
 from .transforms import apply_transform
+
+if TYPE_CHECKING:           # for the annotations only
+    from .skeleton import Skeleton
 
 DOWN = np.array([[0.0, 0.0, 1.0],     # a bone aimed straight down: x = -z, y = y, z = x
                  [0.0, 1.0, 0.0],
@@ -64,7 +68,7 @@ class LayerPose:
 class BoneLayer:
     """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section)."""
 
-    def __init__(self, section, skeleton, rest, where):
+    def __init__(self, section: Section, skeleton: 'Skeleton', rest: np.ndarray, where: str):
         self.sleeves = []
         for i, s in enumerate(section.sections('sleeves')):
             link = skeleton.link(s.text('link'), f'{where}.sleeves[{i}].link')
@@ -112,13 +116,13 @@ class BoneLayer:
         self.skin_radius = upper.number('skin_radius', 0.2, lo=0.0, hi=2.0)
         upper.reject_unknown()
 
-    def pad_ends_gap(self, links):
+    def pad_ends_gap(self, links: np.ndarray) -> float:
         """Distance between the two pad ends before the left/right constraint: their tips."""
         pose = self.solve(links)
         first = 2 * len(self.sleeves)
         return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
 
-    def solve(self, links, full=True):
+    def solve(self, links: np.ndarray, full: bool = True) -> LayerPose:
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
         ``full=False`` solves only what the cloth needs each step: the bones below the pads.

@@ -19,23 +19,31 @@ types on every call (see kernel_cache.FixedTypes). This file is a kernel file: t
 code depends on the fields' order, so an edit here recompiles every kernel.
 """
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, TypeVar
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:           # for the annotations only: these modules build on this one
+    from .bone_layer import BoneLayer
+    from .rig import Rig
+    from .skeleton import Skeleton
+
+_Bundle = TypeVar('_Bundle')
 
 
-def floats(a) -> np.ndarray:
-    """``a`` as a C-contiguous float64 array (the kernels' float type)."""
+def floats(a: npt.ArrayLike) -> np.ndarray:
+    """Return ``a`` as a C-contiguous float64 array (the kernels' float type)."""
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
-def ints(a) -> np.ndarray:
-    """``a`` as a C-contiguous int64 array (the kernels' index type)."""
+def ints(a: npt.ArrayLike) -> np.ndarray:
+    """Return ``a`` as a C-contiguous int64 array (the kernels' index type)."""
     return np.ascontiguousarray(a, dtype=np.int64)
 
 
-def flags(a) -> np.ndarray:
-    """``a`` as a C-contiguous boolean array."""
+def flags(a: npt.ArrayLike) -> np.ndarray:
+    """Return ``a`` as a C-contiguous boolean array."""
     return np.ascontiguousarray(a, dtype=np.bool_)
 
 
@@ -217,15 +225,15 @@ class Scene(NamedTuple):
     layer_tips: np.ndarray
 
 
-def skeleton_model(skeleton) -> SkeletonModel:
-    """The kinematic arrays of a core.skeleton.Skeleton."""
+def skeleton_model(skeleton: 'Skeleton') -> SkeletonModel:
+    """Return the kinematic arrays of a core.skeleton.Skeleton."""
     return SkeletonModel(floats(skeleton.origin), floats(skeleton.axis), ints(skeleton.kind),
                          ints(skeleton.var), floats(skeleton.mult), floats(skeleton.offset),
                          ints(skeleton.parent))
 
 
-def layer_model(layer=None) -> LayerModel:
-    """A core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
+def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
+    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
     from .bone_layer import DOWN
     if layer is None:
         return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
@@ -241,8 +249,8 @@ def layer_model(layer=None) -> LayerModel:
         floats([x.below_length for x in p]), floats(DOWN), float(layer.rest_gap))
 
 
-def cloth_model(rig) -> ClothModel:
-    """A core.rig.Rig's cloth, pins, references and hood."""
+def cloth_model(rig: 'Rig') -> ClothModel:
+    """Return a core.rig.Rig's cloth, pins, references and hood."""
     return ClothModel(
         int(rig.pin_link), floats(rig.pin_local), ints(rig.reference_link),
         floats(rig.reference_local), ints(rig.pin_below), floats(rig.pin_below_local),
@@ -252,8 +260,8 @@ def cloth_model(rig) -> ClothModel:
         floats(rig.hood.pivot), float(rig.hood.length))
 
 
-def collider_model(rig) -> ColliderModel:
-    """A core.rig.Rig's colliders in their links' frames."""
+def collider_model(rig: 'Rig') -> ColliderModel:
+    """Return a core.rig.Rig's colliders in their links' frames."""
     return ColliderModel(
         ints(rig.collider_links), floats(rig.collider_centers), floats(rig.collider_rotations),
         floats(rig.collider_radii), ints(rig.capsule_links), floats(rig.capsule_ends),
@@ -261,8 +269,8 @@ def collider_model(rig) -> ColliderModel:
         floats(rig.plane_normals))
 
 
-def model_of(skeleton, rig) -> Model:
-    """The fixed bundle of a skeleton and the rig fitted to it."""
+def model_of(skeleton: 'Skeleton', rig: 'Rig') -> Model:
+    """Return the fixed bundle of a skeleton and the rig fitted to it."""
     return Model(skeleton.model, rig.layer.model if rig.layer else layer_model(), cloth_model(rig),
                  collider_model(rig))
 
@@ -275,8 +283,8 @@ def posed_like(colliders: ColliderModel, n: int) -> Posed:
                  np.zeros(colliders.plane_normals.shape), np.zeros((n, 3)))
 
 
-def copied(bundle):
-    """A copy of a bundle (nested bundles too) whose arrays are new arrays of the same values."""
+def copied(bundle: _Bundle) -> _Bundle:
+    """Return a copy of a bundle (nested ones too) with new arrays of the same values."""
     if hasattr(bundle, '_fields'):
         return type(bundle)(*(copied(v) for v in bundle))
     if isinstance(bundle, tuple):

@@ -9,12 +9,12 @@ class Choice(enum.IntEnum):
 
     @classmethod
     def names(cls) -> tuple:
-        """The parameter values, in the enum's order."""
+        """Return the parameter values, in the enum's order."""
         return tuple(m.name.lower() for m in cls)
 
     @classmethod
-    def parse(cls, text: str, what: str):
-        """The member named ``text``; ValueError naming ``what`` and the choices otherwise."""
+    def parse(cls, text: str, what: str) -> 'Choice':
+        """Return the member named ``text``; else ValueError naming ``what`` and the choices."""
         try:
             return cls[str(text).upper()]
         except KeyError:

@@ -10,8 +10,8 @@ class ConfigError(ValueError):
     """A configuration file or value is wrong; the message names the file and key."""
 
 
-def config_dir():
-    """The shipped config folder: the installed share/ folder, else the source tree's."""
+def config_dir() -> str:
+    """Return the shipped config folder: the installed share/ folder, else the source tree's."""
     package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     here = os.path.join(os.path.dirname(package), 'config')     # a source checkout
     if os.path.isfile(os.path.join(here, 'jacket_rig.yaml')):
@@ -24,11 +24,11 @@ def config_dir():
     raise ConfigError('cannot find the jacket_cloth_ros config folder')
 
 
-def shipped(name):
+def shipped(name: str) -> str:
     return os.path.join(config_dir(), name)
 
 
-def parse_yaml(text, where):
+def parse_yaml(text: str, where: str) -> dict:
     """YAML text (e.g. carried in a recording) to a mapping, with load_yaml's errors."""
     try:
         data = yaml.safe_load(text)
@@ -39,8 +39,8 @@ def parse_yaml(text, where):
     return data
 
 
-def read_text(path, what):
-    """A configuration file's text; the error names the file (``what``: 'URDF', 'rig', ...)."""
+def read_text(path: str, what: str) -> str:
+    """Read a configuration file's text; errors name the file (``what``: 'URDF', 'rig', ...)."""
     try:
         with open(path, encoding='utf-8') as f:
             return f.read()
@@ -50,7 +50,7 @@ def read_text(path, what):
         raise ConfigError(f'{what} {path}: not a UTF-8 text file (byte {e.start})') from None
 
 
-def load_yaml(path):
+def load_yaml(path: str) -> dict:
     try:
         with open(path, encoding='utf-8') as f:
             data = yaml.safe_load(f)
@@ -68,7 +68,7 @@ def load_yaml(path):
 class Section:
     """Typed access to one mapping of a config file; every error names file and key path."""
 
-    def __init__(self, data, where):
+    def __init__(self, data: object, where: str):
         if not isinstance(data, dict):
             raise ConfigError(f'{where}: expected a mapping')
         self._data = data
@@ -78,10 +78,10 @@ class Section:
     def _path(self, key):
         return f'{self._where}.{key}'
 
-    def has(self, key):
+    def has(self, key: str) -> bool:
         return key in self._data
 
-    def section(self, key, default=None):
+    def section(self, key: str, default: dict | None = None) -> 'Section':
         self._used.add(key)
         if key not in self._data:
             if default is None:
@@ -89,14 +89,15 @@ class Section:
             return Section(default, self._path(key))
         return Section(self._data[key], self._path(key))
 
-    def sections(self, key):
+    def sections(self, key: str) -> list['Section']:
         self._used.add(key)
         items = self._data.get(key, [])
         if not isinstance(items, list):
             raise ConfigError(f'{self._path(key)}: expected a list')
         return [Section(item, f'{self._path(key)}[{i}]') for i, item in enumerate(items)]
 
-    def number(self, key, default=None, lo=None, hi=None):
+    def number(self, key: str, default: float | None = None, lo: float | None = None,
+               hi: float | None = None) -> float:
         self._used.add(key)
         v = self._data.get(key, default)
         if v is None:
@@ -107,13 +108,14 @@ class Section:
             raise ConfigError(f'{self._path(key)}: {v} is outside [{lo}, {hi}]')
         return float(v)
 
-    def integer(self, key, default=None, lo=None, hi=None):
+    def integer(self, key: str, default: int | None = None, lo: int | None = None,
+                hi: int | None = None) -> int:
         v = self.number(key, default, lo, hi)
         if v != int(v):
             raise ConfigError(f'{self._path(key)}: expected a whole number, got {v}')
         return int(v)
 
-    def vector(self, key, n=3, default=None):
+    def vector(self, key: str, n: int = 3, default: list[float] | None = None) -> list[float]:
         self._used.add(key)
         v = self._data.get(key, default)
         ok = isinstance(v, (list, tuple)) and len(v) == n and all(
@@ -122,7 +124,8 @@ class Section:
             raise ConfigError(f'{self._path(key)}: expected a list of {n} numbers, got {v!r}')
         return [float(e) for e in v]
 
-    def text(self, key, default=None, choices=None):
+    def text(self, key: str, default: str | None = None,
+             choices: tuple[str, ...] | None = None) -> str:
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, str) or not v:
@@ -131,14 +134,14 @@ class Section:
             raise ConfigError(f'{self._path(key)}: {v!r} is not one of {sorted(choices)}')
         return v
 
-    def texts(self, key, default=None):
+    def texts(self, key: str, default: list[str] | None = None) -> list[str]:
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, list) or not all(isinstance(e, str) for e in v):
             raise ConfigError(f'{self._path(key)}: expected a list of strings, got {v!r}')
         return list(v)
 
-    def reject_unknown(self):
+    def reject_unknown(self) -> None:
         """Typos should not be silently ignored: name every key nobody read."""
         unknown = sorted(set(self._data) - self._used)
         if unknown:

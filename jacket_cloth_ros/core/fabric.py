@@ -21,7 +21,7 @@ class Fabric:
     edge_max_distance_scale: float
     hood_damping: float
 
-    def with_values(self, **changes):
+    def with_values(self, **changes: float) -> 'Fabric':
         return replace(self, **changes)
 
 
@@ -34,13 +34,13 @@ FABRIC_RANGES = {
 }
 
 
-def load_fabrics(path=None):
+def load_fabrics(path: str | None = None) -> dict[str, Fabric]:
     """All presets of a fabrics YAML file, validated; {name: Fabric}."""
     path = path or shipped('fabrics.yaml')
     return fabrics_from_data(load_yaml(path), path)
 
 
-def fabrics_from_data(data, path):
+def fabrics_from_data(data: dict, path: str) -> dict[str, Fabric]:
     """Presets from parsed YAML; ``path`` names where they came from in error messages."""
     out = {}
     for name in data:
@@ -57,7 +57,7 @@ def fabrics_from_data(data, path):
     return out
 
 
-def load_fabric(name, path=None):
+def load_fabric(name: str, path: str | None = None) -> Fabric:
     presets = load_fabrics(path)
     if name not in presets:
         raise ConfigError(f'fabric {name!r} is not a preset (presets: {", ".join(presets)})')

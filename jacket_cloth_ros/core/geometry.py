@@ -11,7 +11,7 @@ import numpy as np
 
 
 @functools.lru_cache(maxsize=8)
-def grid_triangles(rows, cols):
+def grid_triangles(rows: int, cols: int) -> np.ndarray:
     """Vertex indices of the cloth mesh: two triangles per grid quad, flat (3 per triangle)."""
     tri = []
     for r in range(rows - 1):
@@ -22,7 +22,7 @@ def grid_triangles(rows, cols):
 
 
 @functools.lru_cache(maxsize=8)
-def grid_lines(rows, cols):
+def grid_lines(rows: int, cols: int) -> np.ndarray:
     """Vertex indices of the grid's horizontal and vertical edges, flat (2 per edge)."""
     lines = []
     for r in range(rows):

@@ -8,12 +8,18 @@ MoveIt names them: ``<world_joint>/trans_x``, ``trans_y``, ``trans_z``, ``rot_x`
 Carrying it in the JointState keeps body and world motion on one stamp, so replay is exact.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from .kernel_cache import njit
 from .step_kernel import quat_matrix
+
+if TYPE_CHECKING:           # for the annotations only
+    from .skeleton import Skeleton
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
 _OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
@@ -22,7 +28,7 @@ _OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
 class InputRejected(ValueError):
     """The message cannot be used at all; ``code`` names the case for rate-limited logging."""
 
-    def __init__(self, code, text):
+    def __init__(self, code: str, text: str):
         super().__init__(text)
         self.code = code
 
@@ -39,20 +45,22 @@ class Sample:
 class InputParser:
     """Maps names to skeleton joints; holds the last value of joints a message leaves out."""
 
-    def __init__(self, skeleton, world_joint='world_joint'):
+    def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
         self.last_q = np.zeros(len(skeleton.joint_names))
         self.last_root, self.last_quat = np.eye(4), np.array([0.0, 0.0, 0.0, 1.0])
 
-    def set_world_joint(self, name):
+    def set_world_joint(self, name: str) -> None:
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
 
     def _plan(self, names):
-        """Where each name of a message goes, and the warnings its name list earns: worked out
-        once per distinct name list (a publisher sends the same list every time)."""
+        """Work out where each name of a message goes, and the warnings its name list earns.
+
+        Worked out once per distinct name list (a publisher sends the same list every time).
+        """
         plan = self._plans.get(names)
         if plan is not None:
             return plan
@@ -88,7 +96,7 @@ class InputParser:
         self._plans[names] = plan
         return plan
 
-    def parse(self, stamp_ns, names, positions):
+    def parse(self, stamp_ns: int, names: Sequence[str], positions: npt.ArrayLike) -> Sample:
         names = tuple(names)
         positions = np.asarray(positions, dtype=float)
         if len(names) == 0 and len(positions) == 0:
@@ -114,9 +122,11 @@ class InputParser:
 @njit(cache=True)
 def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
                  last_root, last_quat, q, root, quat):
-    """A sample's joint values ``q``, root pose ``root`` and its unit quaternion ``quat`` from
-    one message's positions by its plan; joints and a world pose it leaves out keep their last
-    values. Compiled: in numpy it was a visible share of every input."""
+    """Fill a sample's joint values ``q``, root pose ``root`` and unit quaternion ``quat``.
+
+    From one message's positions by its plan; joints and a world pose it leaves out keep their
+    last values. Compiled: in numpy it was a visible share of every input.
+    """
     for k in range(positions.shape[0]):
         if not np.isfinite(positions[k]):
             return _NON_FINITE
@@ -148,7 +158,8 @@ def root_jump(root_a, root_b, quat_a, quat_b):
 
     The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
     Compiled: in numpy it cost a visible share of every input, more so in a node that
-    sleeps between inputs."""
+    sleeps between inputs.
+    """
     d0 = root_b[0, 3] - root_a[0, 3]
     d1 = root_b[1, 3] - root_a[1, 3]
     d2 = root_b[2, 3] - root_a[2, 3]

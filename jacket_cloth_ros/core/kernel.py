@@ -78,9 +78,11 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
 
 @njit(cache=True)
 def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance):
-    """XPBD (Macklin et al. 2016): compliance instead of stiffness, so the cloth's softness no
-    longer depends on the iteration count or the step; ``lam`` accumulates each constraint's
-    multiplier over the sweeps of one (sub)step. Unit masses. Returns the sweeps run.
+    """Relax the constraints with XPBD (Macklin et al. 2016); return the sweeps run.
+
+    Compliance instead of stiffness, so the cloth's softness no longer depends on the
+    iteration count or the step; ``lam`` accumulates each constraint's multiplier over the
+    sweeps of one (sub)step. Unit masses.
     """
     lam[:] = 0.0
     inv_dt2 = 1.0 / (dt * dt) if dt > 0.0 else 0.0
@@ -117,9 +119,12 @@ def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance
 
 @njit(cache=True)
 def _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2):
-    """Per ellipsoid, once per collision pass over the cloth: the matrix into the space where
-    it is a unit sphere (its axes as rows over its radii), the matrix back, and the squared
-    radius of its bounding sphere. The per-vertex test then multiplies instead of dividing."""
+    """Compute per ellipsoid, once per collision pass, the maps to and from its unit sphere.
+
+    The matrix into the space where it is a unit sphere (its axes as rows over its radii), the
+    matrix back, and the squared radius of its bounding sphere. The per-vertex test then
+    multiplies instead of dividing.
+    """
     for e in range(radii.shape[0]):
         for k in range(3):
             for r in range(3):
@@ -170,8 +175,10 @@ MAX_COLLISION_PASSES = 4
 @njit(cache=True)
 def _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
               plane_n):
-    """One pass of vertex i against every collider: pushed onto the surface of each it is
-    inside. Returns the deepest push-out, or -1 if it was inside none."""
+    """Push vertex i onto the surface of every collider it is inside, in one pass.
+
+    Returns the deepest push-out, or -1 if it was inside none.
+    """
     deepest = -1.0
     for e in range(centers.shape[0]):
         p0 = x[i, 0] - centers[e, 0]
@@ -212,12 +219,14 @@ VERTICAL_COLLISION_ITERATIONS = 8
 @njit(cache=True)
 def hard_vertical_pass_outside(x, upper, lower, rest, contact, centers, axes, radii, cap_a,
                                cap_b, cap_r, plane_p, plane_n):
-    """M12 that agrees with the colliders: top-down, each lower vertex at its rest length from
-    the upper one and outside the body. Where the straight line runs into a collider, the
-    edge turns about its upper vertex onto the collider's surface (projected alternately onto
-    the length and out of the body), so the column wraps around a lifted thigh at its length
-    instead of being pushed out stretched afterwards. Outside wins where both cannot hold.
-    Returns the deepest push-out."""
+    """M12 that agrees with the colliders: each vertical at its length, outside the body.
+
+    Top-down, each lower vertex at its rest length from the upper one and outside the body.
+    Where the straight line runs into a collider, the edge turns about its upper vertex onto
+    the collider's surface (projected alternately onto the length and out of the body), so the
+    column wraps around a lifted thigh at its length instead of being pushed out stretched
+    afterwards. Outside wins where both cannot hold. Returns the deepest push-out.
+    """
     ne = centers.shape[0]
     to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
     _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
@@ -352,7 +361,7 @@ SOLVER_GAUSS_SEIDEL, SOLVER_XPBD = (int(m) for m in Solver)
 
 @njit(cache=True)
 def _lerp(out, a, b, w):
-    """out = a + w (b - a), elementwise over arrays of one shape."""
+    """Set out = a + w (b - a), elementwise over arrays of one shape."""
     fa, fb, fo = a.reshape(-1), b.reshape(-1), out.reshape(-1)
     for i in range(fo.shape[0]):
         fo[i] = fa[i] + w * (fb[i] - fa[i])
@@ -384,9 +393,10 @@ def _normalise_rows(normals):
 
 @njit(cache=True)
 def cloth_step(cloth, colliders, tuning, state, control, now, before):
-    """One fixed step of the jacket cloth, in ``control.substeps`` equal substeps ("Small
-    Steps"). Takes core.bundles: ClothModel, ColliderModel, Tuning, ClothState, StepControl,
-    and Posed twice.
+    """Advance the jacket cloth one fixed step in ``control.substeps`` equal substeps.
+
+    Substeps as in "Small Steps". Takes core.bundles: ClothModel, ColliderModel, Tuning,
+    ClothState, StepControl, and Posed twice.
 
     ``control.damping`` and ``contact_damping`` are per substep. The pinned vertices, the
     colliders and the M11 references are given where they are at the end of the step

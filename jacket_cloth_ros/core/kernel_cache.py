@@ -13,10 +13,14 @@ are in place before their first ``@njit(cache=True)``.
 import functools
 import hashlib
 import os
+from typing import TYPE_CHECKING
 
 from numba import njit, typeof
 from numba.core import caching
 from numba.core.typing.typeof import Purpose
+
+if TYPE_CHECKING:           # for the annotations only
+    from numba.core.dispatcher import Dispatcher
 
 __all__ = ['njit', 'kernels_stamp', 'kernels_cached', 'FixedTypes']
 
@@ -25,8 +29,8 @@ CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
-    'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py', 'core/inputs.py',
-    'ros/cdr.py', 'ros/marker_kernel.py'))
+    'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py',
+    'core/inputs.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
 
 
 @functools.lru_cache(maxsize=None)
@@ -35,8 +39,8 @@ def _content_hash(path, mtime, size):        # read again only when the file cha
         return hashlib.sha256(f.read()).digest()
 
 
-def kernels_stamp():
-    """The content hashes of every file holding one of the package's kernels."""
+def kernels_stamp() -> tuple[bytes, ...]:
+    """Return the content hashes of every file holding one of the package's kernels."""
     stamps = []
     for path in KERNEL_FILES:
         st = os.stat(path)
@@ -86,17 +90,17 @@ class FixedTypes:
     ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call (``check`` False: never, for timing).
     """
 
-    def __init__(self, dispatcher, check=None):
+    def __init__(self, dispatcher: 'Dispatcher', check: bool | None = None):
         self.dispatcher = dispatcher
         self._check = CHECK_TYPES if check is None else check
         self._entry = None
         self._types = None
 
-    def retype(self):
+    def retype(self) -> None:
         """Type the next call again (an argument bundle was rebuilt)."""
         self._entry = None
 
-    def __call__(self, *args):
+    def __call__(self, *args: object) -> object:
         if self._entry is not None:
             if self._check:
                 types = tuple(typeof(a, Purpose.argument) for a in args)
@@ -113,8 +117,10 @@ class FixedTypes:
 
 
 def kernels_cached() -> bool:
-    """Whether numba's cache holds the compiled step for the kernel files as they are now
-    (else the next simulation made compiles every kernel, which takes a while)."""
+    """Tell whether numba's cache holds the compiled step for the kernel files as they are.
+
+    If not, the next simulation made compiles every kernel, which takes a while.
+    """
     from . import step_kernel
     try:
         return bool(step_kernel.advance._cache._cache_file._load_index())

@@ -6,9 +6,13 @@ name the instant, the vertex and the collider. Stretch and compression are kept 
 folding where a thigh lifts it is not a rubber-band hem.
 """
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
+
+if TYPE_CHECKING:           # for the annotations only
+    from .rig import Rig
+    from .simulation import Colliders
 
 
 SURFACE = 1e-9         # m: depths below this are rounding, the vertex is on the surface
@@ -23,9 +27,11 @@ class Worst(NamedTuple):
 
 
 def edge_strain(x: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -> tuple:
-    """(worst stretch, worst compression) of edges a-b against their rest lengths, as
-    ``length / rest - 1`` and ``1 - length / rest`` (0 if none); each names the edge's lower
-    vertex ``b``."""
+    """Return (worst stretch, worst compression) of edges a-b against their rest lengths.
+
+    As ``length / rest - 1`` and ``1 - length / rest`` (0 if none); each names the edge's
+    lower vertex ``b``.
+    """
     if len(a) == 0:
         return Worst(0.0, -1), Worst(0.0, -1)
     ratio = np.linalg.norm(x[a] - x[b], axis=1) / rest
@@ -34,8 +40,9 @@ def edge_strain(x: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -
             Worst(max(0.0, float(1.0 - ratio[c])), int(b[c])))
 
 
-def depth_inside(x: np.ndarray, free: np.ndarray, colliders, labels) -> Worst:
-    """The deepest free vertex inside any collider (m), the vertex and the collider's label.
+def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
+                 labels: Sequence[str]) -> Worst:
+    """Find the deepest free vertex inside any collider (m), with the collider's label.
 
     ``colliders``: simulation.Colliders in the frame of ``x``; ``labels``: one name per
     ellipsoid, capsule and plane, in that order. Depth is the distance to the surface point
@@ -73,8 +80,8 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders, labels) -> Worst:
     return best if best.vertex >= 0 else Worst(0.0, -1)
 
 
-def collider_labels(rig) -> list:
-    """One readable name per collider of a rig, in the order of simulation.Colliders."""
+def collider_labels(rig: 'Rig') -> list:
+    """Name each collider of a rig readably, in the order of simulation.Colliders."""
     links = rig.skeleton.link_names
     return ([f'ellipsoid {k} on {links[i]}' for k, i in enumerate(rig.collider_links)]
             + [f'capsule {k} on {links[i]}' for k, i in enumerate(rig.capsule_links)]

@@ -17,7 +17,7 @@ from .step_kernel import gust_scale
 
 
 def _param(default, doc, lo=None, hi=None, choices=None):
-    """A parameter's field: its default, meaning, range (inclusive) or choices."""
+    """Make a parameter's field: its default, meaning, range (inclusive) or choices."""
     return field(default=default, metadata={'doc': doc, 'range': None if lo is None else (lo, hi),
                                             'choices': choices})
 
@@ -55,14 +55,14 @@ class SimParams:
     teleport_angle_deg: float = _param(
         90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, value in self.__dict__.items():
             reason = check_sim_value(name, value)
             if reason:
                 raise ValueError(f'{name} {reason}')
 
-    def with_values(self, **changes) -> 'SimParams':
-        """A copy with ``changes`` (validated)."""
+    def with_values(self, **changes: object) -> 'SimParams':
+        """Return a copy with ``changes`` (validated)."""
         return replace(self, **changes)
 
     def wind_at(self, t_ns: int) -> np.ndarray:
@@ -85,7 +85,7 @@ class SimParams:
 SIM_FIELDS = {f.name: f for f in fields(SimParams)}
 
 
-def check_sim_value(name: str, value) -> str:
+def check_sim_value(name: str, value: object) -> str:
     """Why ``value`` is not valid for SimParams field ``name``, or ''."""
     meta = SIM_FIELDS[name].metadata
     if meta['choices'] is not None:

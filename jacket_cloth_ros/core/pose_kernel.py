@@ -39,8 +39,10 @@ def _transform_point(t, p, out):
 
 @njit(cache=True)
 def forward_kinematics(skeleton, q, world):
-    """Link transforms of a bundles.SkeletonModel into ``world`` (L,4,4), root frame; links
-    in breadth-first order."""
+    """Put the link transforms of a bundles.SkeletonModel into ``world`` (L,4,4), root frame.
+
+    Links are in breadth-first order.
+    """
     origin, axis, kind, var = skeleton.origin, skeleton.axis, skeleton.kind, skeleton.var
     mult, offset, parent = skeleton.mult, skeleton.offset, skeleton.parent
     world[0] = np.eye(4)
@@ -116,9 +118,11 @@ def grid_bones(x, cols, bone_rc, positions, quaternions):
 @njit(cache=True)
 def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_parents,
                layer_rot, layer_pos, positions, quaternions):
-    """Every bone relative to its parent link (see JacketSimulation.bones): M9 grid bones in
-    the root frame, then the M8 hood bone and the M1/M2 layer bones on their links. Returns
-    whether every number is finite."""
+    """Pose every bone relative to its parent link (see JacketSimulation.bones).
+
+    M9 grid bones in the root frame, then the M8 hood bone and the M1/M2 layer bones on their
+    links. Returns whether every number is finite.
+    """
     n_grid = bone_rc.shape[0]
     grid_bones(x, cols, bone_rc, positions[:n_grid], quaternions[:n_grid])
     t = links[hood_link]
@@ -136,7 +140,7 @@ def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_par
 
 @njit(cache=True)
 def _to_link(t, position, rotation, local_position, local_rotation):
-    """A frame (position, rotation) in the root frame, seen from link pose ``t``."""
+    """Return a frame (position, rotation) in the root frame, seen from link pose ``t``."""
     for r in range(3):
         local_position[r] = (t[0, r] * (position[0] - t[0, 3]) + t[1, r] * (position[1] - t[1, 3])
                              + t[2, r] * (position[2] - t[2, 3]))
@@ -147,7 +151,7 @@ def _to_link(t, position, rotation, local_position, local_rotation):
 
 @njit(cache=True)
 def twist_angle(rotation, axis):
-    """The twist part of ``rotation`` about the unit ``axis`` (swing-twist split), radians."""
+    """Return the twist of ``rotation`` about the unit ``axis`` (swing-twist split), radians."""
     w = np.sqrt(max(0.0, 1.0 + rotation[0, 0] + rotation[1, 1] + rotation[2, 2])) / 2
     if w > 1e-6:
         v0 = (rotation[2, 1] - rotation[1, 2]) / (4 * w)
@@ -169,9 +173,11 @@ def twist_angle(rotation, axis):
 
 @njit(cache=True)
 def solve_layer(links, layer, full, rot, pos, tips, below):
-    """M1 sleeves and M2 pads of a bundles.LayerModel (see bone_layer.BoneLayer.solve): bones
-    into rot/pos/tips in the layer's order when ``full``, and always the bones below the pads
-    into ``below``."""
+    """Solve M1 sleeves and M2 pads of a bundles.LayerModel (see bone_layer.BoneLayer.solve).
+
+    Bones go into rot/pos/tips in the layer's order when ``full``, and the bones below the pads
+    always into ``below``.
+    """
     sleeve_link, sleeve_end, sleeve_axis = layer.sleeve_link, layer.sleeve_end, layer.sleeve_axis
     sleeve_length, sleeve_share, upper = layer.sleeve_length, layer.sleeve_share, layer.upper
     pad_pivot, pad_aim_link, pad_aim = layer.pad_pivot, layer.pad_aim_link, layer.pad_aim
@@ -237,15 +243,16 @@ def solve_layer(links, layer, full, rot, pos, tips, below):
 
 @njit(cache=True)
 def skinned_pose(links, cloth, below, top, ref):
-    """M6 pinned top row and M11 reference points of a bundles.ClothModel (see
-    JacketSimulation._skinned_pose).
+    """Pose the M6 pinned top row and M11 reference points of a bundles.ClothModel.
 
-    The top row rides its link, blended towards the M2 bones below the pads (``below``, none
-    when empty); each column's reference points are lifted with its top vertex.
+    See JacketSimulation._skinned_pose. The top row rides its link, blended towards the M2
+    bones below the pads (``below``, none when empty); each column's reference points are
+    lifted with its top vertex.
     """
     pin_link, pin_local = cloth.pin_link, cloth.pin_local
     reference_link, reference_local = cloth.reference_link, cloth.reference_local
-    pin_below, pin_below_local, pin_weight = cloth.pin_below, cloth.pin_below_local, cloth.pin_weight
+    pin_below, pin_below_local, pin_weight = (cloth.pin_below, cloth.pin_below_local,
+                                              cloth.pin_weight)
     cols = pin_local.shape[0]
     carried = np.empty(3)
     held = np.empty(3)
@@ -267,9 +274,12 @@ def skinned_pose(links, cloth, below, top, ref):
 
 @njit(cache=True)
 def collider_poses(links, colliders, posed):
-    """M10 ellipsoids (centre, axes as columns) and capsule ends of a bundles.ColliderModel on
-    their links, into a bundles.Posed."""
-    links_of, centers_local, rotations_local = colliders.links, colliders.centers, colliders.rotations
+    """Pose the M10 ellipsoids and capsule ends of a bundles.ColliderModel into a bundles.Posed.
+
+    Each on its link; an ellipsoid as its centre and its axes as columns.
+    """
+    links_of, centers_local, rotations_local = (colliders.links, colliders.centers,
+                                                colliders.rotations)
     capsule_links, capsule_ends = colliders.capsule_links, colliders.capsule_ends
     centers, axes, cap_a, cap_b = posed.centers, posed.axes, posed.cap_a, posed.cap_b
     for e in range(centers.shape[0]):

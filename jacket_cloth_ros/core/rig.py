@@ -7,12 +7,17 @@ carry its pinned target (M6) or its reference point (M11).
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from .bone_layer import BoneLayer
 from .config import ConfigError, Section, load_yaml, shipped
 from .transforms import apply_transform, invert_transform, rpy_matrix
+
+if TYPE_CHECKING:           # for the annotations only
+    from .skeleton import Skeleton
 
 WORLD = -1          # the link index of colliders fixed in the world (a floor)
 REGION_SCALES = ('damping_scale', 'wind_scale', 'world_share_scale', 'max_distance_scale')
@@ -56,13 +61,13 @@ class Hood:
     rest_direction: np.ndarray  # unit, in the link's frame
 
 
-def interleaved_order(a, b, window=4):
-    """Gauss-Seidel order, top-down, where no constraint shares a vertex with the ``window``
-    before it (the earliest such constraint comes next).
+def interleaved_order(a: npt.ArrayLike, b: npt.ArrayLike, window: int = 4) -> np.ndarray:
+    """Return a top-down Gauss-Seidel order that keeps vertex-sharing constraints apart.
 
-    Each projection then no longer waits for the one before it to store its vertex, so the CPU
-    overlaps their square roots and divisions (docs/performance.md); the order stays top-down
-    to within a few constraints.
+    No constraint shares a vertex with the ``window`` before it (the earliest such constraint
+    comes next). Each projection then no longer waits for the one before it to store its vertex,
+    so the CPU overlaps their square roots and divisions (docs/performance.md); the order stays
+    top-down to within a few constraints.
     """
     left = list(range(len(a)))
     order, recent = [], []
@@ -78,7 +83,8 @@ def interleaved_order(a, b, window=4):
     return np.array(order, dtype=np.int64)
 
 
-def split_ellipsoid(center, rotation, radii, max_ratio=2.0):
+def split_ellipsoid(center: npt.ArrayLike, rotation: np.ndarray, radii: npt.ArrayLike,
+                    max_ratio: float = 2.0) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """M10: replace a badly stretched ellipsoid by overlapping, more uniform pieces.
 
     Pushing out in ellipsoid space bends the push direction more the more the ellipsoid is
@@ -106,7 +112,7 @@ def split_ellipsoid(center, rotation, radii, max_ratio=2.0):
 class Rig:
     """A validated rig fitted to a skeleton."""
 
-    def __init__(self, data, skeleton, where='rig'):
+    def __init__(self, data: dict, skeleton: 'Skeleton', where: str = 'rig'):
         top = Section(data, where)
         rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
         self.skeleton = skeleton
@@ -238,8 +244,11 @@ class Rig:
         self.plane_normals = np.array([p.normal for p in self.planes], dtype=float).reshape(-1, 3)
 
     def _skin_top_row(self, rest):
-        """M6 + M2: the pinned top row follows its link and, near the shoulders, the bones
-        below the shoulder pads (weight falls off linearly to zero at ``skin_radius``)."""
+        """M6 + M2: skin the pinned top row to its link and, near the shoulders, the pads' bones.
+
+        Those are the bones below the shoulder pads; their weight falls off linearly to zero at
+        ``skin_radius``.
+        """
         top = self.rest[:self.cols]
         self.pin_weight = np.zeros(self.cols)
         self.pin_below = np.zeros(self.cols, dtype=int)
@@ -313,15 +322,15 @@ class Rig:
         self.tether_length = to_top.min(axis=1)
 
     @property
-    def n(self):
+    def n(self) -> int:
         return self.rows * self.cols
 
-    def bone_vertices(self):
+    def bone_vertices(self) -> list[tuple[int, int]]:
         """M9: vertices that carry bones (every row but the last, every n-th column)."""
         cols = list(range(0, self.cols, self.bone_column_step))
         return [(r, c) for r in range(self.rows - 1) for c in cols]
 
 
-def load_rig(skeleton, path=None):
+def load_rig(skeleton: 'Skeleton', path: str | None = None) -> Rig:
     path = path or shipped('jacket_rig.yaml')
     return Rig(load_yaml(path), skeleton, where=path)

@@ -12,9 +12,12 @@ skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from . import kernel, pose_kernel, step_kernel
 from .bone_layer import LayerPose
@@ -23,6 +26,11 @@ from .bundles import (
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
 from .params import SimParams
+
+if TYPE_CHECKING:           # for the annotations only
+    from .fabric import Fabric
+    from .rig import Rig
+    from .skeleton import Skeleton
 
 
 _NO_BELOW = np.zeros((0, 4, 4))          # a rig without M2 pads: the top row rides its link
@@ -37,9 +45,11 @@ DESIGN_RATE = 120.0
 AUTO_SWEEP_SHARE = 0.03
 
 
-def per_step(share, exponent):
-    """A share lost per design step, as the share lost in a step ``exponent`` times as long
-    (the compiled step's formula: step_kernel.lost_per)."""
+def per_step(share: npt.ArrayLike, exponent: float) -> float | np.ndarray:
+    """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
+
+    The compiled step's formula: step_kernel.lost_per.
+    """
     if np.ndim(share) == 0:
         return step_kernel.lost_per(float(share), float(exponent))
     out = np.empty(np.shape(share))
@@ -47,10 +57,10 @@ def per_step(share, exponent):
     return out
 
 
-def xpbd_compliance(stiffness, iterations):
-    """XPBD compliance (m/N at unit mass) that one design step of XPBD makes as stiff as the
-    article's relaxation makes it with ``stiffness`` per sweep and ``iterations`` sweeps.
+def xpbd_compliance(stiffness: npt.ArrayLike, iterations: int) -> np.ndarray | float:
+    """Return the XPBD compliance (m/N at unit mass) matching the article's relaxation.
 
+    One design step of XPBD with it is as stiff as ``iterations`` sweeps of ``stiffness``.
     For one constraint between two unit masses, n sweeps of stiffness k correct a share
     k_n = 1 - (1 - k)^n of the error, and XPBD corrects 2 / (2 + alpha / dt^2), so
     alpha = 2 dt^2 (1 - k_n) / k_n with dt = 1 / DESIGN_RATE. Stiffness 1 gives alpha = 0.
@@ -71,11 +81,11 @@ class Bones:
     finite: bool = True        # False if any number is not (never to be published)
 
     @property
-    def translations(self):
+    def translations(self) -> np.ndarray:
         return self.poses[:, :3]
 
     @property
-    def quaternions(self):
+    def quaternions(self) -> np.ndarray:
         return self.poses[:, 3:]
 
 
@@ -113,7 +123,8 @@ class StepReport:
 class JacketSimulation:
     """Jacket cloth + hood pendulum for one skeleton and rig."""
 
-    def __init__(self, skeleton, rig, fabric, params=SimParams(), world_joint='world_joint'):
+    def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabric: 'Fabric',
+                 params: SimParams = SimParams(), world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.rig = rig
         self.parser = InputParser(skeleton, world_joint)
@@ -152,7 +163,7 @@ class JacketSimulation:
         self._warm_up()
 
     def _tuning(self):
-        """The fabric's and parameters' values as the compiled step takes them."""
+        """Return the fabric's and parameters' values as the compiled step takes them."""
         p, f = self.params, self.fabric
         return Tuning(
             floats(self.stiffness), int(f.iterations), floats(self.compliance),
@@ -189,12 +200,12 @@ class JacketSimulation:
         self.t_sim = None
 
     # -- parameters -------------------------------------------------------------------------
-    def set_fabric(self, fabric):
+    def set_fabric(self, fabric: 'Fabric') -> None:
         """Live change: new parameters act from the next step; the cloth is not reset."""
         self.fabric = fabric
         self._apply_fabric()
 
-    def set_params(self, params):
+    def set_params(self, params: SimParams) -> None:
         self.params = params
         self._apply_fabric()
 
@@ -217,11 +228,12 @@ class JacketSimulation:
         self.tuning = self._tuning()
 
     # -- the skinned pose ---------------------------------------------------------------------
-    def reference_points(self, links, layer=None):
+    def reference_points(self, links: np.ndarray,
+                         layer: LayerPose | None = None) -> np.ndarray:
         """M11: each vertex's rest position carried by its nearest bone (see _skinned_pose)."""
         return self._skinned_pose(links, layer)[1]
 
-    def pinned_points(self, links, layer=None):
+    def pinned_points(self, links: np.ndarray, layer: LayerPose | None = None) -> np.ndarray:
         """M6: where the top row is (see _skinned_pose)."""
         return self._skinned_pose(links, layer)[0]
 
@@ -240,15 +252,15 @@ class JacketSimulation:
         return top, ref
 
     @property
-    def layer(self):
+    def layer(self) -> LayerPose | None:
         """M1/M2 bones for the current skeleton pose (solved once per pose, on demand)."""
         if self._layer is None or self._layer[0] is not self.links:
             self._layer = (self.links, self.rig.layer.solve(self.links) if self.rig.layer
                            else None)
         return self._layer[1]
 
-    def hood_anchor(self, links):
-        """The hood bone's centre and its link's rotation, in the simulation frame."""
+    def hood_anchor(self, links: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the hood bone's centre and its link's rotation, in the simulation frame."""
         t = links[self.rig.hood.link]
         return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
 
@@ -276,7 +288,8 @@ class JacketSimulation:
         self.contact[:] = False
 
     # -- one input ----------------------------------------------------------------------------
-    def process(self, stamp_ns, names, positions):
+    def process(self, stamp_ns: int, names: Sequence[str],
+                positions: npt.ArrayLike) -> StepReport:
         """Advance the simulation to ``stamp_ns`` with one JointState's content."""
         report = StepReport(stamp_ns)
         started = time.perf_counter_ns()
@@ -330,7 +343,7 @@ class JacketSimulation:
         return ''
 
     def _advance(self, sample, report):
-        """The steps up to ``sample``; False if they left a non-finite cloth or hood."""
+        """Run the steps up to ``sample``; False if they left a non-finite cloth or hood."""
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns
         cap = self.params.max_steps_per_input
@@ -351,9 +364,11 @@ class JacketSimulation:
         return n <= 0 or not stats[step_kernel.NON_FINITE]
 
     def _run_steps(self, a, b, n):
-        """``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call: the skeleton
-        interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth and M8 (see
-        step_kernel.advance). Returns its stats."""
+        """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
+
+        The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
+        and M8 (see step_kernel.advance). Returns its stats.
+        """
         layer = self.rig.layer
         k = len(layer.names) if layer else 0
         out = StepOutput(np.empty_like(self.links), np.empty((k, 3, 3)), np.empty((k, 3)),
@@ -371,15 +386,17 @@ class JacketSimulation:
         return out.stats
 
     @property
-    def state(self):
+    def state(self) -> ClothState:
         """The cloth, hood and root as the compiled steps move them (the very arrays)."""
         return ClothState(self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
                           self._lam, self._started)
 
     def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt):
-        """One kernel step of the current state at this skeleton pose, no substeps (the
-        reset's settling step); its colliders and references are where the next step's
-        substeps start from."""
+        """Run one kernel step of the current state at this skeleton pose, no substeps.
+
+        The reset's settling step; its colliders and references are where the next step's
+        substeps start from.
+        """
         args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
         out = self._cloth_kernel(*args)
         for kept, now in zip(self._before, args[-1]):
@@ -387,11 +404,14 @@ class JacketSimulation:
         self._started[0] = True
         return out
 
-    def kernel_arguments(self, links=None, root=None, ref=None, acc=None, damping=None,
-                         contact_damping=None, dt=None):
-        """kernel.cloth_step's bundles for one step of the current state without substeps;
-        by default at the current pose with the fabric's forces (the lab times the kernel on
-        them)."""
+    def kernel_arguments(self, links: np.ndarray | None = None, root: np.ndarray | None = None,
+                         ref: np.ndarray | None = None, acc: np.ndarray | None = None,
+                         damping: npt.ArrayLike | None = None,
+                         contact_damping: float | None = None, dt: float | None = None) -> tuple:
+        """Return kernel.cloth_step's bundles for one step of the current state without substeps.
+
+        By default at the current pose with the fabric's forces; the lab times the kernel on them.
+        """
         p, f = self.params, self.fabric
         links = self.links if links is None else links
         root = self.root if root is None else root
@@ -412,7 +432,7 @@ class JacketSimulation:
         return (self.model.cloth, self.model.colliders, self.tuning, self.state, control, now,
                 now)
 
-    def hood_step(self, links, acc, dt, damping):
+    def hood_step(self, links: np.ndarray, acc: np.ndarray, dt: float, damping: float) -> None:
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
         step_kernel.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
                               float(dt), float(damping))
@@ -426,7 +446,7 @@ class JacketSimulation:
             now.ref[:] = ref
         return now
 
-    def collider_frames(self, links, root=None):
+    def collider_frames(self, links: np.ndarray, root: np.ndarray | None = None) -> Colliders:
         """Every collider in the simulation frame, for the kernel and the markers.
 
         Planes fixed in the world (the floor) need the root's world pose ``root``.
@@ -436,8 +456,11 @@ class JacketSimulation:
                          self.rig.capsule_radii, c.plane_p, c.plane_n)
 
     # -- outputs ------------------------------------------------------------------------------
-    def bones(self):
-        """M9 jacket bones (x down the cloth, y left to right, z = x * y) and the M8 hood bone."""
+    def bones(self) -> Bones:
+        """Return the M9 jacket bones and the M8 hood bone.
+
+        Jacket bones have x down the cloth, y left to right and z = x * y.
+        """
         layer = self.layer
         n = len(self.bone_names)
         poses = np.empty((n, 7))
@@ -452,7 +475,7 @@ class JacketSimulation:
             finite = False
         return Bones(self.bone_names, self.bone_parents, poses, finite)
 
-    def strain(self):
+    def strain(self) -> tuple[float, float]:
         """Worst relative stretch of the simulated vertical and horizontal stretch constraints.
 
         The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.

@@ -23,7 +23,7 @@ _MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
 class Skeleton:
     """Links, joints and forward kinematics of a URDF character."""
 
-    def __init__(self, urdf_xml):
+    def __init__(self, urdf_xml: str):
         if not isinstance(urdf_xml, str) or not urdf_xml.strip():
             raise ConfigError('URDF: empty robot description')
         try:
@@ -93,33 +93,36 @@ class Skeleton:
         self.joint_index = index
         self.model = skeleton_model(self)
 
-    def link(self, name, where='rig'):
+    def link(self, name: str, where: str = 'rig') -> int:
         if name not in self.link_index:
             raise ConfigError(f'{where}: link {name!r} is not in the URDF '
                               f'(links: {", ".join(self.link_names)})')
         return self.link_index[name]
 
-    def forward(self, q):
+    def forward(self, q: np.ndarray) -> np.ndarray:
         """Link transforms (L,4,4) in the root link's frame for joint values q (J,)."""
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
 
 
-def shipped_character_urdf():
-    """The shipped character's URDF text (config/character.urdf): the node's fallback."""
+def shipped_character_urdf() -> str:
+    """Return the shipped character's URDF text (config/character.urdf): the node's fallback."""
     with open(shipped('character.urdf'), encoding='utf-8') as f:
         return f.read()
 
 
-def load_shipped_character():
-    """The shipped character as a Skeleton, for the tools and the lab."""
+def load_shipped_character() -> Skeleton:
+    """Load the shipped character as a Skeleton, for the tools and the lab."""
     return Skeleton(shipped_character_urdf())
 
 
-def skeleton_from(text, where):
-    """The skeleton of a URDF's text read from a file; every error names it (``where``, e.g.
-    'URDF path'), an empty file too: it never means the shipped character."""
+def skeleton_from(text: str, where: str) -> Skeleton:
+    """Return the skeleton of a URDF's text read from a file.
+
+    Every error names the file (``where``, e.g. 'URDF path'), an empty file too: it never
+    means the shipped character.
+    """
     if not text.strip():
         raise ConfigError(f'{where}: empty file')
     try:
@@ -131,6 +134,6 @@ def skeleton_from(text, where):
         raise ConfigError(message) from None
 
 
-def load_skeleton(path):
-    """The skeleton of a URDF file; errors name the file."""
+def load_skeleton(path: str) -> Skeleton:
+    """Load the skeleton of a URDF file; errors name the file."""
     return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')

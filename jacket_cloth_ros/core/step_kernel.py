@@ -74,8 +74,10 @@ def relative_move(new, old, delta):
 
 @njit(cache=True)
 def plane_poses(links, root, colliders, posed):
-    """Planes of a bundles.ColliderModel on their links into a bundles.Posed; a plane fixed in
-    the world (link < 0) seen from ``root``."""
+    """Pose the planes of a bundles.ColliderModel on their links into a bundles.Posed.
+
+    A plane fixed in the world (link < 0) is seen from ``root``.
+    """
     plane_links, points_local = colliders.plane_links, colliders.plane_points
     normals_local, points, normals = colliders.plane_normals, posed.plane_p, posed.plane_n
     frame = np.empty((4, 4))
@@ -92,8 +94,10 @@ def plane_poses(links, root, colliders, posed):
 
 @njit(cache=True)
 def hood_step(links, cloth, p, pp, acc, dt, damping):
-    """M8: one Verlet particle on a rod of fixed length from the hood bone's centre (the
-    hood of a bundles.ClothModel)."""
+    """M8: step one Verlet particle on a rod of fixed length from the hood bone's centre.
+
+    The hood is that of a bundles.ClothModel.
+    """
     hood_link, pivot, length = cloth.hood_link, cloth.hood_pivot, cloth.hood_length
     anchor = np.empty(3)
     _transform_point(links[hood_link], pivot, anchor)
@@ -111,8 +115,10 @@ def hood_step(links, cloth, p, pp, acc, dt, damping):
 
 @njit(cache=True)
 def lost_per(share, exponent):
-    """A share lost per design step, as the share lost in a step ``exponent`` times as long
-    (fabrics are tuned at simulation.DESIGN_RATE)."""
+    """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
+
+    Fabrics are tuned at simulation.DESIGN_RATE.
+    """
     return share if exponent == 1.0 else 1.0 - (1.0 - share) ** exponent
 
 
@@ -125,9 +131,9 @@ def lost_per_each(share, exponent, out):
 
 @njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
 def advance(model, tuning, state, before, motion, out):
-    """``motion.steps`` fixed steps from sample a towards sample b (core.bundles: Model,
-    Tuning, ClothState, Posed, Motion, StepOutput).
+    """Run ``motion.steps`` fixed steps from sample a towards sample b.
 
+    Takes core.bundles: Model, Tuning, ClothState, Posed, Motion, StepOutput.
     ``state`` is moved in place; ``before`` holds the colliders and references where the
     last step ended and is moved on to this one's end; ``out.links`` and the layer arrays
     end with the last step's pose (the layer solved in full at that step only).
@@ -248,8 +254,11 @@ def _copy_posed(src, dst):
 
 @njit(cache=True)
 def gust_scale(t_ns, gust, period):
-    """The wind's factor at a step's time: two slow incommensurate gusts of relative size
-    ``gust`` (1 without). A function of the stamp only, so a replay sees the live wind."""
+    """Return the wind's factor at a step's time.
+
+    Two slow incommensurate gusts of relative size ``gust`` (1 without). A function of the
+    stamp only, so a replay sees the live wind.
+    """
     if gust == 0.0:
         return 1.0
     phase = 2 * np.pi * (t_ns * 1e-9) / period

@@ -2,9 +2,10 @@
 """Rigid-transform helpers, vectorised. Quaternions are (x, y, z, w) as in ROS messages."""
 
 import numpy as np
+import numpy.typing as npt
 
 
-def rpy_matrix(rpy):
+def rpy_matrix(rpy: npt.ArrayLike) -> np.ndarray:
     """URDF roll-pitch-yaw (fixed axes x, y, z) to a 3x3 rotation."""
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
@@ -15,7 +16,7 @@ def rpy_matrix(rpy):
     ])
 
 
-def quat_to_matrix(q):
+def quat_to_matrix(q: npt.ArrayLike) -> np.ndarray:
     """(...,4) quaternions (x, y, z, w), normalised here, to (...,3,3) rotations."""
     q = np.asarray(q, dtype=float)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
@@ -33,9 +34,11 @@ def quat_to_matrix(q):
     return r
 
 
-def cross(a, b):
-    """np.cross for (..., 3) arrays without its axis juggling, which costs more than the
-    product at these sizes."""
+def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:
+    """Return np.cross of (..., 3) arrays without its axis juggling.
+
+    The juggling costs more than the product at these sizes.
+    """
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
@@ -44,7 +47,7 @@ def cross(a, b):
     return out
 
 
-def matrix_to_quat(r):
+def matrix_to_quat(r: npt.ArrayLike) -> np.ndarray:
     """(...,3,3) rotations to unit (...,4) quaternions (x, y, z, w) with w >= 0."""
     r = np.asarray(r, dtype=float)
     m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
@@ -61,7 +64,7 @@ def matrix_to_quat(r):
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
-def quat_slerp(q0, q1, t):
+def quat_slerp(q0: npt.ArrayLike, q1: npt.ArrayLike, t: float) -> np.ndarray:
     """Spherical interpolation between two unit quaternions (x, y, z, w)."""
     q0 = np.asarray(q0, dtype=float)
     q1 = np.asarray(q1, dtype=float)
@@ -76,7 +79,8 @@ def quat_slerp(q0, q1, t):
     return (np.sin((1 - t) * theta) * q0 + np.sin(t * theta) * q1) / s
 
 
-def make_transform(rotation=None, translation=None):
+def make_transform(rotation: npt.ArrayLike | None = None,
+                   translation: npt.ArrayLike | None = None) -> np.ndarray:
     t = np.eye(4)
     if rotation is not None:
         t[:3, :3] = rotation
@@ -85,13 +89,13 @@ def make_transform(rotation=None, translation=None):
     return t
 
 
-def invert_transform(t):
+def invert_transform(t: np.ndarray) -> np.ndarray:
     out = np.eye(4)
     out[:3, :3] = t[:3, :3].T
     out[:3, 3] = -t[:3, :3].T @ t[:3, 3]
     return out
 
 
-def apply_transform(t, points):
+def apply_transform(t: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Apply a 4x4 transform to (N,3) points."""
     return points @ t[:3, :3].T + t[:3, 3]

@@ -6,6 +6,8 @@ which the frame-rate tests rely on. A pose is the joint values and the root's wo
 (x, y, z, yaw); the root stands 0.96 m above the floor.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..core.inputs import WORLD_VARIABLES
@@ -104,13 +106,13 @@ def _compose(base, local):
     return (bx + c * x - s * y, by + s * x + c * y, bz + z, byaw + yaw)
 
 
-def clip_length(name):
+def clip_length(name: str) -> float:
     if name == 'showcase':
         return sum(CLIPS[n][1] for n in SHOWCASE)
     return CLIPS[name][1]
 
 
-def segment_at(name, t):
+def segment_at(name: str, t: float) -> tuple[str, float, tuple[float, float, float, float]]:
     """(segment name, local time, root pose at the segment start) of a clip at time t."""
     if name != 'showcase':
         return name, t, (0.0, 0.0, 0.0, 0.0)
@@ -125,8 +127,8 @@ def segment_at(name, t):
     raise AssertionError('unreachable')
 
 
-def pose(name, t):
-    """Joint values {name: value} and the root's world pose (x, y, z, qx, qy, qz, qw)."""
+def pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...]]:
+    """Return joint values {name: value} and the root's world pose as x, y, z, qx, qy, qz, qw."""
     if name not in ALL_CLIPS:
         raise ValueError(f'unknown clip {name!r} (clips: {", ".join(ALL_CLIPS)})')
     seg, local_t, base = segment_at(name, t)
@@ -136,14 +138,15 @@ def pose(name, t):
     return {k: float(v) for k, v in q.items()}, tuple(float(v) for v in root)
 
 
-def joint_state_content(joint_names, name, t, world_joint='world_joint'):
+def joint_state_content(joint_names: Sequence[str], name: str, t: float,
+                        world_joint: str = 'world_joint') -> tuple[list[str], list[float]]:
     """(names, positions) of a JointState for the clip at time t: every joint plus the root."""
     q, root = pose(name, t)
     names = list(joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
 
 
-def showcase_highlights():
+def showcase_highlights() -> list[tuple[float, str]]:
     """(time in the showcase, segment name) of each segment's highlight."""
     out, start = [], 0.0
     for seg in SHOWCASE:

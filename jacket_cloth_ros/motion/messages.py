@@ -12,11 +12,13 @@ from typing import TYPE_CHECKING, Iterator, Sequence, Tuple
 from .clips import clip_length, joint_state_content
 
 if TYPE_CHECKING:           # for the annotations only: the skeleton is the caller's
+    from sensor_msgs.msg import JointState
     from ..core.skeleton import Skeleton
 
 
-def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_ns: int):
-    """A ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
+def joint_state_message(names: Sequence[str], positions: Sequence[float],
+                        stamp_ns: int) -> JointState:
+    """Make a ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
 
     Args:
         names: joint names, in the order of ``positions``.
@@ -37,7 +39,7 @@ def joint_state_message(names: Sequence[str], positions: Sequence[float], stamp_
 
 def clip_messages(skeleton: Skeleton, clip: str, rate: float, duration: float, start_ns: int,
                   world_joint: str = 'world_joint') -> Iterator[Tuple[int, object]]:
-    """A clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
+    """Yield a clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
 
     Args:
         skeleton: the character whose joints the messages name (its ``joint_names``).

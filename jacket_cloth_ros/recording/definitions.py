@@ -19,8 +19,8 @@ _FIELD = re.compile(r'^\s*([A-Za-z][\w/]*)(?:<=\d+)?(?:\[[^\]]*\])?\s+\w+')
 
 
 @functools.lru_cache(maxsize=None)
-def message_text(type_name):
-    """The .msg text of ``pkg/msg/Type`` (or ``pkg/Type``) as installed."""
+def message_text(type_name: str) -> str:
+    """Return the .msg text of ``pkg/msg/Type`` (or ``pkg/Type``) as installed."""
     pkg, _, name = _split(type_name)
     path = os.path.join(_share_directory(pkg), 'msg', name + '.msg')
     with open(path, encoding='utf-8') as f:
@@ -44,8 +44,8 @@ def _split(type_name):
     raise ValueError(f'not a message type name: {type_name!r}')
 
 
-def dependencies(type_name):
-    """The message types a definition uses, as ``pkg/Type``."""
+def dependencies(type_name: str) -> list[str]:
+    """Return the message types a definition uses, as ``pkg/Type``."""
     pkg, _, _ = _split(type_name)
     out = []
     for line in message_text(type_name).splitlines():
@@ -65,8 +65,8 @@ def dependencies(type_name):
 
 
 @functools.lru_cache(maxsize=None)
-def ros2msg_schema(type_name):
-    """The concatenated definition: top level first, then each dependency once."""
+def ros2msg_schema(type_name: str) -> str:
+    """Return the concatenated definition: top level first, then each dependency once."""
     parts = [message_text(type_name).rstrip('\n')]
     seen, queue = set(), list(dependencies(type_name))
     while queue:

@@ -11,6 +11,8 @@ the file layout is the library's; only messages and their chunk are packed here.
 import struct
 import tempfile
 import zlib
+from collections.abc import Callable
+from typing import BinaryIO
 
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
@@ -50,7 +52,7 @@ def _compressor(name):
 
 
 def _message_index(channel_id, records):
-    """A MessageIndex record: (log time, offset in the chunk) of each message, one pack."""
+    """Pack a MessageIndex record: (log time, offset in the chunk) of each message."""
     flat = [value for record in records for value in record]
     return (struct.pack('<BQHI', Opcode.MESSAGE_INDEX, 6 + 8 * len(flat), channel_id,
                         8 * len(flat))
@@ -58,7 +60,9 @@ def _message_index(channel_id, records):
 
 
 class McapWriter:
-    """Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
+    """An MCAP stream writer: chunks of messages, then the summary and the footer.
+
+    Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
     summary (schemas, channels, statistics, chunk and metadata indexes) and the footer.
 
     Messages are packed in the caller's thread. Everything that touches the stream (a closed
@@ -67,7 +71,8 @@ class McapWriter:
     order, so the caller never waits for a chunk's compression.
     """
 
-    def __init__(self, stream, compression='lz4', chunk_bytes=8 * 1024 * 1024, run=None):
+    def __init__(self, stream: BinaryIO, compression: str = 'lz4',
+                 chunk_bytes: int = 8 * 1024 * 1024, run: Callable[..., None] | None = None):
         self._stream = stream
         self._compression = compression
         self._compress = _compressor(compression)
@@ -101,17 +106,18 @@ class McapWriter:
             record.write(self._records)
         self._stream.write(self._records.end())
 
-    def start(self, profile='', library='jacket_cloth_ros'):
+    def start(self, profile: str = '', library: str = 'jacket_cloth_ros') -> None:
         self._run(self._stream.write, MAGIC)
         self._run(self._write_records, Header(profile=profile, library=library))
 
-    def register_schema(self, name, encoding, data):
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
         schema = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
         self._schemas.append(schema)
         self._run(self._write_records, schema)
         return schema.id
 
-    def register_channel(self, topic, message_encoding, schema_id, metadata=None):
+    def register_channel(self, topic: str, message_encoding: str, schema_id: int,
+                         metadata: dict[str, str] | None = None) -> int:
         channel = Channel(id=len(self._channels) + 1, topic=topic, schema_id=schema_id,
                           message_encoding=message_encoding, metadata=dict(metadata or {}))
         self._channels.append(channel)
@@ -119,7 +125,8 @@ class McapWriter:
         self._run(self._write_records, channel)
         return channel.id
 
-    def add_message(self, channel_id, log_time, data, publish_time, sequence=0):
+    def add_message(self, channel_id: int, log_time: int, data: bytes, publish_time: int,
+                    sequence: int = 0) -> None:
         offset = self._used
         end = offset + _MESSAGE.size + len(data)
         if end > len(self._chunk):
@@ -142,7 +149,7 @@ class McapWriter:
         if end > self._chunk_bytes:
             self._close_chunk()
 
-    def time_range(self):
+    def time_range(self) -> tuple[int, int] | None:
         """(first, last) log time of the messages so far, or None before the first."""
         spans = [s for s in ((self._start, self._end), (self._chunk_start, self._chunk_end))
                  if s[0] is not None]
@@ -150,7 +157,7 @@ class McapWriter:
             return None
         return min(s[0] for s in spans), max(s[1] for s in spans)
 
-    def add_metadata(self, name, data):
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
         self._run(self._write_metadata, Metadata(name=name, metadata=dict(data)))
 
     def _write_metadata(self, metadata):
@@ -160,7 +167,7 @@ class McapWriter:
             MetadataIndex(offset=offset, length=self._records.count, name=metadata.name))
         self._stream.write(self._records.end())
 
-    def flush(self):
+    def flush(self) -> None:
         """Close the chunk in progress (if any) into the file and flush the stream."""
         self._close_chunk()
         self._run(self._stream.flush)
@@ -203,9 +210,11 @@ class McapWriter:
         self._chunk_index_file.write(self._records.end())
         self._chunk_count += 1
 
-    def finish(self):
-        """Write the last chunk, the summary and the footer (through ``run``, after all else);
-        the stream stays open."""
+    def finish(self) -> None:
+        """Write the last chunk, the summary and the footer (through ``run``, after all else).
+
+        The stream stays open.
+        """
         self._close_chunk()
         first, last = self.time_range() or (0, 0)
         statistics = Statistics(

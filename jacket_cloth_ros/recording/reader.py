@@ -8,6 +8,7 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 import os
 import struct
 import zlib
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import yaml
@@ -40,8 +41,8 @@ class Recording:
     complete: bool = True               # False: cut short, the readable part is here
 
 
-def mcap_files(path):
-    """The MCAP files of a recording: the file itself, or a bag directory's files in order."""
+def mcap_files(path: str) -> list[str]:
+    """Return a recording's MCAP files: the file itself, or a bag directory's files in order."""
     if not os.path.isdir(path):
         if not os.path.exists(path):
             raise RecordingError(f'{path}: no such file or directory')
@@ -70,7 +71,7 @@ def mcap_files(path):
     return files
 
 
-def read_recording(path, topics=None):
+def read_recording(path: str, topics: Collection[str] | None = None) -> Recording:
     """Every message (optionally of some topics), metadata and topic types of a recording."""
     out = Recording(path, [])
     for one in mcap_files(path):
@@ -85,16 +86,19 @@ class _TopicCounter(dict):
         self[message.topic] = self.get(message.topic, 0) + 1
 
 
-def count_messages(path):
-    """Messages per topic and whether the recording is complete, streamed: an hour of
-    session (gigabytes of /tf and markers) is counted without holding it in memory."""
+def count_messages(path: str) -> tuple[dict[str, int], bool]:
+    """Count messages per topic and tell whether the recording is complete, streamed.
+
+    An hour of session (gigabytes of /tf and markers) is counted without holding it in memory.
+    """
     out = Recording(path, _TopicCounter())
     for one in mcap_files(path):
         _read_file(one, None, out)
     return dict(out.messages), out.complete
 
 
-def read_messages(path, topics=None):
+def read_messages(path: str,
+                  topics: Collection[str] | None = None) -> tuple[list[RecordedMessage], bool]:
     """All messages (optionally of some topics) in file order; (messages, complete)."""
     rec = read_recording(path, topics)
     return rec.messages, rec.complete
@@ -133,8 +137,11 @@ def _read_file(path, topics, out):
 
 
 def _stream_file(f, path, topics, out):
-    """Read the records in order; a read that fails at the end of the file is a cut (a killed
-    writer: its readable part is kept), one that fails before it is damage."""
+    """Read the records in order, telling a cut file from a damaged one.
+
+    A read that fails at the end of the file is a cut (a killed writer: its readable part is
+    kept), one that fails before it is damage.
+    """
     size = os.fstat(f.fileno()).st_size
     f.seek(0)
     schemas, channels = {}, {}
@@ -160,7 +167,7 @@ def _stream_file(f, path, topics, out):
 
 
 def _check_summary_crc(f, path):
-    """The footer's CRC over the summary (MCAP spec), which the mcap reader does not check."""
+    """Check the footer's CRC of the summary (MCAP spec); the mcap reader does not check it."""
     f.seek(-(_FOOTER_SIZE + len(MAGIC)), os.SEEK_END)
     footer_at = f.tell()
     summary_start, _, crc = struct.unpack('<QQI', f.read(_FOOTER_SIZE)[9:])

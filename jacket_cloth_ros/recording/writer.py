@@ -27,9 +27,12 @@ CHUNK_BYTES = 8 * 1024 * 1024
 
 
 class Compression(Choice):
-    """MCAP chunk compression (the record_compression parameter). lz4 is the node's default:
-    its files are larger than zstd's, but the node compresses the closing chunk in its own
-    callback, and lz4 does that in a fraction of zstd's time (docs/performance.md)."""
+    """MCAP chunk compression (the record_compression parameter).
+
+    lz4 is the node's default: its files are larger than zstd's, but the node compresses the
+    closing chunk in its own callback, and lz4 does that in a fraction of zstd's time
+    (docs/performance.md).
+    """
 
     NONE = 0
     LZ4 = 1
@@ -41,13 +44,17 @@ class Compression(Choice):
         return '' if self is Compression.NONE else self.name.lower()
 
 
-def is_bag_folder(path) -> bool:
-    """Whether a recording path names a rosbag2 bag folder: any path not ending in ``.mcap``
-    (as ``ros2 bag record -o NAME`` makes the folder NAME)."""
+def is_bag_folder(path: str | os.PathLike) -> bool:
+    """Tell whether a recording path names a rosbag2 bag folder.
+
+    Any path not ending in ``.mcap`` does, as ``ros2 bag record -o NAME`` makes the folder
+    NAME.
+    """
     return not os.fspath(path).endswith('.mcap')
 
 
-def qos_profile_yaml(reliable=True, transient_local=False, depth=10):
+def qos_profile_yaml(reliable: bool = True, transient_local: bool = False,
+                     depth: int = 10) -> str:
     """``offered_qos_profiles`` in the string form of Jazzy and newer."""
     profile = {
         'history': 'keep_last', 'depth': depth,
@@ -73,8 +80,9 @@ class SessionRecorder:
     at the next chunk or at ``close()``.
     """
 
-    def __init__(self, path, flush_period_ns=1_000_000_000, final_name=None, background=False,
-                 compression='zstd'):
+    def __init__(self, path: str, flush_period_ns: int = 1_000_000_000,
+                 final_name: str | None = None, background: bool = False,
+                 compression: str = 'zstd'):
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
@@ -128,7 +136,7 @@ class SessionRecorder:
                 except Exception as e:  # noqa: BLE001 - whatever it is, the caller must hear
                     self._error = e
 
-    def add_topic(self, topic, type_name, qos_yaml=None):
+    def add_topic(self, topic: str, type_name: str, qos_yaml: str | None = None) -> None:
         if topic in self._channels:
             return
         if type_name not in self._schemas:
@@ -142,8 +150,8 @@ class SessionRecorder:
         self._types[topic] = type_name
         self._qos[topic] = yaml.safe_load(qos_yaml or qos_profile_yaml())
 
-    def write(self, topic, data, stamp_ns):
-        """Copies ``data`` into the open chunk (the caller may reuse its buffer)."""
+    def write(self, topic: str, data: bytes, stamp_ns: int) -> None:
+        """Copy ``data`` into the open chunk (the caller may reuse its buffer)."""
         channel = self._channels[topic]         # positional: this runs for every message
         self._writer.add_message(channel, stamp_ns, data, stamp_ns, self._writer.counts[channel])
         if self._last_flush is None:
@@ -152,13 +160,14 @@ class SessionRecorder:
             self._writer.flush()
             self._last_flush = stamp_ns
 
-    def add_session_config(self, urdf, rig_yaml, fabrics_yaml, parameters):
-        """What a replay needs besides the inputs: character, rig, fabrics, parameters."""
+    def add_session_config(self, urdf: str, rig_yaml: str, fabrics_yaml: str,
+                           parameters: dict) -> None:
+        """Add what a replay needs besides the inputs: character, rig, fabrics, parameters."""
         self._writer.add_metadata(SESSION_CONFIG, {
             'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
             'parameters_json': json.dumps(parameters, sort_keys=True)})
 
-    def close(self):
+    def close(self) -> None:
         if self._closed:
             return
         self._closed = True

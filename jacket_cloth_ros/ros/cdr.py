@@ -10,10 +10,15 @@ are (``Publisher.publish`` takes serialised bytes) and records the same bytes.
 
 import dataclasses
 import struct
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.kernel_cache import njit
+
+if TYPE_CHECKING:           # for the annotations only: messages builds on this module
+    from .messages import MarkerSpec
 
 _HEADER = b'\x00\x01\x00\x00'        # CDR_LE encapsulation
 
@@ -24,57 +29,60 @@ class CdrWriter:
     def __init__(self):
         self.buf = bytearray(_HEADER)
 
-    def align(self, n):
+    def align(self, n: int) -> None:
         pad = -(len(self.buf) - 4) % n
         if pad:
             self.buf += bytes(pad)
 
-    def u8(self, v):
+    def u8(self, v: int) -> None:
         self.buf.append(int(v) & 0xFF)
 
-    def i32(self, v):
+    def i32(self, v: int) -> None:
         self.align(4)
         self.buf += struct.pack('<i', v)
 
-    def u32(self, v):
+    def u32(self, v: int) -> None:
         self.align(4)
         self.buf += struct.pack('<I', v)
 
-    def f32s(self, values):
+    def f32s(self, values: Sequence[float]) -> None:
         self.align(4)
         self.buf += struct.pack(f'<{len(values)}f', *values)
 
-    def f64s(self, values):
+    def f64s(self, values: Sequence[float]) -> None:
         self.align(8)
         self.buf += struct.pack(f'<{len(values)}d', *values)
 
-    def f64_array(self, array):
-        """A block of float64 (any shape, row-major), aligned once: a sequence's elements."""
+    def f64_array(self, array: np.ndarray) -> None:
+        """Add a block of float64 (any shape, row-major), aligned once: a sequence's elements."""
         self.align(8)
         self.buf += np.ascontiguousarray(array, dtype='<f8').tobytes()
 
-    def string(self, s):
+    def string(self, s: str) -> None:
         b = s.encode()
         self.u32(len(b) + 1)
         self.buf += b
         self.buf.append(0)
 
-    def stamp(self, stamp_ns):
+    def stamp(self, stamp_ns: int) -> None:
         self.i32(int(stamp_ns // 1_000_000_000))
         self.u32(int(stamp_ns % 1_000_000_000))
 
-    def header(self, stamp_ns, frame_id):
+    def header(self, stamp_ns: int, frame_id: str) -> None:
         self.stamp(stamp_ns)
         self.string(frame_id)
 
-    def bytes(self):
+    def bytes(self) -> bytes:
         return bytes(self.buf)
 
 
-def joint_state(stamp_ns, names, positions, frame_id=''):
-    """sensor_msgs/JointState with names and positions (no velocity, no effort), padding
-    zeroed and nothing after the last field: rclpy's serializer leaves its padding
-    uninitialised and appends bytes that strict readers reject."""
+def joint_state(stamp_ns: int, names: Sequence[str], positions: Sequence[float],
+                frame_id: str = '') -> bytes:
+    """Encode a sensor_msgs/JointState with names and positions (no velocity, no effort).
+
+    Padding is zeroed and nothing follows the last field: rclpy's serializer leaves its
+    padding uninitialised and appends bytes that strict readers reject.
+    """
     w = CdrWriter()
     w.header(stamp_ns, frame_id)
     w.u32(len(names))
@@ -88,9 +96,12 @@ def joint_state(stamp_ns, names, positions, frame_id=''):
     return w.bytes()
 
 
-def parameter_event(stamp_ns, node, changed):
-    """rcl_interfaces/ParameterEvent with ``changed`` parameters (rcl_interfaces/Parameter
-    messages), padding zeroed and nothing after the last field (see :func:`joint_state`)."""
+def parameter_event(stamp_ns: int, node: str, changed: Sequence) -> bytes:
+    """Encode an rcl_interfaces/ParameterEvent with ``changed`` parameters.
+
+    ``changed`` holds rcl_interfaces/Parameter messages; padding zeroed and nothing after the
+    last field (see :func:`joint_state`).
+    """
     w = CdrWriter()
     w.stamp(stamp_ns)
     w.string(node)
@@ -121,7 +132,8 @@ def parameter_event(stamp_ns, node, changed):
     return w.bytes()
 
 
-def tf_message(names, parents, translations, quaternions, stamp_ns, prefix=''):
+def tf_message(names: Sequence[str], parents: Sequence[str], translations: np.ndarray,
+               quaternions: np.ndarray, stamp_ns: int, prefix: str = '') -> bytes:
     """tf2_msgs/TFMessage: one TransformStamped per bone (field by field; see TfTemplate)."""
     w = CdrWriter()
     w.u32(len(names))
@@ -153,7 +165,7 @@ class _Template:
 
     @staticmethod
     def _f64_at(byte_at, count):
-        """Indices of ``count`` doubles from byte offset ``byte_at`` (8-aligned after the header)."""
+        """Return ``count`` doubles' indices from byte ``byte_at`` (8-aligned after the header)."""
         return (byte_at - 4) // 8 + np.arange(count)
 
     def _bytes(self, stamp_ns):
@@ -169,7 +181,7 @@ class TfTemplate(_Template):
     appends, which were a large share of an input. The bytes equal :func:`tf_message`'s.
     """
 
-    def __init__(self, names, parents, prefix=''):
+    def __init__(self, names: Sequence[str], parents: Sequence[str], prefix: str = ''):
         w = CdrWriter()
         w.u32(len(names))
         stamps, poses = [], []
@@ -184,7 +196,7 @@ class TfTemplate(_Template):
         super().__init__(w, stamps)
         self._pose_at = np.array(poses)
 
-    def encode(self, poses, stamp_ns):
+    def encode(self, poses: np.ndarray, stamp_ns: int) -> bytes:
         """``poses``: (bones, 7) translations then quaternions (x, y, z, w)."""
         _put_rows(self._f64, self._pose_at, poses)
         return self._bytes(stamp_ns)
@@ -206,7 +218,7 @@ def _put_rows(f64, at, rows):
             f64[at[i, k]] = rows[i, k]
 
 
-def marker(w, m, stamp_ns, frame):
+def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[int, int, int]:
     """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`.
 
     Returns where its varying fields start: (stamp, pose, points) byte offsets; the scale's
@@ -246,7 +258,7 @@ def marker(w, m, stamp_ns, frame):
     return stamp_at, pose_at, points_at
 
 
-def marker_array(markers, stamp_ns, frame):
+def marker_array(markers: 'Sequence[MarkerSpec]', stamp_ns: int, frame: str) -> bytes:
     """visualization_msgs/MarkerArray, field by field (see MarkerTemplate)."""
     w = CdrWriter()
     w.u32(len(markers))
@@ -264,7 +276,7 @@ class MarkerTemplate(_Template):
     :func:`marker_array`'s of the same markers.
     """
 
-    def __init__(self, layout, frame, pose_rows):
+    def __init__(self, layout: 'Sequence[MarkerSpec]', frame: str, pose_rows: int):
         w = CdrWriter()
         w.u32(len(layout))
         stamps, dst, src = [], [], []
@@ -285,15 +297,17 @@ class MarkerTemplate(_Template):
         super().__init__(w, stamps)
         self._dst, self._src = np.concatenate(dst), np.concatenate(src)  # the mesh has points
 
-    def encode(self, fill, arguments, stamp_ns):
-        """The values written by ``fill(*arguments, src, dst, doubles)``: it makes the pose and
-        point tables (as messages.marker_values) and scatters ``doubles[dst] = tables[src]``
-        (marker_kernel.fill_markers)."""
+    def encode(self, fill: Callable[..., None], arguments: tuple, stamp_ns: int) -> bytes:
+        """Return the message's bytes with the values ``fill(*arguments, src, dst, doubles)``.
+
+        ``fill`` makes the pose and point tables (as messages.marker_values) and scatters
+        ``doubles[dst] = tables[src]`` (marker_kernel.fill_markers).
+        """
         fill(*arguments, self._src, self._dst, self._f64)
         return self._bytes(stamp_ns)
 
 
-def diagnostic_array(stamp_ns, statuses):
+def diagnostic_array(stamp_ns: int, statuses: Sequence[tuple]) -> bytes:
     """diagnostic_msgs/DiagnosticArray from (level, name, message, hardware_id, {key: value})."""
     w = CdrWriter()
     w.header(stamp_ns, '')
@@ -319,7 +333,7 @@ class JointStateContent:
 
     __slots__ = ('stamp_ns', 'name', 'position')
 
-    def __init__(self, stamp_ns, name, position):
+    def __init__(self, stamp_ns: int, name: tuple[str, ...], position: np.ndarray):
         self.stamp_ns, self.name, self.position = stamp_ns, name, position
 
 
@@ -336,7 +350,7 @@ class JointStateReader:
         self._names_bytes = b''
         self._names = ()
 
-    def read(self, raw):
+    def read(self, raw: bytes) -> JointStateContent:
         raw = bytes(raw)
         if raw[:2] == b'\x00\x00':                 # CDR_BE: not what ROS 2 writes on x86/ARM
             return _joint_state_by_rclpy(raw)
@@ -375,7 +389,7 @@ def _aligned(at, n):
 
 
 def _strings(raw, at):
-    """A CDR sequence<string> at ``at``: (tuple of str, offset after it)."""
+    """Read a CDR sequence<string> at ``at``: (tuple of str, offset after it)."""
     (count,) = struct.unpack_from('<I', raw, at)
     at += 4
     if count > len(raw):

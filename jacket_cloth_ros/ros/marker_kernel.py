@@ -7,6 +7,8 @@ position (3), orientation (x, y, z, w) and scale (3), in the order messages.mark
 them.
 """
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..core.bundles import Posed
@@ -14,20 +16,26 @@ from ..core.kernel_cache import njit
 from ..core.pose_kernel import _transform_point, collider_poses, quat_from_matrix
 from ..core.step_kernel import plane_poses
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.rig import Rig
+
 POSE_WIDTH = 10
 HOOD_SPHERE = 0.05                 # diameter of the hood particle's sphere, m
 PLANE_SIZE, PLANE_THICKNESS = 2.0, 0.002
 
 
-def shape_count(rig):
+def shape_count(rig: 'Rig') -> int:
     """Rows of shape_poses for ``rig``: ellipsoids, three per capsule, planes, the hood."""
     return len(rig.collider_links) + 3 * len(rig.capsule_links) + len(rig.plane_links) + 1
 
 
 @njit(cache=True, nogil=True)
 def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hood_p, out):
-    """Ellipsoids as scaled spheres; a capsule as its cylinder and two end spheres; a plane as
-    a thin square at its point nearest the origin (the root); the hood particle as a sphere."""
+    """Pose the marker shapes into ``out``.
+
+    Ellipsoids as scaled spheres; a capsule as its cylinder and two end spheres; a plane as a
+    thin square at its point nearest the origin (the root); the hood particle as a sphere.
+    """
     j = 0
     for k in range(centers.shape[0]):
         out[j, :3] = centers[k]
@@ -85,10 +93,12 @@ def _z_to(d, q):
 
 @njit(cache=True, nogil=True)
 def marker_table(model, scene):
-    """The pose table (shape_poses' rows: the colliders of a bundles.Model on the scene's
-    links, the hood particle) and the point table (the cloth's vertices, the hood's anchor and
-    particle, the layer bones' pivots, their tips), flattened one after the other. Returns
-    (table, pose rows)."""
+    """Return (table, pose rows): the pose table and the point table, flattened in turn.
+
+    The pose table has shape_poses' rows: the colliders of a bundles.Model on the scene's
+    links, and the hood particle. The point table holds the cloth's vertices, the hood's anchor
+    and particle, the layer bones' pivots and their tips.
+    """
     colliders, x, hood_p = model.colliders, scene.x, scene.hood_p
     k_caps = colliders.capsule_links.shape[0]
     nv = x.shape[0]
@@ -116,9 +126,11 @@ def marker_table(model, scene):
 
 @njit(cache=True, nogil=True)
 def fill_markers(model, scene, src, dst, out):
-    """marker_table, then cdr.MarkerTemplate's scatter ``out[dst] = table[src]``, in one call:
-    as separate numpy and compiled calls they cost several times as much in a node that
-    sleeps between inputs (caches cold)."""
+    """Run marker_table, then cdr.MarkerTemplate's scatter ``out[dst] = table[src]``, in one call.
+
+    As separate numpy and compiled calls they cost several times as much in a node that
+    sleeps between inputs (caches cold).
+    """
     table, _ = marker_table(model, scene)
     for i in range(dst.shape[0]):
         out[dst[i]] = table[src[i]]

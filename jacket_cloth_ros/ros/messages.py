@@ -3,6 +3,7 @@
 
 import functools
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -10,6 +11,11 @@ from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import Scene, floats
 from ..core.kernel_cache import FixedTypes
+
+if TYPE_CHECKING:           # for the annotations only
+    from builtin_interfaces.msg import Time
+    from ..core.rig import Rig
+    from ..core.simulation import Bones, JacketSimulation
 
 # visualization_msgs/Marker constants
 SPHERE, CUBE, CYLINDER, LINE_LIST, TRIANGLE_LIST = 2, 1, 3, 5, 11
@@ -46,27 +52,31 @@ class MarkerSpec:
     point_rows: np.ndarray = None  # its points: these rows of the point table
 
 
-def stamp_msg(stamp_ns):
+def stamp_msg(stamp_ns: int) -> 'Time':
     from builtin_interfaces.msg import Time
     return Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
 
 
-def tf_message(bones, stamp_ns, prefix=''):
+def tf_message(bones: 'Bones', stamp_ns: int, prefix: str = '') -> bytes:
     """One TFMessage with every bone, each a child of an existing skeleton link."""
-    return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(bones.poses,
-                                                                               stamp_ns)
+    return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(
+        bones.poses, stamp_ns)
 
 
 @functools.lru_cache(maxsize=8)
-def tf_template(names, parents, prefix):
-    """The TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
+def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
+                prefix: str) -> cdr.TfTemplate:
+    """Return the TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
     return cdr.TfTemplate(names, parents, prefix)
 
 
 @functools.lru_cache(maxsize=8)
-def marker_layout(rig, layer_bones, reset):
-    """Every marker of the rig but its varying values: cloth mesh and seams, colliders, hood
-    pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in each namespace first after a reset."""
+def marker_layout(rig: 'Rig', layer_bones: int, reset: bool) -> tuple[MarkerSpec, ...]:
+    """Lay out every marker of the rig but its varying values.
+
+    Cloth mesh and seams, colliders, hood pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in
+    each namespace first after a reset.
+    """
     out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
            for ns in MARKER_NAMESPACES] if reset else []
     n = rig.n
@@ -90,9 +100,12 @@ def marker_layout(rig, layer_bones, reset):
     return tuple(out)
 
 
-def marker_values(sim):
-    """(poses, points): the pose table (marker_kernel.shape_poses) and the point table (the
-    cloth's vertices, the hood's anchor and particle, the layer bones' pivots, their tips)."""
+def marker_values(sim: 'JacketSimulation') -> tuple[np.ndarray, np.ndarray]:
+    """Return (poses, points): the pose table and the point table.
+
+    The pose table as marker_kernel.shape_poses makes it; the point table holds the cloth's
+    vertices, the hood's anchor and particle, the layer bones' pivots and their tips.
+    """
     table, rows = _MARKER_TABLE(*_marker_arguments(sim))
     width = marker_kernel.POSE_WIDTH
     return table[:rows * width].reshape(rows, width), table[rows * width:].reshape(-1, 3)
@@ -110,8 +123,8 @@ def _layer_bones(sim):
     return 0 if sim.layer is None else len(sim.layer.positions)
 
 
-def marker_specs(sim, reset=False):
-    """The MarkerArray's markers with their values: what marker_array encodes, readable."""
+def marker_specs(sim: 'JacketSimulation', reset: bool = False) -> list[MarkerSpec]:
+    """Return the MarkerArray's markers with their values: what marker_array encodes, readable."""
     poses, points = marker_values(sim)
     out = []
     for m in marker_layout(sim.rig, _layer_bones(sim), reset):
@@ -125,8 +138,9 @@ def marker_specs(sim, reset=False):
     return out
 
 
-def marker_array(sim, stamp_ns, frame, reset=False):
-    """The MarkerArray's CDR bytes: its values written into a template laid out once."""
+def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
+                 reset: bool = False) -> bytes:
+    """Return the MarkerArray's CDR bytes: its values written into a template laid out once."""
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
     return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
 
@@ -138,7 +152,8 @@ def _marker_template(rig, layer_bones, reset, frame):
                               marker_kernel.shape_count(rig))
 
 
-def diagnostics(stamp_ns, node_name, values, level_warn, message):
+def diagnostics(stamp_ns: int, node_name: str, values: dict, level_warn: bool,
+                message: str) -> bytes:
     status = (WARN if level_warn else OK, f'{node_name}: cloth simulation', message,
               'jacket_cloth', values)
     return cdr.diagnostic_array(stamp_ns, [status])

@@ -4,6 +4,7 @@
 import argparse
 import sys
 import time
+from typing import TYPE_CHECKING
 
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
@@ -31,6 +32,9 @@ from . import cdr
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.simulation import JacketSimulation
+
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -46,7 +50,7 @@ NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 class JacketClothNode(Node):
     """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: object):
         super().__init__('jacket_cloth_node', **kwargs)
         for name, (kind, default, rng, ro, text) in NODE_PARAMETERS.items():
             self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
@@ -57,7 +61,8 @@ class JacketClothNode(Node):
         if preset not in self.fabrics:
             raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
                               f'(presets: {", ".join(self.fabrics)})')
-        for name, (kind, default, rng, ro, text) in fabric_parameters(self.fabrics[preset]).items():
+        for name, (kind, default, rng, ro, text) in fabric_parameters(
+                self.fabrics[preset]).items():
             self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -96,7 +101,7 @@ class JacketClothNode(Node):
                                                self._use_shipped_character)
 
     @property
-    def sim(self):
+    def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
 
     # -- model --------------------------------------------------------------------------------
@@ -168,7 +173,7 @@ class JacketClothNode(Node):
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
-        """Valid changes act from the next step; the cloth is never reset by them."""
+        """Apply valid changes from the next step; they never reset the cloth."""
         names = {p.name for p in params}
         if 'record' in names:
             self._open_recorder(self._p('record'))
@@ -204,7 +209,7 @@ class JacketClothNode(Node):
         self._write_session_config()
 
     def _write_session_config(self):
-        """The character, rig, fabrics and parameters, so a replay needs only the file."""
+        """Record the character, rig, fabrics and parameters, so a replay needs only the file."""
         if self.recorder is None or self.pipeline is None:
             return
         rig_file = self._p('rig_file') or shipped('jacket_rig.yaml')
@@ -220,7 +225,7 @@ class JacketClothNode(Node):
             self.get_logger().error(f'recording stopped: {e}')
             self.recorder = None
 
-    def close(self):
+    def close(self) -> None:
         if self.recorder is not None:
             self.recorder.close()
             self.recorder = None
@@ -249,7 +254,7 @@ class JacketClothNode(Node):
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
 
-    def on_joint_state(self, raw, info):
+    def on_joint_state(self, raw: bytes, info: dict) -> None:
         """One serialized JointState in (the joint_states callback): simulate, publish, record.
 
         Public so a harness can feed the node without DDS, as the lab's endurance run does.
@@ -293,7 +298,7 @@ def _read(path):
         return f.read()
 
 
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
         prog='jacket_cloth_node',

@@ -16,8 +16,11 @@ _ROS_TYPES = {float: T.PARAMETER_DOUBLE, int: T.PARAMETER_INTEGER, str: T.PARAME
 
 
 def _sim_parameters():
-    """Every SimParams field as a parameter: the simulation's table (core.params) is the one
-    source of their defaults, ranges and descriptions."""
+    """Return every SimParams field as a parameter.
+
+    The simulation's table (core.params) is the one source of their defaults, ranges and
+    descriptions.
+    """
     out = {}
     for name, f in SIM_FIELDS.items():
         kind = _ROS_TYPES[f.type]
@@ -64,7 +67,8 @@ NODE_PARAMETERS = {
 }
 
 
-def descriptor(name, kind, rng, read_only, text):
+def descriptor(name: str, kind: int, rng: tuple | None, read_only: bool,
+               text: str) -> ParameterDescriptor:
     d = ParameterDescriptor(name=name, type=kind, description=text, read_only=read_only)
     if rng is not None and kind == T.PARAMETER_DOUBLE:
         d.floating_point_range = [FloatingPointRange(from_value=float(rng[0]),
@@ -74,7 +78,7 @@ def descriptor(name, kind, rng, read_only, text):
     return d
 
 
-def fabric_parameters(fabric):
+def fabric_parameters(fabric: Fabric) -> dict[str, tuple]:
     """``fabric.<field>`` parameters, seeded from a preset; all of them change live."""
     out = {}
     for f in fields(Fabric):
@@ -86,14 +90,14 @@ def fabric_parameters(fabric):
     return out
 
 
-def default_values(fabric):
+def default_values(fabric: Fabric) -> dict[str, object]:
     """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric``."""
     values = {name: spec[1] for name, spec in NODE_PARAMETERS.items()}
     values.update({name: spec[1] for name, spec in fabric_parameters(fabric).items()})
     return values
 
 
-def check_value(name, value):
+def check_value(name: str, value: object) -> str:
     """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''."""
     if name in SIM_FIELDS:
         reason = check_sim_value(name, value)
@@ -109,18 +113,18 @@ def check_value(name, value):
     return ''
 
 
-def sim_params_from(values):
+def sim_params_from(values: dict) -> SimParams:
     sim = {k: values[k] for k in SIM_KEYS}
     sim['wind'] = tuple(float(w) for w in sim['wind'])
     return SimParams(**sim)
 
 
-def fabric_from(preset, values):
-    """The preset with every ``fabric.<field>`` value applied."""
+def fabric_from(preset: Fabric, values: dict) -> Fabric:
+    """Return the preset with every ``fabric.<field>`` value applied."""
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
 
 
-def parse_override(text, known):
+def parse_override(text: str, known: dict) -> tuple[str, object]:
     """``name:=value`` (as ``--ros-args -p`` takes it) to (name, typed value), validated.
 
     ``known`` maps parameter names to their current values (their types come from there).

@@ -7,18 +7,26 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 ``timing`` is on (live), keeping a replay's output file byte-identical run after run.
 """
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from ..core.simulation import JacketSimulation
+from ..core.simulation import JacketSimulation, StepReport
 from ..core.transforms import matrix_to_quat
 from ..recording.writer import qos_profile_yaml
 from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.fabric import Fabric
+    from ..core.rig import Rig
+    from ..core.skeleton import Skeleton
+    from .cdr import JointStateContent
 
-def session_topics(joint_states='/joint_states', wind='/jacket_cloth_node/wind',
-                   markers='/jacket_cloth_node/markers'):
-    """A session's topics by key: (name, type, offered QoS as rosbag2 records it).
+
+def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_cloth_node/wind',
+                   markers: str = '/jacket_cloth_node/markers') -> dict[str, tuple[str, str, str]]:
+    """Return a session's topics by key: (name, type, offered QoS as rosbag2 records it).
 
     Inputs (JointState, wind, parameter changes) and outputs (/tf, markers, diagnostics): the
     node records them all, a replay reads the inputs and writes them all again.
@@ -39,8 +47,8 @@ def session_topics(joint_states='/joint_states', wind='/jacket_cloth_node/wind',
 class SessionPipeline:
     """A simulation plus the cadence and content of its output messages."""
 
-    def __init__(self, skeleton, rig, fabrics, values, node_name='jacket_cloth_node',
-                 timing=True):
+    def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
+                 values: dict, node_name: str = 'jacket_cloth_node', timing: bool = True):
         self.fabrics = fabrics
         self.values = dict(values)
         self.node_name = node_name
@@ -69,7 +77,7 @@ class SessionPipeline:
     def _fabric(self):
         return fabric_from(self.fabrics[self.values['fabric']], self.values)
 
-    def apply(self, changes):
+    def apply(self, changes: dict) -> None:
         """Parameter changes (name -> value), acting from the next step; never a reset."""
         self.values.update(changes)
         if set(changes) & set(SIM_KEYS):
@@ -81,11 +89,12 @@ class SessionPipeline:
         if 'frame_prefix' in changes:
             self._tf = self._tf_template()
 
-    def note_latency(self, ns):
-        """The live node's time from a JointState's arrival to its /tf going out."""
+    def note_latency(self, ns: int) -> None:
+        """Note the live node's time from a JointState's arrival to its /tf going out."""
         self._latencies.append(ns)
 
-    def on_joint_state(self, msg, stamp_ns):
+    def on_joint_state(self, msg: 'JointStateContent',
+                       stamp_ns: int) -> tuple[StepReport, list[tuple[str, bytes]]]:
         """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
         self.inputs += 1
         report = self.sim.process(stamp_ns, msg.name, msg.position)

@@ -10,6 +10,7 @@ Sessions compared in one call are timed in the same process, so their step-time 
 
 import json
 import os
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -20,7 +21,11 @@ import numpy as np  # noqa: E402
 from ..core.measures import Worst, collider_labels, depth_inside, edge_strain  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
-from .session import run_session  # noqa: E402
+from .session import SessionInput, run_session  # noqa: E402
+
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.simulation import StepReport
+    from ..ros.pipeline import SessionPipeline
 
 # What a viewer sees wrong, per input on the published cloth (core.measures), and the push-out
 # depth found during the steps: each reported as max and p99 over inputs, with where.
@@ -34,7 +39,7 @@ REPORTED_PARAMETERS = ('fabric', 'sim_rate', 'stretch_limit', 'fabric.iterations
 class SessionFigures:
     """Per-input series of one session, gathered while it runs."""
 
-    def __init__(self, session, moments):
+    def __init__(self, session: SessionInput, moments: int):
         self.session = session
         self.t0, t1 = session.stamp_range()
         self.targets = list(np.linspace(self.t0, t1, moments + 2)[1:-1].astype(np.int64))
@@ -54,7 +59,8 @@ class SessionFigures:
         self.published = 0              # inputs whose bones went out
         self.tf_sent = 0                # /tf messages, as the node records them
 
-    def probe(self, pipeline, report, stamp, outputs):
+    def probe(self, pipeline: 'SessionPipeline', report: 'StepReport', stamp: int,
+              outputs: list[tuple[str, bytes]]) -> None:
         sim = pipeline.sim
         if not report.accepted:
             return
@@ -97,7 +103,7 @@ class SessionFigures:
             self.targets.pop(0)
             self.frames.append(sim_frame(sim, stamp))
 
-    def report(self, pipeline):
+    def report(self, pipeline: 'SessionPipeline') -> dict:
         a = np.array(self.rows, dtype=float).reshape(-1, 9)
         step_us = a[:, 6][np.isfinite(a[:, 6])]
         values = pipeline.values
@@ -181,14 +187,15 @@ CHARTS = {
 }
 
 
-def output_names(count):
-    """The files ``analyze`` writes into its folder for ``count`` sessions."""
+def output_names(count: int) -> list[str]:
+    """Return the files ``analyze`` writes into its folder for ``count`` sessions."""
     strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
                                                    for k in range(1, count + 1)]
     return ['report.json', 'summary.md'] + sorted(CHARTS) + strips
 
 
-def analyze(sessions, out_dir, names=None, moments=6):
+def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None = None,
+            moments: int = 6) -> dict:
     """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
     os.makedirs(out_dir, exist_ok=True)
     names = names or [os.path.basename(s.recording.path.rstrip('/')) for s in sessions]
@@ -256,9 +263,12 @@ def _summary(names, reports):
     return '\n'.join(lines)
 
 
-def summary_line(report):
-    """The one line the command prints: per session, frames, strain and step time, or how
-    many inputs were dropped when none was simulated."""
+def summary_line(report: dict) -> str:
+    """Return the one line the command prints.
+
+    Per session: frames, strain and step time, or how many inputs were dropped when none was
+    simulated.
+    """
     parts = []
     for r in report.get('sessions', [report]):
         text = f'{os.path.basename(r["file"])} {r["frames"]} frames'

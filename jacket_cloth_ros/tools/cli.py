@@ -27,7 +27,7 @@ def _skeleton(urdf_path=None):
     return load_skeleton(path), path
 
 
-def cmd_motion(args):
+def cmd_motion(args: argparse.Namespace) -> int:
     skeleton, urdf_path = _skeleton(args.urdf)
     duration = args.duration if args.duration is not None else clip_length(args.clip)
     if args.output:
@@ -91,7 +91,7 @@ def _check_output(path, force, inputs=(), recording=False):
     check_output(path, force, inputs, recording)
 
 
-def cmd_picture(args):
+def cmd_picture(args: argparse.Namespace) -> int:
     from ..tools.picture import render_filmstrip
     from .outputs import replacing
     skeleton, _ = _skeleton(args.urdf)
@@ -115,7 +115,7 @@ def _session(args):
     return session
 
 
-def cmd_replay(args):
+def cmd_replay(args: argparse.Namespace) -> int:
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
     session = _session(args)
@@ -129,7 +129,7 @@ def cmd_replay(args):
     return 0
 
 
-def cmd_analyze(args):
+def cmd_analyze(args: argparse.Namespace) -> int:
     from .analyze import analyze, output_names, summary_line
     from .outputs import check_output_folder
     if len(args.input) > 1 and not args.compare:
@@ -144,7 +144,7 @@ def cmd_analyze(args):
     return 0
 
 
-def cmd_demo(args):
+def cmd_demo(args: argparse.Namespace) -> int:
     """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
     from ..tools.picture import render_filmstrip
     os.makedirs(args.out, exist_ok=True)
@@ -188,7 +188,7 @@ def cmd_demo(args):
     return 0
 
 
-def cmd_warm(args):
+def cmd_warm(args: argparse.Namespace) -> int:
     from .warm import warm_kernels
     took, cached = warm_kernels()
     print(f'kernels {"loaded from the cache" if cached else "compiled and cached"} in '
@@ -196,7 +196,7 @@ def cmd_warm(args):
     return 0
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog='jacket_cloth', description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True)
     m = sub.add_parser('motion', help='play a built-in clip live on joint_states or to MCAP')
@@ -259,7 +259,7 @@ def _session_options(parser):
                         help='a node parameter, as with --ros-args -p (repeatable)')
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

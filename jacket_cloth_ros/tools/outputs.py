@@ -1,16 +1,17 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Where the tools write: regular files only, never one of their inputs, none overwritten
-without ``--force``, and a file is replaced only by a complete new one.
+"""Where the tools write: regular files only, never an input, none overwritten without ``--force``.
 
-Every tool that writes a file checks it here first (replay -o, motion -o, picture -o, the
-files of analyze --out, the demo's), so a device, a folder or the recording being read is
-refused in one line before anything is read or written.
+A file is replaced only by a complete new one. Every tool that writes a file checks it here
+first (replay -o, motion -o, picture -o, the files of analyze --out, the demo's), so a
+device, a folder or the recording being read is refused in one line before anything is
+read or written.
 """
 
 import contextlib
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable, Iterator
 
 from ..recording.writer import is_bag_folder
 
@@ -23,11 +24,15 @@ class OutputError(ValueError):
     """An output path a tool refuses; the message is one line."""
 
 
-def check_output(path, force, inputs=(), recording=False):
-    """Refuse ``path`` as an output file unless it is safe to write: its folder exists, it is
-    none of ``inputs`` (files, or bag folders it must not be inside) and, if it exists, it is
-    a regular file and ``force`` is set. A ``recording`` not ending in ``.mcap`` is a bag
-    folder (writer.is_bag_folder): if it exists, it must be a bag (with metadata.yaml)."""
+def check_output(path: str | os.PathLike, force: bool, inputs: Iterable[str | None] = (),
+                 recording: bool = False) -> None:
+    """Refuse ``path`` as an output file unless it is safe to write.
+
+    Its folder exists, it is none of ``inputs`` (files, or bag folders it must not be inside)
+    and, if it exists, it is a regular file and ``force`` is set. A ``recording`` not ending
+    in ``.mcap`` is a bag folder (writer.is_bag_folder): if it exists, it must be a bag (with
+    metadata.yaml).
+    """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
@@ -47,9 +52,12 @@ def check_output(path, force, inputs=(), recording=False):
             raise OutputError(f'{path} exists (use --force to overwrite)')
 
 
-def check_output_folder(folder, names, force, inputs=()):
-    """``check_output`` for each of the files ``names`` a tool writes into ``folder`` (made if
-    missing); the folder, if it exists, must be one."""
+def check_output_folder(folder: str | os.PathLike, names: Iterable[str], force: bool,
+                        inputs: Iterable[str | None] = ()) -> None:
+    """Run ``check_output`` for each of the files ``names`` a tool writes into ``folder``.
+
+    The folder is made if missing; if it exists, it must be one.
+    """
     folder = os.fspath(folder)
     if os.path.lexists(folder) and not os.path.isdir(folder):
         raise OutputError(f'{folder} is not a folder')
@@ -74,10 +82,13 @@ def _not_an_input(path, inputs):
 
 
 @contextlib.contextmanager
-def replacing(path, recording=False):
-    """A temporary path next to ``path`` to write the output to; it becomes ``path`` only when
-    the block ends without an error, so a failed run leaves the old file (or none). For a
-    ``recording`` that is a bag folder, the temporary path is a folder's, not yet made."""
+def replacing(path: str | os.PathLike, recording: bool = False) -> Iterator[str]:
+    """Yield a temporary path next to ``path`` to write the output to.
+
+    It becomes ``path`` only when the block ends without an error, so a failed run leaves the
+    old file (or none). For a ``recording`` that is a bag folder, the temporary path is a
+    folder's, not yet made.
+    """
     path = os.fspath(path)
     if recording and is_bag_folder(path):
         with _replacing_folder(os.path.normpath(path)) as tmp:
@@ -100,7 +111,7 @@ def replacing(path, recording=False):
 
 @contextlib.contextmanager
 def _replacing_folder(path):
-    """``replacing`` for a bag folder: written under a fresh name, then swapped in."""
+    """Do ``replacing`` for a bag folder: written under a fresh name, then swapped in."""
     parent, name = os.path.split(os.path.abspath(path))
     scratch = tempfile.mkdtemp(prefix=f'.{name}.', suffix='.partial', dir=parent)
     tmp = os.path.join(scratch, name)

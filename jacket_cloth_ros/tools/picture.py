@@ -9,7 +9,9 @@ hood at rest for that skeleton pose): the gap between dashed and solid is what t
 the pendulum add.
 """
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -26,6 +28,10 @@ from ..core.inputs import InputParser  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import read_messages  # noqa: E402
 
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.rig import Rig
+    from ..core.skeleton import Skeleton
+
 VIEWS = (('side', 0, 'x (m, forward)'), ('front', 1, 'y (m, left)'))
 
 
@@ -40,8 +46,8 @@ class Frame:
     hood_ref: np.ndarray = None  # (2,3) hood at rest
 
 
-def sim_frame(sim, stamp_ns):
-    """A frame of a running simulation (its current state)."""
+def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
+    """Return a frame of a running simulation (its current state)."""
     rig = sim.rig
     layer = sim.layer
     ref = sim.reference_points(sim.links, layer).reshape(rig.rows, rig.cols, 3)
@@ -57,7 +63,8 @@ def _stamp(msg):
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
-def recorded_frames(mcap_path, skeleton, rig=None):
+def recorded_frames(mcap_path: str, skeleton: 'Skeleton',
+                    rig: 'Rig | None' = None) -> tuple[list[Frame], int]:
     """Frames at every recorded MarkerArray with a mesh; the skeleton from the nearest input."""
     messages, _ = read_messages(mcap_path)
     states = [deserialize_message(m.data, JointState) for m in messages
@@ -88,7 +95,8 @@ def recorded_frames(mcap_path, skeleton, rig=None):
     return out, _stamp(states[0])
 
 
-def pick(frames, t0, times=None, moments=6):
+def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
+         moments: int = 6) -> list[Frame]:
     """Frames nearest ``times`` (s after t0), or ``moments`` evenly spaced ones."""
     if times is None:
         picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
@@ -98,7 +106,9 @@ def pick(frames, t0, times=None, moments=6):
     return [frames[k] for k in picks]
 
 
-def draw_filmstrip(frames, skeleton, png_path, t0, labels=None, title=None):
+def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0: int,
+                   labels: Callable[[int], str] | None = None,
+                   title: str | None = None) -> None:
     """Two rows (side and front view), one column per frame."""
     fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
     for col, f in enumerate(frames):
@@ -136,10 +146,15 @@ def draw_filmstrip(frames, skeleton, png_path, t0, labels=None, title=None):
     plt.close(fig)
 
 
-def render_filmstrip(mcap_path, png_path, skeleton, moments=6, labels=None, title=None,
-                     times=None, rig=None):
-    """Filmstrip of a recording at ``times`` (s from its start) or ``moments`` evenly spaced
-    instants; with ``rig``, the skinned pose is drawn too. Returns the stamps drawn."""
+def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moments: int = 6,
+                     labels: Callable[[int], str] | None = None, title: str | None = None,
+                     times: Sequence[float] | None = None,
+                     rig: 'Rig | None' = None) -> list[int]:
+    """Draw a filmstrip of a recording; return the stamps drawn.
+
+    At ``times`` (s from its start) or ``moments`` evenly spaced instants; with ``rig``, the
+    skinned pose is drawn too.
+    """
     frames, t0 = recorded_frames(mcap_path, skeleton, rig)
     chosen = pick(frames, t0, times, moments)
     draw_filmstrip(chosen, skeleton, png_path, t0, labels, title)

@@ -8,13 +8,17 @@ input and set-up: a byte-identical file (no wall-clock figure goes into it).
 
 import os
 import time
+from typing import TYPE_CHECKING
 
 from ..recording.writer import SessionRecorder
 from .outputs import replacing
-from .session import output_topics, run_session
+from .session import SessionInput, output_topics, run_session
+
+if TYPE_CHECKING:           # for the annotations only
+    from ..ros.pipeline import SessionPipeline
 
 
-def replay(session, out_path):
+def replay(session: SessionInput, out_path: str) -> tuple['SessionPipeline', float]:
     """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
     topics = output_topics(session)
     with replacing(out_path, recording=True) as tmp:     # a failed replay leaves no output

@@ -10,6 +10,7 @@ the shipped one fits the skeleton.
 
 import json
 import struct
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from rcl_interfaces.msg import ParameterEvent
@@ -19,8 +20,9 @@ from rclpy.serialization import deserialize_message
 from ..core.config import ConfigError, parse_yaml, read_text, shipped
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
+from ..core.simulation import StepReport
 from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
-from ..recording.reader import RecordingError, read_recording
+from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, parse_override
@@ -50,18 +52,19 @@ class SessionInput:
     setup: SessionSetup
     warnings: list = None        # one line each, for the user
 
-    def stamp_range(self):
+    def stamp_range(self) -> tuple[int, int]:
         """(first, last) JointState header stamp in ns: the span the session covers."""
         stamps = [e[0] for e in self.events if e[2] == 'joint_states']
         return min(stamps), max(stamps)
 
 
-def joint_state_topic(recording, topic=None):
-    """The recording's JointState topic: the one asked for, else the only one there is."""
+def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
+    """Return the recording's JointState topic: the one asked for, else the only one there is."""
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
     if topic is not None:
         if topic not in recording.topics:
-            raise RecordingError(f'{recording.path}: no topic {topic} (topics: {listed or "none"})')
+            raise RecordingError(
+                f'{recording.path}: no topic {topic} (topics: {listed or "none"})')
         if recording.topics[topic] != JOINT_STATE:
             raise RecordingError(f'{recording.path}: {topic} is {recording.topics[topic]!r}, '
                                  f'not {JOINT_STATE}')
@@ -78,7 +81,9 @@ def joint_state_topic(recording, topic=None):
     return found[0]
 
 
-def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=()):
+def load_session(path: str, topic: str | None = None, urdf: str | None = None,
+                 rig: str | None = None, fabric: str | None = None,
+                 overrides: Iterable[str] = ()) -> SessionInput:
     """Read a recording and settle its set-up: recorded values, then the options given."""
     recording = read_recording(path)
     topic = joint_state_topic(recording, topic)
@@ -115,8 +120,10 @@ def load_session(path, topic=None, urdf=None, rig=None, fabric=None, overrides=(
 
 
 def _check_joints(session):
-    """The JointState must speak of this skeleton: none known is an error, some unknown a
-    warning (the node would ignore them too)."""
+    """Check that the JointState speaks of this skeleton.
+
+    None known is an error, some unknown a warning (the node would ignore them too).
+    """
     first = next(e for e in session.events if e[2] == 'joint_states')
     try:
         names = list(JointStateReader().read(first[3]).name)
@@ -139,8 +146,10 @@ def _check_joints(session):
 
 
 def _header_stamp(raw):
-    """The stamp (ns) of the std_msgs/Header that starts a CDR message, or None if the bytes
-    cannot hold one."""
+    """Return the stamp (ns) of the std_msgs/Header that starts a CDR message.
+
+    None if the bytes cannot hold one.
+    """
     raw = bytes(raw[:12])
     if len(raw) < 12 or raw[0] != 0 or raw[1] not in (0, 1):
         return None
@@ -149,10 +158,13 @@ def _header_stamp(raw):
 
 
 def _events(recording, topic):
-    """JointState, wind and parameter changes in recorded order: the order they were written,
-    which is the order the node received them (log times can go back, or differ from the
-    stamps). A JointState carries its header stamp, the time the node simulates to; the others
-    their log time, for information only (run_session stamps them as the node does)."""
+    """Return JointState, wind and parameter changes in recorded order.
+
+    The order they were written, which is the order the node received them (log times can go
+    back, or differ from the stamps). A JointState carries its header stamp, the time the node
+    simulates to; the others their log time, for information only (run_session stamps them as
+    the node does).
+    """
     events = []
     for order, m in enumerate(recording.messages):
         if m.topic == topic:
@@ -180,12 +192,16 @@ def _parameter_changes(data, values):
     return changes
 
 
-def run_session(session, sink=None, probe=None, timing=False):
-    """Feed a session to a fresh pipeline. ``sink(key, bytes, stamp)`` receives every message
-    the node would record; ``probe(pipeline, report, stamp, outputs)`` sees the state after each
-    input (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step
-    costs into diagnostics as the live node does; a replay file then differs run to run.
-    Returns the pipeline."""
+def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] | None = None,
+                probe: Callable[[SessionPipeline, StepReport, int, list], None] | None = None,
+                timing: bool = False) -> SessionPipeline:
+    """Feed a session to a fresh pipeline; return the pipeline.
+
+    ``sink(key, bytes, stamp)`` receives every message the node would record;
+    ``probe(pipeline, report, stamp, outputs)`` sees the state after each input
+    (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step costs
+    into diagnostics as the live node does; a replay file then differs run to run.
+    """
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
                                timing=timing)
@@ -218,8 +234,8 @@ def run_session(session, sink=None, probe=None, timing=False):
     return pipeline
 
 
-def output_topics(session):
-    """The topics a replay writes, named as the node names them (inputs keep their names)."""
+def output_topics(session: SessionInput) -> dict[str, tuple[str, str, str]]:
+    """Return the topics a replay writes, named as the node names them (inputs keep theirs)."""
     topics = session_topics(joint_states=session.topic)
     for m in session.recording.messages:
         if m.type_name == WIND and m.topic.endswith('/wind'):
