@@ -10,7 +10,8 @@ and is judged on what a user would see:
 - tunnelled: a vertex left more than ``TUNNEL_M`` inside a collider at the end of an input;
 - knotted/flipped: more than ``FLIPPED_SHARE`` of the mesh triangles facing the other way than
   on the skinned pose, after the calm tail;
-- stretched: vertical strain above ``VERTICAL_BOUND`` after the calm tail;
+- stretched: a vertical edge more than ``VERTICAL_BOUND`` over its rest length at the end of
+  any input (what a viewer sees as a rubber hem for a few frames);
 - did not recover: the hem still more than ``RECOVER_M`` (mean) from the skinned hem after the
   calm tail.
 """
@@ -24,6 +25,7 @@ from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.geometry import grid_triangles
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.core.kernel import StretchLimit
+from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content
@@ -136,6 +138,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
     nonfinite = 0
     worst_offset = 0.0
     worst_tunnel = 0.0
+    worst_stretch = 0.0
     for stamp, names, pos in scene.inputs:
         report = sim.process(stamp, names, pos)
         if report.reset == 'non-finite cloth state':
@@ -145,6 +148,8 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
         ref = sim.reference_points(sim.links, sim.layer)
         worst_offset = max(worst_offset, float(np.linalg.norm(sim.x - ref, axis=1).max()))
         worst_tunnel = max(worst_tunnel, deepest_inside(sim))
+        worst_stretch = max(worst_stretch, edge_strain(sim.x, rig.vert_a, rig.vert_b,
+                                                       rig.vert_rest)[0].value)
     rig_ = sim.rig
     ref = sim.reference_points(sim.links, sim.layer)
     hem = slice((rig_.rows - 1) * rig_.cols, rig_.n)
@@ -154,6 +159,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
         'max_inside_m': worst_tunnel,
         'flipped_share_end': _flipped_share(sim),
         'vertical_strain_end': sim.strain()[0],
+        'max_vertical_stretch': worst_stretch,
         'hem_offset_end_m': float(np.linalg.norm(sim.x[hem] - ref[hem], axis=1).mean()),
         'resets': sim.resets,
         'overruns': sim.overruns,
@@ -166,7 +172,7 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
         verdict = 'tunnelled'
     elif figures['flipped_share_end'] > FLIPPED_SHARE:
         verdict = 'knotted/flipped'
-    elif figures['vertical_strain_end'] > VERTICAL_BOUND:
+    elif worst_stretch > VERTICAL_BOUND:
         verdict = 'stretched'
     elif figures['hem_offset_end_m'] > RECOVER_M:
         verdict = 'did not recover'
@@ -202,14 +208,15 @@ def write_matrix(results, out_dir, methods):
         cells = []
         for m in methods:
             verdict, f = results[(scene, m)]
-            cells.append(f'{verdict} (inside {f["max_inside_m"] * 100:.1f} cm, vertical '
-                         f'{f["vertical_strain_end"] * 100:.1f} %)')
+            cells.append(f'{verdict} (inside {f["max_inside_m"] * 100:.1f} cm, stretch '
+                         f'{f["max_vertical_stretch"] * 100:.1f} %)')
         lines.append(f'| {scene} | ' + ' | '.join(cells) + ' |')
     lines += ['', f'Bounds: exploded > {EXPLODED_M} m from the skinned pose; tunnelled > '
               f'{TUNNEL_M * 100:.0f} cm inside a collider; knotted/flipped > '
-              f'{FLIPPED_SHARE:.0%} of triangles reversed, stretched > {VERTICAL_BOUND:.0%} '
-              f'vertical strain, did not recover: hem > {RECOVER_M * 100:.0f} cm from the '
-              f'skinned hem, each {CALM_S} s after the scene.', '']
+              f'{FLIPPED_SHARE:.0%} of triangles reversed after the scene, stretched: a '
+              f'vertical edge > {VERTICAL_BOUND:.0%} over rest at any input, did not recover: '
+              f'hem > {RECOVER_M * 100:.0f} cm from the skinned hem {CALM_S} s after the '
+              'scene.', '']
     with open(os.path.join(out_dir, 'stress.md'), 'w', encoding='utf-8') as f:
         f.write('\n'.join(lines))
     with open(os.path.join(out_dir, 'stress.json'), 'w', encoding='utf-8') as f:
