@@ -57,5 +57,7 @@ def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
     assert len(report['horizontal_stretch']['vertex']) == 2        # (row, column)
     assert report['vertical_stretch']['max'] <= 0.10               # M12, at every input
     assert report['push_out_m']['max'] > report['inside_m']['max']  # pushed out, not left in
+    assert report['worst_instant'] == 'worst_instant.png'
+    assert (tmp_path / 'out' / 'worst_instant.png').stat().st_size > 10_000
     summary = (tmp_path / 'out' / 'summary.md').read_text()
     assert 'vertical compression max / p99' in summary and 'inside a collider' in summary

@@ -15,7 +15,7 @@ if TYPE_CHECKING:           # for the annotations only
     from .simulation import Colliders
 
 
-SURFACE = 1e-9         # m: depths below this are rounding, the vertex is on the surface
+SURFACE = 1e-6         # m: depths below this are rounding, the vertex is on the surface
 
 
 class Worst(NamedTuple):

@@ -25,6 +25,7 @@ from .session import SessionInput, run_session  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.simulation import StepReport
+    from ..core.skeleton import Skeleton
     from ..ros.pipeline import SessionPipeline
 
 # What a viewer sees wrong, per input on the published cloth (core.measures), and the push-out
@@ -52,6 +53,7 @@ class SessionFigures:
         self.worst = {name: [] for name in MEASURES}        # (time s, Worst) per input
         self.labels = collider_labels(session.setup.rig)
         self.frames = []
+        self.worst_frames = {}          # measure -> (value, frame) at its worst input so far
         self.reset_reasons = []
         self.tf_compared = 0
         self.tf_equal = 0
@@ -88,6 +90,9 @@ class SessionFigures:
         for name, worst in zip(MEASURES, (vs, vc, hs, inside,
                                           Worst(report.max_penetration, -1))):
             self.worst[name].append((t, worst))
+        for name, worst in (('vertical_stretch', vs), ('inside_m', inside)):
+            if name not in self.worst_frames or worst.value > self.worst_frames[name][0]:
+                self.worst_frames[name] = (worst.value, sim_frame(sim, stamp))
         ref = sim.reference_points(sim.links, sim.layer)
         hem = slice((rig.rows - 1) * rig.cols, rig.n)
         anchor, rot = sim.hood_anchor(sim.links)
@@ -134,6 +139,12 @@ class SessionFigures:
             'parameters': {k: values[k] for k in REPORTED_PARAMETERS if k in values},
             **{name: self._measure(name, pipeline.sim.rig.cols) for name in MEASURES},
         }
+
+    def report_where(self, name: str) -> str:
+        """Say where a measure was worst: vertex (row, column) and collider, if known."""
+        m = self._measure(name, self.session.setup.rig.cols)
+        parts = ['r{} c{}'.format(*m['vertex'])] if 'vertex' in m else []
+        return ' '.join(parts + ([m['collider']] if 'collider' in m else []))
 
     def _measure(self, name, cols):
         """{max, p99} over inputs, and when (s), which vertex (row, column) and collider."""
@@ -191,7 +202,9 @@ def output_names(count: int) -> list[str]:
     """Return the files ``analyze`` writes into its folder for ``count`` sessions."""
     strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
                                                    for k in range(1, count + 1)]
-    return ['report.json', 'summary.md'] + sorted(CHARTS) + strips
+    worst = ['worst_instant.png'] if count == 1 else [f'worst_instant_{k}.png'
+                                                      for k in range(1, count + 1)]
+    return ['report.json', 'summary.md'] + sorted(CHARTS) + strips + worst
 
 
 def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None = None,
@@ -211,6 +224,11 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
                            'bones (navy); dashed blue: skinned hem and hood')
         reports[-1]['filmstrip'] = strip if figures.frames else None
+        worst = 'worst_instant.png' if len(sessions) == 1 else \
+            f'worst_instant_{len(reports)}.png'
+        if figures.worst_frames:
+            _draw_worst(figures, session.setup.skeleton, os.path.join(out_dir, worst), name)
+        reports[-1]['worst_instant'] = worst if figures.worst_frames else None
     for chart, (columns, title) in CHARTS.items():
         _series_chart(os.path.join(out_dir, chart), series, columns, title)
     if len(reports) == 1:
@@ -278,8 +296,8 @@ def summary_line(report: dict) -> str:
         if median is None:
             text += ', nothing simulated'
         else:
-            text += (f', vertical strain {r["max_vertical_strain"]:.3f}, step {median:.0f} us '
-                     'median')
+            text += (f', vertical stretch {r["vertical_stretch"]["max"]:.3f}, inside '
+                     f'{r["inside_m"]["max"] * 1e3:.1f} mm, step {median:.0f} us median')
         parts.append(text)
     return '; '.join(parts)
 
@@ -299,3 +317,18 @@ def _max_p99(measure, scale, unit):
         where.append(measure['collider'])
     text = f"{measure['max'] * scale:.4g} / {measure['p99'] * scale:.4g}{unit}"
     return text + (f" ({', '.join(where)})" if where else '')
+
+
+def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: str) -> None:
+    """Draw the worst instants: the longest vertical edge, the deepest vertex in a collider.
+
+    Side and front views at each of those inputs, the skinned pose dashed.
+    """
+    frames, labels = [], {}
+    for measure, title in (('vertical_stretch', 'vertical stretch'), ('inside_m', 'inside')):
+        value, frame = figures.worst_frames[measure]
+        where = figures.report_where(measure)
+        frames.append(frame)
+        labels[frame.stamp_ns - figures.t0] = f'\nworst {title} {value:.2g}\n{where}'
+    draw_filmstrip(frames, skeleton, path, figures.t0, labels=lambda dt: labels.get(dt, ''),
+                   title=f'{name}: the worst instants; dashed blue: skinned hem and hood')
