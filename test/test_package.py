@@ -114,3 +114,28 @@ def test_the_environment_has_the_node_and_the_tools_as_commands():
     done = subprocess.run([os.path.join(bin_dir, 'jacket_cloth'), '--help'],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 0 and 'replay' in done.stdout
+
+
+def test_the_node_runs_without_mcap_and_recording_says_what_it_needs():
+    # mcap has no rosdep key on every distro: `rosdep install` then `ros2 run` must start the
+    # node; only recording needs `pip install mcap`, and says so.
+    script = '''
+import sys
+class NoMcap:
+    def find_spec(self, name, path=None, target=None):
+        if name == 'mcap' or name.startswith('mcap.'):
+            raise ImportError('no mcap here')
+sys.meta_path.insert(0, NoMcap())
+import jacket_cloth_ros.ros.node
+from jacket_cloth_ros.recording.writer import SessionRecorder
+try:
+    SessionRecorder(sys.argv[1])
+except OSError as e:
+    print(e)
+'''
+    import tempfile
+    with tempfile.TemporaryDirectory() as folder:
+        done = subprocess.run([sys.executable, '-c', script, os.path.join(folder, 'x.mcap')],
+                              capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert 'recording needs the mcap package (pip install mcap)' in done.stdout

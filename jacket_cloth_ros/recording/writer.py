@@ -17,7 +17,6 @@ import yaml
 
 from ..core.choices import Choice
 from .definitions import ros2msg_schema
-from .mcap_file import McapWriter
 
 SESSION_CONFIG = 'jacket_cloth_session'     # the MCAP metadata record of a session's setup
 _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
@@ -83,6 +82,10 @@ class SessionRecorder:
     def __init__(self, path: str, flush_period_ns: int = 1_000_000_000,
                  final_name: str | None = None, background: bool = False,
                  compression: str = 'zstd'):
+        try:            # only recording needs mcap: a node without it runs, unrecorded
+            from .mcap_file import McapWriter
+        except ImportError as e:
+            raise OSError(f'recording needs the mcap package (pip install mcap): {e}') from None
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
