@@ -44,15 +44,19 @@ def test_m6_top_row_follows_its_link_and_m12_vertical_lengths_exact(make_sim, ri
     by_below = np.einsum('nij,nj->ni', below[:, :3, :3], rig.pin_below_local) + below[:, :3, 3]
     w = rig.pin_weight[:, None]
     assert sim.x[:rig.cols] == pytest.approx((1 - w) * carried + w * by_below, abs=1e-12)
-    # M12: exact, except where the last push-out moved an end off a collider.
+    # M12: exact where no collider is in the way, within 0.1 % where one turned the edge.
     vert = np.linalg.norm(sim.x[rig.vert_a] - sim.x[rig.vert_b], axis=1)
     free_of_contact = ~sim.contact[rig.vert_a] & ~sim.contact[rig.vert_b]
     assert free_of_contact.mean() > 0.8
     assert vert[free_of_contact] == pytest.approx(rig.vert_rest[free_of_contact], abs=1e-12)
-    # The pass itself leaves every vertical exactly at its rest length.
+    assert vert == pytest.approx(rig.vert_rest, rel=1e-3)
+    # With no collider, the pass leaves every vertical exactly at its rest length.
     from jacket_cloth_ros.core import kernel
     x = sim.x + np.random.default_rng(1).normal(0, 0.02, sim.x.shape)
-    kernel.hard_vertical_pass(x, rig.vert_a, rig.vert_b, rig.vert_rest)
+    none3 = np.zeros((0, 3))
+    kernel.hard_vertical_pass_outside(
+        x, rig.vert_a, rig.vert_b, rig.vert_rest, np.zeros(rig.n, dtype=np.bool_), none3,
+        np.zeros((0, 3, 3)), none3, none3, none3, np.zeros(0), none3, none3)
     vert = np.linalg.norm(x[rig.vert_a] - x[rig.vert_b], axis=1)
     assert vert == pytest.approx(rig.vert_rest, abs=1e-12)
 

@@ -309,22 +309,6 @@ def limit_distance(x, free, ref, max_distance):
 
 
 @njit(cache=True)
-def hard_vertical_pass(x, upper, lower, rest):
-    """M12: top-down, move only the lower vertex so each vertical length is exactly its rest."""
-    for j in range(upper.shape[0]):
-        a, b = upper[j], lower[j]
-        d0 = x[a, 0] - x[b, 0]
-        d1 = x[a, 1] - x[b, 1]
-        d2 = x[a, 2] - x[b, 2]
-        length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if length > 1e-9:
-            f = (length - rest[j]) / length
-            x[b, 0] += d0 * f
-            x[b, 1] += d1 * f
-            x[b, 2] += d2 * f
-
-
-@njit(cache=True)
 def tethers(x, free, anchor, length):
     """Long-range attachments: no vertex further from its pinned anchor than its tether.
 
