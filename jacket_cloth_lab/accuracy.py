@@ -23,6 +23,7 @@ import numpy as np
 
 from jacket_cloth_ros.core import kernel
 from jacket_cloth_ros.core.kernel import Solver, StretchLimit
+from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.core.bundles import (
     ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning)
 from jacket_cloth_ros.core.simulation import (
@@ -126,17 +127,9 @@ def hem_curve(rig, x):
 
 
 def deepest_inside(sim):
-    """Deepest free vertex inside an ellipsoid (depth along its shortest radius) or a plane."""
-    c = sim.collider_frames(sim.links)
-    free = sim.x[sim.rig.free]
-    deepest = 0.0
-    for center, axes, radii in zip(c.centers, c.axes, c.radii):
-        r = np.linalg.norm(((free - center) @ axes) / radii, axis=1)
-        if (r < 1.0).any():
-            deepest = max(deepest, float(((1.0 - r[r < 1.0]) * radii.min()).max()))
-    for point, normal in zip(c.plane_points, c.plane_normals):
-        deepest = max(deepest, float(-((free - point) @ normal).min()))
-    return deepest
+    """Return the deepest free vertex's depth inside any collider (m), as analyze reports it."""
+    return depth_inside(sim.x, sim.rig.free, sim.collider_frames(sim.links),
+                        collider_labels(sim.rig)).value
 
 
 def run(skeleton, rig, fabric, method, inputs):

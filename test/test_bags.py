@@ -92,3 +92,8 @@ def test_a_bag_folder_is_laid_out_as_rosbag2_does_and_every_reader_opens_it(tmp_
     assert _jacket_cloth('replay', str(clip), '-o', str(bag)).returncode == 1
     assert _jacket_cloth('replay', str(clip), '-o', str(bag), '--force').returncode == 0
     assert (bag / 'metadata.yaml').exists() and not list(tmp_path.glob('.session.*'))
+    # Never the folder that holds the input, even with --force.
+    inner = bag / 'session_0.mcap'
+    kept = inner.read_bytes()
+    assert _jacket_cloth('replay', str(inner), '-o', str(bag), '--force').returncode == 1
+    assert inner.read_bytes() == kept

@@ -128,14 +128,30 @@ def test_fixed_types_refuses_a_call_whose_types_changed():
 
 
 def test_the_compiled_step_is_typed_once_whatever_values_the_parameters_take(make_sim, skeleton):
-    # Bundles fix every dtype: ints where floats are meant, a live change and a rig without
-    # the optional parts still give the one signature the step was compiled for.
+    # Bundles fix every dtype: ints where floats are meant, a live change, arrays a caller
+    # assigned in another order, and another rig (capsules, a floor, another skeleton) all
+    # give the types the step was first compiled for.
+    from numba import typeof
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    from jacket_cloth_ros.core.skeleton import load_skeleton
     sim = make_sim()
     inputs = clip_inputs(skeleton, 'walk', 0.3)
     for k, (stamp, names, pos) in enumerate(inputs):
         if k == 5:
             sim.set_params(sim.params.with_values(wind=(1, 0, 0), wind_gust=1, gravity=10,
                                                   quality_tolerance=0, substeps=2))
+            sim.x = np.asfortranarray(sim.x)
+            sim.hood_p = sim.hood_p.astype(np.float32)
         assert not sim.process(stamp, names, pos).warnings
-    assert len(step_kernel.advance.signatures) == 1
     assert sim._advance_kernel._types is not None          # typed, then called directly
+    other_skeleton = load_skeleton(shipped('examples/mannequin.urdf'))
+    other = JacketSimulation(other_skeleton,
+                             load_rig(other_skeleton, shipped('examples/mannequin_rig.yaml')),
+                             load_fabric('tweed_jacket'))
+    assert other.rig.capsule_links.size and other.rig.plane_links.size
+    for ours, theirs in ((sim.model, other.model), (sim.tuning, other.tuning),
+                         (sim.state, other.state)):
+        assert typeof(ours) == typeof(theirs)

@@ -32,15 +32,6 @@ def _cell(value):
     return repr(value)
 
 
-def test_the_node_declares_every_simulation_parameter_with_its_default_and_range():
-    for name, f in SIM_FIELDS.items():
-        kind, default, rng, read_only, text = NODE_PARAMETERS[name]
-        assert (tuple(default) if isinstance(default, list) else default) == f.default, name
-        assert text == f.metadata['doc'] and not read_only
-        if not isinstance(f.default, tuple):
-            assert rng == f.metadata['range'], name
-
-
 def test_the_shipped_parameter_file_holds_the_defaults_under_any_namespace():
     with open(os.path.join(ROOT, 'config', 'node_params.yaml'), encoding='utf-8') as f:
         data = yaml.safe_load(f)

@@ -403,7 +403,7 @@ def test_a_damaged_chunk_is_an_error_naming_the_file_and_nothing_is_replayed(
     capsys.readouterr()
     err = _one_line_error(capsys, ['replay', str(flipped), '-o', str(out)])
     assert err.startswith(f'jacket_cloth replay: {flipped}: damaged file') and 'CRC' in err
-    assert not out.exists() and not os.path.exists(str(out) + '.partial')
+    assert not out.exists() and not list(tmp_path.glob('.out.mcap.*'))
     assert 'damaged file' in _one_line_error(capsys, ['analyze', str(flipped), '--out',
                                                       str(tmp_path / 'an')])
     # Cut short as well (no summary: the records are streamed): still damage, not a cut.
@@ -420,7 +420,7 @@ def test_a_partial_output_never_replaces_the_file(clip, tmp_path, capsys, monkey
         raise OSError('disk full')
     monkeypatch.setattr(replay_module, 'run_session', boom)
     assert 'disk full' in _one_line_error(capsys, ['replay', str(clip), '-o', str(out)])
-    assert not out.exists() and not os.path.exists(str(out) + '.partial')
+    assert not out.exists() and not list(tmp_path.glob('.out.mcap.*'))
     shutil.rmtree(tmp_path, ignore_errors=True)
 
 

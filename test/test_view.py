@@ -6,6 +6,7 @@ import json
 import os
 
 import numpy as np
+import pytest
 import yaml
 from rclpy.serialization import deserialize_message
 from tf2_msgs.msg import TFMessage
@@ -21,32 +22,37 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VIEW = os.path.join(ROOT, 'config', 'view')
 
 
-def _tf_messages(skeleton, rig, **values):
+def _tf_messages(skeleton, rig, rate=60, **values):
     fabrics = load_fabrics()
     pipe = SessionPipeline(skeleton, rig, fabrics, {**default_values(fabrics['tweed_jacket']),
                                                     **values})
     reader, sent = JointStateReader(), []
     for k in range(40):                 # the run clip moves the character through the world
-        names, pos = joint_state_content(skeleton.joint_names, 'run', k / 60)
-        content = reader.read(joint_state(10**10 + k * 10**9 // 60, names, pos))
+        names, pos = joint_state_content(skeleton.joint_names, 'run', k / rate)
+        content = reader.read(joint_state(10**10 + k * 10**9 // rate, names, pos))
         _, outputs = pipe.on_joint_state(content, content.stamp_ns)
-        sent.append([deserialize_message(data, TFMessage) for key, data in outputs
-                     if key == 'tf'])
+        sent.append(([deserialize_message(data, TFMessage) for key, data in outputs
+                      if key == 'tf'], dict(zip(names, pos))))
     return pipe, sent
 
 
 def test_publish_world_tf_puts_the_root_in_the_world_frame(skeleton, rig):
     _, without = _tf_messages(skeleton, rig)
-    assert all(len(tfs) == 1 for tfs in without)                # off by default
-    pipe, sent = _tf_messages(skeleton, rig, publish_world_tf=True, world_frame='map')
-    world = sent[-1][1].transforms[0]
-    assert (world.header.frame_id, world.child_frame_id) == ('map', skeleton.link_names[0])
-    assert world.header.stamp == sent[-1][0].transforms[0].header.stamp
-    t, q = world.transform.translation, world.transform.rotation
-    root = pipe.sim.root
-    assert np.linalg.norm(root[:3, 3]) > 0.5                    # the character moved
-    assert np.allclose([t.x, t.y, t.z], root[:3, 3], atol=1e-12)
-    assert np.allclose(quat_to_matrix([q.x, q.y, q.z, q.w]), root[:3, :3], atol=1e-9)
+    assert all(len(tfs) == 1 for tfs, _ in without)             # off by default
+    # At 50 Hz the inputs fall between 120 Hz steps: the transform is the input's own pose,
+    # as robot_state_publisher's links are, not the last step's.
+    pipe, sent = _tf_messages(skeleton, rig, rate=50, publish_world_tf=True, world_frame='map')
+    for tfs, values in sent[1:]:
+        world = tfs[1].transforms[0]
+        assert (world.header.frame_id, world.child_frame_id) == ('map', skeleton.link_names[0])
+        assert world.header.stamp == tfs[0].transforms[0].header.stamp
+        t, q = world.transform.translation, world.transform.rotation
+        assert [t.x, t.y, t.z] == pytest.approx(
+            [values[f'world_joint/trans_{a}'] for a in 'xyz'], abs=1e-12)
+        given = [values[f'world_joint/rot_{a}'] for a in 'xyzw']
+        assert np.allclose(quat_to_matrix([q.x, q.y, q.z, q.w]), quat_to_matrix(given),
+                           atol=1e-9)
+    assert abs(values['world_joint/trans_x']) + abs(values['world_joint/trans_y']) > 0.5
 
 
 def test_the_rviz_config_shows_the_node_topics_in_the_world_frame():

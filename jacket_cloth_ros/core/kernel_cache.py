@@ -85,9 +85,10 @@ class FixedTypes:
     numba types every argument of every call; for named tuples it does so in Python, which
     costs more than the call itself. Here the first call goes through numba's dispatcher
     (compiling or loading, and checking the types), and later calls go straight to the
-    entry point compiled for those types. The bundles (core.bundles) fix every dtype and
-    layout, so the types stay the same; :meth:`retype` is for an owner that rebuilt one, and
-    ``JACKET_CLOTH_CHECK_TYPES=1`` checks every call (``check`` False: never, for timing).
+    entry point compiled for those types, which reads any argument as the type it had then:
+    every caller builds its arguments with core.bundles' builders, which fix each dtype and
+    layout. ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check``
+    False never does (for timing).
     """
 
     def __init__(self, dispatcher: 'Dispatcher', check: bool | None = None):
@@ -95,10 +96,6 @@ class FixedTypes:
         self._check = CHECK_TYPES if check is None else check
         self._entry = None
         self._types = None
-
-    def retype(self) -> None:
-        """Type the next call again (an argument bundle was rebuilt)."""
-        self._entry = None
 
     def __call__(self, *args: object) -> object:
         if self._entry is not None:

@@ -50,6 +50,8 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
     """
     best = Worst(SURFACE, -1)       # on the surface (rounding) is not inside
     idx = np.flatnonzero(free)
+    if len(idx) == 0:
+        return Worst(0.0, -1)
     p = x[idx]
     k = 0
     for c, axes, radii in zip(colliders.centers, colliders.axes, colliders.radii):
@@ -81,9 +83,5 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
 
 
 def collider_labels(rig: 'Rig') -> list:
-    """Name each collider of a rig readably, in the order of simulation.Colliders."""
-    links = rig.skeleton.link_names
-    return ([f'ellipsoid {k} on {links[i]}' for k, i in enumerate(rig.collider_links)]
-            + [f'capsule {k} on {links[i]}' for k, i in enumerate(rig.capsule_links)]
-            + [f'plane {k} on {"the world" if i < 0 else links[i]}'
-               for k, i in enumerate(rig.plane_links)])
+    """Return the rig's name of each collider, in the order of simulation.Colliders."""
+    return [c.name for c in (*rig.colliders, *rig.capsules, *rig.planes)]

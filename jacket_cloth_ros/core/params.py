@@ -56,10 +56,16 @@ class SimParams:
         90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
 
     def __post_init__(self) -> None:
-        for name, value in self.__dict__.items():
+        for name, value in list(self.__dict__.items()):
             reason = check_sim_value(name, value)
             if reason:
                 raise ValueError(f'{name} {reason}')
+            kind = SIM_FIELDS[name].type          # 2.0 for an int field is kept as 2
+            if kind is tuple:
+                value = tuple(float(v) for v in value)
+            elif kind in (int, float):
+                value = kind(value)
+            object.__setattr__(self, name, value)
 
     def with_values(self, **changes: object) -> 'SimParams':
         """Return a copy with ``changes`` (validated)."""

@@ -22,7 +22,7 @@ import numpy.typing as npt
 from . import kernel, pose_kernel, step_kernel
 from .bone_layer import LayerPose
 from .bundles import (
-    ClothState, Motion, StepControl, StepOutput, Tuning, floats, model_of, posed_like)
+    ClothState, Motion, StepControl, StepOutput, Tuning, flags, floats, model_of, posed_like)
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
 from .params import SimParams
@@ -371,10 +371,11 @@ class JacketSimulation:
         """
         layer = self.rig.layer
         k = len(layer.names) if layer else 0
-        out = StepOutput(np.empty_like(self.links), np.empty((k, 3, 3)), np.empty((k, 3)),
+        out = StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
                          np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
                          np.zeros(step_kernel.STAT_SLOTS))
-        motion = Motion(a.q, b.q, a.root_quat, b.root_quat, floats(a.root[:3, 3]),
+        motion = Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
+                        floats(a.root[:3, 3]),
                         floats(b.root[:3, 3]), int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns),
                         int(self.t_sim), int(self.dt_ns), int(n))
         self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
@@ -387,7 +388,14 @@ class JacketSimulation:
 
     @property
     def state(self) -> ClothState:
-        """The cloth, hood and root as the compiled steps move them (the very arrays)."""
+        """The cloth, hood and root as the compiled steps move them (the very arrays).
+
+        Each is made a C-ordered float64 (bool) array first, if a caller assigned another: the
+        compiled step reads them as the types it was first called with (FixedTypes).
+        """
+        self.x, self.xp, self.hood_p, self.hood_pp, self.root = (
+            floats(a) for a in (self.x, self.xp, self.hood_p, self.hood_pp, self.root))
+        self.contact = flags(self.contact)
         return ClothState(self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
                           self._lam, self._started)
 

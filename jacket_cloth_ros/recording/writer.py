@@ -89,6 +89,7 @@ class SessionRecorder:
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
+        codec = Compression.parse(compression, 'compression').mcap_name    # before any file
         self.path = path
         self._folder = None
         file_path = path
@@ -101,15 +102,19 @@ class SessionRecorder:
             file_path = os.path.join(path, self._name)
         else:
             self._name = final_name or os.path.basename(path)     # as the bag will know it
-        self._file = open(file_path, 'wb')
+        try:
+            self._file = open(file_path, 'wb')
+        except OSError:
+            if self._folder is not None:
+                os.rmdir(self._folder)          # no empty bag left to refuse the next try
+            raise
         self._queue = self._thread = self._error = None
         if background:
             self._queue = queue.SimpleQueue()
             self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
             self._thread.start()
-        self._writer = McapWriter(
-            self._file, compression=Compression.parse(compression, 'compression').mcap_name,
-            chunk_bytes=CHUNK_BYTES, run=self._do)
+        self._writer = McapWriter(self._file, compression=codec, chunk_bytes=CHUNK_BYTES,
+                                  run=self._do)
         self._writer.start(profile='ros2', library='jacket_cloth_ros')
         self._channels = {}
         self._schemas = {}

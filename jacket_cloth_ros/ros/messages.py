@@ -114,7 +114,8 @@ def marker_values(sim: 'JacketSimulation') -> tuple[np.ndarray, np.ndarray]:
 def _marker_arguments(sim):
     layer = sim.layer
     empty = np.empty((0, 3))
-    return (sim.model, Scene(sim.links, sim.root, sim.x, sim.hood_p,
+    return (sim.model, Scene(floats(sim.links), floats(sim.root), floats(sim.x),
+                             floats(sim.hood_p),
                              empty if layer is None else floats(layer.positions),
                              empty if layer is None else floats(layer.tips)))
 

@@ -12,7 +12,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.simulation import JacketSimulation, StepReport
-from ..core.transforms import matrix_to_quat
 from ..recording.writer import qos_profile_yaml
 from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
@@ -126,12 +125,17 @@ class SessionPipeline:
         return out
 
     def _world_transform(self, stamp_ns):
-        """world_frame -> the URDF root at the last step (the world_joint variables)."""
+        """Encode world_frame -> the URDF root: the input's own world_joint variables.
+
+        Not the last step's root: with inputs off the step grid that lags the input, and the
+        skeleton's links (robot_state_publisher) are at the input's pose.
+        """
         root = self.sim.skeleton.link_names[0]
         key = (self.values['world_frame'], root)
         if self._world_tf is None or self._world_tf[0] != key:
             self._world_tf = (key, messages.tf_template((root,), (key[0],), ''))
-        pose = np.concatenate([self.sim.root[:3, 3], matrix_to_quat(self.sim.root[:3, :3])])
+        last = self.sim.last
+        pose = np.concatenate([last.root[:3, 3], last.root_quat])
         return self._world_tf[1].encode(pose[None], stamp_ns)
 
     def _diagnostics(self, stamp_ns):

@@ -79,6 +79,8 @@ def _not_an_input(path, inputs):
         if os.path.isdir(given) and real.startswith(os.path.join(os.path.realpath(given), '')):
             raise OutputError(f'{path} is inside the input folder {given}; write the output '
                               'elsewhere')
+        if os.path.realpath(given).startswith(os.path.join(real, '')):
+            raise OutputError(f'{path} holds the input {given}; write the output elsewhere')
 
 
 @contextlib.contextmanager
@@ -117,8 +119,14 @@ def _replacing_folder(path):
     tmp = os.path.join(scratch, name)
     try:
         yield tmp
+        old = os.path.join(scratch, name + '.old')
         if os.path.lexists(path):
-            os.rename(path, os.path.join(scratch, name + '.old'))
-        os.rename(tmp, path)
+            os.rename(path, old)
+        try:
+            os.rename(tmp, path)
+        except OSError:
+            if os.path.lexists(old):
+                os.rename(old, path)            # the old bag stays where it was
+            raise
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
