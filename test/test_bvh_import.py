@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth import``: real BVH captures into a URDF and JointState, checked against the reader.
+"""``jacket_cloth import``: real BVH captures into a URDF and JointState, as the reader sees them.
 
 The captures are the two real ones bvhtoolbox 0.1.3's source distribution ships (a MocapBank
 capture and a free-BVH-archive one); ``make`` fetches them from the registry into the venv's
