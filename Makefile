@@ -9,6 +9,7 @@ VENV      ?= .venv
 PY        := $(VENV)/bin/python
 PIP       := $(PY) -m pip --disable-pip-version-check -q
 READY     := $(VENV)/.jacket_cloth_ready
+MOCAP     := $(VENV)/share/mocap
 TF2_BUILD := $(VENV)/build/tf2_msgs
 export PYTHONPATH := $(CURDIR)$(if $(PYTHONPATH),:$(PYTHONPATH))
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
@@ -20,7 +21,7 @@ else
   SETUP := system
 endif
 
-.PHONY: all setup demo analysis test bench-kernel clean-venv
+.PHONY: all setup mocap demo analysis test bench-kernel clean-venv
 all: test
 
 setup: $(READY)
@@ -61,7 +62,20 @@ analysis: $(READY)
 	$(PY) -m jacket_cloth_ros analyze out/demo/session.mcap out/demo/down_jacket.mcap \
 	    --compare --out out/analysis --force
 
-test: $(READY)
+# Real motion captures for the import tests, from the registry (never committed here): the
+# MocapBank and free-BVH examples that bvhtoolbox 0.1.3's source distribution (MIT) ships.
+MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
+mocap: $(MOCAP_FILES)
+
+$(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
+	$(PIP) download --no-deps --no-binary :all: bvhtoolbox==0.1.3 -d $(MOCAP)
+
+$(MOCAP_FILES): $(MOCAP)/bvhtoolbox-0.1.3.tar.gz
+	tar -xzf $< -C $(MOCAP) --strip-components=3 \
+	    bvhtoolbox-0.1.3/tests/example_files/$(notdir $@)
+	touch $@
+
+test: $(READY) $(MOCAP_FILES)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth``: the motion source, the demo and session pictures.
+"""``jacket_cloth``: the motion source, capture import, the demo and session pictures.
 
 Every failure ends in one readable line on stderr and a non-zero exit, never a traceback.
 """
@@ -83,6 +83,40 @@ def _motion_to_file(args, skeleton, duration):
             count += 1
         rec.close()
     print(f'wrote {count} JointState messages of {args.clip!r} to {args.output}')
+    return 0
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    """Turn a BVH capture into a JointState recording and, with --urdf-out, its URDF."""
+    from ..motion.bvh import BvhError, joint_state_content, load_capture, stamps_ns
+    from ..recording.writer import SessionRecorder, qos_profile_yaml
+    from ..ros.cdr import joint_state
+    from .outputs import replacing
+    if args.urdf_out and os.path.abspath(args.urdf_out) == os.path.abspath(args.output):
+        raise ToolError('--urdf-out and -o are the same file')
+    _check_output(args.output, args.force, [args.input], recording=True)
+    if args.urdf_out:
+        _check_output(args.urdf_out, args.force, [args.input, args.output])
+    try:
+        capture = load_capture(args.input, args.scale)
+    except BvhError as e:
+        raise ToolError(str(e)) from None
+    stamps = stamps_ns(capture, int(round(args.start * 1e9)))
+    with replacing(args.output, recording=True) as tmp:
+        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
+        rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        for k, stamp in enumerate(stamps):
+            names, positions = joint_state_content(capture, k, args.world_joint)
+            rec.write('/joint_states', joint_state(int(stamp), names, positions), int(stamp))
+        rec.close()
+    if args.urdf_out:
+        with replacing(args.urdf_out) as tmp:
+            with open(tmp, 'w', encoding='utf-8') as f:
+                f.write(capture.urdf)
+    print(f'wrote {capture.frames} JointState messages at {1.0 / capture.frame_time:.6g} Hz '
+          f'to {args.output}' + (f' and the URDF to {args.urdf_out}' if args.urdf_out else '')
+          + f' ({len(capture.joint_names)} joints, scale {capture.scale:g} m per unit, '
+          f'{capture.height_m:.2f} m tall)')
     return 0
 
 
@@ -241,6 +275,18 @@ def build_parser() -> argparse.ArgumentParser:
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
+    i = sub.add_parser('import', help='a BVH motion capture as a JointState recording and a URDF')
+    i.add_argument('input', help='a .bvh file')
+    i.add_argument('-o', '--output', required=True,
+                   help='the recording: an MCAP file (.mcap), else a rosbag2 bag folder')
+    i.add_argument('--urdf-out', default=None, help="write the capture's skeleton as a URDF")
+    i.add_argument('--scale', type=float, default=None,
+                   help='metres per BVH unit (default: m, cm, mm or in, whichever makes the '
+                   'rest skeleton nearest 1.7 m tall)')
+    i.add_argument('--start', type=float, default=1000.0, help='first stamp (s)')
+    i.add_argument('--world-joint', default='world_joint')
+    i.add_argument('--force', action='store_true', help='overwrite the output files')
+    i.set_defaults(func=cmd_import)
     w = sub.add_parser('warm', help="compile the node's kernels into numba's cache now, so its "
                        'first start takes seconds (make runs it; after colcon build, once)')
     w.set_defaults(func=cmd_warm)

@@ -1,0 +1,236 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A BVH motion capture as what the node consumes: a URDF and JointState content (no ROS).
+
+The file is read with pybvh (a maintained reader: numpy float64 throughout, angles in
+radians, each joint's Euler order as its CHANNELS line gives it). Conventions of the result:
+
+- Axes: BVH is Y-up and a character at rest faces +Z with its left on +X. The URDF and the
+  world are Z-up with the character facing +X and its left on +Y (REP 103), so every vector
+  is turned once by ``Y_UP_TO_Z_UP``: x = z_bvh, y = x_bvh, z = y_bvh. Every link frame is
+  parallel to the world at the rest pose (all channels zero), so a rig written for Z-up link
+  frames fits.
+- Units: BVH lengths times ``scale`` are metres; without one, ``guess_scale`` picks metres,
+  centimetres, millimetres or inches from the rest skeleton's height.
+- Joints: a BVH joint with rotation channels becomes one revolute joint per channel, named
+  ``<joint>_<channel>`` (``Chest_Zrotation``), chained through massless links
+  ``<joint>_<channel>_link`` in the order of its CHANNELS line. That order is the capture's
+  own Euler order (R = R1 R2 R3, intrinsic), so the values are the file's, in radians, with
+  no conversion that could meet gimbal lock. They are ``continuous`` (no limits). An End
+  Site becomes a fixed link ``<joint>_end``.
+- Root: the BVH root is the URDF's root link; its position and rotation channels travel as
+  the MoveIt floating joint ``world_joint`` (``trans_x`` ... ``rot_w``), not in the URDF. As
+  pybvh (and most readers) does, the root's position channels place it and its OFFSET is
+  not added.
+- Continuity: the node interpolates joint values linearly between samples, so every angle
+  channel is unwrapped over time (whole turns added or taken away) until consecutive samples
+  never differ by more than pi; otherwise the values are the file's. The root quaternion
+  keeps one sign (q and -q are one rotation).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+import xml.etree.ElementTree as ElementTree
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.transforms import matrix_to_quat
+
+if TYPE_CHECKING:           # for the annotations only: pybvh is imported when a file is read
+    from pybvh import Bvh
+
+# Rows give the Z-up coordinates of a BVH vector: x = z_bvh, y = x_bvh, z = y_bvh.
+Y_UP_TO_Z_UP = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+_AXIS = {'X': 0, 'Y': 1, 'Z': 2}
+# Candidate units of a capture (metres per BVH unit), for guess_scale.
+UNITS = {'m': 1.0, 'cm': 0.01, 'mm': 0.001, 'in': 0.0254}
+# The height a guessed unit aims for: an adult's, in metres.
+_TYPICAL_HEIGHT_M = 1.7
+
+
+class BvhError(ValueError):
+    """A BVH file that cannot be imported; the message is one line naming the file."""
+
+
+@dataclass
+class Capture:
+    """A BVH capture converted: the URDF, and per frame its joint values and root pose."""
+
+    name: str                    # the robot's name (the file's stem)
+    urdf: str                    # URDF text: links and joints of the skeleton, Z-up, metres
+    frame_time: float            # seconds between frames (the reader's, see frame_time)
+    scale: float                 # metres per BVH unit
+    joint_names: list            # the URDF's revolute joints, in the columns' order
+    positions: np.ndarray        # (F, J) joint values, radians, continuous over time
+    root: np.ndarray             # (F, 7) root pose: x, y, z (m), qx, qy, qz, qw
+    link_names: list             # the BVH joints' and end sites' links, file order
+    height_m: float              # the rest skeleton's height, metres
+
+    @property
+    def frames(self) -> int:
+        """Return the number of frames."""
+        return len(self.positions)
+
+
+def read_bvh(path: str) -> Bvh:
+    """Read ``path`` with pybvh; every failure becomes one BvhError line naming the file."""
+    import pybvh
+    if not os.path.isfile(path):
+        raise BvhError(f'{path}: no such file')
+    if os.path.getsize(path) == 0:
+        raise BvhError(f'{path}: empty file')
+    try:
+        with warnings.catch_warnings():
+            # The capture is Y-up by the format's convention: no guessing, so no warning.
+            warnings.simplefilter('ignore')
+            bvh = pybvh.read_bvh_file(path, world_up='+y')
+    except Exception as e:  # noqa: BLE001 - the reader raises many kinds; all mean "bad BVH"
+        text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        text = text.replace(f' in file {path}', '').replace(f' {path}', ' the file')
+        raise BvhError(f'{path}: not a readable BVH file ({text})') from None
+    if bvh.frame_count < 1:
+        raise BvhError(f'{path}: no frames')
+    if not (bvh.frame_time > 0 and math.isfinite(bvh.frame_time)):
+        raise BvhError(f'{path}: bad Frame Time {bvh.frame_time}')
+    if not (np.isfinite(bvh.root_pos).all() and np.isfinite(bvh.joint_angles).all()):
+        raise BvhError(f'{path}: a channel value is not a finite number')
+    return bvh
+
+
+def rest_offsets(bvh: Bvh) -> np.ndarray:
+    """Return every node's rest position (N, 3) in BVH units and axes, the root at zero."""
+    index = {id(n): i for i, n in enumerate(bvh.nodes)}
+    out = np.zeros((len(bvh.nodes), 3))
+    for i, node in enumerate(bvh.nodes):
+        if node.parent is not None:
+            out[i] = out[index[id(node.parent)]] + np.asarray(node.offset, dtype=float)
+    return out
+
+
+def guess_scale(bvh: Bvh) -> tuple[float, str]:
+    """Return (metres per unit, unit name) whose rest skeleton is nearest an adult's height."""
+    height = float(np.ptp(rest_offsets(bvh)[:, 1]))
+    if height <= 0.0:
+        return 1.0, 'm'
+    unit = min(UNITS, key=lambda u: abs(math.log(height * UNITS[u] / _TYPICAL_HEIGHT_M)))
+    return UNITS[unit], unit
+
+
+def axis_rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Return rotations (F, 3, 3) by ``angles`` (F,) about a unit ``axis`` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                  [-axis[1], axis[0], 0.0]])
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
+def continuous_angles(angles: np.ndarray) -> np.ndarray:
+    """Return angles (F, ...) moved by whole turns so consecutive frames differ by at most pi.
+
+    A capture that wraps at +-pi (179 degrees, then -179) would otherwise be interpolated the
+    long way round, through a whole turn of the joint between two samples.
+    """
+    return np.unwrap(np.asarray(angles, dtype=float), axis=0)
+
+
+def _urdf(bvh, name: str, scale: float) -> tuple[str, list, list]:
+    """Return the URDF text, its revolute joints' names and the node links' names."""
+    robot = ElementTree.Element('robot', name=name)
+    robot.append(ElementTree.Comment(
+        f' Made by jacket_cloth import from a BVH capture: Z-up, metres ({scale:g} per BVH '
+        'unit), one revolute joint per rotation channel in the file\'s order. '))
+    links, joints, node_links = set(), [], []
+
+    def link(link_name):
+        if link_name in links:
+            raise BvhError(f'two parts of the skeleton are both named {link_name!r}')
+        links.add(link_name)
+        ElementTree.SubElement(robot, 'link', name=link_name)
+
+    def joint(joint_name, kind, parent, child, xyz=(0.0, 0.0, 0.0), axis=None):
+        j = ElementTree.SubElement(robot, 'joint', name=joint_name, type=kind)
+        ElementTree.SubElement(j, 'parent', link=parent)
+        ElementTree.SubElement(j, 'child', link=child)
+        ElementTree.SubElement(j, 'origin', xyz=' '.join(repr(float(v)) for v in xyz),
+                               rpy='0 0 0')
+        if axis is not None:
+            ElementTree.SubElement(j, 'axis', xyz=' '.join(repr(float(v)) for v in axis))
+
+    node_link = {}
+    for node in bvh.nodes:
+        if node.parent is None:
+            link_name = node.name
+            link(link_name)
+        else:
+            parent = node_link[id(node.parent)]
+            xyz = Y_UP_TO_Z_UP @ np.asarray(node.offset, dtype=float) * scale
+            if node.is_end_site():
+                link_name = f'{node.parent.name}_end'
+                link(link_name)
+                joint(f'{link_name}_fixed', 'fixed', parent, link_name, xyz)
+            else:
+                link_name = node.name
+                for i, ch in enumerate(node.rot_channels):
+                    last = i == len(node.rot_channels) - 1
+                    child = link_name if last else f'{node.name}_{ch}rotation_link'
+                    link(child)
+                    joint_name = f'{node.name}_{ch}rotation'
+                    joint(joint_name, 'continuous', parent, child, xyz,
+                          Y_UP_TO_Z_UP[:, _AXIS[ch]])
+                    joints.append(joint_name)
+                    parent, xyz = child, (0.0, 0.0, 0.0)
+        node_link[id(node)] = link_name
+        node_links.append(link_name)
+    ElementTree.indent(robot)
+    text = '<?xml version="1.0"?>\n' + ElementTree.tostring(robot, encoding='unicode') + '\n'
+    return text, joints, node_links
+
+
+def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
+    """Convert a capture read by ``read_bvh`` into the URDF and the JointState content."""
+    if scale is None:
+        scale, _ = guess_scale(bvh)
+    if not (scale > 0 and math.isfinite(scale)):
+        raise BvhError(f'scale must be a positive number, not {scale}')
+    urdf, joint_names, link_names = _urdf(bvh, name, scale)
+    angles = continuous_angles(bvh.joint_angles)
+    # joint_angles holds the root first, then each joint in file order, as the URDF does.
+    positions = angles[:, 1:, :].reshape(len(angles), -1)
+    root = bvh.nodes[0]
+    rot = np.tile(np.eye(3), (len(angles), 1, 1))
+    for i, ch in enumerate(root.rot_channels):
+        rot = rot @ axis_rotations(Y_UP_TO_Z_UP[:, _AXIS[ch]], angles[:, 0, i])
+    quat = matrix_to_quat(rot)
+    # One sign throughout: q and -q are one rotation, and a flip would read as a jump.
+    flips = np.sum(quat[1:] * quat[:-1], axis=1) < 0.0
+    quat[1:] *= np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+    trans = bvh.root_pos @ Y_UP_TO_Z_UP.T * scale
+    height = float(np.ptp(rest_offsets(bvh)[:, 1])) * scale
+    return Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
+                   joint_names=joint_names, positions=positions,
+                   root=np.hstack([trans, quat]), link_names=link_names, height_m=height)
+
+
+def load_capture(path: str, scale: float | None = None) -> Capture:
+    """Read and convert the BVH file ``path``; the robot is named after the file."""
+    name = os.path.splitext(os.path.basename(path))[0] or 'capture'
+    return convert(read_bvh(path), name, scale)
+
+
+def joint_state_content(capture: Capture, frame: int,
+                        world_joint: str = 'world_joint') -> tuple[list, list]:
+    """Return (names, positions) of one frame: every joint, then the root's seven variables."""
+    from ..core.inputs import WORLD_VARIABLES
+    names = list(capture.joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
+    return names, [float(v) for v in capture.positions[frame]] + \
+        [float(v) for v in capture.root[frame]]
+
+
+def stamps_ns(capture: Capture, start_ns: int) -> np.ndarray:
+    """Return each frame's stamp: ``start_ns`` plus the frame's time at the capture's rate."""
+    return start_ns + np.round(np.arange(capture.frames) * capture.frame_time * 1e9).astype(
+        np.int64)

@@ -1,0 +1,182 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth import``: real BVH captures into a URDF and JointState, as the reader sees them.
+
+The captures are the two real ones bvhtoolbox 0.1.3's source distribution ships (a MocapBank
+capture and a free-BVH-archive one); ``make`` fetches them from the registry into the venv's
+share/mocap, so nothing here was written by this project.
+"""
+
+import json
+import os
+import shutil
+import sys
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+from jacket_cloth_ros.core.skeleton import Skeleton, load_skeleton
+from jacket_cloth_ros.core.transforms import make_transform, quat_to_matrix
+from jacket_cloth_ros.motion.bvh import (Y_UP_TO_Z_UP, continuous_angles, convert, load_capture,
+                                         read_bvh)
+from jacket_cloth_ros.tools.cli import main
+
+MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
+CAPTURES = {'test_mocapbank.bvh': (455, 24), 'test_freebvh.bvh': (69, 70)}   # frames, nodes
+RIG = os.path.join(os.path.dirname(shipped('character.urdf')), 'examples',
+                   'mocapbank_rig.yaml')
+
+
+def _capture_path(name):
+    path = os.path.join(MOCAP, name)
+    if not os.path.isfile(path):
+        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+    return path
+
+
+@pytest.fixture(scope='module', params=sorted(CAPTURES))
+def capture(request):
+    path = _capture_path(request.param)
+    bvh = read_bvh(path)
+    return request.param, bvh, convert(bvh, request.param.split('.')[0])
+
+
+def _world_positions(capture, skeleton, frame):
+    """Return each BVH node's world position by the URDF's forward kinematics and the root."""
+    columns = [capture.joint_names.index(n) for n in skeleton.joint_names]
+    links = skeleton.forward(capture.positions[frame, columns])
+    root = make_transform(quat_to_matrix(capture.root[frame, 3:]), capture.root[frame, :3])
+    rows = [skeleton.link_index[n] for n in capture.link_names]
+    return (root @ links[rows])[:, :3, 3]
+
+
+def test_the_urdf_moves_every_joint_where_the_reader_puts_it(capture):
+    name, bvh, cap = capture
+    frames, nodes = CAPTURES[name]
+    skeleton = Skeleton(cap.urdf)
+    assert cap.frames == frames and len(cap.link_names) == nodes == len(bvh.nodes)
+    assert sorted(skeleton.joint_names) == sorted(cap.joint_names)
+    assert skeleton.root == bvh.nodes[0].name
+    assert 1.5 < cap.height_m < 1.9 and cap.scale == 0.01        # centimetres, guessed
+    # The reader's own forward kinematics, turned Z-up and into metres once.
+    expected = bvh.node_positions() @ Y_UP_TO_Z_UP.T * cap.scale
+    worst = max(np.abs(_world_positions(cap, skeleton, k) - expected[k]).max()
+                for k in range(cap.frames))
+    assert worst < 1e-6
+    # The root moves (a capture, not a pose): its path is part of what was compared.
+    assert np.ptp(cap.root[:, :3], axis=0).max() > 0.05
+
+
+def test_rest_link_frames_are_z_up_facing_x():
+    cap = load_capture(_capture_path('test_mocapbank.bvh'))
+    skeleton = Skeleton(cap.urdf)
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    at = {n: rest[skeleton.link_index[n], :3, 3] for n in ('Head', 'LeftAnkle', 'LeftWrist',
+                                                           'LeftAnkle_end')}
+    assert at['Head'][2] > 0.5 and at['LeftAnkle'][2] < -0.8        # up is +z
+    assert at['LeftWrist'][1] > 0.15                                 # left is +y
+    assert at['LeftAnkle_end'][0] - at['LeftAnkle'][0] > 0.1         # the toes point at +x
+    assert np.allclose(rest[:, :3, :3], np.eye(3))                   # frames parallel to world
+    # One joint a channel, in the file's Euler order (Z, X, Y), about Z-up's axes.
+    assert [n for n in skeleton.joint_names if n.startswith('Chest2_')] == [
+        'Chest2_Zrotation', 'Chest2_Xrotation', 'Chest2_Yrotation']
+
+
+def test_a_wrap_at_pi_is_unwrapped_so_interpolation_takes_the_short_way():
+    bvh = read_bvh(_capture_path('test_mocapbank.bvh'))
+    raw = bvh.joint_angles
+    # The capture itself wraps: LeftHip's first angle goes from 179.99 to -179.96 degrees.
+    hip = [n.name for n in bvh.nodes if not n.is_end_site()].index('LeftHip')
+    wrap = int(np.argmax(np.abs(np.diff(raw[:, hip, 0]))))
+    assert abs(raw[wrap + 1, hip, 0] - raw[wrap, hip, 0]) > 6.0
+    cap = convert(bvh, 'mocapbank')
+    column = cap.joint_names.index('LeftHip_Zrotation')
+    steps = np.abs(np.diff(cap.positions, axis=0))
+    assert steps.max() <= np.pi and steps[wrap, column] < 0.01
+    # The same rotation each frame: the values moved by whole turns only.
+    turns = (cap.positions[:, column] - raw[:, hip, 0]) / (2 * np.pi)
+    assert np.allclose(turns, np.round(turns)) and set(np.abs(np.round(turns))) == {0.0, 1.0}
+    # A channel made to wrap by hand (2 pi added to a stretch) comes back as it was.
+    wrapped = raw.copy()
+    wrapped[100:200, 5, 1] += 2 * np.pi
+    wrapped[300:, 7, 2] -= 2 * np.pi
+    assert np.allclose(continuous_angles(wrapped), continuous_angles(raw))
+    # The root quaternion keeps one sign, so no step between samples is a flip to -q.
+    q = cap.root[:, 3:]
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
+    assert (np.sum(q[1:] * q[:-1], axis=1) > 0.9).all()
+
+
+def test_import_writes_joint_states_at_the_capture_rate_and_the_urdf(tmp_path, capsys):
+    src = _capture_path('test_freebvh.bvh')
+    out, urdf = tmp_path / 'session.mcap', tmp_path / 'char.urdf'
+    assert main(['import', src, '-o', str(out), '--urdf-out', str(urdf), '--start', '5']) == 0
+    assert '69 JointState messages at 30 Hz' in capsys.readouterr().out
+    skeleton = load_skeleton(str(urdf))
+    with open(out, 'rb') as f:
+        messages = [(m.log_time, msg) for _, _, m, msg in
+                    make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages(
+                        topics=['/joint_states'])]
+    assert len(messages) == 69
+    stamps = np.array([t for t, _ in messages])
+    assert stamps[0] == 5_000_000_000 and np.allclose(np.diff(stamps), 1e9 / 30, atol=1)
+    first = messages[0][1]
+    assert first.header.stamp.sec == 5 and first.header.stamp.nanosec == 0
+    world = [f'world_joint/{v}' for v in WORLD_VARIABLES]
+    assert list(first.name) == sorted(skeleton.joint_names, key=list(first.name).index) + world
+    assert set(first.name) == set(skeleton.joint_names) | set(world)
+    cap = load_capture(src)
+    assert np.allclose(messages[-1][1].position, np.r_[cap.positions[-1], cap.root[-1]])
+    # Outputs are checked as the other tools' are: an existing one needs --force.
+    assert main(['import', src, '-o', str(out)]) == 1
+    assert 'exists (use --force' in capsys.readouterr().err
+    # A bag folder too, as motion -o writes one.
+    assert main(['import', src, '-o', str(tmp_path / 'bag')]) == 0
+    assert (tmp_path / 'bag' / 'metadata.yaml').is_file()
+
+
+@pytest.mark.parametrize('content, words', [
+    ('', 'empty file'),
+    ('just some text\n', 'not a readable BVH file'),
+    (None, 'not a readable BVH file'),                     # the capture, cut short
+    ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
+     'Zrotation Xrotation Wobble\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n',
+     'unrecognized channel'),
+])
+def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
+    bad = tmp_path / 'bad.bvh'
+    if content is None:
+        with open(_capture_path('test_mocapbank.bvh'), encoding='utf-8') as f:
+            content = f.read()[:20_000]
+    bad.write_text(content)
+    out = tmp_path / 'out.mcap'
+    assert main(['import', str(bad), '-o', str(out), '--urdf-out', str(tmp_path / 'c.urdf')]) \
+        == 1
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and err.startswith('jacket_cloth import: ') and words in err
+    assert not out.exists() and not (tmp_path / 'c.urdf').exists()
+
+
+def test_a_mocap_session_replays_with_the_jacket_fitted_to_its_skeleton(tmp_path):
+    src = str(tmp_path / 'mocapbank.bvh')
+    shutil.copy(_capture_path('test_mocapbank.bvh'), src)
+    session, urdf = tmp_path / 'mocap.mcap', tmp_path / 'mocapbank.urdf'
+    assert main(['import', src, '-o', str(session), '--urdf-out', str(urdf)]) == 0
+    jacket, again = tmp_path / 'jacket.mcap', tmp_path / 'again.mcap'
+    assert main(['replay', str(session), '-o', str(jacket), '--urdf', str(urdf),
+                 '--rig', RIG]) == 0
+    # The replay carries its set-up: a replay of it needs no option and gives the same bones.
+    assert main(['replay', str(jacket), '-o', str(again)]) == 0
+    assert main(['analyze', str(jacket), str(again), '--compare', '--moments', '2',
+                 '--out', str(tmp_path / 'analysis')]) == 0
+    first, second = json.loads((tmp_path / 'analysis' / 'report.json').read_text())['sessions']
+    for report in (first, second):
+        assert report['inputs'] == report['frames'] == 455 and report['dropped_inputs'] == 0
+        assert report['nonfinite_count'] == 0
+        assert report['reset_reasons'] == ['first sample']
+        assert 0.0 < report['max_vertical_strain'] < 0.5
+        assert report['sim_steps'] >= 454 * 2
+    assert second['replay_matches_recording'] is True and second['recorded_tf_compared'] == 455
