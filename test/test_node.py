@@ -356,3 +356,29 @@ def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, 
     run_session(session, probe=lambda p, r, stamp, outs: replayed.extend(
         data for key, data in outs if key == 'tf'))
     assert replayed == recorded
+
+
+def test_undecodable_wind_and_description_leave_the_node_running(harness):
+    """Bytes that are no message on any subscribed topic are dropped with a warning."""
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    talker = rclpy.create_node('description_talker', context=ctx)
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    garbage = b'\x00\x01\x00\x00' + b'\xff' * 40
+    description = talker.create_publisher(String, '/robot_description', latched)
+    description.publish(garbage)
+    try:
+        # The node waits for the topic; garbage on it is a warning, not the end of the node.
+        h = harness(robot_description_timeout=3.0)
+        assert 'description_decode' in h.node._log_times
+        pub = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', 10)
+        h.spin_until(lambda: pub.get_subscription_count() > 0)
+        pub.publish(garbage)
+        h.spin_until(lambda: 'wind_decode' in h.node._log_times)
+        msg = Vector3Stamped()
+        msg.vector.x = 2.0
+        pub.publish(msg)
+        h.spin_until(lambda: h.node.sim.params.wind == (2.0, 0.0, 0.0))
+    finally:
+        talker.destroy_node()
+        rclpy.shutdown(context=ctx)

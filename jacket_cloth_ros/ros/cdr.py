@@ -309,13 +309,18 @@ class JointStateReader:
         return JointStateContent(sec * 1_000_000_000 + nanosec, names, position)
 
 
-def _joint_state_by_rclpy(raw):
+def deserialize(raw, msg_type):
+    """rclpy's deserialize_message, failing with ValueError on bytes that are no ``msg_type``."""
     from rclpy.serialization import deserialize_message
-    from sensor_msgs.msg import JointState
     try:
-        msg = deserialize_message(raw, JointState)
+        return deserialize_message(raw, msg_type)
     except Exception as e:  # noqa: BLE001 - rclpy raises its own error types
         raise ValueError(str(e)) from None
+
+
+def _joint_state_by_rclpy(raw):
+    from sensor_msgs.msg import JointState
+    msg = deserialize(raw, JointState)
     return JointStateContent(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
                              tuple(msg.name), np.array(msg.position, dtype=float))
 

@@ -12,7 +12,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import serialize_message
 from rcl_interfaces.msg import ParameterEvent, SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -87,8 +87,9 @@ class JacketClothNode(Node):
         if urdf:
             self._load_model(urdf, 'the robot_description parameter')
         else:
+            # Raw: bytes that are no String reach the callback, which says so, not the executor.
             self._description = self.create_subscription(
-                String, '/robot_description', self._on_description, LATCHED)
+                String, '/robot_description', self._on_description, LATCHED, raw=True)
             self._fallback = self.create_timer(self._p('robot_description_timeout'),
                                                self._use_shipped_character)
 
@@ -109,8 +110,14 @@ class JacketClothNode(Node):
                 out[name] = list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
         return out
 
-    def _on_description(self, msg):
+    def _on_description(self, raw):
         if self.pipeline is None:
+            try:
+                msg = cdr.deserialize(raw, String)
+            except cdr.DECODE_ERRORS as e:
+                self._warn('description_decode', f'a /robot_description that does not decode '
+                           f'({e}): message dropped')
+                return
             try:
                 self._load_model(msg.data, 'the /robot_description topic')
             except ConfigError as e:
@@ -231,7 +238,11 @@ class JacketClothNode(Node):
 
         The change is recorded as a parameter event; the message itself is recorded too.
         """
-        msg = deserialize_message(raw, Vector3Stamped)
+        try:
+            msg = cdr.deserialize(raw, Vector3Stamped)
+        except cdr.DECODE_ERRORS as e:
+            self._warn('wind_decode', f'a ~/wind that does not decode ({e}): message dropped')
+            return
         v = [msg.vector.x, msg.vector.y, msg.vector.z]
         result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
         if not result.successful:
