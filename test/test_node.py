@@ -382,3 +382,39 @@ def test_undecodable_wind_and_description_leave_the_node_running(harness):
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)
+
+
+def _start_node(tmp_path, *params):
+    import subprocess
+    import sys
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
+    args = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args']
+    for p in params:
+        args += ['-p', p]
+    return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=tmp_path)
+
+
+def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
+    rig = (tmp_path / 'rig.yaml')
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        text = f.read()
+    assert 'radii: [0.155, 0.195]' in text
+    rig.write_text(text.replace('radii: [0.155, 0.195]', 'radii: [.inf, 0.195]', 1))
+    cases = {
+        'sim_rate:=abc': 'sim_rate', 'sim_rate:=1e9': 'sim_rate', 'solver:=bogus': 'solver',
+        'record_compression:=bogus': 'record_compression', 'frame_prefix:=/x': 'frame_prefix',
+        'wind:=[.nan,0.0,0.0]': 'wind', f'rig_file:={rig}': 'radii',
+    }
+    started = {case: _start_node(tmp_path, case, 'robot_description_timeout:=0.0')
+               for case in cases}
+    for case, proc in started.items():
+        try:
+            out, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        lines = err.strip().splitlines()
+        assert proc.returncode == 1 and len(lines) == 1, (case, err)
+        assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], (case, err)

@@ -7,6 +7,7 @@ import time
 
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -47,8 +48,8 @@ class JacketClothNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('jacket_cloth_node', **kwargs)
-        for name, (kind, default, rng, ro, text) in NODE_PARAMETERS.items():
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        for name, spec in NODE_PARAMETERS.items():
+            self._declare(name, spec)
         fabric_file = self._p('fabric_file') or None
         self._fabric_file = fabric_file or shipped('fabrics.yaml')
         self.fabrics = load_fabrics(fabric_file)
@@ -56,8 +57,8 @@ class JacketClothNode(Node):
         if preset not in self.fabrics:
             raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
                               f'(presets: {", ".join(self.fabrics)})')
-        for name, (kind, default, rng, ro, text) in fabric_parameters(self.fabrics[preset]).items():
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        for name, spec in fabric_parameters(self.fabrics[preset]).items():
+            self._declare(name, spec)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -96,6 +97,19 @@ class JacketClothNode(Node):
     @property
     def sim(self):
         return self.pipeline.sim if self.pipeline else None
+
+    def _declare(self, name, spec):
+        """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
+        kind, default, rng, ro, text = spec
+        try:
+            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        except ParameterException as e:
+            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
+            raise ConfigError(f'parameter {name}: {reason}') from None
+        reason = check_value(name, self._p(name))
+        if reason:
+            raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
+                              f'parameter {name}: {reason}')
 
     # -- model --------------------------------------------------------------------------------
     def _p(self, name):
