@@ -257,7 +257,7 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
         assert h.node.sim.skeleton.name == 'from_topic'
         # Loaded: the node stops listening and its fallback timer is gone (less executor work).
         assert '/robot_description' not in [s.topic_name for s in h.node.subscriptions]
-        assert not list(h.node.timers)
+        assert list(h.node.timers) == [h.node._diag_timer]       # diagnostics' own rate
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)
@@ -418,3 +418,62 @@ def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
         lines = err.strip().splitlines()
         assert proc.returncode == 1 and len(lines) == 1, (case, err)
         assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], (case, err)
+
+
+def _level(status):
+    return ord(status.level) if isinstance(status.level, bytes) else status.level
+
+
+def test_diagnostics_keep_their_rate_and_say_when_the_node_fails(harness):
+    from diagnostic_msgs.msg import DiagnosticArray
+    h = harness(diagnostics_rate=10.0)
+    diags = []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    # No input: diagnostics still go out at their rate.
+    h.spin_until(lambda: len(diags) >= 3)
+    assert [(_level(d.status[0]), d.status[0].message) for d in diags[:3]] == [(0, 'no input')] * 3
+    # Every input resets (gaps over reset_gap): WARN, then ERROR.
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'idle', 0.0)
+    for k in range(5):
+        before = h.node.inputs
+        h.send(names, pos, (300 + 2 * k) * 10 ** 9)
+        h.spin_until(lambda: h.node.inputs > before)
+    h.spin_until(lambda: 'resets on every input' in diags[-1].status[0].message)
+    assert _level(diags[-1].status[0]) == 2
+    assert any(_level(d.status[0]) == 1 and 'reset' in d.status[0].message for d in diags)
+    # Nothing published (a non-finite pose): no /tf, but ERROR diagnostics at their rate.
+    h.spin_until(lambda: len(h.tf) == 5)
+    h.node.sim.bones = lambda: type('Bones', (), {'finite': False})()
+    tf_before, diag_before = len(h.tf), len(diags)
+    for k in range(3):
+        before = h.node.inputs
+        h.send(names, pos, 310 * 10 ** 9 + k * 10 ** 7)
+        h.spin_until(lambda: h.node.inputs > before)
+    h.spin_until(lambda: len(diags) >= diag_before + 3)
+    assert len(h.tf) == tf_before
+    assert any(_level(d.status[0]) == 2 and 'nothing published' in d.status[0].message
+               for d in diags[diag_before:])
+
+
+def test_dropped_inputs_count_undecodable_and_lost_messages(harness):
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    h = harness()
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'idle', 0.0)
+    before = h.node.inputs
+    h.send(names, pos, 400 * 10 ** 9)
+    h.spin_until(lambda: h.node.inputs > before)
+    for _ in range(3):
+        h.pub.publish(b'\x00\x01\x00\x00' + b'\xff' * 40)
+    h.spin_until(lambda: h.node.pipeline.undecodable == 3)
+    # A burst the node's queue cannot hold: what it never saw is counted from the numbering.
+    burst = 2000
+    for _ in range(burst):
+        h.send(names, pos, 400 * 10 ** 9)           # a repeated stamp: dropped, and cheap
+    pipeline = h.node.pipeline
+    h.spin_until(lambda: pipeline.inputs - 1 + pipeline.lost == burst, timeout=20)
+    assert pipeline.lost > 0
+    values = {v.key: v.value for v in deserialize_message(
+        pipeline.diagnostics_now(0), DiagnosticArray).status[0].values}
+    assert int(values['dropped_inputs']) == pipeline.dropped + 3 == burst + 3 - pipeline.lost
+    assert (values['undecodable_inputs'], values['lost_inputs']) == ('3', str(pipeline.lost))

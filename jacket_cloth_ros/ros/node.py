@@ -68,6 +68,9 @@ class JacketClothNode(Node):
         self._urdf = None
         self._log_times = {}
         self.inputs = 0
+        self._sequences = {}        # publisher gid -> the last sequence number it sent us
+        self._diag_timer = None
+        self._diag_wall = 0.0
 
         self.publishers_by_key = {
             'tf': self.create_publisher(TFMessage, '/tf', TF_QOS),
@@ -161,6 +164,10 @@ class JacketClothNode(Node):
             self.destroy_timer(self._fallback)
             self._description = self._fallback = None
         self._write_session_config()
+        # Diagnostics keep their own rate when inputs stop or nothing else is published.
+        self._diag_wall = time.monotonic()
+        self._diag_timer = self.create_timer(1.0 / self._p('diagnostics_rate'),
+                                             self._diagnostics_watchdog)
         # Subscribed only now: a publisher that waits for us knows we can simulate.
         self.create_subscription(JointState, 'joint_states', self.on_joint_state,
                                  qos_profile_sensor_data, raw=True)
@@ -187,6 +194,8 @@ class JacketClothNode(Node):
             self._open_recorder(self._p('record'))
         if self.pipeline is None:
             return
+        if 'diagnostics_rate' in names:
+            self._diag_timer.timer_period_ns = int(1e9 / self._p('diagnostics_rate'))
         values = self._values()
         self.pipeline.apply({n: values[n] for n in names})
         # Recorded at the last input's stamp: a replay applies them after the same input.
@@ -247,6 +256,30 @@ class JacketClothNode(Node):
             self._log_times[code] = now
             self.get_logger().warning(text)
 
+    def _diagnostics_watchdog(self):
+        """Diagnostics, when the inputs' own have not gone out for a period of wall time."""
+        if time.monotonic() - self._diag_wall < 1.2 / self._p('diagnostics_rate'):
+            return
+        last = self.sim.last
+        stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
+        out = self.pipeline.diagnostics_now(stamp_ns)
+        self.publishers_by_key['diagnostics'].publish(out)
+        self._diag_wall = time.monotonic()
+        self._record(self._topics['diagnostics'][0], out, stamp_ns)
+
+    def _count_lost(self, info):
+        """A publisher numbers what it sends: a gap is messages lost before this callback."""
+        seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
+        if not seq or not gid:
+            return
+        key = gid['data'] if isinstance(gid, dict) else gid
+        last = self._sequences.pop(key, None)       # re-inserted: the dict stays in use order
+        if last is not None and seq > last + 1:
+            self.pipeline.note_lost(seq - last - 1)
+        self._sequences[key] = seq if last is None else max(seq, last)
+        if len(self._sequences) > 64:
+            del self._sequences[next(iter(self._sequences))]
+
     def _on_wind(self, raw):
         """~/wind sets the wind live, through the ``wind`` parameter (one path, validated).
 
@@ -281,9 +314,11 @@ class JacketClothNode(Node):
         # Latency counts from the message's arrival in this process (the rmw's receive time,
         # system clock), so time queued behind other callbacks is in it; without one, from now.
         arrived = info.get('received_timestamp') or time.time_ns()
+        self._count_lost(info)
         try:
             msg = self._joint_states.read(raw)
         except cdr.DECODE_ERRORS as e:
+            self.pipeline.note_undecodable()
             self._warn('decode', f'a JointState that does not decode ({e}): message dropped')
             return
         stamp_ns = msg.stamp_ns
@@ -297,12 +332,14 @@ class JacketClothNode(Node):
         if report.skipped_steps:
             self._warn('overrun', f'{report.skipped_steps} steps skipped (cap '
                        f'max_steps_per_input); the cloth lags no further behind')
-        if report.accepted and not outputs:
+        if report.accepted and not any(key == 'tf' for key, _ in outputs):
             self._warn('nan', 'non-finite bone pose: nothing published')
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
             if key == 'tf':      # latency: arrival to /tf handed to DDS
                 self.pipeline.note_latency(time.time_ns() - arrived)
+            elif key == 'diagnostics':
+                self._diag_wall = time.monotonic()
             self._record(self._topics[key][0], out, stamp_ns)
 
 
