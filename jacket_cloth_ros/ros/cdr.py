@@ -311,11 +311,15 @@ class JointStateReader:
 
 def deserialize(raw, msg_type):
     """rclpy's deserialize_message, failing with ValueError on bytes that are no ``msg_type``."""
-    from rclpy.serialization import deserialize_message
+    from rclpy.serialization import deserialize_message, serialize_message
     try:
-        return deserialize_message(raw, msg_type)
+        msg = deserialize_message(raw, msg_type)
     except Exception as e:  # noqa: BLE001 - rclpy raises its own error types
         raise ValueError(str(e)) from None
+    # Fast CDR reads past the end of a short buffer without an error: compare with a whole one.
+    if len(serialize_message(msg)) > len(raw):
+        raise ValueError(f'cut short ({len(raw)} bytes)')
+    return msg
 
 
 def _joint_state_by_rclpy(raw):

@@ -69,6 +69,9 @@ class JacketClothNode(Node):
         self._log_times = {}
         self.inputs = 0
         self._sequences = {}        # publisher gid -> the last sequence number it sent us
+        # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
+        self.received = dict.fromkeys(('wind', 'robot_description'), 0)
+        self.refused = dict.fromkeys(('wind', 'robot_description'), 0)
         self._diag_timer = None
         self._diag_wall = 0.0
 
@@ -128,16 +131,19 @@ class JacketClothNode(Node):
         return out
 
     def _on_description(self, raw):
+        self.received['robot_description'] += 1
         if self.pipeline is None:
             try:
                 msg = cdr.deserialize(raw, String)
             except cdr.DECODE_ERRORS as e:
+                self.refused['robot_description'] += 1
                 self._warn('description_decode', f'a /robot_description that does not decode '
                            f'({e}): message dropped')
                 return
             try:
                 self._load_model(msg.data, 'the /robot_description topic')
             except ConfigError as e:
+                self.refused['robot_description'] += 1
                 self.get_logger().error(f'/robot_description rejected: {e}')
 
     def _use_shipped_character(self):
@@ -285,14 +291,17 @@ class JacketClothNode(Node):
 
         The change is recorded as a parameter event; the message itself is recorded too.
         """
+        self.received['wind'] += 1
         try:
             msg = cdr.deserialize(raw, Vector3Stamped)
         except cdr.DECODE_ERRORS as e:
+            self.refused['wind'] += 1
             self._warn('wind_decode', f'a ~/wind that does not decode ({e}): message dropped')
             return
         v = [msg.vector.x, msg.vector.y, msg.vector.z]
         result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
         if not result.successful:
+            self.refused['wind'] += 1
             self._warn('wind', f'~/wind rejected: {result.reason}')
             return
         last = self.sim.last if self.sim else None
