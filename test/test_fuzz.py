@@ -328,9 +328,9 @@ def test_found_by_fuzzing_a_short_message_and_a_huge_quaternion(make_sim, rest_i
     msg.vector.x = 1.0
     whole = serialize_message(msg)
     assert cdr.deserialize(whole, Vector3Stamped).vector.x == 1.0
-    for cut in (4, 8, len(whole) - 8):
-        with pytest.raises(ValueError, match='cut short'):
-            cdr.deserialize(whole[:cut], Vector3Stamped)
+    for data in [whole[:cut] for cut in range(len(whole))] + [b'\x00\x01\x01\x01']:
+        with pytest.raises(ValueError):
+            cdr.deserialize(data, Vector3Stamped)
     # A world rotation of 1e200 components: its squares overflowed to a division by zero.
     names, pos = rest_input
     names = list(names)
