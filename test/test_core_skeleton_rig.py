@@ -75,6 +75,64 @@ def test_rig_validation_names_the_bad_key(skeleton, edit, message):
         Rig(data, skeleton)
 
 
+NAN, INF = float('nan'), float('inf')
+
+
+@pytest.mark.parametrize('edit, message', [
+    (lambda d: d['cloth']['shape'].update(row_spacing=NAN), 'shape.row_spacing: nan is not'),
+    (lambda d: d['cloth']['shape'].update(center=[0, NAN, 0]), 'shape.center:.*not finite'),
+    (lambda d: d['cloth']['shape'].update(center=[0, 1e300, 0]), 'shape.center:.*outside'),
+    (lambda d: d['cloth']['shape'].update(radii=[INF, 0.2]), 'shape.radii:.*not finite'),
+    (lambda d: d['cloth']['shape'].update(radii=[1e-300, 0.2]), 'shape.radii:.*outside'),
+    (lambda d: d['colliders'][0].update(radii=[0.1, 0.1, 1e300]), r'colliders\[0\].radii'),
+    (lambda d: d['hood'].update(pivot=[INF, 0, 0]), 'hood.pivot:.*not finite'),
+    (lambda d: d['hood'].update(rest_direction=[NAN, 0, 1]), 'hood.rest_direction'),
+    (lambda d: d['colliders'][4].update(normal=[0, 0, INF]), r'colliders\[4\].normal'),
+    (lambda d: d['cloth']['max_distance'].update(hem=NAN), 'max_distance.hem: nan'),
+    (lambda d: d['cloth']['max_distance'].update(top=INF), 'max_distance.top: inf'),
+    (lambda d: d['cloth'].update(regions=[{'rows': [0, 1], 'cols': [0, 1]}] * 300),
+     'regions: 300 entries, at most 256'),
+])
+def test_rig_numbers_are_finite_and_in_range(skeleton, edit, message):
+    data = _rig_data()
+    edit(data)
+    with pytest.raises(ConfigError, match=message):
+        Rig(data, skeleton, where='rig.yaml')
+
+
+@pytest.mark.parametrize('attribute, value', [
+    ('xyz', '0 nan 0'), ('xyz', '0 0 inf'), ('xyz', '1e300 0 0'), ('rpy', 'nan 0 0')])
+def test_urdf_origins_are_finite_and_in_range(urdf_text, attribute, value):
+    from jacket_cloth_ros.core.skeleton import skeleton_from
+    import re
+    first = re.search(r'<origin [^>]*/>', urdf_text).group(0)
+    origin = '<origin xyz="0 0 0" rpy="0 0 0"/>'.replace(
+        f'{attribute}="0 0 0"', f'{attribute}="{value}"')
+    with pytest.raises(ConfigError, match=r"^URDF x.urdf: joint '\w+' origin"):
+        skeleton_from(urdf_text.replace(first, origin, 1), 'URDF x.urdf')
+
+
+@pytest.mark.parametrize('text, message', [
+    # Each alias repeats the list before it ten times: a few KB that expand beyond memory.
+    ('a: &a [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\n' + ''.join(
+        f'{chr(98 + k)}: &{chr(98 + k)} [{", ".join(["*" + chr(97 + k)] * 10)}]\n'
+        for k in range(20)), 'aliases'),
+    ('a: ' + '[' * 100000 + ']' * 100000 + '\n', 'nested deeper than 32'),
+    ('a: "' + 'x' * (1 << 21) + '"\n', 'larger than'),
+    ('cloth: {cols: ' + 'x' * 100000 + '}\n', r'rig.yaml.cloth.cols: expected a number'),
+])
+def test_a_hostile_yaml_is_a_short_error_naming_the_file(skeleton, tmp_path, text, message):
+    import time
+    from jacket_cloth_ros.core.rig import load_rig
+    path = tmp_path / 'rig.yaml'
+    path.write_text(text)
+    start = time.monotonic()
+    with pytest.raises(ConfigError, match=message) as error:
+        load_rig(skeleton, str(path))
+    assert str(error.value).startswith(str(path)) and len(str(error.value)) < 400
+    assert '\n' not in str(error.value) and time.monotonic() - start < 5
+
+
 def test_shipped_rig_topology(rig):
     # 9x12 grid: horizontal + vertical stretch, two diagonals, two skip-one bends.
     assert rig.n == 108

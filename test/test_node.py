@@ -257,7 +257,7 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
         assert h.node.sim.skeleton.name == 'from_topic'
         # Loaded: the node stops listening and its fallback timer is gone (less executor work).
         assert '/robot_description' not in [s.topic_name for s in h.node.subscriptions]
-        assert not list(h.node.timers)
+        assert list(h.node.timers) == [h.node._diag_timer]       # diagnostics' own rate
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)
@@ -357,3 +357,124 @@ def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, 
     run_session(session, probe=lambda p, r, stamp, outs: replayed.extend(
         data for key, data in outs if key == 'tf'))
     assert replayed == recorded
+
+
+def test_undecodable_wind_and_description_leave_the_node_running(harness):
+    """Bytes that are no message on any subscribed topic are dropped with a warning."""
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    talker = rclpy.create_node('description_talker', context=ctx)
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    garbage = b'\x00\x01\x00\x00' + b'\xff' * 40
+    description = talker.create_publisher(String, '/robot_description', latched)
+    description.publish(garbage)
+    try:
+        # The node waits for the topic; garbage on it is a warning, not the end of the node.
+        h = harness(robot_description_timeout=3.0)
+        assert 'description_decode' in h.node._log_times
+        pub = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', 10)
+        h.spin_until(lambda: pub.get_subscription_count() > 0)
+        pub.publish(garbage)
+        h.spin_until(lambda: 'wind_decode' in h.node._log_times)
+        msg = Vector3Stamped()
+        msg.vector.x = 2.0
+        pub.publish(msg)
+        h.spin_until(lambda: h.node.sim.params.wind == (2.0, 0.0, 0.0))
+    finally:
+        talker.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def _start_node(tmp_path, *params):
+    import subprocess
+    import sys
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
+    args = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args']
+    for p in params:
+        args += ['-p', p]
+    return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=tmp_path)
+
+
+def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
+    rig = (tmp_path / 'rig.yaml')
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        text = f.read()
+    assert 'radii: [0.155, 0.195]' in text
+    rig.write_text(text.replace('radii: [0.155, 0.195]', 'radii: [.inf, 0.195]', 1))
+    cases = {
+        'sim_rate:=abc': 'sim_rate', 'sim_rate:=1e9': 'sim_rate', 'solver:=bogus': 'solver',
+        'record_compression:=bogus': 'record_compression', 'frame_prefix:=/x': 'frame_prefix',
+        'wind:=[.nan,0.0,0.0]': 'wind', f'rig_file:={rig}': 'radii',
+    }
+    started = {case: _start_node(tmp_path, case, 'robot_description_timeout:=0.0')
+               for case in cases}
+    for case, proc in started.items():
+        try:
+            out, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        lines = err.strip().splitlines()
+        assert proc.returncode == 1 and len(lines) == 1, (case, err)
+        assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], (case, err)
+
+
+def _level(status):
+    return ord(status.level) if isinstance(status.level, bytes) else status.level
+
+
+def test_diagnostics_keep_their_rate_and_say_when_the_node_fails(harness):
+    from diagnostic_msgs.msg import DiagnosticArray
+    h = harness(diagnostics_rate=10.0)
+    diags = []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    # No input: diagnostics still go out at their rate.
+    h.spin_until(lambda: len(diags) >= 3)
+    assert [(_level(d.status[0]), d.status[0].message) for d in diags[:3]] == [(0, 'no input')] * 3
+    # Every input resets (gaps over reset_gap): WARN, then ERROR.
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'idle', 0.0)
+    for k in range(5):
+        before = h.node.inputs
+        h.send(names, pos, (300 + 2 * k) * 10 ** 9)
+        h.spin_until(lambda: h.node.inputs > before)
+    h.spin_until(lambda: 'resets on every input' in diags[-1].status[0].message)
+    assert _level(diags[-1].status[0]) == 2
+    assert any(_level(d.status[0]) == 1 and 'reset' in d.status[0].message for d in diags)
+    # Nothing published (a non-finite pose): no /tf, but ERROR diagnostics at their rate.
+    h.spin_until(lambda: len(h.tf) == 5)
+    h.node.sim.bones = lambda: type('Bones', (), {'finite': False})()
+    tf_before, diag_before = len(h.tf), len(diags)
+    for k in range(3):
+        before = h.node.inputs
+        h.send(names, pos, 310 * 10 ** 9 + k * 10 ** 7)
+        h.spin_until(lambda: h.node.inputs > before)
+    h.spin_until(lambda: len(diags) >= diag_before + 3)
+    assert len(h.tf) == tf_before
+    assert any(_level(d.status[0]) == 2 and 'nothing published' in d.status[0].message
+               for d in diags[diag_before:])
+
+
+def test_dropped_inputs_count_undecodable_and_lost_messages(harness):
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    h = harness()
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'idle', 0.0)
+    before = h.node.inputs
+    h.send(names, pos, 400 * 10 ** 9)
+    h.spin_until(lambda: h.node.inputs > before)
+    for _ in range(3):
+        h.pub.publish(b'\x00\x01\x00\x00' + b'\xff' * 40)
+    h.spin_until(lambda: h.node.pipeline.undecodable == 3)
+    # A burst the node's queue cannot hold: what it never saw is counted from the numbering.
+    burst = 2000
+    for _ in range(burst):
+        h.send(names, pos, 400 * 10 ** 9)           # a repeated stamp: dropped, and cheap
+    pipeline = h.node.pipeline
+    h.spin_until(lambda: pipeline.inputs - 1 + pipeline.lost == burst, timeout=20)
+    assert pipeline.lost > 0
+    values = {v.key: v.value for v in deserialize_message(
+        pipeline.diagnostics_now(0), DiagnosticArray).status[0].values}
+    assert int(values['dropped_inputs']) == pipeline.dropped + 3 == burst + 3 - pipeline.lost
+    assert (values['undecodable_inputs'], values['lost_inputs']) == ('3', str(pipeline.lost))

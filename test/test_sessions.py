@@ -593,3 +593,24 @@ def _umask():
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def test_overrides_read_numbers_as_numbers_and_name_unknown_presets(clip, tmp_path, capsys):
+    out = tmp_path / 'out.mcap'
+    # YAML 1.1 reads 1e3 as a string; for a float parameter it is the number it says.
+    assert _replay(clip, out, '-p', 'sim_rate:=1e3', '-p', 'wind:=[1e1, 0, -2.5E0]') == 0
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', str(out), '--force',
+                                   '-p', 'sim_rate:=abc'])
+    assert 'sim_rate' in err and 'not a float' in err
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', str(out), '--force',
+                                   '-p', 'sim_rate:=nan'])
+    assert 'sim_rate' in err
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', str(out), '--force',
+                                   '-p', 'fabric:=bogus'])
+    assert "'bogus' is not a preset" in err and 'tweed_jacket' in err
+    # A preset named with -p seeds the fabric.* values, as --fabric does.
+    session = load_session(str(clip), overrides=['fabric:=veil'])
+    veil = session.setup.fabrics['veil']
+    assert session.setup.values['fabric.damping'] == veil.damping
+    session = load_session(str(clip), overrides=['fabric:=veil', 'fabric.damping:=0.3'])
+    assert session.setup.values['fabric.damping'] == 0.3

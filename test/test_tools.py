@@ -103,3 +103,23 @@ def test_recording_is_readable_after_a_kill(tmp_path):
     assert not complete
     # Chunks are flushed about every second of stamps: most of the 3 s survive.
     assert sum(m.topic == '/tf' for m in msgs) >= 60
+
+
+@pytest.mark.parametrize('stop', [signal.SIGINT, signal.SIGTERM])
+def test_live_motion_stops_on_a_signal_with_one_line(stop):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 3))
+    motion = subprocess.Popen(
+        [sys.executable, '-m', 'jacket_cloth_ros', 'motion', '--clip', 'walk', '--duration',
+         '60', '--wait', '0'], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True)
+    try:
+        time.sleep(4.0)                 # imports, then the clip is playing
+        motion.send_signal(stop)
+        out, err = motion.communicate(timeout=20)
+    finally:
+        if motion.poll() is None:
+            motion.kill()
+            motion.wait()
+    assert motion.returncode == 128 + stop, err
+    assert 'Traceback' not in err and err.strip().splitlines() == [
+        f'jacket_cloth motion: stopped by {signal.Signals(stop).name}'], err

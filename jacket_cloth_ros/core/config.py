@@ -1,9 +1,57 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """YAML configuration loading with validation messages that name the bad key."""
 
+import math
 import os
+import reprlib
 
 import yaml
+
+MAX_YAML_BYTES = 1 << 20      # a rig or fabrics file is a few KB; this bounds parse time
+MAX_YAML_DEPTH = 32           # the deepest file we ship nests 5 levels
+MAX_COORDINATE = 1000.0       # m: a vector beyond this is no character's rig
+MAX_ITEMS = 256               # entries of one list of a rig (colliders, regions, sleeves)
+_SHOW = reprlib.Repr()
+_SHOW.maxstring = _SHOW.maxother = 60
+_SHOW.maxlevel = 2
+
+
+def shown(value: object) -> str:
+    """Return a bounded repr for error lines, whatever the value's size."""
+    return _SHOW.repr(value)
+
+
+class _BoundedLoader(yaml.SafeLoader):
+    """SafeLoader that refuses aliases and deep nesting, so no file expands beyond its size."""
+
+    _depth = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            raise yaml.composer.ComposerError(None, None, 'aliases (*name) are not accepted',
+                                              self.peek_event().start_mark)
+        if self._depth >= MAX_YAML_DEPTH:
+            raise yaml.composer.ComposerError(None, None, f'nested deeper than {MAX_YAML_DEPTH} '
+                                              'levels', self.peek_event().start_mark)
+        self._depth += 1
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def bounded_load(text: str) -> object:
+    """Load YAML as yaml.safe_load does, bounded: size, no aliases, no deep nesting.
+
+    At most MAX_YAML_BYTES; every refusal is a yaml.YAMLError.
+    """
+    if len(text) > MAX_YAML_BYTES:
+        raise yaml.YAMLError(f'larger than {MAX_YAML_BYTES} bytes')
+    loader = _BoundedLoader(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
 
 
 class ConfigError(ValueError):
@@ -31,9 +79,9 @@ def shipped(name: str) -> str:
 def parse_yaml(text: str, where: str) -> dict:
     """YAML text (e.g. carried in a recording) to a mapping, with load_yaml's errors."""
     try:
-        data = yaml.safe_load(text)
+        data = bounded_load(text)
     except yaml.YAMLError as e:
-        raise ConfigError(f'{where}: not valid YAML ({e})'.replace('\n', ' ')) from None
+        raise ConfigError(f'{where}: not valid YAML ({_one_line(e)})') from None
     if not isinstance(data, dict):
         raise ConfigError(f'{where}: expected a mapping at the top level')
     return data
@@ -53,16 +101,20 @@ def read_text(path: str, what: str) -> str:
 def load_yaml(path: str) -> dict:
     try:
         with open(path, encoding='utf-8') as f:
-            data = yaml.safe_load(f)
+            data = bounded_load(f.read(MAX_YAML_BYTES + 1))
     except OSError as e:
         raise ConfigError(f'{path}: cannot read ({e.strerror})') from None
     except UnicodeDecodeError as e:
         raise ConfigError(f'{path}: not a UTF-8 text file (byte {e.start})') from None
     except yaml.YAMLError as e:
-        raise ConfigError(f'{path}: not valid YAML ({e})'.replace('\n', ' ')) from None
+        raise ConfigError(f'{path}: not valid YAML ({_one_line(e)})') from None
     if not isinstance(data, dict):
         raise ConfigError(f'{path}: expected a mapping at the top level')
     return data
+
+
+def _one_line(error):
+    return ' '.join(str(error).split())
 
 
 class Section:
@@ -94,6 +146,8 @@ class Section:
         items = self._data.get(key, [])
         if not isinstance(items, list):
             raise ConfigError(f'{self._path(key)}: expected a list')
+        if len(items) > MAX_ITEMS:
+            raise ConfigError(f'{self._path(key)}: {len(items)} entries, at most {MAX_ITEMS}')
         return [Section(item, f'{self._path(key)}[{i}]') for i, item in enumerate(items)]
 
     def number(self, key: str, default: float | None = None, lo: float | None = None,
@@ -103,7 +157,9 @@ class Section:
         if v is None:
             raise ConfigError(f'{self._path(key)}: missing')
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise ConfigError(f'{self._path(key)}: expected a number, got {v!r}')
+            raise ConfigError(f'{self._path(key)}: expected a number, got {shown(v)}')
+        if not math.isfinite(v):
+            raise ConfigError(f'{self._path(key)}: {v} is not a finite number')
         if (lo is not None and v < lo) or (hi is not None and v > hi):
             raise ConfigError(f'{self._path(key)}: {v} is outside [{lo}, {hi}]')
         return float(v)
@@ -115,13 +171,20 @@ class Section:
             raise ConfigError(f'{self._path(key)}: expected a whole number, got {v}')
         return int(v)
 
-    def vector(self, key: str, n: int = 3, default: list[float] | None = None) -> list[float]:
+    def vector(self, key: str, n: int = 3, default: list[float] | None = None,
+               lo: float = -MAX_COORDINATE, hi: float = MAX_COORDINATE) -> list[float]:
+        """Return a list of ``n`` finite numbers, each in [lo, hi]."""
         self._used.add(key)
         v = self._data.get(key, default)
         ok = isinstance(v, (list, tuple)) and len(v) == n and all(
             isinstance(e, (int, float)) and not isinstance(e, bool) for e in v)
         if not ok:
-            raise ConfigError(f'{self._path(key)}: expected a list of {n} numbers, got {v!r}')
+            raise ConfigError(f'{self._path(key)}: expected a list of {n} numbers, '
+                              f'got {shown(v)}')
+        if not all(math.isfinite(e) for e in v):
+            raise ConfigError(f'{self._path(key)}: {v} has a number that is not finite')
+        if not all(lo <= e <= hi for e in v):
+            raise ConfigError(f'{self._path(key)}: {v} has a number outside [{lo}, {hi}]')
         return [float(e) for e in v]
 
     def text(self, key: str, default: str | None = None,
@@ -129,20 +192,20 @@ class Section:
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, str) or not v:
-            raise ConfigError(f'{self._path(key)}: expected a non-empty string, got {v!r}')
+            raise ConfigError(f'{self._path(key)}: expected a non-empty string, got {shown(v)}')
         if choices is not None and v not in choices:
-            raise ConfigError(f'{self._path(key)}: {v!r} is not one of {sorted(choices)}')
+            raise ConfigError(f'{self._path(key)}: {shown(v)} is not one of {sorted(choices)}')
         return v
 
     def texts(self, key: str, default: list[str] | None = None) -> list[str]:
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, list) or not all(isinstance(e, str) for e in v):
-            raise ConfigError(f'{self._path(key)}: expected a list of strings, got {v!r}')
+            raise ConfigError(f'{self._path(key)}: expected a list of strings, got {shown(v)}')
         return list(v)
 
     def reject_unknown(self) -> None:
         """Typos should not be silently ignored: name every key nobody read."""
-        unknown = sorted(set(self._data) - self._used)
+        unknown = sorted(map(str, set(self._data) - self._used))
         if unknown:
-            raise ConfigError(f'{self._where}: unknown key(s) {", ".join(unknown)}')
+            raise ConfigError(f'{self._where}: unknown key(s) {shown(", ".join(unknown))}')

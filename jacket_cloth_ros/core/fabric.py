@@ -3,7 +3,7 @@
 
 from dataclasses import dataclass, fields, replace
 
-from .config import ConfigError, Section, load_yaml, shipped
+from .config import ConfigError, Section, shown, load_yaml, shipped
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ def fabrics_from_data(data: dict, path: str) -> dict[str, Fabric]:
     """Presets from parsed YAML; ``path`` names where they came from in error messages."""
     out = {}
     for name in data:
-        sec = Section(data[name], f'{path}: {name}')
+        sec = Section(data[name], f'{path}: {shown(name)}')
         values = {}
         for f in fields(Fabric):
             lo, hi = FABRIC_RANGES[f.name]

@@ -140,9 +140,12 @@ def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_wo
     world = np.empty(7)
     for k in range(world_from.shape[0]):
         world[world_to[k]] = positions[world_from[k]]
-    norm = np.sqrt(world[3] ** 2 + world[4] ** 2 + world[5] ** 2 + world[6] ** 2)
-    if norm < 1e-6:
+    # Scaled by the largest component: squares of 1e200 overflow and those of 1e-200 vanish.
+    big = max(abs(world[3]), abs(world[4]), abs(world[5]), abs(world[6]))
+    if big < 1e-6:
         return _ZERO_QUATERNION
+    norm = big * np.sqrt((world[3] / big) ** 2 + (world[4] / big) ** 2 + (world[5] / big) ** 2
+                         + (world[6] / big) ** 2)
     for k in range(4):
         quat[k] = world[3 + k] / norm
     root[:] = 0.0

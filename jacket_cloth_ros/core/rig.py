@@ -122,9 +122,7 @@ class Rig:
         shape = cloth.section('shape')
         shape_link = skeleton.link(shape.text('link'), f'{where}.cloth.shape.link')
         center = np.array(shape.vector('center'))
-        radii = np.array(shape.vector('radii', 2))
-        if (radii <= 0).any():
-            raise ConfigError(f'{where}.cloth.shape.radii: must be positive')
+        radii = np.array(shape.vector('radii', 2, lo=0.01, hi=5.0))
         flare = shape.number('flare', 0.0, lo=-0.05, hi=0.1)
         opening = np.radians(shape.number('opening_deg', 40.0, lo=0.0, hi=180.0))
         spacing = shape.number('row_spacing', lo=0.005, hi=1.0)
@@ -213,9 +211,7 @@ class Rig:
             else:
                 link = skeleton.link(link_name, f'{key}.link')
             if kind == 'ellipsoid':
-                radii = np.array(c.vector('radii'))
-                if (radii <= 0).any():
-                    raise ConfigError(f'{key}.radii: must be positive')
+                radii = np.array(c.vector('radii', lo=1e-3, hi=5.0))
                 rotation = rpy_matrix(np.radians(c.vector('rpy_deg', 3, [0, 0, 0])))
                 for k, (ctr, rot, rad) in enumerate(split_ellipsoid(c.vector('center'),
                                                                     rotation, radii)):

@@ -13,7 +13,7 @@ import numpy as np
 from urdf_parser_py import urdf
 
 from .bundles import floats, skeleton_model
-from .config import ConfigError, read_text, shipped
+from .config import MAX_COORDINATE, ConfigError, read_text, shipped
 from .pose_kernel import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -71,6 +71,8 @@ class Skeleton:
             if j.origin is not None:
                 xyz = j.origin.xyz if j.origin.xyz is not None else [0, 0, 0]
                 rpy = j.origin.rpy if j.origin.rpy is not None else [0, 0, 0]
+                _check_numbers(j.name, 'origin xyz', xyz, MAX_COORDINATE)
+                _check_numbers(j.name, 'origin rpy', rpy, 100.0)
                 self.origin[k] = make_transform(rpy_matrix(rpy), xyz)
             if j.type in _MOVABLE:
                 ax = np.array(j.axis if j.axis is not None else [1, 0, 0], dtype=float)
@@ -90,6 +92,8 @@ class Skeleton:
             self.var[k] = index[j.mimic.joint]
             self.mult[k] = j.mimic.multiplier if j.mimic.multiplier is not None else 1.0
             self.offset[k] = j.mimic.offset if j.mimic.offset is not None else 0.0
+            _check_numbers(j.name, 'mimic multiplier and offset',
+                           [self.mult[k], self.offset[k]], 100.0)
         self.joint_index = index
         self.model = skeleton_model(self)
 
@@ -104,6 +108,17 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def _check_numbers(joint, what, values, limit):
+    """Refuse a URDF's numbers unless finite and within ``limit``: no rig fits 1e308 m off."""
+    try:
+        v = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f'URDF: joint {joint!r} {what}: not numbers') from None
+    if v.shape != (len(values),) or not np.isfinite(v).all() or (abs(v) > limit).any():
+        raise ConfigError(f'URDF: joint {joint!r} {what} {v.tolist()}: each must be finite and '
+                          f'within +-{limit}')
 
 
 def shipped_character_urdf() -> str:

@@ -16,6 +16,8 @@ from mcap.reader import make_reader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import CRCValidationError, StreamReader
 
+from ..core.config import MAX_YAML_BYTES, bounded_load
+
 MAGIC = b'\x89MCAP0\r\n'
 _FOOTER_SIZE = 1 + 8 + 8 + 8 + 4        # opcode, length, summary start, offsets start, CRC
 
@@ -51,7 +53,7 @@ def mcap_files(path: str) -> list[str]:
     if os.path.isfile(meta):
         try:
             with open(meta, encoding='utf-8') as f:
-                info = yaml.safe_load(f)['rosbag2_bagfile_information']
+                info = bounded_load(f.read(MAX_YAML_BYTES + 1))['rosbag2_bagfile_information']
             storage = info.get('storage_identifier', '')
             if storage != 'mcap':
                 raise RecordingError(f'{path}: bag storage is {storage!r}; only mcap is read')

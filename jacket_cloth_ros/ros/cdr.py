@@ -373,13 +373,22 @@ class JointStateReader:
         return JointStateContent(sec * 1_000_000_000 + nanosec, names, position)
 
 
-def _joint_state_by_rclpy(raw):
-    from rclpy.serialization import deserialize_message
-    from sensor_msgs.msg import JointState
+def deserialize(raw: bytes, msg_type: type) -> object:
+    """Deserialize as rclpy does, failing with ValueError on bytes that are no ``msg_type``."""
+    from rclpy.serialization import deserialize_message, serialize_message
     try:
-        msg = deserialize_message(raw, JointState)
+        msg = deserialize_message(raw, msg_type)
     except Exception as e:  # noqa: BLE001 - rclpy raises its own error types
         raise ValueError(str(e)) from None
+    # Fast CDR reads past the end of a short buffer without an error: compare with a whole one.
+    if len(serialize_message(msg)) > len(raw):
+        raise ValueError(f'cut short ({len(raw)} bytes)')
+    return msg
+
+
+def _joint_state_by_rclpy(raw):
+    from sensor_msgs.msg import JointState
+    msg = deserialize(raw, JointState)
     return JointStateContent(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
                              tuple(msg.name), np.array(msg.position, dtype=float))
 

@@ -21,7 +21,7 @@ if TYPE_CHECKING:           # for the annotations only
 SPHERE, CUBE, CYLINDER, LINE_LIST, TRIANGLE_LIST = 2, 1, 3, 5, 11
 ADD, DELETEALL = 0, 3
 # diagnostic_msgs/DiagnosticStatus levels
-OK, WARN = 0, 1
+OK, WARN, ERROR = 0, 1, 2
 
 # Every scene's bundles have the same types, so the marker kernel is typed once.
 _FILL_MARKERS = FixedTypes(marker_kernel.fill_markers)
@@ -153,8 +153,8 @@ def _marker_template(rig, layer_bones, reset, frame):
                               marker_kernel.shape_count(rig))
 
 
-def diagnostics(stamp_ns: int, node_name: str, values: dict, level_warn: bool,
+def diagnostics(stamp_ns: int, node_name: str, values: dict, level: int,
                 message: str) -> bytes:
-    status = (WARN if level_warn else OK, f'{node_name}: cloth simulation', message,
-              'jacket_cloth', values)
+    """Encode the node's one DiagnosticArray status at ``level`` (OK, WARN or ERROR)."""
+    status = (level, f'{node_name}: cloth simulation', message, 'jacket_cloth', values)
     return cdr.diagnostic_array(stamp_ns, [status])

@@ -8,12 +8,12 @@ from typing import TYPE_CHECKING
 
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import (
     DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
-from rclpy.serialization import deserialize_message
 from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -52,8 +52,8 @@ class JacketClothNode(Node):
 
     def __init__(self, **kwargs: object):
         super().__init__('jacket_cloth_node', **kwargs)
-        for name, (kind, default, rng, ro, text) in NODE_PARAMETERS.items():
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        for name, spec in NODE_PARAMETERS.items():
+            self._declare(name, spec)
         fabric_file = self._p('fabric_file') or None
         self._fabric_file = fabric_file or shipped('fabrics.yaml')
         self.fabrics = load_fabrics(fabric_file)
@@ -61,9 +61,8 @@ class JacketClothNode(Node):
         if preset not in self.fabrics:
             raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
                               f'(presets: {", ".join(self.fabrics)})')
-        for name, (kind, default, rng, ro, text) in fabric_parameters(
-                self.fabrics[preset]).items():
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        for name, spec in fabric_parameters(self.fabrics[preset]).items():
+            self._declare(name, spec)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -73,6 +72,12 @@ class JacketClothNode(Node):
         self._urdf = None
         self._log_times = {}
         self.inputs = 0
+        self._sequences = {}        # publisher gid -> the last sequence number it sent us
+        # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
+        self.received = dict.fromkeys(('wind', 'robot_description'), 0)
+        self.refused = dict.fromkeys(('wind', 'robot_description'), 0)
+        self._diag_timer = None
+        self._diag_wall = 0.0
 
         self.publishers_by_key = {
             'tf': self.create_publisher(TFMessage, '/tf', TF_QOS),
@@ -94,15 +99,29 @@ class JacketClothNode(Node):
             self._load_model(urdf, 'the robot_description parameter')
         else:
             # Relative, as robot_state_publisher publishes it: under a namespace the node hears
-            # its own character's description, not another's.
+            # its own character's description, not another's. Raw: bytes that are no String
+            # reach the callback, which says so, not the executor.
             self._description = self.create_subscription(
-                String, 'robot_description', self._on_description, LATCHED)
+                String, 'robot_description', self._on_description, LATCHED, raw=True)
             self._fallback = self.create_timer(self._p('robot_description_timeout'),
                                                self._use_shipped_character)
 
     @property
     def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
+
+    def _declare(self, name, spec):
+        """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
+        kind, default, rng, ro, text = spec
+        try:
+            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        except ParameterException as e:
+            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
+            raise ConfigError(f'parameter {name}: {reason}') from None
+        reason = check_value(name, self._p(name))
+        if reason:
+            raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
+                              f'parameter {name}: {reason}')
 
     # -- model --------------------------------------------------------------------------------
     def _p(self, name):
@@ -117,11 +136,20 @@ class JacketClothNode(Node):
                 out[name] = list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
         return out
 
-    def _on_description(self, msg):
+    def _on_description(self, raw):
+        self.received['robot_description'] += 1
         if self.pipeline is None:
+            try:
+                msg = cdr.deserialize(raw, String)
+            except cdr.DECODE_ERRORS as e:
+                self.refused['robot_description'] += 1
+                self._warn('description_decode', f'a {self._description.topic_name} that does '
+                           f'not decode ({e}): message dropped')
+                return
             try:
                 self._load_model(msg.data, f'the {self._description.topic_name} topic')
             except ConfigError as e:
+                self.refused['robot_description'] += 1
                 self.get_logger().error(f'{self._description.topic_name} rejected: {e}')
 
     def _use_shipped_character(self):
@@ -153,6 +181,10 @@ class JacketClothNode(Node):
             self.destroy_timer(self._fallback)
             self._description = self._fallback = None
         self._write_session_config()
+        # Diagnostics keep their own rate when inputs stop or nothing else is published.
+        self._diag_wall = time.monotonic()
+        self._diag_timer = self.create_timer(1.0 / self._p('diagnostics_rate'),
+                                             self._diagnostics_watchdog)
         # Subscribed only now: a publisher that waits for us knows we can simulate.
         self.create_subscription(JointState, 'joint_states', self.on_joint_state,
                                  qos_profile_sensor_data, raw=True)
@@ -179,6 +211,8 @@ class JacketClothNode(Node):
             self._open_recorder(self._p('record'))
         if self.pipeline is None:
             return
+        if 'diagnostics_rate' in names:
+            self._diag_timer.timer_period_ns = int(1e9 / self._p('diagnostics_rate'))
         values = self._values()
         self.pipeline.apply({n: values[n] for n in names})
         # Recorded at the last input's stamp: a replay applies them after the same input.
@@ -238,15 +272,46 @@ class JacketClothNode(Node):
             self._log_times[code] = now
             self.get_logger().warning(text)
 
+    def _diagnostics_watchdog(self):
+        """Diagnostics, when the inputs' own have not gone out for a period of wall time."""
+        if time.monotonic() - self._diag_wall < 1.2 / self._p('diagnostics_rate'):
+            return
+        last = self.sim.last
+        stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
+        out = self.pipeline.diagnostics_now(stamp_ns)
+        self.publishers_by_key['diagnostics'].publish(out)
+        self._diag_wall = time.monotonic()
+        self._record(self._topics['diagnostics'][0], out, stamp_ns)
+
+    def _count_lost(self, info):
+        """Count a gap in a publisher's numbering as messages lost before this callback."""
+        seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
+        if not seq or not gid:
+            return
+        key = gid['data'] if isinstance(gid, dict) else gid
+        last = self._sequences.pop(key, None)       # re-inserted: the dict stays in use order
+        if last is not None and seq > last + 1:
+            self.pipeline.note_lost(seq - last - 1)
+        self._sequences[key] = seq if last is None else max(seq, last)
+        if len(self._sequences) > 64:
+            del self._sequences[next(iter(self._sequences))]
+
     def _on_wind(self, raw):
         """~/wind sets the wind live, through the ``wind`` parameter (one path, validated).
 
         The change is recorded as a parameter event; the message itself is recorded too.
         """
-        msg = deserialize_message(raw, Vector3Stamped)
+        self.received['wind'] += 1
+        try:
+            msg = cdr.deserialize(raw, Vector3Stamped)
+        except cdr.DECODE_ERRORS as e:
+            self.refused['wind'] += 1
+            self._warn('wind_decode', f'a ~/wind that does not decode ({e}): message dropped')
+            return
         v = [msg.vector.x, msg.vector.y, msg.vector.z]
         result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
         if not result.successful:
+            self.refused['wind'] += 1
             self._warn('wind', f'~/wind rejected: {result.reason}')
             return
         last = self.sim.last if self.sim else None
@@ -268,9 +333,11 @@ class JacketClothNode(Node):
         # Latency counts from the message's arrival in this process (the rmw's receive time,
         # system clock), so time queued behind other callbacks is in it; without one, from now.
         arrived = info.get('received_timestamp') or time.time_ns()
+        self._count_lost(info)
         try:
             msg = self._joint_states.read(raw)
         except cdr.DECODE_ERRORS as e:
+            self.pipeline.note_undecodable()
             self._warn('decode', f'a JointState that does not decode ({e}): message dropped')
             return
         stamp_ns = msg.stamp_ns
@@ -284,12 +351,14 @@ class JacketClothNode(Node):
         if report.skipped_steps:
             self._warn('overrun', f'{report.skipped_steps} steps skipped (cap '
                        f'max_steps_per_input); the cloth lags no further behind')
-        if report.accepted and not outputs:
+        if report.accepted and not any(key == 'tf' for key, _ in outputs):
             self._warn('nan', 'non-finite bone pose: nothing published')
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
             if key == 'tf':      # latency: arrival to /tf handed to DDS
                 self.pipeline.note_latency(time.time_ns() - arrived)
+            elif key == 'diagnostics':
+                self._diag_wall = time.monotonic()
             self._record(self._topics[key][0], out, stamp_ns)
 
 

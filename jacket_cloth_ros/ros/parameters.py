@@ -124,6 +124,18 @@ def fabric_from(preset: Fabric, values: dict) -> Fabric:
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
 
 
+def _as_float(value):
+    """Return a number, or a string that is one (YAML 1.1 reads ``1e3`` as text), as a float."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return float(value) if isinstance(value, (int, float)) else value
+
+
 def parse_override(text: str, known: dict) -> tuple[str, object]:
     """``name:=value`` (as ``--ros-args -p`` takes it) to (name, typed value), validated.
 
@@ -145,14 +157,14 @@ def parse_override(text: str, known: dict) -> tuple[str, object]:
     elif isinstance(current, int):
         ok = isinstance(value, int) and not isinstance(value, bool)
     elif isinstance(current, float):
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-        value = float(value) if ok else value
+        value = _as_float(value)
+        ok = isinstance(value, float)
     elif isinstance(current, str):
         value, ok = raw, True
     else:
         ok = isinstance(value, list)
-        value = [float(v) for v in value] if ok and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) else value
+        value = [_as_float(v) for v in value] if ok else value
+        ok = ok and all(isinstance(v, float) for v in value)
     if not ok:
         raise ValueError(f'-p {name}: {raw!r} is not a {type(current).__name__}')
     spec = NODE_PARAMETERS.get(name)

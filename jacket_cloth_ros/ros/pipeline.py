@@ -56,7 +56,11 @@ class SessionPipeline:
                                     values['world_joint'])
         self.inputs = 0
         self.dropped = 0
+        self.undecodable = 0        # JointStates that did not decode (the node counts them)
+        self.lost = 0               # JointStates their publisher numbered that never arrived
         self.last_reset_reason = ''
+        self._reset_streak = 0
+        self._window = dict.fromkeys(_WINDOW, 0)
         self._costs = []
         self._latencies = []
         self._last_marker = None
@@ -92,33 +96,54 @@ class SessionPipeline:
         """Note the live node's time from a JointState's arrival to its /tf going out."""
         self._latencies.append(ns)
 
+    def note_undecodable(self) -> None:
+        """Count a JointState that did not decode as a dropped input."""
+        self.undecodable += 1
+        self._window['dropped'] += 1
+
+    def note_lost(self, count: int) -> None:
+        """Count ``count`` JointStates lost before they reached the node."""
+        self.lost += count
+        self._window['lost'] += count
+
     def on_joint_state(self, msg: 'JointStateContent',
                        stamp_ns: int) -> tuple[StepReport, list[tuple[str, bytes]]]:
         """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
         self.inputs += 1
+        self._window['inputs'] += 1
         report = self.sim.process(stamp_ns, msg.name, msg.position)
         if not report.accepted:
             self.dropped += 1
+            self._window['dropped'] += 1
             return report, []
+        self._window['accepted'] += 1
         if report.reset:
             self.last_reset_reason = report.reset
             self._marker_reset = True
+        if report.reset and report.reset != 'first sample':
+            self._window['resets'] += 1
+            self._reset_streak += 1
+        else:
+            self._reset_streak = 0
         self._costs.append(report.step_cost_ns)
         return report, self._outputs(stamp_ns)
 
     def _outputs(self, stamp_ns):
         bones = self.sim.bones()
-        if not bones.finite:
-            return []            # never a NaN on /tf (the simulation resets itself on one)
-        out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
-        if self.values['publish_world_tf']:
-            out.append(('tf', self._world_transform(stamp_ns)))
-        rate = self.values['markers_rate']
-        if rate > 0 and _due(self._last_marker, stamp_ns, rate):
-            self._last_marker = stamp_ns
-            out.append(('markers', messages.marker_array(
-                self.sim, stamp_ns, self.sim.skeleton.link_names[0], reset=self._marker_reset)))
-            self._marker_reset = False
+        out = []
+        if bones.finite:         # never a NaN on /tf (the simulation resets itself on one)
+            out.append(('tf', self._tf.encode(bones.poses, stamp_ns)))
+            if self.values['publish_world_tf']:
+                out.append(('tf', self._world_transform(stamp_ns)))
+            self._window['published'] += 1
+            rate = self.values['markers_rate']
+            if rate > 0 and _due(self._last_marker, stamp_ns, rate):
+                self._last_marker = stamp_ns
+                out.append(('markers', messages.marker_array(
+                    self.sim, stamp_ns, self.sim.skeleton.link_names[0],
+                    reset=self._marker_reset)))
+                self._marker_reset = False
+        # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
             self._last_diag = stamp_ns
             out.append(('diagnostics', self._diagnostics(stamp_ns)))
@@ -137,6 +162,31 @@ class SessionPipeline:
         last = self.sim.last
         pose = np.concatenate([last.root[:3, 3], last.root_quat])
         return self._world_tf[1].encode(pose[None], stamp_ns)
+
+    def diagnostics_now(self, stamp_ns: int) -> bytes:
+        """Diagnostics whatever the stamps: the live node's own rate, when inputs stop."""
+        return self._diagnostics(stamp_ns)
+
+    def _status(self, slow):
+        """Level and message of the inputs since the last diagnostics."""
+        w = self._window
+        if w['accepted'] and not w['published']:
+            return messages.ERROR, 'nothing published: the bone pose is not finite'
+        if self._reset_streak >= 3:
+            return messages.ERROR, (f'the cloth resets on every input ({self._reset_streak} '
+                                    f'in a row: {self.last_reset_reason})')
+        if w['dropped'] and not w['accepted']:
+            return messages.ERROR, 'every input dropped'
+        problems = []
+        if slow:
+            problems.append('step cost above one step of real time')
+        if w['resets']:
+            problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
+        if w['dropped'] or w['lost']:
+            problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
+        if problems:
+            return messages.WARN, '; '.join(problems)
+        return messages.OK, 'ok' if w['inputs'] else 'no input'
 
     def _diagnostics(self, stamp_ns):
         sim = self.sim
@@ -161,12 +211,19 @@ class SessionPipeline:
             'worst_vertical_strain': f'{vert:.4f}',
             'worst_horizontal_strain': f'{horiz:.4f}',
             'inputs': self.inputs,
-            'dropped_inputs': self.dropped,
+            'dropped_inputs': self.dropped + self.undecodable,
+            'undecodable_inputs': self.undecodable,
+            'lost_inputs': self.lost,
             'sim_steps': sim.steps_total,
             'recording': self.values['record'],
         })
-        message = 'step cost above one step of real time' if slow else 'ok'
-        return messages.diagnostics(stamp_ns, self.node_name, values, slow, message)
+        level, message = self._status(slow)
+        self._window = dict.fromkeys(_WINDOW, 0)
+        return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
+
+
+# What the inputs since the last diagnostics did, for its level.
+_WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
 
 
 def _due(last, stamp_ns, rate):

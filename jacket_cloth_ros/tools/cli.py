@@ -21,6 +21,18 @@ class ToolError(Exception):
     """A failure to report in one line."""
 
 
+class Stopped(Exception):
+    """SIGINT or SIGTERM asked a live command to stop."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(f'stopped by {signal.Signals(signum).name}')
+        self.signum = signum
+
+
+def _stop(signum, frame):
+    raise Stopped(signum)
+
+
 def _skeleton(urdf_path=None):
     from ..core.skeleton import load_skeleton
     path = urdf_path or shipped('character.urdf')
@@ -36,7 +48,9 @@ def cmd_motion(args: argparse.Namespace) -> int:
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
-    rclpy.init()
+    # Our handlers, not rclpy's: its own shut the context down under a publish (a traceback).
+    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
     node = rclpy.create_node('jacket_cloth_motion')
     try:
         reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else \
@@ -65,6 +79,8 @@ def cmd_motion(args: argparse.Namespace) -> int:
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
     return 0
 
 
@@ -312,6 +328,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ToolError, ConfigError, ValueError, OSError) as e:
         print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
         return 1
+    except Stopped as e:
+        print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
+        return 128 + e.signum
     except KeyboardInterrupt:
         return 130
 

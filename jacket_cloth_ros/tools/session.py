@@ -110,9 +110,14 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
         values.update({k: v for k, v in recorded_values.items()
                        if k in values and not k.startswith('fabric')})
         values['fabric'] = preset
-    for text in overrides:
-        name, value = parse_override(text, values)
-        values[name] = value
+    given = dict(parse_override(text, values) for text in overrides)
+    if 'fabric' in given:       # a preset named with -p seeds fabric.*, as --fabric does
+        if given['fabric'] not in fabrics:
+            raise ConfigError(f'-p fabric: {given["fabric"]!r} is not a preset (presets: '
+                              f'{", ".join(fabrics)})')
+        values.update((k, v) for k, v in default_values(fabrics[given['fabric']]).items()
+                      if k.startswith('fabric.'))
+    values.update(given)
     setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics)
     session = SessionInput(recording, topic, _events(recording, topic), setup)
     session.warnings = _check_joints(session)

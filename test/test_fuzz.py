@@ -1,0 +1,341 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Fuzzing: random and mutated CDR on every subscribed topic, MCAP files, YAML set-ups.
+
+Each part runs for a bounded time with a fixed seed, a few seconds in ``make test``. A longer
+run: ``JACKET_CLOTH_FUZZ_SECONDS=600 make test`` (seconds per part), with another seed:
+``JACKET_CLOTH_FUZZ_SEED=7``; a failure prints the seed and the case to run again.
+
+What must hold whatever the bytes: nothing crashes (no exception leaves the node's callbacks,
+the tools end in one line and exit 0 or 1), nothing is silent (every message is used or
+counted as refused, dropped, undecodable) and nothing is lost (every message sent is seen).
+"""
+
+import math
+import os
+import random
+import struct
+import time
+
+import numpy as np
+import pytest
+import rclpy
+import yaml
+from conftest import DOMAIN_ID
+from geometry_msgs.msg import Vector3Stamped
+from rclpy.context import Context
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.serialization import serialize_message
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+from jacket_cloth_ros.core.config import ConfigError, parse_yaml, shipped
+from jacket_cloth_ros.core.fabric import fabrics_from_data
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.ros import cdr
+from jacket_cloth_ros.ros.parameters import check_value
+from jacket_cloth_ros.tools.cli import main
+
+SECONDS = float(os.environ.get('JACKET_CLOTH_FUZZ_SECONDS', '2'))
+SEED = int(os.environ.get('JACKET_CLOTH_FUZZ_SEED', '22'))
+_INTERESTING = (0, 1, 0x7f, 0x80, 0xff, 0x7fff, 0xffff, 0x7fffffff, 0x80000000, 0xffffffff)
+
+
+def mutate(rng, data):
+    """1 to 4 random edits of ``data``: bit flips, bytes, lengths, cuts, repeats, inserts."""
+    data = bytearray(data)
+    for _ in range(rng.randint(1, 4)):
+        op = rng.randrange(7)
+        at = rng.randrange(len(data) + 1)
+        if op == 0 and data:
+            data[min(at, len(data) - 1)] ^= 1 << rng.randrange(8)
+        elif op == 1 and data:
+            data[min(at, len(data) - 1)] = rng.randrange(256)
+        elif op == 2 and len(data) >= 4:        # a length or count field set to an edge value
+            at = min(at, len(data) - 4) & ~3
+            struct.pack_into('<I', data, at, rng.choice(_INTERESTING))
+        elif op == 3:
+            del data[at:]
+        elif op == 4:
+            del data[at:at + rng.randint(1, 16)]
+        elif op == 5:
+            data[at:at] = data[at:at + rng.randint(1, 64)] * rng.randint(1, 8)
+        else:
+            data[at:at] = rng.randbytes(rng.randint(1, 16))
+    return bytes(data)
+
+
+def fuzzed(rng, seeds):
+    """A mutated seed, now and then random bytes, with or without a CDR header."""
+    pick = rng.random()
+    if pick < 0.1:
+        return rng.randbytes(rng.randrange(64))
+    if pick < 0.2:
+        return b'\x00\x01\x00\x00' + rng.randbytes(rng.randrange(256))
+    return mutate(rng, rng.choice(seeds))
+
+
+def _until(deadline_s):
+    end = time.monotonic() + deadline_s
+    while time.monotonic() < end:
+        yield
+
+
+def _wind_applies(raw):
+    try:
+        msg = cdr.deserialize(raw, Vector3Stamped)
+    except cdr.DECODE_ERRORS:
+        return None
+    v = [msg.vector.x, msg.vector.y, msg.vector.z]
+    return None if check_value('wind', v) else tuple(v)
+
+
+def test_fuzz_every_subscribed_topic(urdf_text):
+    from test_node import Harness, _all_finite
+    rng = random.Random(SEED)
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    talker = rclpy.create_node('fuzz_talker', context=ctx)
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    description = talker.create_publisher(String, '/robot_description', latched)
+    h = None
+    try:
+        # /robot_description while the node waits for it: each message is refused or loads.
+        h = Harness.__new__(Harness)
+        _start_waiting(h, robot_description_timeout=60.0)
+        h.ex.add_node(talker)
+        h.spin_until(lambda: description.get_subscription_count() > 0)
+        text_seeds = [urdf_text, urdf_text[:len(urdf_text) // 2]]
+        cdr_seeds = [serialize_message(String(data=t)) for t in text_seeds]
+        sent = 0
+        for _ in _until(SECONDS):
+            if h.node.pipeline is not None:
+                break
+            if rng.random() < 0.5:
+                data = fuzzed(rng, cdr_seeds)
+            else:
+                text = mutate(rng, rng.choice(text_seeds).encode()).decode('utf-8', 'replace')
+                data = serialize_message(String(data=text))
+            description.publish(data)
+            sent += 1
+            h.spin_until(lambda: h.node.received['robot_description'] == sent,
+                         timeout=30)
+            loaded = h.node.pipeline is not None
+            assert h.node.refused['robot_description'] == sent - loaded, (SEED, data[:200])
+        if h.node.pipeline is None:
+            description.publish(String(data=urdf_text))
+        h.spin_until(lambda: h.node.sim is not None and h.pub.get_subscription_count() > 0)
+
+        # ~/wind: each message applies its vector or is refused.
+        wind = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', 10)
+        h.spin_until(lambda: wind.get_subscription_count() > 0)
+        seeds = []
+        for v in ([1.0, 2.0, 3.0], [0.0, 0.0, 0.0], [999.0, -1e3, 1e-300]):
+            msg = Vector3Stamped()
+            msg.header.frame_id = 'world'
+            msg.vector.x, msg.vector.y, msg.vector.z = v
+            seeds.append(serialize_message(msg))
+        sent = 0
+        for _ in _until(SECONDS):
+            data = fuzzed(rng, seeds)
+            before = h.node.refused['wind']
+            wind.publish(data)
+            sent += 1
+            h.spin_until(lambda: h.node.received['wind'] == sent)
+            expected = _wind_applies(data)
+            if expected is None:
+                assert h.node.refused['wind'] == before + 1, (SEED, data)
+            else:
+                assert h.node.refused['wind'] == before, (SEED, data)
+                assert h.node.sim.params.wind == expected, (SEED, data)
+
+        # joint_states: each message is used, or counted as dropped or undecodable.
+        sk = h.node.sim.skeleton
+        seeds = []
+        for k in range(8):
+            names, pos = joint_state_content(sk.joint_names, 'walk', k / 60)
+            msg = JointState(name=list(names), position=[float(p) for p in pos],
+                             velocity=[0.0] * 3)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = 500 + k, 1000 * k
+            msg.header.frame_id = 'base_link'
+            seeds.append(serialize_message(msg))
+        pipeline = h.node.pipeline
+        seen = lambda: pipeline.inputs + pipeline.undecodable + pipeline.lost  # noqa: E731
+        start, accepted, tf_start = seen(), 0, len(h.tf)
+        sent = 0
+        for _ in _until(SECONDS):
+            data = fuzzed(rng, seeds)
+            before = (pipeline.inputs, pipeline.dropped, pipeline.undecodable)
+            h.pub.publish(data)
+            sent += 1
+            h.spin_until(lambda: seen() - start == sent)
+            assert pipeline.lost == 0, (SEED, data)     # paced: nothing may be lost
+            # Seen once: undecodable (counted), or decoded and then dropped (counted) or used.
+            decoded = pipeline.inputs - before[0]
+            assert decoded + pipeline.undecodable - before[2] == 1, (SEED, data)
+            accepted += decoded - (pipeline.dropped - before[1])
+        # Every input used is on /tf, unless its pose was not finite (then warned about).
+        if 'nan' not in h.node._log_times:
+            h.spin_until(lambda: len(h.tf) - tf_start == accepted)
+        # Still alive: a valid clip comes out on /tf, finite.
+        tf_before = len(h.tf)
+        h.send_clip('walk', 60, 0.2, start_s=2000.0)
+        h.spin_until(lambda: len(h.tf) >= tf_before + 10)
+        assert all(_all_finite(tf) for tf in h.tf)
+    finally:
+        if h is not None:
+            h.close()
+        talker.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def _start_waiting(h, **params):
+    """A Harness whose node waits for /robot_description (Harness.__init__ waits for a sim)."""
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+    from tf2_msgs.msg import TFMessage
+    from jacket_cloth_ros.ros.node import JacketClothNode
+    h.ctx = Context()
+    rclpy.init(context=h.ctx, domain_id=DOMAIN_ID)
+    h.node = JacketClothNode(context=h.ctx, parameter_overrides=[
+        Parameter(k, value=v) for k, v in params.items()])
+    h.peer = rclpy.create_node('jacket_fuzz_peer', context=h.ctx)
+    h.pub = h.peer.create_publisher(JointState, 'joint_states', 10)
+    h.tf, h.markers = [], []
+    h.peer.create_subscription(TFMessage, '/tf', h.tf.append, 100)
+    h.ex = SingleThreadedExecutor(context=h.ctx)
+    h.ex.add_node(h.node)
+    h.ex.add_node(h.peer)
+
+
+@pytest.fixture(scope='module')
+def recordings(tmp_path_factory):
+    """A motion file (inputs only) and its replay (every output topic, set-up metadata)."""
+    folder = tmp_path_factory.mktemp('fuzz')
+    clip, full = folder / 'clip.mcap', folder / 'full.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '0.5', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(full)]) == 0
+    return [clip.read_bytes(), full.read_bytes()]
+
+
+def _chunk_spans(data):
+    """(start, end) of each Chunk record (opcode 0x06) of an MCAP file."""
+    spans, at = [], 8
+    while at + 9 <= len(data):
+        op, length = data[at], struct.unpack_from('<Q', data, at + 1)[0]
+        end = at + 9 + length
+        if end > len(data):
+            break
+        if op == 0x06:
+            spans.append((at, end))
+        at = end
+    return spans
+
+
+def test_fuzz_mcap_files_end_in_a_replay_or_one_line(recordings, tmp_path, capsys):
+    rng = random.Random(SEED)
+    path, out = tmp_path / 'in.mcap', tmp_path / 'out.mcap'
+    for case in _until(SECONDS):
+        seed = rng.choice(recordings)
+        spans = _chunk_spans(seed)
+        if spans and rng.random() < 0.6:        # damage inside one chunk, the rest intact
+            a, b = rng.choice(spans)
+            data = seed[:a] + mutate(rng, seed[a:b]) + seed[b:]
+        else:
+            data = mutate(rng, seed)
+        path.write_bytes(data)
+        start = time.monotonic()
+        code = main(['replay', str(path), '-o', str(out), '--force'])
+        err = capsys.readouterr().err.strip()
+        assert code in (0, 1) and 'Traceback' not in err, (SEED, err)
+        if code == 1:
+            assert len(err.splitlines()) == 1 and len(err) < 2000, (SEED, err)
+        assert time.monotonic() - start < 30, (SEED, 'slow')
+
+
+def _random_value(rng, depth=0):
+    pick = rng.randrange(12)
+    if pick == 0:
+        return rng.choice([math.nan, math.inf, -math.inf, 1e308, -1e308, 1e-308, 0, -1])
+    if pick == 1:
+        return rng.uniform(-10, 10)
+    if pick == 2:
+        return rng.randint(-100, 100)
+    if pick == 3:
+        return rng.choice(['', 'x', 'base_link', 'spine', 'world', 'ellipsoid', 'plane', 'é'])
+    if pick == 4:
+        return rng.choice([None, True, False])
+    if pick == 5 and depth < 4:
+        return [_random_value(rng, depth + 1) for _ in range(rng.randrange(5))]
+    if pick == 6 and depth < 4:
+        return {rng.choice(['a', 'link', 'radii', 'center', 'type']): _random_value(rng, depth + 1)
+                for _ in range(rng.randrange(4))}
+    return rng.uniform(-1, 1)
+
+
+def _mutate_tree(rng, node):
+    """One value somewhere in a parsed YAML tree replaced by a random one."""
+    if isinstance(node, dict) and node:
+        key = rng.choice(list(node))
+        if rng.random() < 0.3 or not isinstance(node[key], (dict, list)):
+            node[key] = _random_value(rng)
+        else:
+            _mutate_tree(rng, node[key])
+    elif isinstance(node, list) and node:
+        k = rng.randrange(len(node))
+        if rng.random() < 0.3 or not isinstance(node[k], (dict, list)):
+            node[k] = _random_value(rng)
+        else:
+            _mutate_tree(rng, node[k])
+
+
+def test_fuzz_yaml_set_ups_load_or_name_the_file(skeleton):
+    rng = random.Random(SEED)
+    texts = {}
+    for name in ('jacket_rig.yaml', 'fabrics.yaml'):
+        with open(shipped(name), encoding='utf-8') as f:
+            texts[name] = f.read()
+    for case in _until(SECONDS):
+        name = rng.choice(list(texts))
+        if rng.random() < 0.5:
+            data = yaml.safe_load(texts[name])
+            for _ in range(rng.randint(1, 3)):
+                _mutate_tree(rng, data)
+            text = yaml.safe_dump(data)
+        else:
+            extra = rng.choice(['', '&a ', '*a ', '[' * 50, '{', '<<: *a\n', '!!python/tuple '])
+            raw = mutate(rng, texts[name].encode())
+            at = rng.randrange(len(raw) + 1)
+            text = (raw[:at] + extra.encode() + raw[at:]).decode('utf-8', 'replace')
+        start = time.monotonic()
+        try:
+            parsed = parse_yaml(text, 'fuzz.yaml')
+            if name == 'fabrics.yaml':
+                fabrics_from_data(parsed, 'fuzz.yaml')
+            else:
+                rig = Rig(parsed, skeleton, where='fuzz.yaml')
+                assert np.isfinite(rig.rest).all() and np.isfinite(rig.con_rest).all()
+        except ConfigError as e:
+            message = str(e)
+            assert message.startswith('fuzz.yaml') and '\n' not in message, (SEED, message)
+            assert len(message) < 2000, (SEED, message[:300])
+        assert time.monotonic() - start < 5, (SEED, 'slow', text[:300])
+
+
+def test_found_by_fuzzing_a_short_message_and_a_huge_quaternion(make_sim, rest_input):
+    # Fast CDR decoded a 4-byte ~/wind from memory past its end, differently each time.
+    msg = Vector3Stamped()
+    msg.vector.x = 1.0
+    whole = serialize_message(msg)
+    assert cdr.deserialize(whole, Vector3Stamped).vector.x == 1.0
+    for data in [whole[:cut] for cut in range(len(whole))] + [b'\x00\x01\x01\x01']:
+        with pytest.raises(ValueError):
+            cdr.deserialize(data, Vector3Stamped)
+    # A world rotation of 1e200 components: its squares overflowed to a division by zero.
+    names, pos = rest_input
+    names = list(names)
+    sim = make_sim()
+    for k, axis in enumerate('xyzw'):
+        pos[names.index(f'world_joint/rot_{axis}')] = 1e200 if axis in 'zw' else 0.0
+    report = sim.process(10 ** 9, names, pos)
+    assert report.accepted and np.isfinite(sim.x).all()
