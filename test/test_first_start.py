@@ -13,7 +13,7 @@ import sys
 from numba.core.registry import CPUDispatcher
 from jacket_cloth_ros.core.kernel_cache import kernels_cached
 assert kernels_cached(), 'the cache is empty'
-from jacket_cloth_ros.tools.warm import warm_kernels
+from jacket_cloth_ros.ros.warm import warm_kernels
 warm_kernels()
 import jacket_cloth_ros.core.kernel, jacket_cloth_ros.core.pose_kernel
 import jacket_cloth_ros.core.step_kernel, jacket_cloth_ros.core.inputs
@@ -39,3 +39,21 @@ def test_after_warm_the_node_path_compiles_nothing(tmp_path):
                            text=True, timeout=300)
     assert after.returncode == 0, after.stderr
     assert after.stdout.strip() == '[]'                        # nothing left to compile
+
+
+def test_ctrl_c_while_the_node_compiles_is_one_line_and_a_prompt_exit(tmp_path):
+    # It compiled inside an executor callback: Ctrl-C shut the context down, the compile ran
+    # on for half a minute and the node ended in a traceback.
+    import signal
+    import time
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), ROS_DOMAIN_ID='97')
+    node = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros.ros.node'], env=env,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(3.0)
+    asked = time.monotonic()
+    node.send_signal(signal.SIGINT)
+    err = node.communicate(timeout=120)[1]
+    assert time.monotonic() - asked < 10.0
+    assert node.returncode == 130 and 'Traceback' not in err, err
+    assert err.strip().splitlines()[-1] == \
+        'jacket_cloth_node: stopped while compiling the kernels'

@@ -2,6 +2,8 @@
 """jacket_cloth_node: JointState in; jacket and hood bones on /tf, markers, diagnostics out."""
 
 import argparse
+import os
+import signal
 import sys
 import time
 from typing import TYPE_CHECKING
@@ -31,6 +33,7 @@ from ..recording.writer import SessionRecorder
 from . import cdr
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
+from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.simulation import JacketSimulation
@@ -367,6 +370,11 @@ def _read(path):
         return f.read()
 
 
+def _stop_compiling(signum, frame):
+    print('jacket_cloth_node: stopped while compiling the kernels', file=sys.stderr, flush=True)
+    os._exit(128 + signum)
+
+
 def main(args: list[str] | None = None) -> int:
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
@@ -375,6 +383,21 @@ def main(args: list[str] | None = None) -> int:
         '(sensor_msgs/JointState), publishes bones on /tf, ~/markers and /diagnostics. '
         'Parameters are set with --ros-args -p name:=value (see README).')
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
+    # Compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut the context
+    # down, the compile ran on for half a minute and ended in a traceback.
+    if not kernels_cached():
+        print('jacket_cloth_node: compiling the simulation kernels into numba\'s cache (a first '
+              'start after an install or an edit of a kernel; about half a minute; '
+              '`jacket_cloth warm` does it ahead)', file=sys.stderr)
+        # Ctrl-C or SIGTERM stop it at once: raised as KeyboardInterrupt, numba can swallow it
+        # inside a compiler callback and go on compiling. Nothing is lost: numba writes each
+        # cache file whole or not at all.
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _stop_compiling)
+        warm_kernels()
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
+                          else signal.default_int_handler)
     rclpy.init(args=argv)
     node = None
     try:
@@ -382,6 +405,10 @@ def main(args: list[str] | None = None) -> int:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A signal shut the context down while a callback was still working: stopping.
     except ConfigError as e:
         print(f'jacket_cloth_node: {e}', file=sys.stderr)
         return 1

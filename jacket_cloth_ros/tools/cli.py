@@ -239,7 +239,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_warm(args: argparse.Namespace) -> int:
-    from .warm import warm_kernels
+    from ..ros.warm import warm_kernels
     took, cached = warm_kernels()
     print(f'kernels {"loaded from the cache" if cached else "compiled and cached"} in '
           f'{took:.1f} s')

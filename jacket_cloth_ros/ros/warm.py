@@ -13,9 +13,9 @@ from ..core.kernel_cache import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import load_shipped_character
 from ..motion.clips import joint_state_content
-from ..ros import cdr
-from ..ros.parameters import default_values
-from ..ros.pipeline import SessionPipeline
+from . import cdr
+from .parameters import default_values
+from .pipeline import SessionPipeline
 
 
 def warm_kernels() -> tuple:
