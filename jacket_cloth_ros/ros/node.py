@@ -405,13 +405,13 @@ def main(args: list[str] | None = None) -> int:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except ConfigError as e:
+        print(f'jacket_cloth_node: {e}', file=sys.stderr)
+        return 1
     except Exception:
         if rclpy.ok():
             raise
         # A signal shut the context down while a callback was still working: stopping.
-    except ConfigError as e:
-        print(f'jacket_cloth_node: {e}', file=sys.stderr)
-        return 1
     finally:
         if node is not None:
             node.close()
