@@ -25,6 +25,7 @@ from .bundles import (
     ClothState, Motion, StepControl, StepOutput, Tuning, flags, floats, model_of, posed_like)
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
+from .measures import edge_strain
 from .params import SimParams
 
 if TYPE_CHECKING:           # for the annotations only
@@ -484,13 +485,16 @@ class JacketSimulation:
         return Bones(self.bone_names, self.bone_parents, poses, finite)
 
     def strain(self) -> tuple[float, float]:
-        """Worst relative stretch of the simulated vertical and horizontal stretch constraints.
+        """Worst |length / rest - 1| of the vertical and horizontal stretch constraints."""
+        vs, vc, hs, hc = self.edge_strains()
+        return max(vs.value, vc.value), max(hs.value, hc.value)
+
+    def edge_strains(self) -> tuple:
+        """(stretch, compression) of the verticals, then of the horizontals, with where.
 
         The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.
         """
         rig = self.rig
-        vert = np.linalg.norm(self.x[rig.vert_a] - self.x[rig.vert_b], axis=1) / rig.vert_rest
         h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
-        horiz = np.linalg.norm(self.x[rig.con_a[h]] - self.x[rig.con_b[h]], axis=1)
-        horiz /= rig.con_rest[h]
-        return float(np.abs(vert - 1).max()), float(np.abs(horiz - 1).max())
+        return (*edge_strain(self.x, rig.vert_a, rig.vert_b, rig.vert_rest),
+                *edge_strain(self.x, rig.con_a[h], rig.con_b[h], rig.con_rest[h]))

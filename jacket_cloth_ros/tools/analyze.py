@@ -18,7 +18,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..core.measures import Worst, collider_labels, depth_inside, edge_strain  # noqa: E402
+from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import SessionInput, run_session  # noqa: E402
@@ -80,12 +80,10 @@ class SessionFigures:
                 self.tf_compared += 1
                 self.tf_equal += self.recorded_tf[self.tf_sent] == data
             self.tf_sent += 1
-        vert, horiz = sim.strain()
         rig = sim.rig
         t = (stamp - self.t0) * 1e-9
-        vs, vc = edge_strain(sim.x, rig.vert_a, rig.vert_b, rig.vert_rest)
-        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
-        hs, _ = edge_strain(sim.x, rig.con_a[h], rig.con_b[h], rig.con_rest[h])
+        vs, vc, hs, hc = sim.edge_strains()
+        vert, horiz = max(vs.value, vc.value), max(hs.value, hc.value)     # as sim.strain()
         inside = depth_inside(sim.x, rig.free, sim.collider_frames(sim.links), self.labels)
         for name, worst in zip(MEASURES, (vs, vc, hs, inside,
                                           Worst(report.max_penetration, -1))):
