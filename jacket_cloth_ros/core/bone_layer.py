@@ -6,14 +6,17 @@
   does not wring the sleeve at one point.
 - M2 upper jacket: a shoulder-pad bone on the torso aims (look-at) at a point on the upper arm,
   so a raised arm lifts the pad; the bone below hangs from the pad's end and is aimed straight
-  down in the torso frame (undoing the pad's rotation); a left/right position constraint keeps
-  the two bones below at their rest distance, against the stretch the moving pads cause.
-  Solved every step from the current skeleton pose, nothing baked.
+  down in the upper jacket's frame (undoing the pad's rotation); a left/right position
+  constraint keeps the two bones below at their rest distance, against the stretch the moving
+  pads cause. Solved every step from the current skeleton pose, nothing baked. The upper
+  jacket's frame (front, left, up) is the torso link's turned by ``rpy_deg``, else the rig's
+  forward and up at the zero pose: no link axis is taken for down.
 
 The pinned top row of the cloth (M6) is skinned to the bones below the pads (see Rig), so the
 cloth follows the upper jacket as it does in the article.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -27,7 +30,9 @@ from .transforms import apply_transform
 if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
 
-DOWN = np.array([[0.0, 0.0, 1.0],     # a bone aimed straight down: x = -z, y = y, z = x
+# A bone aimed straight down, in the upper jacket's (front, left, up) axes: x = -up, y = left,
+# z = front.
+DOWN = np.array([[0.0, 0.0, 1.0],
                  [0.0, 1.0, 0.0],
                  [-1.0, 0.0, 0.0]])
 
@@ -40,6 +45,7 @@ class Sleeve:
     twist_share: float
     axis: np.ndarray        # unit, link frame: towards end_link
     length: float
+    rest: np.ndarray        # end_link's rotation in the link's frame at the zero pose
 
 
 @dataclass
@@ -68,7 +74,8 @@ class LayerPose:
 class BoneLayer:
     """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section)."""
 
-    def __init__(self, section: Section, skeleton: 'Skeleton', rest: np.ndarray, where: str):
+    def __init__(self, section: Section, skeleton: 'Skeleton', rest: np.ndarray, where: str,
+                 axes_at: Callable[..., np.ndarray] | None = None):
         self.sleeves = []
         for i, s in enumerate(section.sections('sleeves')):
             link = skeleton.link(s.text('link'), f'{where}.sleeves[{i}].link')
@@ -79,13 +86,17 @@ class BoneLayer:
                 raise ConfigError(f'{where}.sleeves[{i}].end_link: must not sit on link')
             self.sleeves.append(Sleeve(
                 s.text('name', 'jacket_' + skeleton.link_names[link]), link, end,
-                s.number('twist_share', 0.5, lo=0.0, hi=1.0), offset / length, length))
+                s.number('twist_share', 0.5, lo=0.0, hi=1.0), offset / length, length,
+                (rest[link][:3, :3].T @ rest[end][:3, :3]).T.copy()))
             s.reject_unknown()
         self.pads = []
         self.upper_link = None
         self.skin_radius = 0.0
+        self.down = DOWN              # the bone below's axes and the pads' side, torso frame
+        self.side = np.array([0.0, 1.0, 0.0])
         if section.has('upper'):
-            self._load_upper(section.section('upper'), skeleton, f'{where}.upper')
+            self._load_upper(section.section('upper'), skeleton, f'{where}.upper',
+                             axes_at or (lambda link, part=None: np.eye(3)))
         section.reject_unknown()
         self.names = ([s.name for s in self.sleeves] + [s.name + '_twist' for s in self.sleeves]
                       + [p.name for p in self.pads] + [p.below_name for p in self.pads])
@@ -97,8 +108,11 @@ class BoneLayer:
             self.rest_gap = self.pad_ends_gap(rest)
             self.model = layer_model(self)
 
-    def _load_upper(self, upper, skeleton, where):
+    def _load_upper(self, upper, skeleton, where, axes_at):
         self.upper_link = skeleton.link(upper.text('link'), f'{where}.link')
+        axes = axes_at(self.upper_link, upper)
+        self.down = axes @ DOWN
+        self.side = axes[:, 1].copy()
         pads = upper.section('shoulder_pads')
         for side in ('left', 'right'):
             p = pads.section(side)

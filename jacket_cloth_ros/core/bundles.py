@@ -67,6 +67,7 @@ class LayerModel(NamedTuple):
     sleeve_axis: np.ndarray
     sleeve_length: np.ndarray
     sleeve_share: np.ndarray
+    sleeve_rest: np.ndarray  # (S,3,3) the end link's rest rotation in the link's frame, inverse
     upper: int              # the torso link the pads sit on
     pad_pivot: np.ndarray
     pad_aim_link: np.ndarray
@@ -74,6 +75,7 @@ class LayerModel(NamedTuple):
     pad_length: np.ndarray
     pad_below_length: np.ndarray
     down: np.ndarray        # (3,3) a bone aimed straight down in the torso frame
+    side: np.ndarray        # (3,) the body's left in the torso frame: the pads' y
     rest_gap: float         # M2 left/right distance of the pad ends at rest
 
 
@@ -99,6 +101,8 @@ class ClothModel(NamedTuple):
     hood_link: int
     hood_pivot: np.ndarray          # (3,) the hood bone's centre in its link's frame
     hood_length: float
+    hood_side: np.ndarray           # (3,) the body's left in the hood link's frame: its y
+    up: np.ndarray                  # (3,) world: gravity pulls along -up
 
 
 class ColliderModel(NamedTuple):
@@ -237,16 +241,19 @@ def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
     from .bone_layer import DOWN
     if layer is None:
         return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
+                          floats(np.zeros((0, 3, 3))),
                           0, floats(np.zeros((0, 3))), ints([]), floats(np.zeros((0, 3))),
-                          floats([]), floats([]), floats(DOWN), 0.0)
+                          floats([]), floats([]), floats(DOWN), floats([0.0, 1.0, 0.0]), 0.0)
     s, p = layer.sleeves, layer.pads
     return LayerModel(
         ints([x.link for x in s]), ints([x.end_link for x in s]),
         floats(np.array([x.axis for x in s]).reshape(-1, 3)), floats([x.length for x in s]),
-        floats([x.twist_share for x in s]), int(layer.upper_link if p else 0),
+        floats([x.twist_share for x in s]),
+        floats(np.array([x.rest for x in s]).reshape(-1, 3, 3)), int(layer.upper_link if p else 0),
         floats(np.array([x.pivot for x in p]).reshape(-1, 3)), ints([x.aim_link for x in p]),
         floats(np.array([x.aim for x in p]).reshape(-1, 3)), floats([x.length for x in p]),
-        floats([x.below_length for x in p]), floats(DOWN), float(layer.rest_gap))
+        floats([x.below_length for x in p]), floats(layer.down), floats(layer.side),
+        float(layer.rest_gap))
 
 
 def cloth_model(rig: 'Rig') -> ClothModel:
@@ -257,7 +264,7 @@ def cloth_model(rig: 'Rig') -> ClothModel:
         floats(rig.pin_weight), flags(rig.free), ints(rig.con_a), ints(rig.con_b),
         floats(rig.con_rest), ints(rig.vert_a), ints(rig.vert_b), floats(rig.vert_rest),
         ints(rig.tether_anchor), floats(rig.tether_length), int(rig.hood.link),
-        floats(rig.hood.pivot), float(rig.hood.length))
+        floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side), floats(rig.up))
 
 
 def collider_model(rig: 'Rig') -> ColliderModel:

@@ -38,6 +38,12 @@ def _transform_point(t, p, out):
 
 
 @njit(cache=True)
+def _rotate(t, v, out):
+    for r in range(3):
+        out[r] = t[r, 0] * v[0] + t[r, 1] * v[1] + t[r, 2] * v[2]
+
+
+@njit(cache=True)
 def forward_kinematics(skeleton, q, world):
     """Put the link transforms of a bundles.SkeletonModel into ``world`` (L,4,4), root frame.
 
@@ -116,19 +122,21 @@ def grid_bones(x, cols, bone_rc, positions, quaternions):
 
 
 @njit(cache=True)
-def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_p, layer_parents,
+def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_side, hood_p, layer_parents,
                layer_rot, layer_pos, positions, quaternions):
     """Pose every bone relative to its parent link (see JacketSimulation.bones).
 
-    M9 grid bones in the root frame, then the M8 hood bone and the M1/M2 layer bones on their
-    links. Returns whether every number is finite.
+    M9 grid bones in the root frame, then the M8 hood bone (y towards the body's left,
+    ``hood_side`` in its link's frame) and the M1/M2 layer bones on their links. Returns
+    whether every number is finite.
     """
     n_grid = bone_rc.shape[0]
     grid_bones(x, cols, bone_rc, positions[:n_grid], quaternions[:n_grid])
     t = links[hood_link]
-    anchor, frame, local = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
+    anchor, frame, local, side = np.empty(3), np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
     _transform_point(t, hood_pivot, anchor)
-    orthonormal_frame(hood_p - anchor, t[:3, 1], frame)
+    _rotate(t, hood_side, side)
+    orthonormal_frame(hood_p - anchor, side, frame)
     _to_link(t, anchor, frame, positions[n_grid], local)
     quat_from_matrix(local, quaternions[n_grid])
     for b in range(layer_parents.shape[0]):
@@ -180,13 +188,15 @@ def solve_layer(links, layer, full, rot, pos, tips, below):
     """
     sleeve_link, sleeve_end, sleeve_axis = layer.sleeve_link, layer.sleeve_end, layer.sleeve_axis
     sleeve_length, sleeve_share, upper = layer.sleeve_length, layer.sleeve_share, layer.upper
+    sleeve_rest = layer.sleeve_rest
     pad_pivot, pad_aim_link, pad_aim = layer.pad_pivot, layer.pad_aim_link, layer.pad_aim
     pad_length, pad_below_length = layer.pad_length, layer.pad_below_length
-    down, rest_gap = layer.down, layer.rest_gap
+    down, side, rest_gap = layer.down, layer.side, layer.rest_gap
     n_s = sleeve_link.shape[0]
     b = 0
     m = np.empty((3, 3))
     rel = np.empty((3, 3))
+    turn = np.empty((3, 3))
     if full:
         for i in range(n_s):
             t = links[sleeve_link[i]]
@@ -196,7 +206,10 @@ def solve_layer(links, layer, full, rot, pos, tips, below):
             b += 1
         for i in range(n_s):
             t, end = links[sleeve_link[i]], links[sleeve_end[i]]
-            _matmul3(t[:3, :3].T, end[:3, :3], rel)
+            # The end link's turn since the zero pose, seen from the link: its frame's own
+            # axes at rest do not count as twist.
+            _matmul3(t[:3, :3].T, end[:3, :3], turn)
+            _matmul3(turn, sleeve_rest[i], rel)
             rodrigues(sleeve_axis[i], sleeve_share[i] * twist_angle(rel, sleeve_axis[i]), m)
             _matmul3(t[:3, :3], m, rot[b])
             for r in range(3):
@@ -211,11 +224,12 @@ def solve_layer(links, layer, full, rot, pos, tips, below):
     torso = links[upper]
     ends = np.empty((n_p, 3))
     frame = np.empty((3, 3))
-    pivot, target = np.empty(3), np.empty(3)
+    pivot, target, left = np.empty(3), np.empty(3), np.empty(3)
+    _rotate(torso, side, left)
     for k in range(n_p):
         _transform_point(torso, pad_pivot[k], pivot)
         _transform_point(links[pad_aim_link[k]], pad_aim[k], target)
-        orthonormal_frame(target - pivot, torso[:3, 1], frame)      # M2 look-at
+        orthonormal_frame(target - pivot, left, frame)      # M2 look-at
         ends[k] = pivot + pad_length[k] * frame[:, 0]
         if full:
             rot[b] = frame

@@ -4,6 +4,11 @@
 Everything is resolved against the skeleton's zero pose once, at load time: rest positions in
 the character's local frame (the URDF root), and for each vertex the link and local offset that
 carry its pinned target (M6) or its reference point (M11).
+
+Axes: no link axis means up or forward. The world frame is the URDF root's frame with the world
+joint at identity; ``up`` (default +z) and ``forward`` (default +x) are world vectors, gravity
+pulls along -up, and the cloth shape and the M2 bones take their front, left and up from them at
+the zero pose, unless an ``rpy_deg`` gives their axes in their link's frame (docs/method.md).
 """
 
 from dataclasses import dataclass
@@ -59,6 +64,7 @@ class Hood:
     pivot: np.ndarray       # bone centre in the link's frame
     length: float
     rest_direction: np.ndarray  # unit, in the link's frame
+    side: np.ndarray        # unit, in the link's frame: the body's left, the hood bone's y
 
 
 def interleaved_order(a: npt.ArrayLike, b: npt.ArrayLike, window: int = 4) -> np.ndarray:
@@ -109,6 +115,30 @@ def split_ellipsoid(center: npt.ArrayLike, rotation: np.ndarray, radii: npt.Arra
     return out
 
 
+def body_axes(up: npt.ArrayLike, forward: npt.ArrayLike, where: str) -> np.ndarray:
+    """Return columns forward, left, up (world) of a rig's ``up`` and ``forward`` vectors.
+
+    ``forward`` is made square to ``up``; one clear line if either is zero or they are parallel.
+    """
+    up, forward = np.asarray(up, dtype=float), np.asarray(forward, dtype=float)
+    for key, v in (('up', up), ('forward', forward)):
+        if np.linalg.norm(v) < 1e-9:
+            raise ConfigError(f'{where}.{key}: {v.tolist()} must not be zero')
+    up = up / np.linalg.norm(up)
+    forward = forward / np.linalg.norm(forward)
+    across = forward - (forward @ up) * up
+    if np.linalg.norm(across) < 0.1:            # within about 6 degrees of each other
+        raise ConfigError(f'{where}: up {up.tolist()} and forward {forward.tolist()} are '
+                          'parallel; forward must point across up')
+    across /= np.linalg.norm(across)
+    return np.column_stack([across, np.cross(up, across), up])
+
+
+def _clean(rotation):
+    """Return a rotation with exact zeros for -0.0, so a frame parallel to the world is exact."""
+    return np.where(rotation == 0.0, 0.0, rotation)
+
+
 class Rig:
     """A validated rig fitted to a skeleton."""
 
@@ -116,6 +146,10 @@ class Rig:
         top = Section(data, where)
         rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
         self.skeleton = skeleton
+        self.world_axes = body_axes(top.vector('up', 3, [0.0, 0.0, 1.0]),
+                                    top.vector('forward', 3, [1.0, 0.0, 0.0]), where)
+        self.up = self.world_axes[:, 2].copy()
+        self._rest = rest
         cloth = top.section('cloth')
         self.cols = cloth.integer('cols', lo=3, hi=64)
         self.rows = cloth.integer('rows', lo=3, hi=64)
@@ -126,16 +160,18 @@ class Rig:
         flare = shape.number('flare', 0.0, lo=-0.05, hi=0.1)
         opening = np.radians(shape.number('opening_deg', 40.0, lo=0.0, hi=180.0))
         spacing = shape.number('row_spacing', lo=0.005, hi=1.0)
+        axes = self.axes_at(shape_link, shape)
         shape.reject_unknown()
-        # Column c runs from the left front edge (+y) round the back (-x) to the right front edge.
+        # Column c runs from the left front edge round the back to the right front edge, rows
+        # hang down; built along the shape's front, left and up axes, then placed at center.
         theta = np.linspace(opening / 2, 2 * np.pi - opening / 2, self.cols)
         pts = np.empty((self.rows, self.cols, 3))
         for r in range(self.rows):
             rx, ry = radii + flare * r
-            pts[r, :, 0] = center[0] + rx * np.cos(theta)
-            pts[r, :, 1] = center[1] + ry * np.sin(theta)
-            pts[r, :, 2] = center[2] - spacing * r
-        local = pts.reshape(-1, 3)
+            pts[r, :, 0] = rx * np.cos(theta)
+            pts[r, :, 1] = ry * np.sin(theta)
+            pts[r, :, 2] = -spacing * r
+        local = center + pts.reshape(-1, 3) @ axes.T
         self.rest = apply_transform(rest[shape_link], local)   # (N,3) in the root frame
 
         self.pin_link = skeleton.link(cloth.text('pin_link'), f'{where}.cloth.pin_link')
@@ -163,19 +199,32 @@ class Rig:
         direction = np.array(hood.vector('rest_direction'))
         if np.linalg.norm(direction) < 1e-9:
             raise ConfigError(f'{where}.hood.rest_direction: must not be zero')
+        hood_link = skeleton.link(hood.text('link'), f'{where}.hood.link')
         self.hood = Hood(
-            link=skeleton.link(hood.text('link'), f'{where}.hood.link'),
+            link=hood_link,
             pivot=np.array(hood.vector('pivot')),
             length=hood.number('length', lo=0.01, hi=2.0),
-            rest_direction=direction / np.linalg.norm(direction))
+            rest_direction=direction / np.linalg.norm(direction),
+            side=self.axes_at(hood_link)[:, 1].copy())
         hood.reject_unknown()
 
         self._load_colliders(top, skeleton, where)
         layer = top.section('jacket_bones') if top.has('jacket_bones') else None
-        self.layer = BoneLayer(layer, skeleton, rest, f'{where}.jacket_bones') if layer else None
+        self.layer = BoneLayer(layer, skeleton, rest, f'{where}.jacket_bones',
+                               self.axes_at) if layer else None
         self._skin_top_row(rest)
         top.reject_unknown()
         self._build_topology()
+
+    def axes_at(self, link: int, section: Section | None = None) -> np.ndarray:
+        """Return a part's front, left and up axes (columns) in its link's frame.
+
+        From the section's ``rpy_deg`` if it has one, else the rig's forward and up seen from
+        the link at the zero pose.
+        """
+        if section is not None and section.has('rpy_deg'):
+            return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
+        return _clean(self._rest[link][:3, :3].T @ self.world_axes)
 
     def _load_regions(self, cloth, where):
         """Per-region multipliers of the fabric's damping, wind, world share and M11 bound.

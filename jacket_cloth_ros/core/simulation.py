@@ -428,7 +428,7 @@ class JacketSimulation:
             ref = self.reference_points(links, self.layer if links is self.links else None)
         if acc is None:
             world_to_local = root[:3, :3].T
-            acc = (world_to_local @ np.array([0.0, 0.0, -p.gravity])
+            acc = (world_to_local @ (-p.gravity * self.rig.up)
                    + self.wind_scale[:, None] * (world_to_local @ p.wind_at(self.t_sim or 0)))
         e = DESIGN_RATE / p.sim_rate
         damping = per_step(self.damping, e) if damping is None else damping
@@ -477,7 +477,8 @@ class JacketSimulation:
         layer = _NO_LAYER_POSE if layer is None else layer
         try:
             finite = pose_kernel.bone_poses(self.x, self.rig.cols, self._bone_rc, self.links,
-                                            hood.link, hood.pivot, self.hood_p, layer.parents,
+                                            hood.link, hood.pivot, hood.side, self.hood_p,
+                                            layer.parents,
                                             layer.rotations, layer.positions, poses[:, :3],
                                             poses[:, 3:])
         except ZeroDivisionError:           # a degenerate frame (numba raises, numpy gives NaN)

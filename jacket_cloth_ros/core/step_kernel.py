@@ -188,10 +188,13 @@ def advance(model, tuning, state, before, motion, out):
             for k in range(3):
                 point[k] += tuning.hood_world_share * (moved[k] - point[k])
         root[:] = new_root
-        # Gravity and wind (M4, gusts a function of the step's time) in the local frame.
+        # Gravity (along the rig's -up) and wind (M4, gusts a function of the step's time) in
+        # the local frame.
         scale = gust_scale(t_sim, gust, tuning.gust_period)
+        up = cloth.up
         for k in range(3):
-            gravity_l[k] = -tuning.gravity * root[2, k]
+            gravity_l[k] = -tuning.gravity * (root[0, k] * up[0] + root[1, k] * up[1]
+                                              + root[2, k] * up[2])
             wind_l[k] = scale * (root[0, k] * wind[0] + root[1, k] * wind[1]
                                  + root[2, k] * wind[2])
         for i in range(nv):
