@@ -159,8 +159,8 @@ def rotate_rig(data: dict, rotation: 'np.ndarray | dict | Rotations', root: str,
         kind = c.get('type', 'ellipsoid')
         if kind == 'ellipsoid':
             c['center'] = _vec(r, c['center'])
-            c['rpy_deg'] = _deg(matrix_rpy(r.T @ rpy_matrix(np.radians(c.get('rpy_deg',
-                                                                               [0, 0, 0])))))
+            turn = rpy_matrix(np.radians(c.get('rpy_deg', [0, 0, 0])))
+            c['rpy_deg'] = _deg(matrix_rpy(r.T @ turn))
         elif kind == 'capsule':
             c['a'], c['b'] = _vec(r, c['a']), _vec(r, c['b'])
         else:
