@@ -220,7 +220,8 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
         if figures.frames:
             draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
-                           'bones (navy); dashed blue: skinned hem and hood')
+                           'bones (navy); dashed blue: skinned hem and hood',
+                           world_axes=session.setup.rig.world_axes)
         reports[-1]['filmstrip'] = strip if figures.frames else None
         worst = 'worst_instant.png' if len(sessions) == 1 else \
             f'worst_instant_{len(reports)}.png'
@@ -329,4 +330,5 @@ def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: 
         frames.append(frame)
         labels[frame.stamp_ns - figures.t0] = f'\nworst {title} {value:.2g}\n{where}'
     draw_filmstrip(frames, skeleton, path, figures.t0, labels=lambda dt: labels.get(dt, ''),
-                   title=f'{name}: the worst instants; dashed blue: skinned hem and hood')
+                   title=f'{name}: the worst instants; dashed blue: skinned hem and hood',
+                   world_axes=figures.session.setup.rig.world_axes)

@@ -7,6 +7,12 @@ kinematics) or straight from a simulation being run (the analysis). The response
 against the skinned pose the simulation starts from (dashed: the jacket's reference hem and the
 hood at rest for that skeleton pose): the gap between dashed and solid is what the cloth and
 the pendulum add.
+
+Frames are drawn in the world, whatever the URDF's link axes: the root's world pose (the world
+joint of the input) carries them out of the character's frame, the rig's ``up`` is drawn up and
+its ``forward`` to the right of the side view, and each frame is centred on the character's
+body link (the first link from the root with two children or more: the pelvis) at its moment,
+so a character that walks away, by the world joint or by the URDF's own joints, stays in frame.
 """
 
 from collections.abc import Callable, Sequence
@@ -25,6 +31,7 @@ from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 from ..core.fabric import load_fabric  # noqa: E402
 from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
+from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import read_messages  # noqa: E402
 
@@ -32,7 +39,8 @@ if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
     from ..core.skeleton import Skeleton
 
-VIEWS = (('side', 0, 'x (m, forward)'), ('front', 1, 'y (m, left)'))
+VIEWS = (('side', 0), ('front', 1))     # the view axis drawn across: forward, left
+WORLD_AXES = body_axes([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 'rig')    # z up, x forward
 
 
 @dataclass
@@ -44,6 +52,54 @@ class Frame:
     links: np.ndarray           # (L,3) skeleton link origins
     hem_ref: np.ndarray = None  # (C,3) skinned hem
     hood_ref: np.ndarray = None  # (2,3) hood at rest
+    root: np.ndarray = None     # (4,4) the root's world pose; points above are in its frame
+
+
+def body_link(skeleton: 'Skeleton') -> int:
+    """Return the link a picture centres on: the first from the root with two children or more.
+
+    The pelvis of a humanoid, below any chain of virtual links carrying its world motion.
+    """
+    for k in range(len(skeleton.link_names)):
+        if np.count_nonzero(skeleton.parent == k) >= 2:
+            return k
+    return 0
+
+
+def in_view(frame: Frame, axes: np.ndarray, centre: int) -> Frame:
+    """Return the frame in view coordinates: forward, left, up (``axes``, world) from the centre.
+
+    The centre is link ``centre``'s world position at the frame's moment; the side view draws
+    columns 0 and 2, the front view columns 1 and 2.
+    """
+    root = np.eye(4) if frame.root is None else frame.root
+    to_view = axes.T @ root[:3, :3]
+    origin = axes.T @ (root[:3, :3] @ frame.links[centre] + root[:3, 3])
+
+    def view(points):
+        return None if points is None else points @ to_view.T + (axes.T @ root[:3, 3] - origin)
+
+    return Frame(frame.stamp_ns, view(frame.triangles), view(frame.hood), view(frame.bones),
+                 view(frame.links), view(frame.hem_ref), view(frame.hood_ref), np.eye(4))
+
+
+def axis_label(direction: np.ndarray, meaning: str) -> str:
+    """Name a view axis truthfully: the world axis it is, if it is one, and what it means."""
+    for k, name in enumerate('xyz'):
+        for sign, mark in ((1.0, '+'), (-1.0, '-')):
+            if np.allclose(direction, sign * np.eye(3)[k], atol=1e-9):
+                return f'world {mark}{name} (m, {meaning})'
+    return f'{meaning} (m)'
+
+
+def view_limits(skeleton: 'Skeleton', axes: np.ndarray,
+                centre: int) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Return (across, up) limits of a view, from the skeleton's height at its zero pose."""
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))[:, :3, 3]
+    height = (rest - rest[centre]) @ axes[:, 2]
+    size = max(float(height.max() - height.min()), 0.5)
+    return ((-0.42 * size, 0.42 * size),
+            (float(height.min()) - 0.05 * size, float(height.max()) + 0.35 * size))
 
 
 def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
@@ -56,7 +112,7 @@ def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
     bones = np.stack([layer.positions, layer.tips], axis=1) if layer else np.zeros((0, 2, 3))
     return Frame(stamp_ns, sim.x[grid_triangles(rig.rows, rig.cols)].reshape(-1, 3, 3),
                  np.array([anchor, sim.hood_p]), bones, sim.links[:, :3, 3].copy(),
-                 ref[-1].copy(), np.array([anchor, rest]))
+                 ref[-1].copy(), np.array([anchor, rest]), sim.root.copy())
 
 
 def _stamp(msg):
@@ -82,9 +138,10 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton',
         pts = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
         bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
         js = min(states, key=lambda s: abs(_stamp(s) - m.log_time))
-        poses = skeleton.forward(parser.parse(_stamp(js), js.name, js.position).q)
+        sample = parser.parse(_stamp(js), js.name, js.position)
+        poses = skeleton.forward(sample.q)
         frame = Frame(m.log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
-                      poses[:, :3, 3])
+                      poses[:, :3, 3], root=sample.root)
         if sim is not None:
             sim.links = poses          # the skinned pose of this skeleton pose
             skinned = sim_frame(sim, m.log_time)
@@ -108,11 +165,19 @@ def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
 
 def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0: int,
                    labels: Callable[[int], str] | None = None,
-                   title: str | None = None) -> None:
-    """Two rows (side and front view), one column per frame."""
+                   title: str | None = None, world_axes: np.ndarray | None = None) -> None:
+    """Two rows (side and front view), one column per frame, in the world (see in_view).
+
+    ``world_axes``: the rig's forward, left and up (Rig.world_axes); default x, y, z.
+    """
+    world_axes = WORLD_AXES if world_axes is None else world_axes
+    centre = body_link(skeleton)
+    across, upward = view_limits(skeleton, world_axes, centre)
+    xlabels = (axis_label(world_axes[:, 0], 'forward'), axis_label(world_axes[:, 1], 'left'))
+    ylabel = axis_label(world_axes[:, 2], 'up')
     fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
-    for col, f in enumerate(frames):
-        for row, (view, axis, xlabel) in enumerate(VIEWS):
+    for col, f in enumerate(in_view(f, world_axes, centre) for f in frames):
+        for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
             for i in range(1, len(f.links)):
                 p = f.links[[skeleton.parent[i], i]]
@@ -127,19 +192,20 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0:
             for ref in (f.hem_ref, f.hood_ref):
                 if ref is not None:
                     ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
-            ax.set_xlim(-0.7, 0.7)
-            ax.set_ylim(-1.0, 1.3)
+            ax.set_xlim(*across)
+            ax.set_ylim(*upward)
             ax.set_aspect('equal')
             ax.grid(alpha=0.3)
-            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_xlabel(xlabels[axis], fontsize=8)
             ax.tick_params(labelsize=7)
             if col == 0:
-                ax.set_ylabel(f'{view} view: z (m, up)', fontsize=8)
+                ax.set_ylabel(f'{view} view: {ylabel}', fontsize=8)
             if row == 0:
                 name = labels(f.stamp_ns - t0) if labels else ''
                 ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
-    fig.suptitle(title or 'jacket (brown), hood pendulum (orange) and jacket bones (navy) on '
-                 'the skeleton, character frame; dashed blue: skinned hem and hood at rest',
+    fig.suptitle((title or 'jacket (brown), hood pendulum (orange) and jacket bones (navy) on '
+                  'the skeleton; dashed blue: skinned hem and hood at rest')
+                 + f'\nin the world, each frame centred on {skeleton.link_names[centre]}',
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(png_path, dpi=110)
@@ -157,5 +223,6 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
     """
     frames, t0 = recorded_frames(mcap_path, skeleton, rig)
     chosen = pick(frames, t0, times, moments)
-    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title)
+    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title,
+                   rig.world_axes if rig is not None else None)
     return [f.stamp_ns for f in chosen]

@@ -1,0 +1,100 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Pictures in the world, following the character (issue 18 item 4).
+
+The filmstrip draws each frame in a Z-up world view centred on the character's body link at
+its moment, whatever the root link's axes and however the character moves through the world
+(the world joint, or the URDF's own joints). Asserted on the view coordinates the drawing uses.
+"""
+
+import numpy as np
+import pytest
+from conftest import clip_inputs
+from reframe import Y_UP, root_link, rotate_joint_state, rotate_rig, rotate_urdf
+
+from jacket_cloth_ros.core.config import load_yaml, shipped
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.core.simulation import JacketSimulation
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+from jacket_cloth_ros.tools.picture import (
+    axis_label, body_link, draw_filmstrip, in_view, sim_frame)
+
+# The shipped character on a rail: its own prismatic joint walks it along the world's x.
+RAIL = '''<link name="rail"/>
+  <joint name="rail_x" type="prismatic">
+    <parent link="rail"/>
+    <child link="base_link"/>
+    <origin xyz="0 0 0.96" rpy="0 0 0"/>
+    <axis xyz="1 0 0"/>
+    <limit lower="-100" upper="100" effort="1" velocity="10"/>
+  </joint>
+  <link name="base_link"/>'''
+
+
+def _frames(urdf, rig_data, inputs, turn=None, rail=False):
+    skeleton = Skeleton(urdf)
+    rig = Rig(rig_data, skeleton)
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    frames = []
+    for k, (stamp, names, pos) in enumerate(inputs):
+        if turn is not None:
+            pos = rotate_joint_state(names, pos, turn)
+        if rail:            # the world joint stays put; the rail carries the walk
+            names, pos = list(names[:-7]) + ['rail_x'], list(pos[:-7]) + [pos[-7]]
+        assert sim.process(stamp, names, pos).accepted
+        if k % 30 == 29:
+            frames.append(sim_frame(sim, stamp))
+    return skeleton, rig, frames
+
+
+def _check_upright_and_centred(skeleton, frames, axes):
+    centre = body_link(skeleton)
+    assert skeleton.link_names[centre] == 'base_link'
+    head, foot = skeleton.link('head'), skeleton.link('l_foot')
+    views = [in_view(f, axes, centre) for f in frames]
+    for v in views:
+        assert v.links[centre] == pytest.approx(np.zeros(3), abs=1e-12)
+        assert v.links[head][2] > 0.6 and v.links[foot][2] < -0.8       # upright: z up
+        assert np.abs(v.links[head][:2]).max() < 0.2                      # above the pelvis
+        assert np.abs(v.triangles[..., :2]).max() < 0.5                   # the jacket too
+    return views
+
+
+def test_a_walk_away_stays_in_frame_upright_in_any_link_axes():
+    urdf = shipped_character_urdf()
+    data = load_yaml(shipped('jacket_rig.yaml'))
+    inputs = clip_inputs(Skeleton(urdf), 'walk', 3.0)
+    skeleton, rig, frames = _frames(urdf, data, inputs)
+    # The character walked 4 m through the world: drawn in its root frame it stayed put,
+    # drawn in the world without following it, it would have left a 1.4 m wide view.
+    travelled = frames[-1].root[:3, 3] - frames[0].root[:3, 3]
+    assert travelled[0] > 2.5
+    views = _check_upright_and_centred(skeleton, frames, rig.world_axes)
+    assert axis_label(rig.world_axes[:, 2], 'up') == 'world +z (m, up)'
+    assert axis_label(rig.world_axes[:, 0], 'forward') == 'world +x (m, forward)'
+    # The same character with Y-up link frames (and a Y-up world): the same picture.
+    turned_urdf = rotate_urdf(urdf, Y_UP)
+    turned = rotate_rig(data, Y_UP, root_link(urdf))
+    skeleton_t, rig_t, frames_t = _frames(turned_urdf, turned, inputs, Y_UP)
+    assert np.abs(frames_t[0].links[skeleton_t.link('head')][1]) > 0.6  # y is up in its frame
+    views_t = _check_upright_and_centred(skeleton_t, frames_t, rig_t.world_axes)
+    for v, v_t in zip(views, views_t):
+        assert v_t.links == pytest.approx(v.links, abs=1e-9)
+        assert v_t.triangles == pytest.approx(v.triangles, abs=1e-9)
+        assert v_t.hood == pytest.approx(v.hood, abs=1e-9)
+    assert axis_label(rig_t.world_axes[:, 2], 'up') == 'world +y (m, up)'
+
+
+def test_a_walk_by_the_urdfs_own_joints_stays_in_frame(tmp_path):
+    urdf = shipped_character_urdf().replace('<link name="base_link"/>', RAIL, 1)
+    data = load_yaml(shipped('jacket_rig.yaml'))
+    data['colliders'] = [c for c in data['colliders'] if c['link'] != 'world']
+    inputs = clip_inputs(Skeleton(shipped_character_urdf()), 'walk', 3.0)
+    skeleton, rig, frames = _frames(urdf, data, inputs, rail=True)
+    assert skeleton.link_names[0] == 'rail'
+    assert all(np.array_equal(f.root, np.eye(4)) for f in frames)      # no world joint motion
+    assert frames[-1].links[skeleton.link('base_link')][0] > 2.5
+    _check_upright_and_centred(skeleton, frames, rig.world_axes)
+    png = tmp_path / 'strip.png'
+    draw_filmstrip(frames, skeleton, str(png), frames[0].stamp_ns, world_axes=rig.world_axes)
+    assert png.stat().st_size > 10_000
