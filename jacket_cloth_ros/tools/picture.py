@@ -203,8 +203,8 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0:
             if row == 0:
                 name = labels(f.stamp_ns - t0) if labels else ''
                 ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
-    fig.suptitle((title or 'jacket (brown), hood pendulum (orange) and jacket bones (navy) on '
-                  'the skeleton; dashed blue: skinned hem and hood at rest')
+    fig.suptitle((title or 'jacket (brown), hood pendulum (orange), jacket bones (navy);\n'
+                  'dashed blue: skinned hem and hood at rest')
                  + f'\nin the world, each frame centred on {skeleton.link_names[centre]}',
                  fontsize=10)
     fig.tight_layout()
