@@ -169,7 +169,7 @@ def rotate_rig(data: dict, rotation: 'np.ndarray | dict | Rotations', root: str,
 
 
 def rotate_pose(root_pose: np.ndarray, world: np.ndarray) -> np.ndarray:
-    """The new root's world pose (4x4) in the new world: R^T T R, R the root's rotation."""
+    """Return the new root's world pose (4x4) in the new world: R^T T R, R the root's turn."""
     r = np.eye(4)
     r[:3, :3] = world
     return r.T @ root_pose @ r

@@ -30,7 +30,8 @@ class SimParams:
                              10.0, 4000.0)
     max_steps_per_input: int = _param(
         12, 'cap on steps per JointState so a hitch cannot snowball', 1, 100)
-    gravity: float = _param(9.81, 'm/s^2 along the rig\'s -up (the world\'s -z by default)', 0.0, 50.0)
+    gravity: float = _param(9.81, "m/s^2 along the rig's -up (the world's -z by default)",
+                            0.0, 50.0)
     wind: tuple = _param((0.0, 0.0, 0.0),
                          'wind acceleration [x, y, z] in m/s^2 in the world frame (M4)',
                          -1000.0, 1000.0)
