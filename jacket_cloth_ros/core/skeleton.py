@@ -36,6 +36,7 @@ class Skeleton:
             raise ConfigError(f'URDF: malformed robot description ({msg})') from None
         self.name = robot.name
         self.root = root
+        self.urdf_xml = urdf_xml          # its <collision> shapes can become colliders (rig)
         children = {}
         for j in robot.joints:
             children.setdefault(j.parent, []).append(j)
