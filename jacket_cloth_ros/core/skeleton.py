@@ -29,7 +29,7 @@ class Skeleton:
         try:
             # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
             with contextlib.redirect_stderr(io.StringIO()):
-                robot = urdf.URDF.from_xml_string(urdf_xml)
+                robot = urdf.URDF.from_xml_string(_without_declaration(urdf_xml))
             root = robot.get_root()
         except Exception as e:  # noqa: BLE001 - the parser raises many kinds; all mean "bad URDF"
             msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
@@ -109,6 +109,16 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def _without_declaration(text):
+    """The URDF text without its ``<?xml ... encoding=...?>`` line, which lxml refuses in a str."""
+    stripped = text.lstrip()
+    if stripped.startswith('<?xml'):
+        end = stripped.find('?>')
+        if end > 0:
+            return stripped[end + 2:]
+    return text
 
 
 def _check_numbers(joint, what, values, limit):
