@@ -327,7 +327,7 @@ class Rig:
 
 
 def _collider_entries(top, skeleton, where):
-    """The rig's collider entries as (key, Section): a list as written, or from the URDF.
+    """Return the rig's collider entries as (key, Section): a list as written, or from the URDF.
 
     ``colliders: from_urdf`` takes every link's primitive ``<collision>`` shape;
     ``colliders: {from_urdf: [links] or all, drop: [names], add: [entries]}`` takes some links',
@@ -339,7 +339,7 @@ def _collider_entries(top, skeleton, where):
     key = f'{where}.colliders'
     if isinstance(value, list) or not top.has('colliders'):
         return [(f'{key}[{i}]', c) for i, c in enumerate(top.sections('colliders'))]
-    top.section('colliders', {})         # marks the key as read
+    top._used.add('colliders')
     if value == 'from_urdf':
         value = {'from_urdf': 'all'}
     if not isinstance(value, dict):
@@ -351,7 +351,6 @@ def _collider_entries(top, skeleton, where):
         spec.text('from_urdf', choices=('all',))
     else:
         links = spec.texts('from_urdf')
-        raise ConfigError(f'{key}.from_urdf: expected all or a list of links, got {shown(links)}')
     if isinstance(links, list):
         for link in links:
             skeleton.link(link, f'{key}.from_urdf')

@@ -112,7 +112,7 @@ class Skeleton:
 
 
 def _without_declaration(text):
-    """The URDF text without its ``<?xml ... encoding=...?>`` line, which lxml refuses in a str."""
+    """Return the URDF text without its ``<?xml encoding?>`` line (lxml refuses it in a str)."""
     stripped = text.lstrip()
     if stripped.startswith('<?xml'):
         end = stripped.find('?>')

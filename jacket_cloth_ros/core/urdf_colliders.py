@@ -37,8 +37,8 @@ class UrdfShape:
                     'center': [float(v) for v in self.xyz],
                     'radii': [max(float(r), 1e-3) for r in radii],
                     'rpy_deg': [float(v) for v in np.degrees(self.rpy)]}
-        half = self.length / 2 if self.kind == 'capsule' else max(self.length / 2 - self.radius,
-                                                                   0.0)
+        axis_half = self.length / 2 - (0.0 if self.kind == 'capsule' else self.radius)
+        half = max(axis_half, 0.0)
         axis = self.rotation[:, 2] * half
         return {'name': name, 'type': 'capsule', 'link': self.link,
                 'a': [float(v) for v in self.xyz - axis], 'b': [float(v) for v in self.xyz + axis],
@@ -51,8 +51,7 @@ class UrdfShape:
             return self.radius
         if self.kind == 'box':
             return float(np.abs(d) @ (self.size / 2))
-        half = self.length / 2 if self.kind == 'capsule' else max(self.length / 2 - self.radius,
-                                                                   0.0)
+        half = max(self.length / 2 - (0.0 if self.kind == 'capsule' else self.radius), 0.0)
         return abs(float(d[2])) * half + self.radius
 
 

@@ -130,7 +130,7 @@ def _leaves(k, kids):
 
 
 def _branches(k, kids, rest, reach, least):
-    """The children of ``k`` that start a long chain (at least ``least`` m from k)."""
+    """Return the children of ``k`` that start a long chain (at least ``least`` m from k)."""
     out = []
     for c in kids[k]:
         if reach[c] + np.linalg.norm(rest[c][:3, 3] - rest[k][:3, 3]) >= least:
@@ -158,7 +158,7 @@ def _groups(path, rest):
 
 
 def _pick(group, part, sk):
-    """The link of a joint's group that names ``part`` best; else the last (it carries the bone)."""
+    """Return the link of a group that names ``part`` best, else the last (it carries the bone)."""
     ranked = [(name_rank(sk.link_names[k], part), -i, k) for i, k in enumerate(group)]
     named = [r for r in ranked if r[0] is not None]
     if named:
@@ -168,8 +168,10 @@ def _pick(group, part, sk):
 
 
 def _snap(v, degrees=15.0):
-    """A unit vector, snapped onto the nearest axis within ``degrees``: a leaning spine is not
-    a tilted world."""
+    """Return a unit vector, snapped onto the nearest axis within ``degrees``.
+
+    A leaning spine is not a tilted world.
+    """
     v = np.asarray(v, float) / np.linalg.norm(v)
     k = int(np.argmax(np.abs(v)))
     if abs(v[k]) >= np.cos(np.radians(degrees)):
@@ -321,7 +323,7 @@ def _r(v, nd=3):
 
 
 def _in_link(body, link, p):
-    """A root-frame point in a link's frame."""
+    """Return a root-frame point in a link's frame."""
     T = body.rest[link]
     return T[:3, :3].T @ (p - T[:3, 3])
 
@@ -343,7 +345,7 @@ def _body_frame(body):
 
 
 def _aligned(body, link):
-    """True when the link's axes are the body's forward, left and up (no rpy_deg needed)."""
+    """Tell whether the link's axes are the body's forward, left and up (no rpy_deg needed)."""
     return np.allclose(body.rest[link][:3, :3], _body_frame(body), atol=1e-4)
 
 
@@ -400,7 +402,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     if with_shapes:
         ry = width + 0.02 * s
         rx = depth + 0.02 * s
-        lines.append(f'{"cloth radii":>15}: from the <collision> shapes of {", ".join(with_shapes)}')
+        lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
+                     + ', '.join(with_shapes))
     else:
         ry = 1.03 * sh_half
         rx = 0.8 * ry
@@ -456,11 +459,11 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
                 'hood': hood})
     rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, thigh_len, s)
     lines.append(f'{"colliders":>15}: {why}')
-    return rig, lines, body
+    return _plain(rig), lines, body
 
 
 def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
-    """From the URDF's shapes on pelvis, torso and thighs when all have some, else sized."""
+    """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some."""
     shapes = urdf_shapes(body.skeleton.urdf_xml)
     wanted = [body.pelvis, shape_link, body.chest, body.thighs['left'], body.thighs['right']]
     wanted = list(dict.fromkeys(wanted))
@@ -516,7 +519,7 @@ COMMENTS = {
 
 
 def _plain(value):
-    """Numbers as Python floats, for yaml.safe_dump."""
+    """Return the value with numbers as Python floats, for yaml.safe_dump."""
     if isinstance(value, dict):
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, list):
@@ -527,7 +530,7 @@ def _plain(value):
 
 
 def to_yaml(rig: dict, lines: list[str], urdf: str, body: Body) -> str:
-    """The rig as commented YAML a user can tune."""
+    """Return the rig as commented YAML a user can tune."""
     head = HEADER.format(urdf=urdf, links=len(body.skeleton.link_names), height=body.height,
                          choices='\n'.join('#   ' + line.strip() for line in lines))
     parts = [head]
