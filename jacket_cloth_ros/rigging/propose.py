@@ -505,7 +505,7 @@ def _ellipsoid(body, name, link, center, radii):
 HEADER = """\
 # A jacket rig proposed by `jacket_cloth rig` for {urdf} ({links} links, {height:.2f} m tall).
 # Positions are metres in the named link's frame at the URDF's zero pose; angles in degrees.
-# Tune it: every key is the one of config/jacket_rig.yaml (README, "Rigs"). What was chosen:
+# Tune it: every key is explained in docs/your_character.md. What was chosen:
 {choices}
 """
 
