@@ -405,10 +405,13 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
         lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
                      + ', '.join(with_shapes))
     else:
-        ry = 1.03 * sh_half
+        # Wide enough for the shoulders and for the thighs' colliders below (sized as in
+        # _colliders), whichever is wider.
+        hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
+        ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s)
         rx = 0.8 * ry
-        lines.append(f'{"cloth radii":>15}: from the shoulder width ({2 * sh_half:.2f} m; no '
-                     'primitive <collision> shape on the torso)')
+        lines.append(f'{"cloth radii":>15}: from the shoulder and hip widths ({2 * sh_half:.2f}, '
+                     f'{2 * hip_half:.2f} m; no primitive <collision> shape on the torso)')
     rows = 10
     spacing = (top_h - hem_h) / (rows - 1)
     spine_line = P(shape_link) + ((top_h - (P(shape_link) - pelvis) @ up)) * up
