@@ -65,7 +65,8 @@ analysis: $(READY)
 # Real motion captures for the import tests, from the registry (never committed here): the
 # MocapBank and free-BVH examples that bvhtoolbox 0.1.3's source distribution (MIT) ships.
 MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
-mocap: $(MOCAP_FILES)
+JVRC := $(MOCAP)/jvrc1.urdf
+mocap: $(MOCAP_FILES) $(JVRC)
 
 $(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: bvhtoolbox==0.1.3 -d $(MOCAP)
@@ -75,7 +76,13 @@ $(MOCAP_FILES): $(MOCAP)/bvhtoolbox-0.1.3.tar.gz
 	    bvhtoolbox-0.1.3/tests/example_files/$(notdir $@)
 	touch $@
 
-test: $(READY) $(MOCAP_FILES)
+# A humanoid URDF from a real public package for the rig proposal tests (never committed): the
+# JVRC-1 model of jvrc_description 1.1.1 (Apache-2.0, a 0.7 MB wheel), its URDF only.
+$(JVRC): | $(READY)
+	$(PIP) download --no-deps jvrc_description==1.1.1 -d $(MOCAP)
+	cd $(MOCAP) && $(PY) -c "import zipfile; z = zipfile.ZipFile('jvrc_description-1.1.1-py3-none-any.whl'); open('jvrc1.urdf', 'wb').write(z.read('jvrc_description/urdf/jvrc1.urdf'))"
+
+test: $(READY) $(MOCAP_FILES) $(JVRC)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

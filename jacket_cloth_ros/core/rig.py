@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .bone_layer import BoneLayer
-from .config import ConfigError, Section, load_yaml, shipped
+from .config import ConfigError, Section, load_yaml, shipped, shown
 from .transforms import apply_transform, invert_transform, rpy_matrix
 
 if TYPE_CHECKING:           # for the annotations only
@@ -250,10 +250,9 @@ class Rig:
     def _load_colliders(self, top, skeleton, where):
         """M10 ellipsoids (split when stretched), capsules and planes, each riding on a link."""
         self.colliders, self.capsules, self.planes = [], [], []
-        for i, c in enumerate(top.sections('colliders')):
-            key = f'{where}.colliders[{i}]'
+        for key, c in _collider_entries(top, skeleton, where):
             kind = c.text('type', 'ellipsoid', choices=('ellipsoid', 'capsule', 'plane'))
-            name = c.text('name', f'collider_{i}')
+            name = c.text('name', f'collider_{key.rsplit("[", 1)[-1].rstrip("]")}')
             link_name = c.text('link')
             if kind == 'plane' and link_name == 'world':
                 link = WORLD
@@ -374,6 +373,54 @@ class Rig:
         """M9: vertices that carry bones (every row but the last, every n-th column)."""
         cols = list(range(0, self.cols, self.bone_column_step))
         return [(r, c) for r in range(self.rows - 1) for c in cols]
+
+
+def _collider_entries(top, skeleton, where):
+    """Return the rig's collider entries as (key, Section): a list as written, or from the URDF.
+
+    ``colliders: from_urdf`` takes every link's primitive ``<collision>`` shape;
+    ``colliders: {from_urdf: [links] or all, drop: [names], add: [entries]}`` takes some links',
+    drops generated colliders by name and adds entries (one named as a generated collider
+    replaces it).
+    """
+    from .urdf_colliders import colliders_from_urdf
+    value = top._data.get('colliders', [])
+    key = f'{where}.colliders'
+    if isinstance(value, list) or not top.has('colliders'):
+        return [(f'{key}[{i}]', c) for i, c in enumerate(top.sections('colliders'))]
+    top._used.add('colliders')
+    if value == 'from_urdf':
+        value = {'from_urdf': 'all'}
+    if not isinstance(value, dict):
+        raise ConfigError(f'{key}: expected a list of colliders, from_urdf, or a mapping with '
+                          f'from_urdf, drop and add, got {shown(value)}')
+    spec = Section(value, key)
+    links = spec._data.get('from_urdf', 'all')
+    if isinstance(links, str):
+        spec.text('from_urdf', choices=('all',))
+    else:
+        links = spec.texts('from_urdf')
+    if isinstance(links, list):
+        for link in links:
+            skeleton.link(link, f'{key}.from_urdf')
+    generated = colliders_from_urdf(skeleton.urdf_xml, None if links == 'all' else links)
+    if not generated:
+        raise ConfigError(f'{key}.from_urdf: the URDF has no sphere, box, cylinder or capsule '
+                          '<collision> shape on those links (meshes are not used); list '
+                          'colliders instead')
+    names = [g['name'] for g in generated]
+    for name in spec.texts('drop', []):
+        if name not in names:
+            raise ConfigError(f'{key}.drop: {name!r} is not a collider made from the URDF '
+                              f'({", ".join(names)})')
+        generated = [g for g in generated if g['name'] != name]
+        names.remove(name)
+    added = spec.sections('add')
+    spec.reject_unknown()
+    replaced = {a._data.get('name') for a in added}
+    entries = [(f'{key}.from_urdf[{g["name"]}]', Section(g, f'{key}.from_urdf[{g["name"]}]'))
+               for g in generated if g['name'] not in replaced]
+    return entries + [(f'{key}.add[{i}]', a) for i, a in enumerate(added)]
 
 
 def load_rig(skeleton: 'Skeleton', path: str | None = None) -> Rig:

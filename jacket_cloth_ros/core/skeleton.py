@@ -29,13 +29,14 @@ class Skeleton:
         try:
             # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
             with contextlib.redirect_stderr(io.StringIO()):
-                robot = urdf.URDF.from_xml_string(urdf_xml)
+                robot = urdf.URDF.from_xml_string(_without_declaration(urdf_xml))
             root = robot.get_root()
         except Exception as e:  # noqa: BLE001 - the parser raises many kinds; all mean "bad URDF"
             msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
             raise ConfigError(f'URDF: malformed robot description ({msg})') from None
         self.name = robot.name
         self.root = root
+        self.urdf_xml = urdf_xml          # its <collision> shapes can become colliders (rig)
         children = {}
         for j in robot.joints:
             children.setdefault(j.parent, []).append(j)
@@ -108,6 +109,16 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def _without_declaration(text):
+    """Return the URDF text without its ``<?xml encoding?>`` line (lxml refuses it in a str)."""
+    stripped = text.lstrip()
+    if stripped.startswith('<?xml'):
+        end = stripped.find('?>')
+        if end > 0:
+            return stripped[end + 2:]
+    return text
 
 
 def _check_numbers(joint, what, values, limit):

@@ -238,6 +238,55 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_rig(args: argparse.Namespace) -> int:
+    """Propose a rig for a URDF: say which links and why, write commented YAML, a picture."""
+    import yaml
+    from ..core.rig import Rig
+    from ..core.skeleton import load_skeleton
+    from ..rigging.propose import propose, to_yaml
+    from .outputs import replacing
+    _check_output(args.output, args.force, [args.urdf])
+    if args.picture:
+        _check_output(args.picture, args.force, [args.urdf, args.output])
+    skeleton = load_skeleton(args.urdf)
+    forward = _vector(args.forward, '--forward') if args.forward else None
+    rig, lines, body = propose(skeleton, forward)
+    text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
+    loaded = None
+    try:
+        loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
+    except ConfigError as e:
+        if not ({'up', 'forward'} & set(rig)):
+            raise ToolError(f'the proposed rig does not load ({e})') from None
+        print(f'jacket_cloth rig: warning: this skeleton is not Z-up; its rig needs the up, '
+              f'forward and rpy_deg keys, which this version does not read ({e})',
+              file=sys.stderr)
+    with replacing(args.output) as tmp:
+        with open(tmp, 'w', encoding='utf-8') as f:
+            f.write(text)
+    for line in lines:
+        print(line)
+    print(f'wrote {args.output} ({body.height:.2f} m tall'
+          + (f', up {rig["up"]}' if 'up' in rig else '') + ')')
+    if args.picture and loaded is not None:
+        from ..rigging.picture import draw_rig
+        with replacing(args.picture) as tmp:
+            draw_rig(loaded, body.up, body.forward, tmp,
+                     title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
+        print(f'wrote {args.picture}')
+    return 0
+
+
+def _vector(text, what):
+    try:
+        v = [float(t) for t in text.replace(',', ' ').split()]
+    except ValueError:
+        v = []
+    if len(v) != 3 or not all(abs(x) < 1e6 for x in v) or not any(v):
+        raise ToolError(f'{what}: expected three numbers such as 1,0,0, got {text!r}')
+    return v
+
+
 def cmd_warm(args: argparse.Namespace) -> int:
     from ..ros.warm import warm_kernels
     took, cached = warm_kernels()
@@ -303,6 +352,14 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument('--world-joint', default='world_joint')
     i.add_argument('--force', action='store_true', help='overwrite the output files')
     i.set_defaults(func=cmd_import)
+    g = sub.add_parser('rig', help='propose a jacket rig for a URDF skeleton (and a picture)')
+    g.add_argument('--urdf', required=True, help='the character')
+    g.add_argument('-o', '--output', required=True, help='the rig YAML to write')
+    g.add_argument('--picture', default=None, help='also draw the rig at rest into this PNG')
+    g.add_argument('--forward', default=None,
+                   help="the character's forward in the URDF root frame (default 1,0,0)")
+    g.add_argument('--force', action='store_true', help='overwrite the output files')
+    g.set_defaults(func=cmd_rig)
     w = sub.add_parser('warm', help="compile the node's kernels into numba's cache now, so its "
                        'first start takes seconds (make runs it; after colcon build, once)')
     w.set_defaults(func=cmd_warm)

@@ -1,0 +1,549 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Propose a jacket rig for a URDF skeleton: find the body parts, size the cloth, write YAML.
+
+Everything is found at the URDF's zero pose in the root frame, whatever the links' own axes:
+the pelvis is the first link where two legs and the spine part, the chest the first link above
+it where two arms and the neck part (chains from the root); each arm's shoulder, elbow and wrist
+are where its two longest consecutive bones meet; left and right come from the names
+(REP-120 ``l_``, Mixamo ``mixamorig:Left``, Unreal ``_l``, SMPL ``L_``) or else from the side
+they are on. Names also choose between links that sit at one place (a clavicle and an upper
+arm, three links of one ball joint). Sizes come from the links' URDF ``<collision>`` shapes
+when they have primitives, else from bone lengths. Positions and vectors are written in each
+link's frame, so the rig fits whatever the link axes are.
+"""
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+import yaml
+
+from ..core.config import ConfigError
+from ..core.urdf_colliders import urdf_shapes
+from ..core.skeleton import Skeleton
+
+SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
+
+#  Name tables: token sets that name a part, strongest first (tokens: the name cut at _ : . -,
+#  digits and camel case, lower case, side tokens removed).
+NAMES = {
+    'pelvis': [{'pelvis'}, {'hips'}, {'hip'}, {'root'}, {'base'}],
+    'spine': [{'spine'}, {'chest'}, {'torso'}, {'waist'}, {'abdomen'}, {'back'}],
+    'neck': [{'neck'}, {'head'}],
+    'upper_arm': [{'upperarm'}, {'upper', 'arm'}, {'arm'}, {'humerus'}, {'shoulder'}],
+    'forearm': [{'forearm'}, {'lowerarm'}, {'fore', 'arm'}, {'lower', 'arm'}, {'elbow'}],
+    'hand': [{'hand'}, {'wrist'}],
+    'thigh': [{'thigh'}, {'upleg'}, {'up', 'leg'}, {'upper', 'leg'}, {'thigh'}, {'femur'},
+              {'hip'}],
+}
+LEFT, RIGHT = {'l', 'left'}, {'r', 'right'}
+
+
+def tokens(name: str) -> list[str]:
+    """Cut a link name into lower-case words: ``mixamorig:LeftUpLeg`` -> mixamorig left up leg."""
+    spaced = re.sub(r'([a-z])([A-Z])', r'\1 \2', name)
+    spaced = re.sub(r'([A-Z]+)([A-Z][a-z])', r'\1 \2', spaced)
+    return [t for t in re.split(r'[^A-Za-z]+', spaced.lower()) if t]
+
+
+def side_of(name: str) -> str | None:
+    """Return 'left', 'right' or None from a link name's words."""
+    words = set(tokens(name))
+    if words & LEFT and not words & RIGHT:
+        return 'left'
+    if words & RIGHT and not words & LEFT:
+        return 'right'
+    return None
+
+
+def name_rank(name: str, part: str) -> int | None:
+    """Return how strongly a name says ``part`` (0 strongest), None if it does not."""
+    words = set(tokens(name)) - LEFT - RIGHT
+    joined = ''.join(tokens(name))
+    for rank, want in enumerate(NAMES[part]):
+        if want <= words or (len(want) == 1 and next(iter(want)) in words):
+            return rank
+        if len(want) > 1 and ''.join(sorted(want)) in joined:
+            return rank
+    return None
+
+
+@dataclass
+class Choice:
+    """A link chosen for a part of the body, and why."""
+
+    part: str
+    link: str
+    why: str
+
+
+@dataclass
+class Body:
+    """The parts of a skeleton found at its zero pose (root frame)."""
+
+    skeleton: Skeleton
+    rest: np.ndarray                    # (L,4,4) link frames at the zero pose
+    pelvis: int
+    chest: int
+    spine: list                         # link ids from pelvis to chest
+    neck: int
+    arms: dict                          # side -> (upper, forearm, hand) link ids
+    thighs: dict                        # side -> link id
+    knees: dict                         # side -> position of the knee
+    up: np.ndarray
+    forward: np.ndarray
+    left: np.ndarray
+    height: float
+    choices: list = field(default_factory=list)
+
+    def pos(self, link: int) -> np.ndarray:
+        return self.rest[link][:3, 3]
+
+    def name(self, link: int) -> str:
+        return self.skeleton.link_names[link]
+
+
+class Refusal(ConfigError):
+    """The skeleton lacks a torso or two arms: no rig can be proposed."""
+
+
+def _children(sk):
+    kids = [[] for _ in sk.link_names]
+    for k, p in enumerate(sk.parent):
+        if p >= 0:
+            kids[p].append(k)
+    return kids
+
+
+def _reach(sk, rest, kids):
+    """Longest distance from each link's origin down to a leaf of its subtree, along bones."""
+    reach = np.zeros(len(sk.link_names))
+    for k in range(len(sk.link_names) - 1, -1, -1):      # breadth-first order: children later
+        for c in kids[k]:
+            bone = np.linalg.norm(rest[c][:3, 3] - rest[k][:3, 3])
+            reach[k] = max(reach[k], reach[c] + bone)
+    return reach
+
+
+def _leaves(k, kids):
+    return 1 if not kids[k] else sum(_leaves(c, kids) for c in kids[k])
+
+
+def _branches(k, kids, rest, reach, least):
+    """Return the children of ``k`` that start a long chain (at least ``least`` m from k)."""
+    out = []
+    for c in kids[k]:
+        if reach[c] + np.linalg.norm(rest[c][:3, 3] - rest[k][:3, 3]) >= least:
+            out.append(c)
+    return out
+
+
+def _main_path(k, kids, reach):
+    """From link k down its longest chain to a leaf."""
+    path = [k]
+    while kids[path[-1]]:
+        path.append(max(kids[path[-1]], key=lambda c: reach[c]))
+    return path
+
+
+def _groups(path, rest):
+    """Consecutive links of a path grouped by where they sit (one joint: several links)."""
+    groups = [[path[0]]]
+    for k in path[1:]:
+        if np.linalg.norm(rest[k][:3, 3] - rest[groups[-1][-1]][:3, 3]) < SAME_PLACE:
+            groups[-1].append(k)
+        else:
+            groups.append([k])
+    return groups
+
+
+def _pick(group, part, sk):
+    """Return the link of a group that names ``part`` best, else the last (it carries the bone)."""
+    ranked = [(name_rank(sk.link_names[k], part), -i, k) for i, k in enumerate(group)]
+    named = [r for r in ranked if r[0] is not None]
+    if named:
+        rank, _, k = min(named)
+        return k, f'its name says {part.replace("_", " ")}'
+    return group[-1], 'by topology'
+
+
+def _snap(v, degrees=15.0):
+    """Return a unit vector, snapped onto the nearest axis within ``degrees``.
+
+    A leaning spine is not a tilted world.
+    """
+    v = np.asarray(v, float) / np.linalg.norm(v)
+    k = int(np.argmax(np.abs(v)))
+    if abs(v[k]) >= np.cos(np.radians(degrees)):
+        out = np.zeros(3)
+        out[k] = np.sign(v[k])
+        return out
+    return v
+
+
+def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
+    """Find pelvis, spine, chest, neck, arms and thighs of a skeleton; refuse in one line."""
+    rest = sk.forward(np.zeros(len(sk.joint_names)))
+    kids = _children(sk)
+    reach = _reach(sk, rest, kids)
+    pts = rest[:, :3, 3]
+    size = float(np.ptp(pts, axis=0).max()) if len(pts) > 1 else 0.0
+    if size <= 0:
+        raise Refusal('cannot find a torso: the skeleton has no bones')
+    least = 0.15 * size
+    # Pelvis: the first link, from the root, where three long chains part (two legs, spine).
+    pelvis = None
+    for k in range(len(sk.link_names)):
+        if len(_branches(k, kids, rest, reach, least)) >= 3:
+            pelvis = k
+            break
+    if pelvis is None:
+        raise Refusal('cannot find a torso: no link where two legs and a spine part '
+                      f'(links: {", ".join(sk.link_names[:12])}'
+                      f'{", ..." if len(sk.link_names) > 12 else ""})')
+    branches = _branches(pelvis, kids, rest, reach, least)
+    # The spine carries the most ends (head and two hands); names break ties.
+    spine_root = max(branches, key=lambda c: (_leaves(c, kids),
+                                              name_rank(sk.link_names[c], 'spine') is not None,
+                                              reach[c]))
+    legs = [c for c in branches if c != spine_root]
+    # Chest: the first link up the spine where three long chains part (two arms and the neck).
+    chest, k = None, spine_root
+    spine = [pelvis]
+    while k is not None:
+        spine.append(k)
+        if len(_branches(k, kids, rest, reach, least * 0.6)) >= 3:
+            chest = k
+            break
+        nxt = _branches(k, kids, rest, reach, least * 0.6)
+        k = max(nxt, key=lambda c: reach[c]) if nxt else None
+    if chest is None:
+        raise Refusal('cannot find two arms: no link up the spine from '
+                      f'{sk.link_names[pelvis]!r} where two arms and a neck part')
+    tops = _branches(chest, kids, rest, reach, least * 0.6)
+    neck_root = min(tops, key=lambda c: (name_rank(sk.link_names[c], 'neck') is None,
+                                         reach[c]))
+    arms_roots = [c for c in tops if c != neck_root]
+    if len(arms_roots) < 2:
+        raise Refusal(f'cannot find two arms at {sk.link_names[chest]!r}')
+    arms_roots = sorted(arms_roots, key=lambda c: -reach[c])[:2]
+    neck_path = _groups(_main_path(neck_root, kids, reach), rest)
+    up = _snap(pts[neck_path[-1][-1]] - pts[pelvis])
+    fwd = np.array([1.0, 0.0, 0.0]) if forward is None else np.asarray(forward, float)
+    fwd = fwd - (fwd @ up) * up
+    if np.linalg.norm(fwd) < 1e-3:
+        raise Refusal('forward is along up: give another forward direction')
+    fwd = _snap(fwd)
+    left = np.cross(up, fwd)
+    body = Body(sk, rest, pelvis, chest, spine, neck_root, {}, {}, {}, up, fwd, left,
+                float(np.ptp(pts @ up)))
+    nk, why = _pick(neck_path[0] if len(neck_path[0]) > 1 else [neck_root], 'neck', sk)
+    body.neck = nk
+    body.choices += [
+        Choice('pelvis', sk.link_names[pelvis], 'first link from the root where two legs and '
+               'the spine part'),
+        Choice('chest', sk.link_names[chest], 'first link up the spine where two arms and the '
+               'neck part'),
+        Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}')]
+    for root in arms_roots:
+        _arm(body, root, kids, reach)
+    for root in legs[:2]:
+        _leg(body, root, kids, reach)
+    if set(body.arms) != {'left', 'right'}:
+        raise Refusal('cannot find two arms: both arm chains are on one side')
+    if set(body.thighs) != {'left', 'right'}:
+        raise Refusal('cannot find two legs: both leg chains are on one side')
+    return body
+
+
+def _side(body, root, link):
+    """Left or right from the names along the chain, else from where it is."""
+    for k in (link, root):
+        s = side_of(body.name(k))
+        if s:
+            return s, 'by name'
+    d = (body.pos(link) - body.pos(body.chest)) @ body.left
+    return ('left' if d > 0 else 'right'), 'by side'
+
+
+def _arm(body, root, kids, reach):
+    sk, rest = body.skeleton, body.rest
+    groups = _groups([body.chest] + _main_path(root, kids, reach), rest)
+    if len(groups) < 4:
+        raise Refusal(f'cannot find two arms: the chain from {body.name(root)!r} has fewer '
+                      'than three bones')
+    seg = [np.linalg.norm(rest[groups[i + 1][0]][:3, 3] - rest[groups[i][0]][:3, 3])
+           for i in range(len(groups) - 1)]
+    # Shoulder, elbow and wrist: where the two longest consecutive bones meet.
+    i = max(range(1, len(seg) - 1), key=lambda j: seg[j] + seg[j + 1] - 1e-6 * j)
+    upper, why_u = _pick(groups[i], 'upper_arm', sk)
+    fore, why_f = _pick(groups[i + 1], 'forearm', sk)
+    hand, why_h = _pick(groups[i + 2], 'hand', sk)
+    side, why_s = _side(body, root, upper)
+    if side in body.arms:
+        side = 'right' if side == 'left' else 'left'
+        why_s = 'the other arm'
+    body.arms[side] = (upper, fore, hand)
+    body.choices += [
+        Choice(f'{side} upper arm', sk.link_names[upper],
+               f'shoulder of the two longest bones of the arm chain, {why_u}; {side} {why_s}'),
+        Choice(f'{side} forearm', sk.link_names[fore], f'the elbow, {why_f}'),
+        Choice(f'{side} hand', sk.link_names[hand], f'the wrist, {why_h}')]
+
+
+def _leg(body, root, kids, reach):
+    sk, rest = body.skeleton, body.rest
+    groups = _groups([body.pelvis] + _main_path(root, kids, reach), rest)
+    seg = [np.linalg.norm(rest[groups[i + 1][0]][:3, 3] - rest[groups[i][0]][:3, 3])
+           for i in range(len(groups) - 1)]
+    if not seg:
+        return
+    # The thigh is the first long bone (a hip offset before it is short).
+    i = next(j for j, s in enumerate(seg) if s >= 0.5 * max(seg))
+    if i == 0:
+        i = 1 if len(groups) > 1 else 0
+        group = groups[i]
+    else:
+        group = groups[i]
+    thigh, why = _pick(group, 'thigh', sk)
+    side, why_s = _side(body, root, thigh)
+    if side in body.thighs:
+        side = 'right' if side == 'left' else 'left'
+        why_s = 'the other leg'
+    body.thighs[side] = thigh
+    body.knees[side] = rest[groups[min(i + 1, len(groups) - 1)][0]][:3, 3]
+    body.choices.append(Choice(f'{side} thigh', sk.link_names[thigh],
+                               f'first long bone of the leg chain, {why}; {side} {why_s}'))
+
+
+# --- sizing and the YAML ---------------------------------------------------------------------
+
+def _r(v, nd=3):
+    return [round(float(x), nd) + 0.0 for x in v]
+
+
+def _in_link(body, link, p):
+    """Return a root-frame point in a link's frame."""
+    T = body.rest[link]
+    return T[:3, :3].T @ (p - T[:3, 3])
+
+
+def _dir_in_link(body, link, d):
+    return body.rest[link][:3, :3].T @ d
+
+
+def _rpy_deg(R):
+    """URDF roll-pitch-yaw (degrees) of a rotation."""
+    pitch = np.arcsin(-np.clip(R[2, 0], -1, 1))
+    roll = np.arctan2(R[2, 1], R[2, 2])
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    return _r(np.degrees([roll, pitch, yaw]), 2)
+
+
+def _body_frame(body):
+    return np.column_stack([body.forward, body.left, body.up])
+
+
+def _aligned(body, link):
+    """Tell whether the link's axes are the body's forward, left and up (no rpy_deg needed)."""
+    return np.allclose(body.rest[link][:3, :3], _body_frame(body), atol=1e-4)
+
+
+def _orient(body, link):
+    """rpy_deg that turns the link's axes onto forward, left and up, or None if they are."""
+    if _aligned(body, link):
+        return None
+    return _rpy_deg(body.rest[link][:3, :3].T @ _body_frame(body))
+
+
+def _torso_extent(body, links):
+    """Half-depth and half-width of the links' primitive collision shapes about the spine."""
+    shapes = urdf_shapes(body.skeleton.urdf_xml)
+    depth = width = 0.0
+    found = []
+    for k in links:
+        for s in shapes.get(body.name(k), []):
+            T = body.rest[k]
+            c = T[:3, :3] @ s.xyz + T[:3, 3] - body.pos(body.pelvis)
+            for axis, vec in (('d', body.forward), ('w', body.left)):
+                e = abs(c @ vec) + s.extent(T[:3, :3].T @ vec)
+                if axis == 'd':
+                    depth = max(depth, e)
+                else:
+                    width = max(width, e)
+            found.append(body.name(k))
+    return depth, width, sorted(set(found))
+
+
+def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str], Body]:
+    """Return the rig (a mapping for YAML), the lines saying what was chosen and why, the body."""
+    body = find_body(sk, None if forward is None else np.asarray(forward, float))
+    up, fwd, left = body.up, body.forward, body.left
+    P = body.pos
+    pelvis = P(body.pelvis)
+    shoulder = {s: P(a[0]) for s, a in body.arms.items()}
+    sh_height = np.mean([(p - pelvis) @ up for p in shoulder.values()])
+    sh_half = abs((shoulder['left'] - shoulder['right']) @ left) / 2
+    thigh_len = np.mean([np.linalg.norm(body.knees[s] - P(body.thighs[s])) for s in ('left',
+                                                                                     'right')])
+    s = max(body.height / 1.75, 0.1)       # the shipped character is 1.75 m tall
+    lines = [f'{c.part:>15}: {c.link}  ({c.why})' for c in body.choices]
+    # The cloth's top row at 0.38 of the way from the pelvis to the shoulders (as fitted by hand
+    # on the shipped character), its hem 0.85 of a thigh below the hips.
+    top_h = 0.38 * sh_height
+    hem_h = min((P(body.thighs['left']) - pelvis) @ up, 0.0) - 0.85 * thigh_len
+    spine_pts = [(k, (P(k) - pelvis) @ up) for k in body.spine]
+    shape_link = body.spine[0]
+    for k, h in spine_pts:
+        if h <= top_h:
+            shape_link = k
+    torso_links = [k for k in body.spine]
+    depth, width, with_shapes = _torso_extent(body, torso_links)
+    if with_shapes:
+        ry = width + 0.02 * s
+        rx = depth + 0.02 * s
+        lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
+                     + ', '.join(with_shapes))
+    else:
+        # Wide enough for the shoulders and for the thighs' colliders below (sized as in
+        # _colliders), whichever is wider.
+        hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
+        ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s)
+        rx = 0.8 * ry
+        lines.append(f'{"cloth radii":>15}: from the shoulder and hip widths ({2 * sh_half:.2f}, '
+                     f'{2 * hip_half:.2f} m; no primitive <collision> shape on the torso)')
+    rows = 10
+    spacing = (top_h - hem_h) / (rows - 1)
+    spine_line = P(shape_link) + ((top_h - (P(shape_link) - pelvis) @ up)) * up
+    center = _in_link(body, shape_link, spine_line)
+    shape = {'link': body.name(shape_link), 'center': _r(center), 'radii': _r([rx, ry]),
+             'flare': round(0.006 * s, 4), 'opening_deg': 50, 'row_spacing': round(spacing, 4)}
+    rpy = _orient(body, shape_link)
+    if rpy is not None:
+        shape['rpy_deg'] = rpy
+    names = {k: body.name(k) for k in range(len(sk.link_names))}
+    lt, rt = body.thighs['left'], body.thighs['right']
+    cloth = {'cols': 9, 'rows': rows, 'shape': shape, 'pin_link': body.name(shape_link),
+             'reference_bones': [body.name(shape_link), names[body.pelvis], names[lt], names[rt]],
+             'max_distance': {'top': round(0.02 * s, 3), 'hem': round(0.40 * s, 3)},
+             'bone_column_step': 2}
+    sleeves = []
+    for side in ('left', 'right'):
+        u, f, h = body.arms[side]
+        sleeves += [{'link': names[u], 'end_link': names[f], 'twist_share': 0.5},
+                    {'link': names[f], 'end_link': names[h], 'twist_share': 0.5}]
+    pads = {}
+    chest = body.chest
+    for side in ('left', 'right'):
+        u, f, _ = body.arms[side]
+        sign = 1.0 if side == 'left' else -1.0
+        at = pelvis + (sh_height - 0.01 * s) * up + sign * 0.43 * sh_half * left
+        at += ((P(chest) - pelvis) @ fwd) * fwd
+        arm_dir = P(f) - P(u)
+        aim = P(u) + arm_dir / np.linalg.norm(arm_dir) * min(0.1 * s,
+                                                             0.4 * np.linalg.norm(arm_dir))
+        pads[side] = {'pivot': _r(_in_link(body, chest, at)), 'aim_link': names[u],
+                      'aim': _r(_in_link(body, u, aim)), 'length': round(0.65 * sh_half, 3),
+                      'below_length': round(0.4 * sh_height, 3)}
+    upper = {'link': names[chest], 'shoulder_pads': pads, 'skin_radius': round(0.3 * s, 3)}
+    rpy = _orient(body, chest)
+    if rpy is not None:
+        upper['rpy_deg'] = rpy
+    neck = body.neck
+    hood = {'link': names[neck],
+            'pivot': _r(_in_link(body, neck, P(neck) - 0.09 * s * fwd + 0.05 * s * up)),
+            'length': round(0.2 * s, 3),
+            'rest_direction': _r(_dir_in_link(body, neck, -0.45 * fwd - 0.9 * up))}
+    rig = {}
+    if not np.allclose(up, [0, 0, 1], atol=1e-3) or not np.allclose(fwd, [1, 0, 0], atol=1e-3):
+        rig['up'] = _r(up)
+        rig['forward'] = _r(fwd)
+    rig.update({'cloth': cloth, 'jacket_bones': {'sleeves': sleeves, 'upper': upper},
+                'hood': hood})
+    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, thigh_len, s)
+    lines.append(f'{"colliders":>15}: {why}')
+    return _plain(rig), lines, body
+
+
+def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
+    """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some."""
+    shapes = urdf_shapes(body.skeleton.urdf_xml)
+    wanted = [body.pelvis, shape_link, body.chest, body.thighs['left'], body.thighs['right']]
+    wanted = list(dict.fromkeys(wanted))
+    floor = {'name': 'floor', 'type': 'plane', 'link': 'world', 'point': [0.0, 0.0, 0.0],
+             'normal': _r(body.up)}
+    if all(body.name(k) in shapes for k in wanted):
+        return ({'from_urdf': [body.name(k) for k in wanted], 'add': [floor]},
+                'from the URDF <collision> shapes of ' + ', '.join(body.name(k) for k in wanted))
+    P, up = body.pos, body.up
+    pelvis = P(body.pelvis)
+    torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward) \
+        * body.forward
+    out = [_ellipsoid(body, 'torso', shape_link, torso_c, [rx - 0.02 * s, ry - 0.02 * s,
+                                                           0.22 * s]),
+           _ellipsoid(body, 'pelvis', body.pelvis, pelvis - 0.03 * s * up,
+                      [0.13 * s, 0.9 * ry, 0.14 * s])]
+    for side in ('left', 'right'):
+        k = body.thighs[side]
+        knee = body.knees[side]
+        bone = knee - P(k)
+        out.append({'name': f'{side[0]}_thigh', 'type': 'capsule', 'link': body.name(k),
+                    'a': _r(_in_link(body, k, P(k) + 0.07 * bone)),
+                    'b': _r(_in_link(body, k, P(k) + 0.93 * bone)),
+                    'radius': round(0.19 * thigh_len, 3)})
+    out.append(floor)
+    return out, 'sized from bone lengths (no primitive <collision> shape on ' + ', '.join(
+        body.name(k) for k in wanted if body.name(k) not in shapes) + ')'
+
+
+def _ellipsoid(body, name, link, center, radii):
+    e = {'name': name, 'link': body.name(link), 'center': _r(_in_link(body, link, center)),
+         'radii': _r(radii)}
+    rpy = _orient(body, link)
+    if rpy is not None:
+        e['rpy_deg'] = rpy
+    return e
+
+
+HEADER = """\
+# A jacket rig proposed by `jacket_cloth rig` for {urdf} ({links} links, {height:.2f} m tall).
+# Positions are metres in the named link's frame at the URDF's zero pose; angles in degrees.
+# Tune it: every key is explained in docs/your_character.md. What was chosen:
+{choices}
+"""
+
+COMMENTS = {
+    'up': '# the character\'s up and forward in the URDF root frame (its links are not Z-up)',
+    'cloth': '# M3: a coarse grid around the torso; the top row is pinned (M6)',
+    'jacket_bones': '# M1 sleeves on the arms, M2 shoulder pads on the chest',
+    'hood': '# M8: a one-particle pendulum behind the neck',
+    'colliders': '# M10: the body the cloth must stay out of, and the floor',
+}
+
+
+def _plain(value):
+    """Return the value with numbers as Python floats, for yaml.safe_dump."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    return value
+
+
+def to_yaml(rig: dict, lines: list[str], urdf: str, body: Body) -> str:
+    """Return the rig as commented YAML a user can tune."""
+    head = HEADER.format(urdf=urdf, links=len(body.skeleton.link_names), height=body.height,
+                         choices='\n'.join('#   ' + line.strip() for line in lines))
+    parts = [head]
+    for key, value in _plain(rig).items():
+        if key == 'forward':
+            continue
+        if key in COMMENTS:
+            parts.append('\n' + COMMENTS[key] + '\n')
+        chunk = {key: value}
+        if key == 'up':
+            chunk['forward'] = rig['forward']
+        parts.append(yaml.safe_dump(chunk, sort_keys=False, default_flow_style=None, width=99))
+    return ''.join(parts)
