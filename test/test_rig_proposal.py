@@ -279,8 +279,10 @@ def test_the_y_up_proposal_loads_and_rests_where_the_z_up_one_does():
     loaded = Rig(yaml.safe_load(to_yaml(rig, lines, 'y_up.urdf', body)), sk)
     z_up = Rig(yaml.safe_load(to_yaml(*_rig_of(_text(shipped('character.urdf')))[1:3], 'z.urdf',
                                       body)), load_skeleton(shipped('character.urdf')))
-    turn = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)     # z-up -> y-up root
-    assert np.allclose(loaded.rest, z_up.rest @ turn.T, atol=1e-9)
+    # base_link sits under the new root turned -90 deg about x: p -> Rx(-90) p = (x, z, -y);
+    # 1e-7 because the URDF's -1.5707963 is pi/2 only to 3e-8.
+    turn = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)     # Rx(+90)
+    assert np.allclose(loaded.rest, z_up.rest @ turn, atol=1e-7)
 
 
 # --- end to end on four skeletons ----------------------------------------------------------

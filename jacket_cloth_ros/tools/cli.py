@@ -252,15 +252,10 @@ def cmd_rig(args: argparse.Namespace) -> int:
     forward = _vector(args.forward, '--forward') if args.forward else None
     rig, lines, body = propose(skeleton, forward)
     text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
-    loaded = None
     try:
         loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
     except ConfigError as e:
-        if not ({'up', 'forward'} & set(rig)):
-            raise ToolError(f'the proposed rig does not load ({e})') from None
-        print(f'jacket_cloth rig: warning: this skeleton is not Z-up; its rig needs the up, '
-              f'forward and rpy_deg keys, which this version does not read ({e})',
-              file=sys.stderr)
+        raise ToolError(f'the proposed rig does not load ({e})') from None
     with replacing(args.output) as tmp:
         with open(tmp, 'w', encoding='utf-8') as f:
             f.write(text)
@@ -268,7 +263,7 @@ def cmd_rig(args: argparse.Namespace) -> int:
         print(line)
     print(f'wrote {args.output} ({body.height:.2f} m tall'
           + (f', up {rig["up"]}' if 'up' in rig else '') + ')')
-    if args.picture and loaded is not None:
+    if args.picture:
         from ..rigging.picture import draw_rig
         with replacing(args.picture) as tmp:
             draw_rig(loaded, body.up, body.forward, tmp,
