@@ -243,9 +243,9 @@ class JacketSimulation:
 
         M6: the top row is carried by its link and, near the shoulders, by the M2 bones below
         the shoulder pads (``layer``, solved for ``links``), then put outside the colliders
-        (posed with ``self.root`` for the floor), as the compiled step does. A column hangs from its top vertex,
-        so the column's reference points are lifted with it, or M11 would pull the cloth away
-        from its own pinned row.
+        (posed with ``self.root`` for the floor), as the compiled step does. A column hangs
+        from its top vertex, so the column's reference points are lifted with it, or M11 would
+        pull the cloth away from its own pinned row.
         """
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
