@@ -286,6 +286,28 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
 
 
 @njit(cache=True)
+def push_out_points(points, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n):
+    """M6 with M10: put each skinned (pinned) point on the surface of any collider it is in.
+
+    A pinned vertex cannot move in the solve, so one left inside the body (a thigh raised
+    against the jacket's front, a collider fitted a little wide) makes its column either
+    stretched or inside; the body lifts the pinned row instead. Returns the deepest move.
+    """
+    ne = centers.shape[0]
+    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
+    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
+    deepest = 0.0
+    for i in range(points.shape[0]):
+        for _ in range(MAX_COLLISION_PASSES):
+            depth = _push_out(points, i, centers, to_unit, from_unit, reach2, cap_a, cap_b,
+                              cap_r, plane_p, plane_n)
+            if depth < 0.0:
+                break
+            deepest = max(deepest, depth)
+    return deepest
+
+
+@njit(cache=True)
 def _pull_within(x, i, c0, c1, c2, reach):
     """Move vertex i along its line to (c0, c1, c2) until it is ``reach`` away; True if moved."""
     d0 = x[i, 0] - c0

@@ -242,14 +242,18 @@ class JacketSimulation:
         """(pinned top row, M11 reference points) for a skeleton pose.
 
         M6: the top row is carried by its link and, near the shoulders, by the M2 bones below
-        the shoulder pads (``layer``, solved for ``links``). A column hangs from its top vertex,
-        so the column's reference points are lifted with it, or M11 would pull the cloth away
-        from its own pinned row.
+        the shoulder pads (``layer``, solved for ``links``), then put outside the colliders
+        (posed with ``self.root`` for the floor), as the compiled step does. A column hangs
+        from its top vertex, so the column's reference points are lifted with it, or M11 would
+        pull the cloth away from its own pinned row.
         """
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
         top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
         pose_kernel.skinned_pose(links, self.model.cloth, below, top, ref)
+        c = self._posed(links, self.root)       # M10: the pinned row outside the body
+        kernel.push_out_points(top, c.centers, c.axes, self.model.colliders.radii, c.cap_a,
+                               c.cap_b, self.model.colliders.capsule_radii, c.plane_p, c.plane_n)
         return top, ref
 
     @property
@@ -268,6 +272,7 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.links = self.skeleton.forward(sample.q)
+        self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)
         self.x = ref.copy()
         self.x[:self.rig.cols] = top
@@ -276,7 +281,6 @@ class JacketSimulation:
         anchor, rot = self.hood_anchor(self.links)
         self.hood_p = anchor + rot @ self.rig.hood.rest_direction * self.rig.hood.length
         self.hood_pp = self.hood_p.copy()
-        self.root = sample.root.copy()          # the steps move it in place
         self.t_sim = sample.stamp_ns
         self.last = sample
         self.resets += 1

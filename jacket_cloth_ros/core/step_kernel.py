@@ -7,14 +7,15 @@ inputs pays it again with cold caches (docs/performance.md). Here the step is th
 sequence of the same compiled parts:
 
   interpolate the skeleton (M7) -> forward kinematics -> M14 world share -> M1/M2 layer ->
-  M6 pinned row and M11 references -> colliders (M10) -> cloth (kernel.cloth_step) -> M8 hood.
+  M6 pinned row and M11 references -> colliders (M10), the pinned row kept outside them ->
+  cloth (kernel.cloth_step) -> M8 hood.
 """
 
 import numpy as np
 
 from .bundles import Posed, StepControl
 from .kernel_cache import njit
-from .kernel import cloth_step
+from .kernel import cloth_step, push_out_points
 from .pose_kernel import (
     _transform_point, collider_poses, forward_kinematics, share_world_motion, skinned_pose,
     solve_layer)
@@ -204,6 +205,11 @@ def advance(model, tuning, state, before, motion, out):
         solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
                     below)
         skinned_pose(links, cloth, below, top, now.ref)
+        # M10 before M6: the colliders where this step ends, and the pinned row outside them.
+        collider_poses(links, colliders, now)
+        plane_poses(links, root, colliders, now)
+        push_out_points(top, now.centers, now.axes, colliders.radii, now.cap_a, now.cap_b,
+                        colliders.capsule_radii, now.plane_p, now.plane_n)
         # Substeps: as set, or in the automatic quality mode as few as keep the pinned row's
         # move per substep under the tolerance.
         substeps = tuning.max_substeps
@@ -221,8 +227,6 @@ def advance(model, tuning, state, before, motion, out):
             lost_per_each(tuning.damping, e, damp)
             contact_damp = lost_per(tuning.contact_damping, e)
             damp_for = substeps
-        collider_poses(links, colliders, now)
-        plane_poses(links, root, colliders, now)
         if not state.started[0]:        # no step before: substeps start where this one ends
             _copy_posed(now, before)
         deepest, limited, sweeps = cloth_step(

@@ -1,0 +1,76 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Issue 19's targets held on real motion capture, not on motion written here.
+
+Each capture ``make`` fetches (bvhtoolbox 0.1.3's MocapBank and free-BVH files, see
+test_bvh_import.py and docs/motion_capture.md) goes through ``jacket_cloth import``, then the
+replay's pipeline at the default settings with its rig from config/examples, measured after
+every input as ``jacket_cloth analyze`` measures it (core.measures). Whole captures: 455 inputs
+(15 s, sitting down and standing up) and 69 inputs (2.3 s).
+"""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.measures import collider_labels, depth_inside
+from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.session import load_session, run_session
+
+MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
+EXAMPLES = os.path.join(os.path.dirname(shipped('character.urdf')), 'examples')
+CAPTURES = {'test_mocapbank.bvh': 'mocapbank_rig.yaml', 'test_freebvh.bvh': 'freebvh_rig.yaml'}
+
+
+@pytest.fixture(scope='module', params=sorted(CAPTURES))
+def measured(request, tmp_path_factory):
+    """Import, replay at the default settings, and measure one capture after every input."""
+    path = os.path.join(MOCAP, request.param)
+    if not os.path.isfile(path):
+        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+    tmp = tmp_path_factory.mktemp('capture')
+    session, urdf = tmp / 'session.mcap', tmp / 'skeleton.urdf'
+    assert main(['import', path, '-o', str(session), '--urdf-out', str(urdf)]) == 0
+    loaded = load_session(str(session), urdf=str(urdf),
+                          rig=os.path.join(EXAMPLES, CAPTURES[request.param]))
+    labels = collider_labels(loaded.setup.rig)
+    series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [], 'resets': [],
+              'published': 0}
+
+    def probe(pipeline, report, stamp, outputs):
+        sim = pipeline.sim
+        assert report.accepted and np.isfinite(sim.x).all()
+        series['published'] += any(key == 'tf' for key, _ in outputs)
+        if report.reset:
+            series['resets'].append(report.reset)
+        vs, _, hs, _ = sim.edge_strains()
+        series['vertical_stretch'].append(vs.value)
+        series['horizontal_stretch'].append(hs.value)
+        series['inside_m'].append(depth_inside(sim.x, sim.rig.free,
+                                               sim.collider_frames(sim.links), labels).value)
+
+    pipeline = run_session(loaded, probe=probe)
+    series['inputs'] = pipeline.inputs
+    return request.param, series
+
+
+def test_every_input_of_a_real_capture_holds_the_jacket_unstretched_and_outside(measured):
+    # Issue 19 item 3 at the default settings: no vertical edge over 10 % at any input (p99
+    # 3 %), the published cloth never over 1 cm inside a collider (p99 3 mm), and no reset but
+    # the first sample's. Before the pinned row was kept outside the colliders and the
+    # MocapBank rig was fitted, that capture reached 12.1 % (p99 10.7 %) and 4.8 mm.
+    name, s = measured
+    assert s['published'] == s['inputs'] == len(s['vertical_stretch'])
+    assert s['resets'] == ['first sample']
+    stretch, inside = np.array(s['vertical_stretch']), np.array(s['inside_m'])
+    assert stretch.max() <= 0.10 and np.percentile(stretch, 99) <= 0.03, name
+    assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003, name
+
+
+@pytest.mark.xfail(strict=True, reason='open (issue 19): horizontal stretch p99 is about 20 % '
+                   'on both captures (docs/accuracy.md); strict, so meeting it shows here')
+def test_horizontal_stretch_of_a_real_capture_within_10_percent_at_p99(measured):
+    name, s = measured
+    assert np.percentile(s['horizontal_stretch'], 99) <= 0.10, name
