@@ -18,11 +18,12 @@ class LabError(Exception):
 
 
 def cmd_stress(args):
-    from .stress import METHODS, stress, write_matrix
-    methods = tuple(args.methods.split(',')) if args.methods else METHODS
-    unknown = [m for m in methods if m not in METHODS]
+    from .stress import METHODS, XPBD_METHODS, stress, write_matrix
+    methods = tuple(args.methods.split(',')) if args.methods else METHODS + XPBD_METHODS
+    known = METHODS + XPBD_METHODS
+    unknown = [m for m in methods if m not in known]
     if unknown:
-        raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(METHODS)})')
+        raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(known)})')
     loop = 3600.0 if args.full else args.loop
     results = stress(methods, loop_s=loop)
     write_matrix(results, args.out, methods)
@@ -60,7 +61,8 @@ def build_parser():
     sub = p.add_subparsers(dest='command', required=True)
     st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
     st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
-    st.add_argument('--methods', default=None, help='comma-separated (default: all)')
+    st.add_argument('--methods', default=None,
+                    help='comma-separated stretch limits, xpbd+<limit> for XPBD (default: all)')
     st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')
     st.add_argument('--full', action='store_true', help='an hour of looped walk')
     st.set_defaults(func=cmd_stress)
