@@ -159,6 +159,7 @@ def advance(model, tuning, state, before, motion, out):
                 np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
                 np.empty((nv, 3)))
     damp = np.empty(nv)
+    ride = np.empty((nv, 3))
     damp_for = 0
     contact_damp = 0.0
     hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
@@ -180,6 +181,14 @@ def advance(model, tuning, state, before, motion, out):
         forward_kinematics(model.skeleton, q, links)
         # M14: the character moved through the world by `delta` (old local -> new local); a
         # world-space cloth would stay behind by that much. Feel only `world_share` of it.
+        # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
+        # vertex's offset from its column's top before the world share moves it.
+        skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
+            / motion.steps
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    ride[i, k] = x[i, k] - x[i % cols, k]
         relative_move(new_root, root, delta)
         share_world_motion(delta, x, tuning.world_share)
         share_world_motion(delta, xp, tuning.world_share)
@@ -218,26 +227,56 @@ def advance(model, tuning, state, before, motion, out):
             lost_per_each(tuning.damping, e, damp)
             contact_damp = lost_per(tuning.contact_damping, e)
             damp_for = substeps
-        collider_poses(links, colliders, now)
-        plane_poses(links, root, colliders, now)
-        if not state.started[0]:        # no step before: substeps start where this one ends
+        # Beyond the far distance the cloth rides on its skinned pose, keeping its last offset
+        # from it, and no cloth step runs; a change blends the simulated and the riding cloth
+        # over the steps instead of popping.
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    ride[i, k] += top[i % cols, k]
+        if skin >= 1.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    xp[i, k] = x[i, k]
+                    x[i, k] = ride[i, k]
+            collider_poses(links, model.colliders, now)     # the next step starts from here
+            plane_poses(links, root, model.colliders, now)
             _copy_posed(now, before)
-        deepest, limited, sweeps = cloth_step(
-            cloth, colliders, tuning, state,
-            StepControl(acc, damp, contact_damp, dt, substeps, pin_from), now, before)
-        # Where the next step's substeps start from: this step's end.
-        _copy_posed(now, before)
-        state.started[0] = True
-        stats[DEEPEST] = max(stats[DEEPEST], deepest)
-        stats[LIMITED] += limited
-        stats[SWEEPS] += sweeps
-        stats[SUBSTEPS] += substeps
+            state.started[0] = True
+        else:
+            _simulate(model, tuning, state, before, now, links, root, acc, damp,
+                      contact_damp, dt, substeps, pin_from, stats)
+            if skin > 0.0:
+                for i in range(cols, nv):
+                    for k in range(3):
+                        x[i, k] += skin * (ride[i, k] - x[i, k])
         for k in range(3):
             hood_acc[k] = gravity_l[k] + tuning.hood_wind_scale * wind_l[k]
         hood_step(links, cloth, hood_p, hood_pp, hood_acc, dt, hood_damp)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         stats[NON_FINITE] = 1.0
     return t_sim
+
+
+@njit(cache=True)
+def _simulate(model, tuning, state, before, now, links, root, acc, damp, contact_damp, dt,
+              substeps, pin_from, stats):
+    """One cloth step (colliders posed, kernel.cloth_step) and its stats."""
+    colliders, cloth = model.colliders, model.cloth
+    collider_poses(links, colliders, now)
+    plane_poses(links, root, colliders, now)
+    if not state.started[0]:        # no step before: substeps start where this one ends
+        _copy_posed(now, before)
+    deepest, limited, sweeps = cloth_step(
+        cloth, colliders, tuning, state,
+        StepControl(acc, damp, contact_damp, dt, substeps, pin_from), now, before)
+    # Where the next step's substeps start from: this step's end.
+    _copy_posed(now, before)
+    state.started[0] = True
+    stats[DEEPEST] = max(stats[DEEPEST], deepest)
+    stats[LIMITED] += limited
+    stats[SWEEPS] += sweeps
+    stats[SUBSTEPS] += substeps
 
 
 @njit(cache=True)
