@@ -35,10 +35,20 @@ def cmd_stress(args):
 
 
 def cmd_bench(args):
-    args.out = args.out or ('out/bench_speed' if args.what == 'speed' else 'out/bench')
+    folders = {'speed': 'out/bench_speed', 'lod': 'out/bench_lod'}
+    args.out = args.out or folders.get(args.what, 'out/bench')
     if args.what == 'speed':
         from .speed import main as speed_main
         return speed_main(args)
+    if args.what == 'lod':
+        from .lod import lod_bench, write as write_lod
+        results = lod_bench(seconds=args.seconds or (1.0 if args.quick else 3.0),
+                            repeats=1 if args.quick else 3)
+        write_lod(results, args.out)
+        far = results['rows'][-1]
+        print(f'{os.path.join(args.out, "lod.md")}: at {far["distance_m"]:g} m, '
+              f'{far["cost_vs_full"]:.2f}x the full-detail cost')
+        return 0
     from .bench import CLIPS, bench, write
     clips = tuple(args.clips.split(',')) if args.clips else (('walk',) if args.quick else CLIPS)
     unknown = [c for c in clips if c not in CLIPS]
@@ -67,8 +77,9 @@ def build_parser():
     st.add_argument('--full', action='store_true', help='an hour of looped walk')
     st.set_defaults(func=cmd_stress)
     b = sub.add_parser('bench', help='accuracy against measured cost per clip (or: bench speed)')
-    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed'),
-                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit')
+    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed', 'lod'),
+                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit; '
+                   'lod: cost and error against viewer distance')
     b.add_argument('--out', default=None, help='output folder (default: out/bench[_speed])')
     b.add_argument('--quick', action='store_true', help='a few methods on one short clip')
     b.add_argument('--clips', default=None, help='comma-separated motion clips')

@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Level of detail by distance to a viewer (issue 19 item 5, core/lod.py)."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -78,3 +80,12 @@ def test_the_same_viewer_inputs_give_the_same_cloth(skeleton, rig):
 def test_lod_distances_are_checked():
     with pytest.raises(ValueError, match='lod_distances'):
         SimParams(lod_distances=(10.0, -1.0))
+
+
+def test_bench_lod_charts_error_against_distance(tmp_path):
+    from jacket_cloth_lab.cli import main
+    assert main(['bench', 'lod', '--quick', '--out', str(tmp_path)]) == 0
+    rows = json.loads((tmp_path / 'lod.json').read_text())['rows']
+    assert [r['level'] for r in rows] == [0, 0, 1, 1, 2, 2]
+    assert rows[1]['cloth_rms_m'] == 0.0 < rows[2]['cloth_rms_m'] < rows[4]['cloth_rms_m']
+    assert (tmp_path / 'lod.png').stat().st_size > 10_000
