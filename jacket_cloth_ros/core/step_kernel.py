@@ -179,8 +179,6 @@ def advance(model, tuning, state, before, motion, out):
         for k in range(3):
             new_root[k, 3] = motion.pos_a[k] + w * (motion.pos_b[k] - motion.pos_a[k])
         forward_kinematics(model.skeleton, q, links)
-        # M14: the character moved through the world by `delta` (old local -> new local); a
-        # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
         # vertex's offset from its column's top before the world share moves it.
         skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
@@ -189,6 +187,8 @@ def advance(model, tuning, state, before, motion, out):
             for i in range(cols, nv):
                 for k in range(3):
                     ride[i, k] = x[i, k] - x[i % cols, k]
+        # M14: the character moved through the world by `delta` (old local -> new local); a
+        # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         relative_move(new_root, root, delta)
         share_world_motion(delta, x, tuning.world_share)
         share_world_motion(delta, xp, tuning.world_share)
@@ -227,9 +227,9 @@ def advance(model, tuning, state, before, motion, out):
             lost_per_each(tuning.damping, e, damp)
             contact_damp = lost_per(tuning.contact_damping, e)
             damp_for = substeps
-        # Beyond the far distance the cloth rides on its skinned pose, keeping its last offset
-        # from it, and no cloth step runs; a change blends the simulated and the riding cloth
-        # over the steps instead of popping.
+        # Beyond the far distance the cloth rides on its pinned top row with its last shape
+        # and no cloth step runs; a change blends the simulated and the riding cloth over the
+        # steps instead of popping.
         if skin > 0.0:
             for i in range(cols, nv):
                 for k in range(3):
