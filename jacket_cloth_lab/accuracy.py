@@ -1,11 +1,18 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """References and metrics: how far a method is from the cloth model it approximates.
 
-The model is the rig's cloth with inextensible stretch edges, compliant shear/bend edges (the
-fabric's softness as an XPBD compliance, see ``simulation.xpbd_compliance``), collisions (M10)
-and the maximum distance (M11). Its converged solution, the *reference*, is XPBD in float64 with
-steps of 1/``REFERENCE_RATE`` s with ``REFERENCE_ITERATIONS`` sweeps each; running it again
-at half the step (Richardson) says how far the reference itself still is from converged.
+Two references, so that neither solver is judged by its own model only:
+
+- ``REFERENCE`` (XPBD's model): the rig's cloth with inextensible stretch edges, compliant
+  shear/bend edges (the fabric's softness as an XPBD compliance, see
+  ``simulation.xpbd_compliance``), collisions (M10) and the maximum distance (M11), converged:
+  XPBD in float64 with steps of 1/``REFERENCE_RATE`` s with ``REFERENCE_ITERATIONS`` sweeps
+  each; running it again at half the step (Richardson) says how far it still is from converged.
+- ``GS_REFERENCE`` (the article's model): Verlet and sequential Gauss-Seidel sweeps with the
+  fabric's stiffness per sweep (M4, M5), run with as many sweeps and as small steps; its check
+  doubles both. The article's relaxation corrects 1 - (1 - k)^n of an error in n sweeps, so its
+  converged limit holds every constraint (shear and bend too) at its rest length: the fabric's
+  softness belongs to its budget, not to its model.
 
 Cheap exact references need no reference run: the hood pendulum's large-amplitude period
 (``pendulum``) and a hanging chain's equilibrium, a column of the cloth straight down at its
@@ -72,6 +79,7 @@ class Method:
 SHIPPED = Method()               # what the node runs with its default parameters
 # The hood steps once per step, so the reference shortens the step itself, not substeps.
 REFERENCE = Method('xpbd', 'none', REFERENCE_ITERATIONS, 1, REFERENCE_RATE)
+GS_REFERENCE = Method('gauss_seidel', 'none', REFERENCE_ITERATIONS, 1, REFERENCE_RATE)
 
 
 def clip_inputs(skeleton, clip, seconds, start_s=10.0):
@@ -90,6 +98,7 @@ class Trace:
 
     method: Method
     hem: np.ndarray                  # (T, HEM_SAMPLES, 3) the hem curve, simulation frame
+    cloth: np.ndarray                # (T, N, 3) every vertex
     hood: np.ndarray                 # (T, 3) the hood particle
     strain: dict                     # {'vertical'|'horizontal'|'shear': (T,) worst |l/L - 1|}
     strain_mean: dict                # the same, mean over the edges
@@ -137,7 +146,7 @@ def run(skeleton, rig, fabric, method, inputs):
     sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
                            method.params())
     edges = edge_classes(rig)
-    hem, hood, inside, kinetic, step_ns = [], [], [], [], []
+    hem, cloth, hood, inside, kinetic, step_ns = [], [], [], [], [], []
     strain = {k: [] for k in edges}
     strain_mean = {k: [] for k in edges}
     sweeps = steps = 0
@@ -152,6 +161,7 @@ def run(skeleton, rig, fabric, method, inputs):
         steps += report.steps
         x = sim.x
         hem.append(hem_curve(rig, x))
+        cloth.append(x.copy())
         hood.append(sim.hood_p.copy())
         length = np.linalg.norm(x[rig.con_a] - x[rig.con_b], axis=1)
         s = np.abs(length / rig.con_rest - 1.0)
@@ -162,32 +172,66 @@ def run(skeleton, rig, fabric, method, inputs):
         h = sim.dt_ns * 1e-9 / max(report.substeps // max(report.steps, 1), 1)
         v = (x - sim.xp)[rig.free] / h     # xp is the last substep's
         kinetic.append(0.5 * float((v * v).sum()))
-    return Trace(method, np.array(hem), np.array(hood),
+    return Trace(method, np.array(hem), np.array(cloth), np.array(hood),
                  {k: np.array(v) for k, v in strain.items()},
                  {k: np.array(v) for k, v in strain_mean.items()}, np.array(inside),
                  np.array(kinetic), np.array(step_ns), sweeps, steps)
 
 
-def reference(skeleton, rig, fabric, inputs, method=REFERENCE):
+def finer(method):
+    """Return the run that checks a reference: half the step (Gauss-Seidel: twice the sweeps too).
+
+    Gauss-Seidel's stiffness is per sweep, so its converged model is reached by more sweeps as
+    well as by smaller steps; XPBD's compliance makes the sweeps only a solver budget.
+    """
+    sweeps = 2 if method.solver == 'gauss_seidel' else 1
+    return replace(method, sim_rate=method.sim_rate * 2, iterations=method.iterations * sweeps)
+
+
+def reference(skeleton, rig, fabric, inputs, method=REFERENCE, keep_check=False):
     """Run the converged reference; return (trace, Richardson figures) with its error estimate.
 
-    The estimate compares the reference with a run at half its step (Richardson).
+    The estimate compares the reference with its ``finer`` run (Richardson), also returned
+    with ``keep_check``.
     """
     ref = run(skeleton, rig, fabric, method, inputs)
-    finer = run(skeleton, rig, fabric, replace(method, sim_rate=method.sim_rate * 2), inputs)
-    return ref, compare(ref, finer)
+    check = run(skeleton, rig, fabric, finer(method), inputs)
+    return (ref, compare(ref, check)) + ((check,) if keep_check else ())
+
+
+def convergence(skeleton, rig, fabric, inputs, method, sweeps=(6, 12, 24, 48),
+                rates=(240.0, 480.0, 960.0, 1920.0), best=None):
+    """Error of ``method`` against its ``finer`` run (``best`` if given), sweeps then rates varied.
+
+    What shows a reference converged: the error flattening as either grows.
+    """
+    if best is None:
+        best = run(skeleton, rig, fabric, finer(method), inputs)
+    out = {'against': finer(method).label, 'sweeps': [], 'rates': []}
+    for it in sweeps:
+        row = compare(run(skeleton, rig, fabric, replace(method, iterations=it), inputs), best)
+        out['sweeps'].append({'iterations': it, **row})
+    for rate in rates:
+        row = compare(run(skeleton, rig, fabric, replace(method, sim_rate=rate), inputs), best)
+        out['rates'].append({'sim_rate': rate, **row})
+    return out
 
 
 def compare(trace, ref):
-    """Position error of ``trace`` against ``ref`` (m): hem and hood, RMS and max."""
+    """Position error of ``trace`` against ``ref`` (m): hem, hood and every vertex, RMS and max."""
     hem = np.linalg.norm(trace.hem - ref.hem, axis=2)
     hood = np.linalg.norm(trace.hood - ref.hood, axis=1)
-    return {'hem_rms_m': float(np.sqrt((hem ** 2).mean())), 'hem_max_m': float(hem.max()),
-            'hood_rms_m': float(np.sqrt((hood ** 2).mean())), 'hood_max_m': float(hood.max())}
+    out = {'hem_rms_m': float(np.sqrt((hem ** 2).mean())), 'hem_max_m': float(hem.max()),
+           'hood_rms_m': float(np.sqrt((hood ** 2).mean())), 'hood_max_m': float(hood.max())}
+    if trace.cloth.shape == ref.cloth.shape:       # grids of other sizes compare by the hem
+        cloth = np.linalg.norm(trace.cloth - ref.cloth, axis=2)
+        out.update(cloth_rms_m=float(np.sqrt((cloth ** 2).mean())),
+                   cloth_max_m=float(cloth.max()))
+    return out
 
 
-def metrics(trace, ref):
-    """Every figure of one run against the reference, for the tables."""
+def metrics(trace, ref, gs_ref=None):
+    """Every figure of one run against the reference (and ``vs_gs``: the article's), for tables."""
     out = {'method': trace.method.family, 'label': trace.method.label,
            'solver': trace.method.solver, 'stretch_limit': trace.method.stretch_limit,
            'iterations': trace.method.iterations, 'substeps': trace.method.substeps,
@@ -195,6 +239,8 @@ def metrics(trace, ref):
            'cost_ms_per_s': trace.cost_ms_per_s,
            'sweeps_per_step': trace.sweeps / max(trace.steps, 1)}
     out.update(compare(trace, ref))
+    if gs_ref is not None:
+        out['vs_gs'] = compare(trace, gs_ref)
     for name in trace.strain:
         out[f'{name}_strain_max'] = float(trace.strain[name].max())
         out[f'{name}_strain_mean'] = float(trace.strain_mean[name].mean())

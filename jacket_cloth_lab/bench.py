@@ -1,12 +1,13 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``jacket_cloth_lab bench``: every method's error against its measured cost, per motion clip.
 
-For each clip the lab computes the converged reference (``accuracy.reference``), then runs the
-sweep (methods x iterations x substeps x step) through ``JacketSimulation.process`` and times
-it: cost is the measured CPU time per simulated second on this machine, not a model. It also
-runs the exact references (pendulum, hanging chain), the automatic quality mode against the
-fixed default, and the rig-detail study: the converged cloth of coarser grids and of fewer
-colliders against the finest grid's.
+For each clip the lab computes both converged references (``accuracy.reference``: XPBD's model
+and the article's Gauss-Seidel model), how far apart they are and how the Gauss-Seidel one
+converges with sweeps and steps, then runs the sweep (methods x iterations x substeps x
+step) through ``JacketSimulation.process`` and times it: cost is the measured CPU time per
+simulated second on this machine, not a model. It also runs the exact references (pendulum,
+hanging chain), the automatic quality mode against the fixed default, and the rig-detail
+study: the converged cloth of coarser grids and of fewer colliders against the finest grid's.
 """
 
 import copy
@@ -33,11 +34,22 @@ AUTO_BUDGET = {'substeps': 2, 'iterations': 16}   # the most the automatic mode 
 PENDULUM = ((60.0, 120.0, 240.0), (10.0, 60.0, 120.0, 170.0))   # rates (Hz) x amplitudes (deg)
 
 
+QUICK_CONVERGENCE = {'sweeps': (8, 16, 32), 'rates': (240.0, 480.0, 960.0)}
+
+
+def reference_methods(quick=False):
+    """Return the (XPBD, Gauss-Seidel) references; quick mode's are coarser (960 Hz, 32 sweeps)."""
+    if quick:
+        return tuple(replace(m, sim_rate=960.0, iterations=32)
+                     for m in (accuracy.REFERENCE, accuracy.GS_REFERENCE))
+    return accuracy.REFERENCE, accuracy.GS_REFERENCE
+
+
 def sweep(quick=False):
     """Return the methods run on every clip."""
     if quick:
         return [SHIPPED, Method('gauss_seidel', 'none'), Method('gauss_seidel', 'hard_pass', 2),
-                Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2),
+                Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2), Method('xpbd', 'hard_pass'),
                 replace(SHIPPED, sim_rate=60.0)]
     out = []
     for solver, limit in FAMILIES:
@@ -75,16 +87,19 @@ def rig_at_grid(skeleton, cols, rows, colliders=None):
     return Rig(data, skeleton, where=f'shipped rig at {cols}x{rows}')
 
 
-def pareto_front(rows):
-    """Return the indices of the rows no other row beats on both cost and hem error."""
-    order = sorted(range(len(rows)),
-                   key=lambda i: (rows[i]['cost_ms_per_s'], rows[i]['hem_rms_m']))
+def pareto_front(rows, error=lambda r: r['hem_rms_m']):
+    """Return the indices of the rows no other row beats on both cost and ``error``."""
+    order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'], error(rows[i])))
     front, best = [], np.inf
     for i in order:
-        if rows[i]['hem_rms_m'] < best:
+        if error(rows[i]) < best:
             front.append(i)
-            best = rows[i]['hem_rms_m']
+            best = error(rows[i])
     return front
+
+
+def _gs_error(row):
+    return row['vs_gs']['hem_rms_m']
 
 
 def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jacket',
@@ -94,21 +109,31 @@ def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jac
     skeleton = load_shipped_character()
     fabric = load_fabric(fabric_name)
     rig = rig_at_grid(skeleton, 9, 12)
-    ref_method = replace(accuracy.REFERENCE, sim_rate=960.0, iterations=32) if quick \
-        else accuracy.REFERENCE
+    ref_method, gs_method = reference_methods(quick)
     out = {'fabric': fabric_name, 'quick': quick, 'clip_seconds': seconds,
-           'reference': ref_method.label, 'default': SHIPPED.label, 'clips': {}}
+           'reference': ref_method.label, 'gs_reference': gs_method.label,
+           'default': SHIPPED.label, 'clips': {}}
     for clip in clips:
         inputs = accuracy.clip_inputs(skeleton, clip, seconds)
-        say(f'{clip}: reference ({ref_method.label}) and its Richardson check')
+        say(f'{clip}: references ({ref_method.label}; {gs_method.label}) and their checks')
         ref, richardson = accuracy.reference(skeleton, rig, fabric, inputs, ref_method)
+        gs_ref, gs_richardson, gs_check = accuracy.reference(skeleton, rig, fabric, inputs,
+                                                             gs_method, keep_check=True)
         rows = []
         for method in sweep(quick) + auto_methods(quick):
             trace = accuracy.run(skeleton, rig, fabric, method, inputs)
-            rows.append(accuracy.metrics(trace, ref))
-        for i in pareto_front([r for r in rows if not r['tolerance_m']]):
-            rows[i]['pareto'] = True
-        out['clips'][clip] = {'richardson': richardson, 'rows': rows}
+            rows.append(accuracy.metrics(trace, ref, gs_ref))
+        fixed = [i for i, r in enumerate(rows) if not r['tolerance_m']]
+        for i in pareto_front([rows[i] for i in fixed]):
+            rows[fixed[i]]['pareto'] = True
+        for i in pareto_front([rows[i] for i in fixed], _gs_error):
+            rows[fixed[i]]['pareto_gs'] = True
+        out['clips'][clip] = {'richardson': richardson, 'gs_richardson': gs_richardson,
+                              'references_apart': accuracy.compare(gs_ref, ref),
+                              'gs_convergence': accuracy.convergence(
+                                  skeleton, rig, fabric, inputs, gs_method, best=gs_check,
+                                  **(QUICK_CONVERGENCE if quick else {})),
+                              'rows': rows}
         say(f'{clip}: {len(rows)} runs')
     out['pendulum'] = [accuracy.pendulum(skeleton, rig, fabric, rate, theta)
                        for rate in (PENDULUM[0][1:2] if quick else PENDULUM[0])
@@ -165,29 +190,47 @@ def write(results, out_dir):
 def markdown(results):
     lines = ['# jacket_cloth bench', '',
              f'Fabric `{results["fabric"]}`, clips of {results["clip_seconds"]} s at 60 Hz '
-             f'JointState. Reference: {results["reference"]}, float64. Default: '
+             f'JointState. References, float64: XPBD\'s model ({results["reference"]}) and '
+             f'the article\'s Gauss-Seidel model ({results["gs_reference"]}). Default: '
              f'{results["default"]}. Cost: measured CPU time of `process()` per simulated '
-             'second on this machine (ms/s). Errors against the reference (mm). Strain: worst '
+             'second on this machine (ms/s). Errors against the XPBD reference (mm), and hem '
+             'RMS against the Gauss-Seidel one (vs GS). Strain: worst '
              '|l/L - 1| of simulated edges (%). Energy: mean kinetic energy / the reference\'s.',
              '']
     for clip, data in results['clips'].items():
-        r = data['richardson']
+        r, g, apart = data['richardson'], data['gs_richardson'], data['references_apart']
+        conv = data['gs_convergence']
         lines += [f'## {clip}', '',
-                  f'Reference vs half its step (Richardson): hem RMS {_mm(r["hem_rms_m"])} mm, '
-                  f'max {_mm(r["hem_max_m"])} mm; hood RMS {_mm(r["hood_rms_m"])} mm.', '',
+                  f'XPBD reference vs half its step (Richardson): hem RMS {_mm(r["hem_rms_m"])} '
+                  f'mm, max {_mm(r["hem_max_m"])} mm; hood RMS {_mm(r["hood_rms_m"])} mm. '
+                  f'Gauss-Seidel reference vs half its step and twice its sweeps: hem RMS '
+                  f'{_mm(g["hem_rms_m"])} mm, max {_mm(g["hem_max_m"])} mm; every vertex RMS '
+                  f'{_mm(g["cloth_rms_m"])} mm.', '',
+                  f'The two references apart: every vertex RMS {apart["cloth_rms_m"] * 100:.2f} '
+                  f'cm, max {apart["cloth_max_m"] * 100:.2f} cm; hem RMS '
+                  f'{apart["hem_rms_m"] * 100:.2f} cm, max {apart["hem_max_m"] * 100:.2f} cm.', '',
+                  f'Gauss-Seidel convergence, against {conv["against"]} (hem RMS / every vertex '
+                  'RMS, mm): sweeps at the reference\'s rate '
+                  + ', '.join(f'{c["iterations"]}: {_mm(c["hem_rms_m"])} / '
+                              f'{_mm(c["cloth_rms_m"])}' for c in conv['sweeps'])
+                  + '; rates at its sweeps '
+                  + ', '.join(f'{c["sim_rate"]:g} Hz: {_mm(c["hem_rms_m"])} / '
+                              f'{_mm(c["cloth_rms_m"])}' for c in conv['rates']) + '.', '',
                   '| method | cost ms/s | sweeps/step | hem RMS | hem max | hood RMS | hood max '
-                  '| vertical % | horizontal % | shear % | inside mm | energy | Pareto |',
-                  '|---' * 13 + '|']
+                  '| hem RMS vs GS | vertical % | horizontal % | shear % | inside mm | energy '
+                  '| Pareto (XPBD / GS ref) |',
+                  '|---' * 14 + '|']
         for row in sorted(data['rows'], key=lambda x: x['cost_ms_per_s']):
             mark = ' (default)' if row['label'] == results['default'] else ''
             lines.append(
                 f'| {row["label"]}{mark} | {row["cost_ms_per_s"]:.1f} | '
                 f'{row["sweeps_per_step"]:.1f} | {_mm(row["hem_rms_m"])} | '
                 f'{_mm(row["hem_max_m"])} | {_mm(row["hood_rms_m"])} | {_mm(row["hood_max_m"])} | '
-                f'{row["vertical_strain_max"] * 100:.1f} | '
+                f'{_mm(row["vs_gs"]["hem_rms_m"])} | {row["vertical_strain_max"] * 100:.1f} | '
                 f'{row["horizontal_strain_max"] * 100:.1f} | {row["shear_strain_max"] * 100:.1f} '
                 f'| {_mm(row["inside_max_m"])} | {row["energy_ratio"]:.2f} | '
-                f'{"yes" if row.get("pareto") else ""} |')
+                f'{"yes" if row.get("pareto") else ""} / '
+                f'{"yes" if row.get("pareto_gs") else ""} |')
         lines.append('')
     lines += ['## Hood pendulum (M8) against T = 4 sqrt(L/g) K(sin(theta/2))', '',
               '| rate Hz | released at deg | first-cycle amplitude deg | period s | exact s | '
@@ -219,30 +262,36 @@ COLOURS = {'GS': 'tab:gray', 'GS+hard_pass': 'tab:blue', 'GS+tethers': 'tab:gree
            'XPBD': 'tab:orange', 'XPBD+hard_pass': 'tab:red'}
 
 
-def _pareto_axes(ax, clip, data, default_label):
+# Each chart's reference: (its name, the row's hem error, its Pareto mark, its own check).
+REFERENCES = {'xpbd': ('XPBD', lambda r: r['hem_rms_m'], 'pareto', 'richardson'),
+              'gs': ('Gauss-Seidel', _gs_error, 'pareto_gs', 'gs_richardson')}
+
+
+def _pareto_axes(ax, clip, data, default_label, which='xpbd'):
+    name, error, mark, check = REFERENCES[which]
     rows = data['rows']
     for family, colour in COLOURS.items():
         pts = [r for r in rows if r['method'] == family and not r['tolerance_m']]
         if pts:
-            ax.scatter([r['cost_ms_per_s'] for r in pts], [r['hem_rms_m'] * 1e3 for r in pts],
+            ax.scatter([r['cost_ms_per_s'] for r in pts], [error(r) * 1e3 for r in pts],
                        s=14, color=colour, label=family, alpha=0.8)
     auto = [r for r in rows if r['tolerance_m']]
     if auto:
-        ax.scatter([r['cost_ms_per_s'] for r in auto], [r['hem_rms_m'] * 1e3 for r in auto],
+        ax.scatter([r['cost_ms_per_s'] for r in auto], [error(r) * 1e3 for r in auto],
                    marker='s', s=22, facecolors='none', edgecolors='k', label='auto (tolerance)')
-    front = sorted((r for r in rows if r.get('pareto')), key=lambda r: r['cost_ms_per_s'])
-    ax.step([r['cost_ms_per_s'] for r in front], [r['hem_rms_m'] * 1e3 for r in front],
+    front = sorted((r for r in rows if r.get(mark)), key=lambda r: r['cost_ms_per_s'])
+    ax.step([r['cost_ms_per_s'] for r in front], [error(r) * 1e3 for r in front],
             where='post', color='k', lw=0.8, label='Pareto front')
     for r in rows:
         if r['label'] == default_label:
-            ax.scatter([r['cost_ms_per_s']], [r['hem_rms_m'] * 1e3], marker='*', s=160,
+            ax.scatter([r['cost_ms_per_s']], [error(r) * 1e3], marker='*', s=160,
                        color='gold', edgecolors='k', zorder=5, label='shipped default')
-    floor = data['richardson']['hem_rms_m'] * 1e3
+    floor = data[check]['hem_rms_m'] * 1e3
     ax.axhline(max(floor, 1e-3), color='k', ls=':', lw=0.8, label='reference uncertainty')
     ax.set_xscale('log')
     ax.set_yscale('log')
     ax.set_xlabel('cost: CPU ms per simulated second')
-    ax.set_ylabel('hem error, RMS vs converged (mm)')
+    ax.set_ylabel(f'hem error, RMS vs converged {name} (mm)')
     ax.set_title(clip, fontsize=9)
     ax.grid(True, which='both', alpha=0.3)
 
@@ -252,25 +301,52 @@ def charts(results, out_dir):
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     clips = list(results['clips'])
-    for clip in clips:
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
-        _pareto_axes(ax, clip, results['clips'][clip], results['default'])
-        ax.legend(fontsize=7)
+    for which, suffix in (('xpbd', ''), ('gs', '_gs')):
+        for clip in clips:
+            fig, ax = plt.subplots(figsize=(6.4, 4.4))
+            _pareto_axes(ax, clip, results['clips'][clip], results['default'], which)
+            ax.legend(fontsize=7)
+            fig.tight_layout()
+            fig.savefig(os.path.join(out_dir, f'pareto{suffix}_{clip}.png'), dpi=100)
+            plt.close(fig)
+        cols = min(4, len(clips))
+        rows = (len(clips) + cols - 1) // cols
+        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+        for ax, clip in zip(axes.flat, clips):
+            _pareto_axes(ax, clip, results['clips'][clip], results['default'], which)
+            ax.xaxis.label.set_size(7)
+            ax.yaxis.label.set_size(7)
+        for ax in list(axes.flat)[len(clips):]:
+            ax.axis('off')
+        handles, labels = axes.flat[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc='lower right', fontsize=7, ncol=2)
+        fig.suptitle(f'jacket_cloth bench: hem error against measured cost, per clip '
+                     f'({REFERENCES[which][0]} reference)', fontsize=10)
         fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, f'pareto_{clip}.png'), dpi=100)
+        fig.savefig(os.path.join(out_dir, f'pareto{suffix}.png'), dpi=90)
         plt.close(fig)
-    cols = min(4, len(clips))
-    rows = (len(clips) + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
-    for ax, clip in zip(axes.flat, clips):
-        _pareto_axes(ax, clip, results['clips'][clip], results['default'])
-        ax.xaxis.label.set_size(7)
-        ax.yaxis.label.set_size(7)
-    for ax in list(axes.flat)[len(clips):]:
-        ax.axis('off')
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc='lower right', fontsize=7, ncol=2)
-    fig.suptitle('jacket_cloth bench: hem error against measured cost, per clip', fontsize=10)
+    _convergence_chart(results, out_dir, plt)
+
+
+def _convergence_chart(results, out_dir, plt):
+    """gs_convergence.png: the Gauss-Seidel reference's error as sweeps, then rates, grow."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.6))
+    for clip, data in results['clips'].items():
+        conv = data['gs_convergence']
+        a.plot([c['iterations'] for c in conv['sweeps']],
+               [c['cloth_rms_m'] * 1e3 for c in conv['sweeps']], 'o-', label=clip)
+        b.plot([c['sim_rate'] for c in conv['rates']],
+               [c['cloth_rms_m'] * 1e3 for c in conv['rates']], 'o-', label=clip)
+    for ax, what in ((a, 'sweeps per step (at the reference rate)'),
+                     (b, 'rate, Hz (at the reference sweeps)')):
+        ax.set_xscale('log', base=2)
+        ax.set_yscale('log')
+        ax.set_xlabel(what, fontsize=8)
+        ax.set_ylabel('every vertex RMS vs the finer run (mm)', fontsize=8)
+        ax.grid(True, which='both', alpha=0.3)
+    a.legend(fontsize=7)
+    fig.suptitle('Gauss-Seidel reference: error against its finer run (flat = converged)',
+                 fontsize=9)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, 'pareto.png'), dpi=90)
+    fig.savefig(os.path.join(out_dir, 'gs_convergence.png'), dpi=90)
     plt.close(fig)

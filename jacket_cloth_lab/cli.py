@@ -18,11 +18,12 @@ class LabError(Exception):
 
 
 def cmd_stress(args):
-    from .stress import METHODS, stress, write_matrix
-    methods = tuple(args.methods.split(',')) if args.methods else METHODS
-    unknown = [m for m in methods if m not in METHODS]
+    from .stress import METHODS, XPBD_METHODS, stress, write_matrix
+    methods = tuple(args.methods.split(',')) if args.methods else METHODS + XPBD_METHODS
+    known = METHODS + XPBD_METHODS
+    unknown = [m for m in methods if m not in known]
     if unknown:
-        raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(METHODS)})')
+        raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(known)})')
     loop = 3600.0 if args.full else args.loop
     results = stress(methods, loop_s=loop)
     write_matrix(results, args.out, methods)
@@ -34,10 +35,20 @@ def cmd_stress(args):
 
 
 def cmd_bench(args):
-    args.out = args.out or ('out/bench_speed' if args.what == 'speed' else 'out/bench')
+    folders = {'speed': 'out/bench_speed', 'lod': 'out/bench_lod'}
+    args.out = args.out or folders.get(args.what, 'out/bench')
     if args.what == 'speed':
         from .speed import main as speed_main
         return speed_main(args)
+    if args.what == 'lod':
+        from .lod import lod_bench, write as write_lod
+        results = lod_bench(seconds=args.seconds or (1.0 if args.quick else 3.0),
+                            repeats=1 if args.quick else 3)
+        write_lod(results, args.out)
+        far = results['rows'][-1]
+        print(f'{os.path.join(args.out, "lod.md")}: at {far["distance_m"]:g} m, '
+              f'{far["cost_vs_full"]:.2f}x the full-detail cost')
+        return 0
     from .bench import CLIPS, bench, write
     clips = tuple(args.clips.split(',')) if args.clips else (('walk',) if args.quick else CLIPS)
     unknown = [c for c in clips if c not in CLIPS]
@@ -60,13 +71,15 @@ def build_parser():
     sub = p.add_subparsers(dest='command', required=True)
     st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
     st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
-    st.add_argument('--methods', default=None, help='comma-separated (default: all)')
+    st.add_argument('--methods', default=None,
+                    help='comma-separated stretch limits, xpbd+<limit> for XPBD (default: all)')
     st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')
     st.add_argument('--full', action='store_true', help='an hour of looped walk')
     st.set_defaults(func=cmd_stress)
     b = sub.add_parser('bench', help='accuracy against measured cost per clip (or: bench speed)')
-    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed'),
-                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit')
+    b.add_argument('what', nargs='?', default='accuracy', choices=('accuracy', 'speed', 'lod'),
+                   help='accuracy: the Pareto sweep (default); speed: ratios to the limit; '
+                   'lod: cost and error against viewer distance')
     b.add_argument('--out', default=None, help='output folder (default: out/bench[_speed])')
     b.add_argument('--quick', action='store_true', help='a few methods on one short clip')
     b.add_argument('--clips', default=None, help='comma-separated motion clips')

@@ -39,6 +39,8 @@ RECOVER_M = 0.15
 RATE = 60.0
 CALM_S = 1.5
 METHODS = StretchLimit.names()           # how the vertical stretch is removed (none first)
+# The same with XPBD as the solver ('xpbd+<stretch_limit>'); the names above are Gauss-Seidel's.
+XPBD_METHODS = tuple(f'xpbd+{m}' for m in METHODS)
 
 
 @dataclass
@@ -133,7 +135,8 @@ def _flipped_share(sim):
 def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
     """Judge one method on one scene: 'holds' or how it failed, and the figures."""
     fabric = load_fabric(fabric_name).with_values(**scene.fabric)
-    params = SimParams(stretch_limit=method, **scene.params)
+    solver, _, limit = method.rpartition('+')
+    params = SimParams(stretch_limit=limit, solver=solver or 'gauss_seidel', **scene.params)
     sim = JacketSimulation(skeleton, rig, fabric, params)
     nonfinite = 0
     worst_offset = 0.0

@@ -44,3 +44,10 @@ def test_stress_command_writes_the_matrix(tmp_path, capsys):
     assert (out / 'stress.png').stat().st_size > 5_000
     assert main(['stress', '--out', str(out), '--methods', 'glue']) == 1
     assert 'unknown method' in capsys.readouterr().err
+
+
+def test_xpbd_with_the_hard_pass_holds_where_methods_break(skeleton, rig, stress_scenes):
+    # The stress matrix judges the other solver too (issue 19 item 4: the default re-decided).
+    for name in ('step 10x too large (12 Hz)', 'thigh through the cloth at 30 rad/s'):
+        verdict, figures = run_scene(skeleton, rig, stress_scenes[name], 'xpbd+hard_pass')
+        assert verdict == 'holds', (name, figures)

@@ -46,6 +46,8 @@ def test_bench_quick_writes_tables_and_pareto_charts(quick_bench):
     assert '## walk' in text and '(default)' in text and 'Hanging chain' in text
     assert (out / 'pareto_walk.png').stat().st_size > 10_000
     assert (out / 'pareto.png').stat().st_size > 10_000
+    assert (out / 'pareto_gs.png').stat().st_size > 10_000
+    assert (out / 'gs_convergence.png').stat().st_size > 10_000
     rows = results['clips']['walk']['rows']
     assert any(r.get('pareto') for r in rows)
     assert all(r['cost_ms_per_s'] > 0 and np.isfinite(r['hem_rms_m']) for r in rows)
@@ -138,3 +140,21 @@ def test_rig_at_another_grid_covers_the_same_jacket(skeleton, rig):
 def test_bench_rejects_an_unknown_clip(capsys):
     assert main(['bench', '--quick', '--clips', 'moonwalk', '--out', '/tmp/nowhere']) == 1
     assert 'unknown clip' in capsys.readouterr().err
+
+
+def test_the_gauss_seidel_reference_is_converged_and_not_the_xpbd_one(quick_bench):
+    # The article's model run with twice the sweeps at half the step moves the cloth far less
+    # than the two references differ, and less as sweeps and rates grow (issue 19 item 4).
+    _, results = quick_bench
+    walk = results['clips']['walk']
+    own = walk['gs_richardson']
+    apart = walk['references_apart']
+    assert own['cloth_rms_m'] < 0.002 and own['hem_rms_m'] < 0.003
+    assert apart['cloth_rms_m'] > 2 * own['cloth_rms_m']
+    assert apart['cloth_max_m'] > 0.005
+    conv = walk['gs_convergence']
+    for series in (conv['sweeps'], conv['rates']):
+        errors = [c['cloth_rms_m'] for c in series]
+        assert errors == sorted(errors, reverse=True), errors
+    assert all('vs_gs' in r for r in walk['rows'])
+    assert any(r.get('pareto_gs') for r in walk['rows'])

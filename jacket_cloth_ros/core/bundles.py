@@ -153,6 +153,10 @@ class Tuning(NamedTuple):
     wind: np.ndarray                # (3,) world frame
     gust: float
     gust_period: float
+    # Level of detail (core/lod.py): share of the skinned pose at the start and end of one
+    # input's steps; 1 at both: no cloth step runs.
+    skin_from: float = 0.0
+    skin_to: float = 0.0
 
 
 class ClothState(NamedTuple):

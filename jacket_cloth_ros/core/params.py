@@ -56,6 +56,13 @@ class SimParams:
     teleport_angle_deg: float = _param(
         90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
 
+    lod_distances: tuple = _param(
+        (10.0, 30.0), 'm, level of detail by the viewer\'s distance [near, far]: beyond near '
+        'half the sweeps, beyond far only the bone layer and the hood (no viewer: full detail)',
+        0.0, 10000.0)
+    lod_blend_s: float = _param(0.5, 's over which a change to or from the far level blends',
+                                0.01, 5.0)
+
     def __post_init__(self) -> None:
         for name, value in list(self.__dict__.items()):
             reason = check_sim_value(name, value)

@@ -25,6 +25,7 @@ from .bundles import (
     ClothState, Motion, StepControl, StepOutput, Tuning, flags, floats, model_of, posed_like)
 from .inputs import InputParser, InputRejected, Sample, root_jump
 from .kernel_cache import FixedTypes
+from .lod import LevelOfDetail
 from .measures import edge_strain
 from .params import SimParams
 
@@ -119,6 +120,7 @@ class StepReport:
     limited_vertices: int = 0          # M11 vertex-steps moved back to their bound
     sweeps: int = 0                    # relaxation sweeps run (over all steps and substeps)
     substeps: int = 0                  # substeps run (over all steps)
+    lod_level: int = 0                 # level of detail of these steps (core/lod.py)
 
 
 class JacketSimulation:
@@ -148,6 +150,7 @@ class JacketSimulation:
         self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         self.model = model_of(skeleton, rig)
+        self.lod = LevelOfDetail()
         # Colliders and M11 references where the last step ended: substeps start from them.
         self._started = np.zeros(1, dtype=np.bool_)
         self._before = posed_like(self.model.colliders, n)
@@ -358,7 +361,10 @@ class JacketSimulation:
             self.t_sim += (n - cap) * self.dt_ns
             n = cap
         if n > 0:
-            stats = self._run_steps(a, sample, n)
+            plan = self.lod.plan(sample.root[:3, 3], self.params.lod_distances,
+                                 self.params.lod_blend_s, n, self.dt_ns * 1e-9)
+            report.lod_level = plan.level
+            stats = self._run_steps(a, sample, n, LevelOfDetail.tuning(self.tuning, plan))
             report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
             report.limited_vertices += int(stats[step_kernel.LIMITED])
             report.sweeps += int(stats[step_kernel.SWEEPS])
@@ -368,7 +374,14 @@ class JacketSimulation:
         self.last = sample
         return n <= 0 or not stats[step_kernel.NON_FINITE]
 
-    def _run_steps(self, a, b, n):
+    def set_viewer(self, position: npt.ArrayLike | None) -> None:
+        """Set the viewer's world position for the level of detail (None: full detail).
+
+        An input like a JointState: from the next one on, until set again.
+        """
+        self.lod.set_viewer(position)
+
+    def _run_steps(self, a, b, n, tuning=None):
         """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
 
         The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
@@ -383,7 +396,8 @@ class JacketSimulation:
                         floats(a.root[:3, 3]),
                         floats(b.root[:3, 3]), int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns),
                         int(self.t_sim), int(self.dt_ns), int(n))
-        self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
+        tuning = self.tuning if tuning is None else tuning
+        self.t_sim = self._advance_kernel(self.model, tuning, self.state, self._before,
                                           motion, out)
         self.links = out.links
         self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,

@@ -160,6 +160,7 @@ def advance(model, tuning, state, before, motion, out):
                 np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
                 np.empty((nv, 3)))
     damp = np.empty(nv)
+    ride = np.empty((nv, 3))
     damp_for = 0
     contact_damp = 0.0
     hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
@@ -179,6 +180,14 @@ def advance(model, tuning, state, before, motion, out):
         for k in range(3):
             new_root[k, 3] = motion.pos_a[k] + w * (motion.pos_b[k] - motion.pos_a[k])
         forward_kinematics(model.skeleton, q, links)
+        # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
+        # vertex's offset from its column's top before the world share moves it.
+        skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
+            / motion.steps
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    ride[i, k] = x[i, k] - x[i % cols, k]
         # M14: the character moved through the world by `delta` (old local -> new local); a
         # world-space cloth would stay behind by that much. Feel only `world_share` of it.
         relative_move(new_root, root, delta)
@@ -227,24 +236,52 @@ def advance(model, tuning, state, before, motion, out):
             lost_per_each(tuning.damping, e, damp)
             contact_damp = lost_per(tuning.contact_damping, e)
             damp_for = substeps
-        if not state.started[0]:        # no step before: substeps start where this one ends
+        # Beyond the far distance the cloth rides on its pinned top row with its last shape
+        # and no cloth step runs; a change blends the simulated and the riding cloth over the
+        # steps instead of popping.
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    ride[i, k] += top[i % cols, k]
+        if skin >= 1.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    xp[i, k] = x[i, k]
+                    x[i, k] = ride[i, k]
             _copy_posed(now, before)
-        deepest, limited, sweeps = cloth_step(
-            cloth, colliders, tuning, state,
-            StepControl(acc, damp, contact_damp, dt, substeps, pin_from), now, before)
-        # Where the next step's substeps start from: this step's end.
-        _copy_posed(now, before)
-        state.started[0] = True
-        stats[DEEPEST] = max(stats[DEEPEST], deepest)
-        stats[LIMITED] += limited
-        stats[SWEEPS] += sweeps
-        stats[SUBSTEPS] += substeps
+            state.started[0] = True
+        else:
+            _simulate(model, tuning, state, before, now, acc, damp, contact_damp, dt, substeps,
+                      pin_from, stats)
+            if skin > 0.0:
+                for i in range(cols, nv):
+                    for k in range(3):
+                        x[i, k] += skin * (ride[i, k] - x[i, k])
         for k in range(3):
             hood_acc[k] = gravity_l[k] + tuning.hood_wind_scale * wind_l[k]
         hood_step(links, cloth, hood_p, hood_pp, hood_acc, dt, hood_damp)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         stats[NON_FINITE] = 1.0
     return t_sim
+
+
+@njit(cache=True)
+def _simulate(model, tuning, state, before, now, acc, damp, contact_damp, dt, substeps, pin_from,
+              stats):
+    """One cloth step (kernel.cloth_step, the colliders already posed in `now`) and its stats."""
+    colliders, cloth = model.colliders, model.cloth
+    if not state.started[0]:        # no step before: substeps start where this one ends
+        _copy_posed(now, before)
+    deepest, limited, sweeps = cloth_step(
+        cloth, colliders, tuning, state,
+        StepControl(acc, damp, contact_damp, dt, substeps, pin_from), now, before)
+    # Where the next step's substeps start from: this step's end.
+    _copy_posed(now, before)
+    state.started[0] = True
+    stats[DEEPEST] = max(stats[DEEPEST], deepest)
+    stats[LIMITED] += limited
+    stats[SWEEPS] += sweeps
+    stats[SUBSTEPS] += substeps
 
 
 @njit(cache=True)

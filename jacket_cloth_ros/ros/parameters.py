@@ -115,7 +115,9 @@ def check_value(name: str, value: object) -> str:
 
 def sim_params_from(values: dict) -> SimParams:
     sim = {k: values[k] for k in SIM_KEYS}
-    sim['wind'] = tuple(float(w) for w in sim['wind'])
+    for name, f in SIM_FIELDS.items():         # arrays (wind, lod_distances) as tuples
+        if f.type is tuple:
+            sim[name] = tuple(float(w) for w in sim[name])
     return SimParams(**sim)
 
 

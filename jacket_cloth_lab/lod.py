@@ -1,0 +1,100 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth_lab bench lod``: cost and error of the level of detail against distance.
+
+One clip per run with the viewer held at a distance from the character (core/lod.py); cost is
+the measured CPU time of ``process()`` per simulated second, error the cloth's against the
+same clip at full detail (no viewer), both measured in one process, side by side.
+"""
+
+import json
+import os
+import time
+
+import numpy as np
+
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+from jacket_cloth_ros.core.skeleton import load_shipped_character
+from .accuracy import CLIP_RATE, clip_inputs
+
+DISTANCES = (None, 5.0, 12.0, 20.0, 35.0, 60.0)      # m; None: no viewer, full detail
+REPEATS = 3                                             # interleaved, the median kept
+
+
+def _run(skeleton, rig, fabric, inputs, distance):
+    sim = JacketSimulation(skeleton, rig, fabric, SimParams())
+    joints = len(skeleton.joint_names)
+    xs, spent, levels = [], [], []
+    for stamp, names, pos in inputs:
+        root = np.asarray(pos[joints:joints + 3], dtype=float)
+        sim.set_viewer(None if distance is None else root + [distance, 0.0, 0.0])
+        t0 = time.thread_time_ns()
+        report = sim.process(stamp, names, pos)
+        spent.append(time.thread_time_ns() - t0)
+        xs.append(sim.x.copy())
+        levels.append(report.lod_level)
+    return np.array(xs), np.array(spent[1:]), levels
+
+
+def lod_bench(clip='walk', seconds=3.0, distances=DISTANCES, repeats=REPEATS):
+    """Return per distance: level reached, cost (ms/s and against full detail), error (m)."""
+    skeleton = load_shipped_character()
+    rig = load_rig(skeleton)
+    fabric = load_fabric('tweed_jacket')
+    inputs = clip_inputs(skeleton, clip, seconds)
+    costs = {d: [] for d in distances}
+    shapes, levels = {}, {}
+    for _ in range(repeats):
+        for d in distances:
+            xs, spent, lv = _run(skeleton, rig, fabric, inputs, d)
+            costs[d].append(float(np.median(spent)) * 1e-6 * CLIP_RATE)
+            shapes[d], levels[d] = xs, lv
+    full = shapes[None]
+    out = []
+    for d in distances:
+        err = np.linalg.norm(shapes[d] - full, axis=2)
+        out.append({'distance_m': d, 'level': max(levels[d]),
+                    'cost_ms_per_s': float(np.median(costs[d])),
+                    'cost_vs_full': float(np.median(costs[d]) / np.median(costs[None])),
+                    'cloth_rms_m': float(np.sqrt((err ** 2).mean())),
+                    'cloth_max_m': float(err.max())})
+    return {'clip': clip, 'seconds': seconds, 'lod_distances': list(SimParams().lod_distances),
+            'rows': out}
+
+
+def write(results, out_dir):
+    """lod.json, lod.md and lod.png."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, 'lod.json'), 'w', encoding='utf-8') as f:
+        json.dump(results, f, indent=1)
+    lines = [f'# Level of detail against distance ({results["clip"]}, {results["seconds"]} s, '
+             f'lod_distances {results["lod_distances"]})', '',
+             '| viewer at m | level | cost ms/s | cost vs full | cloth RMS vs full cm '
+             '| max cm |', '|---' * 6 + '|']
+    for r in results['rows']:
+        d = 'none' if r['distance_m'] is None else f'{r["distance_m"]:g}'
+        lines.append(f'| {d} | {r["level"]} | {r["cost_ms_per_s"]:.1f} | '
+                     f'{r["cost_vs_full"]:.2f} | {r["cloth_rms_m"] * 100:.2f} | '
+                     f'{r["cloth_max_m"] * 100:.2f} |')
+    with open(os.path.join(out_dir, 'lod.md'), 'w', encoding='utf-8') as f:
+        f.write('\n'.join(lines) + '\n')
+    rows = [r for r in results['rows'] if r['distance_m'] is not None]
+    fig, a = plt.subplots(figsize=(6.4, 3.6))
+    dist = [r['distance_m'] for r in rows]
+    a.plot(dist, [r['cost_vs_full'] for r in rows], 'o-', color='tab:blue')
+    a.set_xlabel('viewer distance (m)')
+    a.set_ylabel('cost / full detail', color='tab:blue')
+    b = a.twinx()
+    b.plot(dist, [r['cloth_rms_m'] * 100 for r in rows], 's--', color='tab:red')
+    b.set_ylabel('cloth RMS vs full detail (cm)', color='tab:red')
+    for x in results['lod_distances']:
+        a.axvline(x, color='k', ls=':', lw=0.8)
+    a.set_title(f'Level of detail: cost and error against distance ({results["clip"]})',
+                fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, 'lod.png'), dpi=100)
+    plt.close(fig)
