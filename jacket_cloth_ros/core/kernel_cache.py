@@ -30,7 +30,7 @@ CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
     'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py',
-    'core/inputs.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
+    'core/inputs.py', 'core/crowd_kernel.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
 
 
 @functools.lru_cache(maxsize=None)

@@ -105,6 +105,15 @@ class Colliders:
 
 
 @dataclass
+class StepJob:
+    """One input's compiled steps, prepared (JacketSimulation.prepare) and not yet run."""
+
+    sample: Sample             # the input they run to
+    steps: int
+    motion: Motion
+
+
+@dataclass
 class StepReport:
     """What one processed sample did, for logging, diagnostics and output."""
 
@@ -292,15 +301,36 @@ class JacketSimulation:
     def process(self, stamp_ns: int, names: Sequence[str],
                 positions: npt.ArrayLike) -> StepReport:
         """Advance the simulation to ``stamp_ns`` with one JointState's content."""
-        report = StepReport(stamp_ns)
         started = time.perf_counter_ns()
+        report, job = self.prepare(stamp_ns, names, positions)
+        if job is not None:
+            out = self.step_output()
+            try:
+                self.t_sim = self._advance_kernel(self.model, self.tuning, self.state,
+                                                  self._before, job.motion, out)
+                ran = True
+            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
+                ran = False
+            self.complete(report, job, out, ran)
+        report.step_cost_ns = time.perf_counter_ns() - started
+        return report
+
+    def prepare(self, stamp_ns: int, names: Sequence[str],
+                positions: npt.ArrayLike) -> tuple[StepReport, 'StepJob | None']:
+        """Do an input's work before its compiled steps; return the report and the steps to run.
+
+        No steps (a refused input, a reset, no step due): the input is done and the job None.
+        Else run ``job.motion`` through step_kernel.advance (alone, or in a crowd's one call)
+        and hand its outcome to :meth:`complete`.
+        """
+        report = StepReport(stamp_ns)
         try:
             self._check_stamp(stamp_ns, report)
             sample = self.parser.parse(stamp_ns, names, positions)
         except InputRejected as e:
             report.accepted = False
             report.warnings.append((e.code, str(e)))
-            return report
+            return report, None
         report.warnings += sample.warnings
         if not report.reset and self.last is None:
             report.reset = 'first sample'
@@ -308,17 +338,45 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             self._reset(sample)
-            finite = np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()
-        else:
-            try:
-                finite = self._advance(sample, report)
-            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
-                finite = False
+            if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
+                report.reset = 'non-finite cloth state'
+                self._reset(sample)
+            return report, None
+        a = self.last
+        n = (sample.stamp_ns - self.t_sim) // self.dt_ns
+        cap = self.params.max_steps_per_input
+        if n > cap:
+            report.skipped_steps = n - cap
+            self.overruns += 1
+            self.t_sim += (n - cap) * self.dt_ns
+            n = cap
+        if n <= 0:
+            report.steps = n
+            self.steps_total += n
+            self.last = sample
+            return report, None
+        return report, StepJob(sample, int(n), self._motion(a, sample, n))
+
+    def complete(self, report: StepReport, job: 'StepJob', out: StepOutput, ran: bool) -> None:
+        """Take a job's steps into the simulation; a non-finite cloth is reset.
+
+        ``out`` is what the steps left; ``ran`` is False if they stopped on a division by zero.
+        """
+        finite = ran
+        if ran:
+            self._take_output(out)
+            stats = out.stats
+            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
+            report.limited_vertices += int(stats[step_kernel.LIMITED])
+            report.sweeps += int(stats[step_kernel.SWEEPS])
+            report.substeps += int(stats[step_kernel.SUBSTEPS])
+            report.steps = job.steps
+            self.steps_total += job.steps
+            self.last = job.sample
+            finite = not stats[step_kernel.NON_FINITE]
         if not finite:
             report.reset = 'non-finite cloth state'
-            self._reset(sample)
-        report.step_cost_ns = time.perf_counter_ns() - started
-        return report
+            self._reset(job.sample)
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:
@@ -343,26 +401,27 @@ class JacketSimulation:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
 
-    def _advance(self, sample, report):
-        """Run the steps up to ``sample``; False if they left a non-finite cloth or hood."""
-        a = self.last
-        n = (sample.stamp_ns - self.t_sim) // self.dt_ns
-        cap = self.params.max_steps_per_input
-        if n > cap:
-            report.skipped_steps = n - cap
-            self.overruns += 1
-            self.t_sim += (n - cap) * self.dt_ns
-            n = cap
-        if n > 0:
-            stats = self._run_steps(a, sample, n)
-            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
-            report.limited_vertices += int(stats[step_kernel.LIMITED])
-            report.sweeps += int(stats[step_kernel.SWEEPS])
-            report.substeps += int(stats[step_kernel.SUBSTEPS])
-        report.steps = n
-        self.steps_total += n
-        self.last = sample
-        return n <= 0 or not stats[step_kernel.NON_FINITE]
+    def step_output(self) -> StepOutput:
+        """Return new arrays for what step_kernel.advance leaves (the last step's pose, stats)."""
+        layer = self.rig.layer
+        k = len(layer.names) if layer else 0
+        return StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
+                          np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
+                          np.zeros(step_kernel.STAT_SLOTS))
+
+    def _motion(self, a, b, n):
+        """Return the Motion of ``n`` fixed steps from sample ``a`` towards ``b``."""
+        return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
+                      floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
+                      int(b.stamp_ns - a.stamp_ns), int(self.t_sim), int(self.dt_ns), int(n))
+
+    def _take_output(self, out):
+        """The last step's pose and layer bones as the steps left them in ``out``."""
+        layer = self.rig.layer
+        self.links = out.links
+        self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
+                                            out.layer_pos, out.layer_tips, out.below)
+                       if layer else None)
 
     def _run_steps(self, a, b, n):
         """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
@@ -370,21 +429,10 @@ class JacketSimulation:
         The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
         and M8 (see step_kernel.advance). Returns its stats.
         """
-        layer = self.rig.layer
-        k = len(layer.names) if layer else 0
-        out = StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
-                         np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
-                         np.zeros(step_kernel.STAT_SLOTS))
-        motion = Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
-                        floats(a.root[:3, 3]),
-                        floats(b.root[:3, 3]), int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns),
-                        int(self.t_sim), int(self.dt_ns), int(n))
+        out = self.step_output()
         self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
-                                          motion, out)
-        self.links = out.links
-        self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
-                                            out.layer_pos, out.layer_tips, out.below)
-                       if layer else None)
+                                          self._motion(a, b, n), out)
+        self._take_output(out)
         return out.stats
 
     @property

@@ -1,0 +1,155 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Many simulations stepped together: one compiled call per round of inputs, in parallel.
+
+Each simulation prepares its input in Python as it does alone (JacketSimulation.prepare);
+the steps of all of them then run in crowd_kernel.advance_crowd, spread over numba's threads;
+each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
+"""
+
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numba
+import numpy as np
+from numba import typed
+
+from . import crowd_kernel
+from .bundles import CrowdSlot, StepOutput
+from .kernel_cache import FixedTypes
+
+if TYPE_CHECKING:           # for the annotations only
+    from .simulation import JacketSimulation, StepJob
+
+
+def threads_for(wanted: int) -> int:
+    """Return the threads a crowd uses for ``wanted`` (0: one per core numba sees)."""
+    most = numba.config.NUMBA_NUM_THREADS
+    return most if wanted <= 0 else min(int(wanted), most)
+
+
+def threading_layer() -> str:
+    """Return numba's threading layer once a parallel kernel ran (omp, tbb or workqueue).
+
+    Every one of them is safe here: the crowd's kernel is only ever called from one thread
+    (the node's executor, or the replay's loop), and the node never forks.
+    """
+    try:
+        return numba.threading_layer()
+    except ValueError:              # no parallel kernel ran yet
+        return 'not started'
+
+
+class CrowdSteps:
+    """The compiled steps of many simulations, run together.
+
+    ``threads``: how many threads the call spreads over (0: all cores, as NUMBA_NUM_THREADS).
+    """
+
+    def __init__(self, threads: int = 0):
+        self.threads = threads_for(threads)
+        self.sims = []
+        self._slots = typed.List()
+        self._keys = []
+        self._call = None
+
+    def add(self, sim: 'JacketSimulation') -> int:
+        """Add a simulation; returns its index."""
+        self.sims.append(sim)
+        slot, key = self._slot(sim)
+        self._slots.append(slot)
+        self._keys.append(key)
+        if self._call is None:      # typed once: every slot has the same types
+            self._call = FixedTypes(crowd_kernel.advance_crowd)
+        return len(self.sims) - 1
+
+    @staticmethod
+    def _key(sim):
+        return (sim.tuning, sim.x, sim.xp, sim.contact, sim.hood_p, sim.hood_pp, sim.root,
+                sim._lam, sim._started)
+
+    def _slot(self, sim):
+        """A slot on the simulation's own arrays, with motion and output arrays of its own."""
+        state = sim.state           # coerces the arrays first: the key holds the coerced ones
+        q = len(sim.skeleton.joint_names)
+        out = sim.step_output()
+        slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
+                         np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
+                         np.zeros(5, dtype=np.int64), out)
+        return slot, self._key(sim)
+
+    def _current(self, index):
+        """Return the slot of simulation ``index``, made again if one of its arrays changed.
+
+        A reset makes new state arrays, a live parameter change a new Tuning.
+        """
+        sim = self.sims[index]
+        key = self._key(sim)
+        if any(a is not b for a, b in zip(key, self._keys[index])):
+            slot, key = self._slot(sim)
+            self._slots[index] = slot
+            self._keys[index] = key
+        return self._slots[index]
+
+    def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, bool]]:
+        """Run each (simulation index, prepared job) in one call; returns (output, ran) each.
+
+        At most one job per simulation. Each output is that simulation's own arrays, written
+        again by its next job: JacketSimulation.complete takes them at once.
+        """
+        if not jobs:
+            return []
+        active = np.empty(len(jobs), dtype=np.int64)
+        for j, (index, job) in enumerate(jobs):
+            slot = self._current(index)
+            m = job.motion
+            slot.q_a[:] = m.q_a
+            slot.q_b[:] = m.q_b
+            slot.quat_a[:] = m.quat_a
+            slot.quat_b[:] = m.quat_b
+            slot.pos_a[:] = m.pos_a
+            slot.pos_b[:] = m.pos_b
+            slot.clock[:] = (m.stamp_a, m.span, m.t_sim, m.dt_ns, m.steps)
+            slot.out.stats[:] = 0.0
+            active[j] = index
+        ran = np.zeros(len(jobs), dtype=np.bool_)
+        numba.set_num_threads(self.threads)
+        self._call(self._slots, active, ran)
+        out = []
+        for j, (index, _) in enumerate(jobs):
+            slot = self._slots[index]
+            self.sims[index].t_sim = int(slot.clock[2])
+            out.append((slot.out, bool(ran[j])))
+        return out
+
+
+def stepped(steps: CrowdSteps, inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]]) -> list:
+    """Process inputs (simulation index, stamp ns, names, positions) as rounds of one call.
+
+    A round takes at most one input per simulation, in their order. Returns each input's
+    StepReport, in the inputs' order; ``step_cost_ns`` is its round's wall time.
+    """
+    sims = steps.sims
+    reports = [None] * len(inputs)
+    pending = list(range(len(inputs)))
+    while pending:
+        seen, this, later = set(), [], []
+        for k in pending:
+            (later if inputs[k][0] in seen else this).append(k)
+            seen.add(inputs[k][0])
+        started = time.perf_counter_ns()
+        jobs = []
+        for k in this:
+            index, stamp, names, positions = inputs[k]
+            reports[k], job = sims[index].prepare(stamp, names, positions)
+            if job is not None:
+                jobs.append((k, index, job))
+        results = steps.run([(index, job) for _, index, job in jobs])
+        for (k, index, job), (out, ran) in zip(jobs, results):
+            sims[index].complete(reports[k], job, out, ran)
+        cost = time.perf_counter_ns() - started
+        for k in this:
+            reports[k].step_cost_ns = cost
+        pending = later
+    return reports
+
