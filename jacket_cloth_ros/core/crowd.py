@@ -52,6 +52,7 @@ class CrowdSteps:
         self._slots = typed.List()
         self._keys = []
         self._call = None
+        self.calls = 0              # compiled calls made (one per round of inputs)
 
     def add(self, sim: 'JacketSimulation') -> int:
         """Add a simulation; returns its index."""
@@ -69,7 +70,7 @@ class CrowdSteps:
                 sim._lam, sim._started)
 
     def _slot(self, sim):
-        """A slot on the simulation's own arrays, with motion and output arrays of its own."""
+        """Make a slot on the simulation's own arrays, with motion and output arrays of its own."""
         state = sim.state           # coerces the arrays first: the key holds the coerced ones
         q = len(sim.skeleton.joint_names)
         out = sim.step_output()
@@ -115,6 +116,7 @@ class CrowdSteps:
         ran = np.zeros(len(jobs), dtype=np.bool_)
         numba.set_num_threads(self.threads)
         self._call(self._slots, active, ran)
+        self.calls += 1
         out = []
         for j, (index, _) in enumerate(jobs):
             slot = self._slots[index]
@@ -123,7 +125,8 @@ class CrowdSteps:
         return out
 
 
-def stepped(steps: CrowdSteps, inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]]) -> list:
+def stepped(steps: CrowdSteps,
+            inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]]) -> list:
     """Process inputs (simulation index, stamp ns, names, positions) as rounds of one call.
 
     A round takes at most one input per simulation, in their order. Returns each input's
@@ -152,4 +155,3 @@ def stepped(steps: CrowdSteps, inputs: Sequence[tuple[int, int, Sequence[str], n
             reports[k].step_cost_ns = cost
         pending = later
     return reports
-

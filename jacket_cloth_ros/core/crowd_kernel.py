@@ -36,4 +36,3 @@ def advance_crowd(slots, active, ran):
     """advance_slot for ``slots[active[j]]`` into ``ran[j]``, characters spread over threads."""
     for j in prange(active.shape[0]):
         ran[j] = advance_slot(slots[active[j]])
-

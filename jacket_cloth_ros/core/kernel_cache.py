@@ -118,8 +118,9 @@ def kernels_cached() -> bool:
 
     If not, the next simulation made compiles every kernel, which takes a while.
     """
-    from . import step_kernel
+    from . import crowd_kernel, step_kernel
     try:
-        return bool(step_kernel.advance._cache._cache_file._load_index())
+        return all(bool(k._cache._cache_file._load_index())
+                   for k in (step_kernel.advance, crowd_kernel.advance_crowd))
     except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
         return False

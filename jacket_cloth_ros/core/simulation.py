@@ -416,7 +416,7 @@ class JacketSimulation:
                       int(b.stamp_ns - a.stamp_ns), int(self.t_sim), int(self.dt_ns), int(n))
 
     def _take_output(self, out):
-        """The last step's pose and layer bones as the steps left them in ``out``."""
+        """Take the last step's pose and layer bones as the steps left them in ``out``."""
         layer = self.rig.layer
         self.links = out.links
         self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
