@@ -6,6 +6,7 @@ the steps of all of them then run in crowd_kernel.advance_crowd, spread over num
 each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
 """
 
+import os
 import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -17,6 +18,10 @@ from numba import typed
 from . import crowd_kernel
 from .bundles import CrowdSlot, StepOutput
 from .kernel_cache import FixedTypes
+
+# GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
+# the executor thread and the machine's other processes; read when the pool first starts.
+os.environ.setdefault('OMP_WAIT_POLICY', 'PASSIVE')
 
 if TYPE_CHECKING:           # for the annotations only
     from .simulation import JacketSimulation, StepJob
@@ -50,6 +55,7 @@ class CrowdSteps:
         self.threads = threads_for(threads)
         self.sims = []
         self._slots = typed.List()
+        self._mine = []             # the same slots, read from Python (the typed list boxes)
         self._keys = []
         self._call = None
         self.calls = 0              # compiled calls made (one per round of inputs)
@@ -59,6 +65,7 @@ class CrowdSteps:
         self.sims.append(sim)
         slot, key = self._slot(sim)
         self._slots.append(slot)
+        self._mine.append(slot)
         self._keys.append(key)
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
@@ -88,9 +95,9 @@ class CrowdSteps:
         key = self._key(sim)
         if any(a is not b for a, b in zip(key, self._keys[index])):
             slot, key = self._slot(sim)
-            self._slots[index] = slot
+            self._slots[index] = self._mine[index] = slot
             self._keys[index] = key
-        return self._slots[index]
+        return self._mine[index]
 
     def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, bool]]:
         """Run each (simulation index, prepared job) in one call; returns (output, ran) each.
@@ -115,11 +122,13 @@ class CrowdSteps:
             active[j] = index
         ran = np.zeros(len(jobs), dtype=np.bool_)
         numba.set_num_threads(self.threads)
+        # Characters handed out one at a time: a thread that the host slows takes fewer.
+        numba.set_parallel_chunksize(1)
         self._call(self._slots, active, ran)
         self.calls += 1
         out = []
         for j, (index, _) in enumerate(jobs):
-            slot = self._slots[index]
+            slot = self._mine[index]
             self.sims[index].t_sim = int(slot.clock[2])
             out.append((slot.out, bool(ran[j])))
         return out
