@@ -86,3 +86,43 @@ def test_k_processes_each_run_their_slice_and_together_every_character_once(tmp_
     assert '2 of 5 characters (slice 0 of 2)' in logs[0], logs[0]
     assert '3 of 5 characters (slice 1 of 2)' in logs[1], logs[1]
     assert all(p.returncode == 0 for p in procs)
+
+
+def test_the_launch_file_starts_k_processes_each_with_its_slice(monkeypatch):
+    # Run the launch file's own process list with stand-ins for the launch packages.
+    import importlib.util
+    import types
+
+    class Config:
+        def __init__(self, name):
+            self.name = name
+
+        def perform(self, context):
+            return context[self.name]
+    fakes = {'launch': types.ModuleType('launch'),
+             'launch.actions': types.ModuleType('launch.actions'),
+             'launch.substitutions': types.ModuleType('launch.substitutions'),
+             'launch_ros': types.ModuleType('launch_ros'),
+             'launch_ros.actions': types.ModuleType('launch_ros.actions')}
+    fakes['launch'].LaunchDescription = list
+    fakes['launch.actions'].DeclareLaunchArgument = lambda *a, **k: None
+    fakes['launch.actions'].OpaqueFunction = lambda function: function
+    fakes['launch.substitutions'].LaunchConfiguration = Config
+    fakes['launch_ros.actions'].Node = lambda **k: k
+    for name, module in fakes.items():
+        monkeypatch.setitem(sys.modules, name, module)
+    here = os.path.dirname(os.path.abspath(__file__))
+    spec = importlib.util.spec_from_file_location('crowd_launch', os.path.join(
+        here, '..', 'launch_scripts', 'jacket_cloth_crowd.launch.py'))
+    launch = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(launch)
+    make = launch.generate_launch_description()[-1]
+    context = {'characters': 'crowd.yaml', 'processes': '4', 'threads': '2', 'first': '0',
+               'count': ''}
+    nodes = make(context)
+    assert [n['parameters'][0]['slice_index'] for n in nodes] == [0, 1, 2, 3]
+    assert {n['parameters'][0]['slice_count'] for n in nodes} == {4}
+    assert len({n['name'] for n in nodes}) == 4
+    # On a second machine: processes 2 and 3 of the same 4.
+    nodes = make(dict(context, first='2', count='2'))
+    assert [n['parameters'][0]['slice_index'] for n in nodes] == [2, 3]
