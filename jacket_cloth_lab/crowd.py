@@ -311,3 +311,55 @@ def chart(c, path):
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
+
+
+PICTURE = (('npc1', 'walk', 'tweed_jacket', None), ('npc2', 'run', 'down_jacket', None),
+           ('npc3', 'dodge', 'veil', None), ('npc4', 'idle', 'tweed_jacket', 'mannequin'),
+           ('npc5', 'arms_up', 'down_jacket', None), ('npc6', 'jump', 'tweed_jacket', None))
+
+
+def crowd_picture(png_path, at_s=1.15):
+    """Draw six characters of one crowd (its one compiled call) at one instant, side by side.
+
+    Each its own clip and fabric, one of them on another skeleton (the mannequin example).
+    """
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import CrowdPipeline, SessionPipeline
+    from jacket_cloth_ros.tools.picture import draw_filmstrip, sim_frame
+    fabrics = load_fabrics()
+    crowd = CrowdPipeline()
+    for name, _, fabric, other in PICTURE:
+        if other:
+            with open(shipped(f'examples/{other}.urdf'), encoding='utf-8') as f:
+                skeleton = Skeleton(f.read())
+            rig = load_rig(skeleton, shipped(f'examples/{other}_rig.yaml'))
+        else:
+            skeleton = Skeleton(shipped_character_urdf())
+            rig = load_rig(skeleton)
+        values = dict(default_values(fabrics[fabric]), fabric=fabric)
+        crowd.add(SessionPipeline(skeleton, rig, fabrics, values, name, timing=False))
+    rate, start = 60.0, 10 ** 10
+    for k in range(int(at_s * rate) + 1):
+        stamp = start + int(round(k / rate * 1e9))
+        inputs = []
+        for i, (_, clip, _, _) in enumerate(PICTURE):
+            sim = crowd.pipelines[i].sim
+            names, pos = joint_state_content(sim.skeleton.joint_names, clip, k / rate)
+            inputs.append((i, JointStateContent(stamp, tuple(names), np.asarray(pos, float))))
+        crowd.on_joint_states(inputs)
+    frames = [sim_frame(p.sim, stamp) for p in crowd.pipelines]
+    draw_filmstrip(frames, [p.sim.skeleton for p in crowd.pipelines], png_path, start,
+                   columns=[f'{n}: {c}, {f.replace("_", " ")}' + (f' ({o})' if o else '')
+                            for n, c, f, o in PICTURE],
+                   title=f'one crowd node, six characters at t = {at_s:g} s: each its own '
+                   'motion, fabric and skeleton, stepped in one compiled call')
+
+
+if __name__ == '__main__':
+    crowd_picture(sys.argv[1] if len(sys.argv) > 1 else 'crowd.png')

@@ -106,16 +106,22 @@ def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
     return [frames[k] for k in picks]
 
 
-def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0: int,
-                   labels: Callable[[int], str] | None = None,
-                   title: str | None = None) -> None:
-    """Two rows (side and front view), one column per frame."""
+def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]', png_path: str,
+                   t0: int, labels: Callable[[int], str] | None = None,
+                   title: str | None = None, columns: Sequence[str] | None = None) -> None:
+    """Two rows (side and front view), one column per frame.
+
+    ``skeleton``: one for every frame, or one per frame (a crowd's characters side by side,
+    each column titled by ``columns``).
+    """
+    skeletons = list(skeleton) if isinstance(skeleton, (list, tuple)) else [skeleton] * len(
+        frames)
     fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
     for col, f in enumerate(frames):
         for row, (view, axis, xlabel) in enumerate(VIEWS):
             ax = axes[row][col]
             for i in range(1, len(f.links)):
-                p = f.links[[skeleton.parent[i], i]]
+                p = f.links[[skeletons[col].parent[i], i]]
                 ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
             ax.add_collection(matplotlib.collections.PolyCollection(
                 f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
@@ -135,7 +141,9 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0:
             ax.tick_params(labelsize=7)
             if col == 0:
                 ax.set_ylabel(f'{view} view: z (m, up)', fontsize=8)
-            if row == 0:
+            if row == 0 and columns:
+                ax.set_title(columns[col], fontsize=9)
+            elif row == 0:
                 name = labels(f.stamp_ns - t0) if labels else ''
                 ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
     fig.suptitle(title or 'jacket (brown), hood pendulum (orange) and jacket bones (navy) on '
