@@ -113,14 +113,16 @@ class FixedTypes:
         return result
 
 
-def kernels_cached() -> bool:
+def kernels_cached(crowd: bool = True) -> bool:
     """Tell whether numba's cache holds the compiled step for the kernel files as they are.
 
-    If not, the next simulation made compiles every kernel, which takes a while.
+    If not, the next simulation made compiles every kernel, which takes a while. With
+    ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
     """
     from . import crowd_kernel, step_kernel
+    wanted = (step_kernel.advance, crowd_kernel.advance_crowd) if crowd else (
+        step_kernel.advance,)
     try:
-        return all(bool(k._cache._cache_file._load_index())
-                   for k in (step_kernel.advance, crowd_kernel.advance_crowd))
+        return all(bool(k._cache._cache_file._load_index()) for k in wanted)
     except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
         return False
