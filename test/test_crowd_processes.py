@@ -126,3 +126,14 @@ def test_the_launch_file_starts_k_processes_each_with_its_slice(monkeypatch):
     # On a second machine: processes 2 and 3 of the same 4.
     nodes = make(dict(context, first='2', count='2'))
     assert [n['parameters'][0]['slice_index'] for n in nodes] == [2, 3]
+
+
+def test_a_bad_characters_file_stops_the_crowd_with_one_line(tmp_path):
+    path = tmp_path / 'crowd.yaml'
+    path.write_text('characters: [{name: a, fabric: silk}]')
+    run = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args',
+                          '-p', f'characters:={path}'], capture_output=True, text=True,
+                         timeout=120, env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2)))
+    assert run.returncode == 1 and 'Traceback' not in run.stderr, run.stderr
+    assert run.stderr.strip().splitlines()[-1].startswith(
+        f"jacket_cloth_crowd: {path}.characters[0].fabric: 'silk' is not a preset")

@@ -124,14 +124,17 @@ class JacketCrowdNode(Node):
         self._open_recorder(self._p('record'))
         for c in self.characters:
             if c.spec.urdf:
-                self._load(c, _read(c.spec.urdf), c.spec.urdf)
+                try:
+                    self._load(c, _read(c.spec.urdf), c.spec.urdf)
+                except ConfigError as e:
+                    raise ConfigError(f'character {c.spec.name}: {e}') from None
             else:
                 c.description = self.create_subscription(
                     String, f'{c.spec.namespace}/robot_description',
                     lambda raw, c=c: self._on_description(c, raw), LATCHED, raw=True)
                 c.fallback = self.create_timer(c.spec.values['robot_description_timeout'],
                                                lambda c=c: self._use_shipped(c))
-        rate = max(c.spec.values['diagnostics_rate'] for c in self.characters)
+        rate = max((c.spec.values['diagnostics_rate'] for c in self.characters), default=1.0)
         self.create_timer(1.0 / rate, self._diagnostics_watchdog)
         self.get_logger().info(
             f'{len(self.characters)} of {len(every)} characters (slice '
@@ -206,7 +209,7 @@ class JacketCrowdNode(Node):
         try:
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
             for key in ('tf', 'diagnostics'):
-                self.recorder.add_topic(*self.characters[0].topics[key])
+                self.recorder.add_topic(*session_topics()[key])
         except OSError as e:
             self.recorder = None
             self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
