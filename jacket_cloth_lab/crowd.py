@@ -68,7 +68,7 @@ def single_commands(n):
 
 
 def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0):
-    """Drive node processes with one JointState stream at RATE; are the characters held?
+    """Drive node processes with one JointState stream at RATE; say if the characters hold.
 
     ``commands``: argv lists (started at once, pinned to ``cores`` if given, the driver to
     the other cores); ``characters``: how many diagnostics statuses to wait for. Returns
@@ -244,8 +244,8 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
         say('crowd: cost per character against N (one core)')
         out['cost'] = [dict(crowd(n, one), characters=n) for n in counts]
         say('crowd: one single-character node process per character (one core)')
-        out['single_cost'] = [dict(singles(n, one), characters=n) for n in ((1,) if quick
-                                                                           else (1, 4))]
+        single_counts = (1,) if quick else (1, 4)
+        out['single_cost'] = [dict(singles(n, one), characters=n) for n in single_counts]
         out['tf'] = tf_batching(8 if quick else 64, 50 if quick else 300)
         if not quick:
             for label, cores in (('one_core', one), ('all_cores', every)):

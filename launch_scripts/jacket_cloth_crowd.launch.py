@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Launch a crowd split over K jacket_cloth_crowd processes, each taking a slice of the file.
+r"""Launch a crowd split over K jacket_cloth_crowd processes, each taking a slice of the file.
 
 Example::
 

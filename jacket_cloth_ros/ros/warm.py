@@ -41,7 +41,7 @@ def warm_kernels(crowd: bool = True) -> tuple:
     # The crowd's one call for many characters (jacket_cloth_crowd), compiled on its own.
     many = CrowdPipeline()
     many.add(SessionPipeline(skeleton, load_rig(skeleton), fabrics,
-                              default_values(fabrics['tweed_jacket'])))
+                             default_values(fabrics['tweed_jacket'])))
     for k in range(3):
         content = cdr.JointStateReader().read(cdr.joint_state(10**9 + k * 10**7, names,
                                                               positions))
