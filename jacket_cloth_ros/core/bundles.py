@@ -235,6 +235,9 @@ class CrowdSlot(NamedTuple):
     pos_b: np.ndarray
     clock: np.ndarray               # int64: stamp_a, span, t_sim, dt_ns, steps (as Motion's)
     out: StepOutput
+    bone_rc: np.ndarray             # M9 bones' (row, column), as JacketSimulation.bones
+    layer_parents: np.ndarray       # M1/M2 bones' parent links (none without a layer)
+    bones: np.ndarray               # (B,7) the bones' poses after the steps, as bones() gives
 
 
 class Scene(NamedTuple):

@@ -16,8 +16,9 @@ import numpy as np
 from numba import typed
 
 from . import crowd_kernel
-from .bundles import CrowdSlot, StepOutput
+from .bundles import CrowdSlot, StepOutput, ints
 from .kernel_cache import FixedTypes
+from .simulation import Bones
 
 # GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
 # the executor thread and the machine's other processes; read when the pool first starts.
@@ -81,9 +82,12 @@ class CrowdSteps:
         state = sim.state           # coerces the arrays first: the key holds the coerced ones
         q = len(sim.skeleton.joint_names)
         out = sim.step_output()
+        layer = sim.rig.layer
+        parents = ints(layer.parent_index if layer else [])
         slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
                          np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
-                         np.zeros(5, dtype=np.int64), out)
+                         np.zeros(5, dtype=np.int64), out, ints(sim._bone_rc), parents,
+                         np.zeros((len(sim.bone_names), 7)))
         return slot, self._key(sim)
 
     def _current(self, index):
@@ -99,11 +103,12 @@ class CrowdSteps:
             self._keys[index] = key
         return self._mine[index]
 
-    def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, bool]]:
-        """Run each (simulation index, prepared job) in one call; returns (output, ran) each.
+    def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, int]]:
+        """Run each (simulation index, prepared job) in one call; returns (output, status) each.
 
-        At most one job per simulation. Each output is that simulation's own arrays, written
-        again by its next job: JacketSimulation.complete takes them at once.
+        The status is crowd_kernel's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
+        one job per simulation. Each output is that simulation's own arrays, written again by
+        its next job: JacketSimulation.complete takes them at once.
         """
         if not jobs:
             return []
@@ -120,7 +125,7 @@ class CrowdSteps:
             slot.clock[:] = (m.stamp_a, m.span, m.t_sim, m.dt_ns, m.steps)
             slot.out.stats[:] = 0.0
             active[j] = index
-        ran = np.zeros(len(jobs), dtype=np.bool_)
+        ran = np.zeros(len(jobs), dtype=np.int64)
         numba.set_num_threads(self.threads)
         # Characters handed out one at a time: a thread that the host slows takes fewer.
         numba.set_parallel_chunksize(1)
@@ -130,8 +135,13 @@ class CrowdSteps:
         for j, (index, _) in enumerate(jobs):
             slot = self._mine[index]
             self.sims[index].t_sim = int(slot.clock[2])
-            out.append((slot.out, bool(ran[j])))
+            out.append((slot.out, int(ran[j])))
         return out
+
+    def bones(self, index: int, finite: bool) -> Bones:
+        """Return simulation ``index``'s bones as the last call left them (a copy)."""
+        sim = self.sims[index]
+        return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
 
 
 def stepped(steps: CrowdSteps,
@@ -157,8 +167,11 @@ def stepped(steps: CrowdSteps,
             if job is not None:
                 jobs.append((k, index, job))
         results = steps.run([(index, job) for _, index, job in jobs])
-        for (k, index, job), (out, ran) in zip(jobs, results):
-            sims[index].complete(reports[k], job, out, ran)
+        for (k, index, job), (out, status) in zip(jobs, results):
+            sim = sims[index]
+            sim.complete(reports[k], job, out, status != crowd_kernel.STEPS_FAILED)
+            if not reports[k].reset:        # the bones the call made are the state's
+                sim.ready_bones = steps.bones(index, status == crowd_kernel.BONES_FINITE)
         cost = time.perf_counter_ns() - started
         for k in this:
             reports[k].step_cost_ns = cost

@@ -154,6 +154,9 @@ class JacketSimulation:
         self.resets = 0
         self.steps_total = 0
         self.overruns = 0
+        # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
+        # new input or reset drops them.
+        self.ready_bones = None
         self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         self.model = model_of(skeleton, rig)
@@ -276,6 +279,7 @@ class JacketSimulation:
 
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
+        self.ready_bones = None
         self.links = self.skeleton.forward(sample.q)
         top, ref = self._skinned_pose(self.links, self.layer)
         self.x = ref.copy()
@@ -324,6 +328,7 @@ class JacketSimulation:
         and hand its outcome to :meth:`complete`.
         """
         report = StepReport(stamp_ns)
+        self.ready_bones = None
         try:
             self._check_stamp(stamp_ns, report)
             sample = self.parser.parse(stamp_ns, names, positions)
@@ -518,6 +523,8 @@ class JacketSimulation:
 
         Jacket bones have x down the cloth, y left to right and z = x * y.
         """
+        if self.ready_bones is not None:
+            return self.ready_bones
         layer = self.layer
         n = len(self.bone_names)
         poses = np.empty((n, 7))
