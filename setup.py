@@ -29,6 +29,7 @@ setup(
         'console_scripts': [
             'jacket_cloth_node = jacket_cloth_ros.ros.node:main',
             'jacket_cloth = jacket_cloth_ros.tools.cli:main',
+            'jacket_cloth_crowd = jacket_cloth_ros.ros.crowd:main',
         ],
     },
 )

@@ -86,6 +86,9 @@ def build_parser():
     b.add_argument('--seconds', type=float, default=None, help='length of each clip')
     b.add_argument('--endurance', type=float, default=None,
                    help='speed: simulated s through the node (default 600; 3600 for the hour)')
+    b.add_argument('--only', default=None,
+                   choices=('crowd',),
+                   help='speed: run this part only (e.g. crowd)')
     b.set_defaults(func=cmd_bench)
     return p
 

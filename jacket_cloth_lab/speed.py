@@ -39,6 +39,7 @@ from jacket_cloth_ros.core.simulation import JacketSimulation
 from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
 from .accuracy import clip_inputs
 from .bench import rig_at_grid
+from .crowd import chart as crowd_chart, crowd_bench, summary as crowd_summary
 
 # The C yardstick beside the repository (never copied in); JACKET_CLOTH_LIMIT names another.
 LIMIT_SOURCE = os.path.join(os.path.dirname(__file__), '..', '..', 'shared', 'limit',
@@ -435,7 +436,7 @@ def _rss_mb():
 
 # -- the command -----------------------------------------------------------------------------
 
-def run(quick, out_dir, say=print, endurance_s=None):
+def run(quick, out_dir, say=print, endurance_s=None, only=None):
     skeleton = load_shipped_character()
     os.makedirs(out_dir, exist_ok=True)
     source = limit_source()
@@ -444,6 +445,8 @@ def run(quick, out_dir, say=print, endurance_s=None):
     steal = results['steal_percent'] = {}
 
     def section(key, title, measure):
+        if only and key != only:
+            return
         say(title)
         with Steal() as taken:
             results[key] = measure()
@@ -459,12 +462,14 @@ def run(quick, out_dir, say=print, endurance_s=None):
         section('endurance', 'endurance', lambda: endurance(
             skeleton, endurance_s, tmp, window_s=5.0 if quick else 60.0))
         if not quick:
-            kernel_us = results['input']['kernel_us_median']
             section('node', 'live node against the floor node (120 Hz, recording on)',
-                    lambda: node_vs_floor(skeleton, 10.0, kernel_us, tmp))
+                    lambda: node_vs_floor(skeleton, 10.0,
+                                          results['input']['kernel_us_median'], tmp))
             section('cold_start_s', 'cold start', lambda: cold_start(skeleton))
             section('after_warm_s', 'start after jacket_cloth warm',
                     lambda: cold_start(skeleton, warmed=True))
+        section('crowd', 'crowd node against one node process per character', lambda: crowd_bench(
+            skeleton, quick, say=say))
     write(results, out_dir)
     return results
 
@@ -475,6 +480,8 @@ def summary(results):
     if steal:
         lines += ['CPU steal (time the host gave other guests) while each part ran: ' + ', '.join(
             f'{k} {v:.0f} %' for k, v in steal.items()) + '.', '']
+    if 'kernel' not in results:          # --only crowd
+        return '\n'.join(lines + crowd_summary(results['crowd'])) + '\n'
     k = results['kernel']
     lines += ['## Kernel against the C yardstick (one step, same grid and iterations)', '',
               '| grid | constraints | iterations | kernel us | yardstick us | ratio |',
@@ -532,6 +539,8 @@ def summary(results):
                   f'First /tf {n["start_s"]:.2f} s after start (warm), '
                   f'{results["cold_start_s"]:.2f} s cold, {results["after_warm_s"]:.2f} s after '
                   '`jacket_cloth warm` (the set-up).']
+    if 'crowd' in results:
+        lines += [''] + crowd_summary(results['crowd'])
     return '\n'.join(lines) + '\n'
 
 
@@ -540,6 +549,10 @@ def write(results, out_dir):
         json.dump(results, f, indent=1)
     with open(os.path.join(out_dir, 'speed.md'), 'w', encoding='utf-8') as f:
         f.write(summary(results))
+    if 'crowd' in results:
+        crowd_chart(results['crowd'], os.path.join(out_dir, 'crowd.png'))
+    if 'kernel' not in results:
+        return
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -569,6 +582,6 @@ def write(results, out_dir):
 
 def main(args):
     results = run(args.quick, args.out, say=lambda t: print(t, flush=True),
-                  endurance_s=args.endurance)
+                  endurance_s=args.endurance, only=args.only)
     print(summary(results))
     return 0

@@ -303,3 +303,38 @@ def test_m6_a_collider_over_the_pinned_row_lifts_it_and_its_column_stays_unstret
         link = sim.links[skeleton.link('spine')]
         assert np.linalg.norm(sim.x[0] - link[:3, :3] @ centre - link[:3, 3]) >= 0.06 - 1e-9
         assert edge_strain(sim.x, rig.vert_a, rig.vert_b, rig.vert_rest)[0].value < 0.01
+
+
+def test_a_crowd_steps_each_character_to_the_bits_it_gets_alone(skeleton, rig):
+    # core.crowd: the steps and bones of every character in one compiled call (parallel);
+    # each character's cloth and bones equal a lone simulation's, a reset and a NaN included.
+    from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+    clips = ('walk', 'run', 'dodge', 'jump')
+    crowd = CrowdSteps(threads=2)
+    sims = [JacketSimulation(skeleton, rig, load_fabric(f), SimParams()) for f in (
+        'tweed_jacket', 'down_jacket', 'veil', 'tweed_jacket')]
+    alone = [JacketSimulation(skeleton, rig, load_fabric(f), SimParams()) for f in (
+        'tweed_jacket', 'down_jacket', 'veil', 'tweed_jacket')]
+    for sim in sims:
+        crowd.add(sim)
+    for k in range(40):
+        inputs = []
+        for i, clip in enumerate(clips):
+            names, pos = joint_state_content(skeleton.joint_names, clip, k / 60)
+            pos = np.array(pos, dtype=float)
+            if i == 3 and k == 10:
+                pos[0] = np.nan                           # refused: this character only
+            if i == 2 and k == 20:
+                pos[list(names).index('world_joint/trans_x')] += 5.0      # a teleport reset
+            inputs.append((i, 10 ** 10 + int(round(k / 60 * 1e9)), names, pos))
+        reports = stepped(crowd, inputs)
+        for (i, stamp, names, pos), report in zip(inputs, reports):
+            mine = alone[i].process(stamp, names, pos)
+            assert (report.accepted, report.reset, report.steps) == (
+                mine.accepted, mine.reset, mine.steps)
+            assert np.array_equal(sims[i].x, alone[i].x)
+            assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
+    assert crowd.calls == 39 and sims[3].ready_bones is not None     # the first: resets
+    assert [s.resets for s in sims] == [1, 1, 3, 1]

@@ -28,10 +28,19 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert (out / 'speed.png').stat().st_size > 10_000
     # Each part says how much of the machine the host took meanwhile (a share, in percent).
     steal = results['steal_percent']
-    assert set(steal) == {'kernel', 'input', 'replay', 'endurance'}
+    assert set(steal) == {'kernel', 'input', 'replay', 'endurance', 'crowd'}
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
+    # The crowd part: every character of every run answered its inputs, and the crowd's cost
+    # per character is printed against the single-character node's.
+    crowd = results['crowd']
+    assert [r['characters'] for r in crowd['cost']] == [1, 4]
+    assert all(r['answered'] > 0.9 and r['cpu_us'] > 0 for r in crowd['cost'] + crowd[
+        'single_cost'])
+    assert set(crowd['cost_ratio']) == {'1', '4'} or set(crowd['cost_ratio']) == {1, 4}
+    assert crowd['tf']['ratio'] > 0 and (out / 'crowd.png').stat().st_size > 10_000
+    assert 'Crowd: many characters in one node' in printed
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):

@@ -46,10 +46,11 @@ def test_ros2_run_finds_the_node_through_the_ament_index(installed):
         else:
             os.environ['AMENT_PREFIX_PATH'] = env_before
     assert prefix == str(installed)
-    assert _executables(prefix, 'jacket_cloth_ros') == ['jacket_cloth', 'jacket_cloth_node']
+    assert _executables(prefix, 'jacket_cloth_ros') == ['jacket_cloth', 'jacket_cloth_crowd',
+                                                        'jacket_cloth_node']
     for name in ('package.xml', 'config/character.urdf', 'config/jacket_rig.yaml',
-                 'config/fabrics.yaml', 'config/node_params.yaml',
-                 'launch/jacket_cloth.launch.py'):
+                 'config/fabrics.yaml', 'config/node_params.yaml', 'config/crowd.yaml',
+                 'launch/jacket_cloth.launch.py', 'launch/jacket_cloth_crowd.launch.py'):
         assert os.path.isfile(os.path.join(share, name)), name
     # The installed script runs the installed code (what `ros2 run ... --help` would do).
     site = glob(os.path.join(str(installed), 'lib', 'python3*', 'site-packages'))[0]
@@ -57,6 +58,9 @@ def test_ros2_run_finds_the_node_through_the_ament_index(installed):
     out = subprocess.run([os.path.join(prefix, 'lib', 'jacket_cloth_ros', 'jacket_cloth_node'),
                           '--help'], env=env, capture_output=True, text=True, timeout=60)
     assert out.returncode == 0 and 'joint_states' in out.stdout
+    out = subprocess.run([os.path.join(prefix, 'lib', 'jacket_cloth_ros', 'jacket_cloth_crowd'),
+                          '--help'], env=env, capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and 'characters:=' in out.stdout
 
 
 def test_package_xml_is_format_3_ament_python():

@@ -12,7 +12,8 @@ longer be swapped by a caller:
 - :class:`ClothState`: cloth, hood and root, moved in place by the steps;
 - :class:`Posed`: colliders and M11 references in the simulation frame at one instant;
 - :class:`Motion` and :class:`StepControl`: what drives one input's steps or one cloth step;
-- :class:`StepOutput`: what the steps leave for the bones and the report.
+- :class:`StepOutput`: what the steps leave for the bones and the report;
+- :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call.
 
 Every builder fixes each field's dtype and memory layout, so the compiled code sees the same
 types on every call (see kernel_cache.FixedTypes). This file is a kernel file: the compiled
@@ -220,6 +221,31 @@ class StepOutput(NamedTuple):
     layer_tips: np.ndarray
     below: np.ndarray
     stats: np.ndarray
+
+
+class CrowdSlot(NamedTuple):
+    """One character of a crowd as crowd_kernel.advance_crowd takes it, kept between inputs.
+
+    Its state arrays are the simulation's own, moved in place; each input writes its two
+    samples into the ``q_a`` .. ``pos_b`` arrays and its clock in place, so the slot is typed
+    once and not per input.
+    """
+
+    model: Model
+    tuning: Tuning
+    state: ClothState
+    before: Posed
+    q_a: np.ndarray
+    q_b: np.ndarray
+    quat_a: np.ndarray
+    quat_b: np.ndarray
+    pos_a: np.ndarray
+    pos_b: np.ndarray
+    clock: np.ndarray               # int64: stamp_a, span, t_sim, dt_ns, steps (as Motion's)
+    out: StepOutput
+    bone_rc: np.ndarray             # M9 bones' (row, column), as JacketSimulation.bones
+    layer_parents: np.ndarray       # M1/M2 bones' parent links (none without a layer)
+    bones: np.ndarray               # (B,7) the bones' poses after the steps, as bones() gives
 
 
 class Scene(NamedTuple):

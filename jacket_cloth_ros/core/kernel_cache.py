@@ -30,7 +30,7 @@ CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
     'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py',
-    'core/inputs.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
+    'core/inputs.py', 'core/crowd_kernel.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
 
 
 @functools.lru_cache(maxsize=None)
@@ -113,13 +113,16 @@ class FixedTypes:
         return result
 
 
-def kernels_cached() -> bool:
+def kernels_cached(crowd: bool = True) -> bool:
     """Tell whether numba's cache holds the compiled step for the kernel files as they are.
 
-    If not, the next simulation made compiles every kernel, which takes a while.
+    If not, the next simulation made compiles every kernel, which takes a while. With
+    ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
     """
-    from . import step_kernel
+    from . import crowd_kernel, step_kernel
+    wanted = (step_kernel.advance, crowd_kernel.advance_crowd) if crowd else (
+        step_kernel.advance,)
     try:
-        return bool(step_kernel.advance._cache._cache_file._load_index())
+        return all(bool(k._cache._cache_file._load_index()) for k in wanted)
     except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
         return False

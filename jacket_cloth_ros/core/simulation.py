@@ -106,6 +106,16 @@ class Colliders:
 
 
 @dataclass
+class StepJob:
+    """One input's compiled steps, prepared (JacketSimulation.prepare) and not yet run."""
+
+    sample: Sample             # the input they run to
+    steps: int
+    motion: Motion
+    tuning: Tuning             # the simulation's, or its level of detail's (core/lod.py)
+
+
+@dataclass
 class StepReport:
     """What one processed sample did, for logging, diagnostics and output."""
 
@@ -147,6 +157,9 @@ class JacketSimulation:
         self.resets = 0
         self.steps_total = 0
         self.overruns = 0
+        # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
+        # new input or reset drops them.
+        self.ready_bones = None
         self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         self.model = model_of(skeleton, rig)
@@ -274,6 +287,7 @@ class JacketSimulation:
 
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
+        self.ready_bones = None
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)
@@ -299,15 +313,37 @@ class JacketSimulation:
     def process(self, stamp_ns: int, names: Sequence[str],
                 positions: npt.ArrayLike) -> StepReport:
         """Advance the simulation to ``stamp_ns`` with one JointState's content."""
-        report = StepReport(stamp_ns)
         started = time.perf_counter_ns()
+        report, job = self.prepare(stamp_ns, names, positions)
+        if job is not None:
+            out = self.step_output()
+            try:
+                self.t_sim = self._advance_kernel(self.model, job.tuning, self.state,
+                                                  self._before, job.motion, out)
+                ran = True
+            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
+                ran = False
+            self.complete(report, job, out, ran)
+        report.step_cost_ns = time.perf_counter_ns() - started
+        return report
+
+    def prepare(self, stamp_ns: int, names: Sequence[str],
+                positions: npt.ArrayLike) -> tuple[StepReport, 'StepJob | None']:
+        """Do an input's work before its compiled steps; return the report and the steps to run.
+
+        No steps (a refused input, a reset, no step due): the input is done and the job None.
+        Else run ``job.motion`` through step_kernel.advance (alone, or in a crowd's one call)
+        and hand its outcome to :meth:`complete`.
+        """
+        report = StepReport(stamp_ns)
+        self.ready_bones = None
         try:
             self._check_stamp(stamp_ns, report)
             sample = self.parser.parse(stamp_ns, names, positions)
         except InputRejected as e:
             report.accepted = False
             report.warnings.append((e.code, str(e)))
-            return report
+            return report, None
         report.warnings += sample.warnings
         if not report.reset and self.last is None:
             report.reset = 'first sample'
@@ -315,17 +351,49 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             self._reset(sample)
-            finite = np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()
-        else:
-            try:
-                finite = self._advance(sample, report)
-            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
-                finite = False
+            if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
+                report.reset = 'non-finite cloth state'
+                self._reset(sample)
+            return report, None
+        a = self.last
+        n = (sample.stamp_ns - self.t_sim) // self.dt_ns
+        cap = self.params.max_steps_per_input
+        if n > cap:
+            report.skipped_steps = n - cap
+            self.overruns += 1
+            self.t_sim += (n - cap) * self.dt_ns
+            n = cap
+        if n <= 0:
+            report.steps = n
+            self.steps_total += n
+            self.last = sample
+            return report, None
+        plan = self.lod.plan(sample.root[:3, 3], self.params.lod_distances,
+                             self.params.lod_blend_s, n, self.dt_ns * 1e-9)
+        report.lod_level = plan.level
+        return report, StepJob(sample, int(n), self._motion(a, sample, n),
+                               LevelOfDetail.tuning(self.tuning, plan))
+
+    def complete(self, report: StepReport, job: 'StepJob', out: StepOutput, ran: bool) -> None:
+        """Take a job's steps into the simulation; a non-finite cloth is reset.
+
+        ``out`` is what the steps left; ``ran`` is False if they stopped on a division by zero.
+        """
+        finite = ran
+        if ran:
+            self._take_output(out)
+            stats = out.stats
+            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
+            report.limited_vertices += int(stats[step_kernel.LIMITED])
+            report.sweeps += int(stats[step_kernel.SWEEPS])
+            report.substeps += int(stats[step_kernel.SUBSTEPS])
+            report.steps = job.steps
+            self.steps_total += job.steps
+            self.last = job.sample
+            finite = not stats[step_kernel.NON_FINITE]
         if not finite:
             report.reset = 'non-finite cloth state'
-            self._reset(sample)
-        report.step_cost_ns = time.perf_counter_ns() - started
-        return report
+            self._reset(job.sample)
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:
@@ -350,29 +418,27 @@ class JacketSimulation:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
 
-    def _advance(self, sample, report):
-        """Run the steps up to ``sample``; False if they left a non-finite cloth or hood."""
-        a = self.last
-        n = (sample.stamp_ns - self.t_sim) // self.dt_ns
-        cap = self.params.max_steps_per_input
-        if n > cap:
-            report.skipped_steps = n - cap
-            self.overruns += 1
-            self.t_sim += (n - cap) * self.dt_ns
-            n = cap
-        if n > 0:
-            plan = self.lod.plan(sample.root[:3, 3], self.params.lod_distances,
-                                 self.params.lod_blend_s, n, self.dt_ns * 1e-9)
-            report.lod_level = plan.level
-            stats = self._run_steps(a, sample, n, LevelOfDetail.tuning(self.tuning, plan))
-            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
-            report.limited_vertices += int(stats[step_kernel.LIMITED])
-            report.sweeps += int(stats[step_kernel.SWEEPS])
-            report.substeps += int(stats[step_kernel.SUBSTEPS])
-        report.steps = n
-        self.steps_total += n
-        self.last = sample
-        return n <= 0 or not stats[step_kernel.NON_FINITE]
+    def step_output(self) -> StepOutput:
+        """Return new arrays for what step_kernel.advance leaves (the last step's pose, stats)."""
+        layer = self.rig.layer
+        k = len(layer.names) if layer else 0
+        return StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
+                          np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
+                          np.zeros(step_kernel.STAT_SLOTS))
+
+    def _motion(self, a, b, n):
+        """Return the Motion of ``n`` fixed steps from sample ``a`` towards ``b``."""
+        return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
+                      floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
+                      int(b.stamp_ns - a.stamp_ns), int(self.t_sim), int(self.dt_ns), int(n))
+
+    def _take_output(self, out):
+        """Take the last step's pose and layer bones as the steps left them in ``out``."""
+        layer = self.rig.layer
+        self.links = out.links
+        self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
+                                            out.layer_pos, out.layer_tips, out.below)
+                       if layer else None)
 
     def set_viewer(self, position: npt.ArrayLike | None) -> None:
         """Set the viewer's world position for the level of detail (None: full detail).
@@ -381,28 +447,16 @@ class JacketSimulation:
         """
         self.lod.set_viewer(position)
 
-    def _run_steps(self, a, b, n, tuning=None):
+    def _run_steps(self, a, b, n):
         """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
 
         The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
         and M8 (see step_kernel.advance). Returns its stats.
         """
-        layer = self.rig.layer
-        k = len(layer.names) if layer else 0
-        out = StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
-                         np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
-                         np.zeros(step_kernel.STAT_SLOTS))
-        motion = Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
-                        floats(a.root[:3, 3]),
-                        floats(b.root[:3, 3]), int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns),
-                        int(self.t_sim), int(self.dt_ns), int(n))
-        tuning = self.tuning if tuning is None else tuning
-        self.t_sim = self._advance_kernel(self.model, tuning, self.state, self._before,
-                                          motion, out)
-        self.links = out.links
-        self._layer = (out.links, LayerPose(layer.names, layer.parent_index, out.layer_rot,
-                                            out.layer_pos, out.layer_tips, out.below)
-                       if layer else None)
+        out = self.step_output()
+        self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
+                                          self._motion(a, b, n), out)
+        self._take_output(out)
         return out.stats
 
     @property
@@ -488,6 +542,8 @@ class JacketSimulation:
 
         Jacket bones have x down the cloth, y left to right and z = x * y.
         """
+        if self.ready_bones is not None:
+            return self.ready_bones
         layer = self.layer
         n = len(self.bone_names)
         poses = np.empty((n, 7))

@@ -169,11 +169,19 @@ class SessionRecorder:
             self._last_flush = stamp_ns
 
     def add_session_config(self, urdf: str, rig_yaml: str, fabrics_yaml: str,
-                           parameters: dict) -> None:
-        """Add what a replay needs besides the inputs: character, rig, fabrics, parameters."""
-        self._writer.add_metadata(SESSION_CONFIG, {
+                           parameters: dict, character: str = '') -> None:
+        """Add what a replay needs besides the inputs: character, rig, fabrics, parameters.
+
+        In a crowd's recording, one per ``character`` (its name): ``SESSION_CONFIG/<name>``.
+        """
+        name = f'{SESSION_CONFIG}/{character}' if character else SESSION_CONFIG
+        self._writer.add_metadata(name, {
             'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
             'parameters_json': json.dumps(parameters, sort_keys=True)})
+
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        """Add an MCAP metadata record (a crowd replay copies its characters' set-ups)."""
+        self._writer.add_metadata(name, data)
 
     def close(self) -> None:
         if self._closed:

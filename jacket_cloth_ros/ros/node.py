@@ -162,7 +162,7 @@ class JacketClothNode(Node):
                              'the shipped character (config/character.urdf)')
 
     def _load_model(self, urdf, source):
-        if not kernels_cached():
+        if not kernels_cached(crowd=False):
             self.get_logger().info(
                 'compiling the simulation kernels into numba\'s cache: a first start after an '
                 'install or an edit of a kernel takes about half a minute (`jacket_cloth warm` '
@@ -385,7 +385,7 @@ def main(args: list[str] | None = None) -> int:
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     # Compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut the context
     # down, the compile ran on for half a minute and ended in a traceback.
-    if not kernels_cached():
+    if not kernels_cached(crowd=False):
         print('jacket_cloth_node: compiling the simulation kernels into numba\'s cache (a first '
               'start after an install or an edit of a kernel; about half a minute; '
               '`jacket_cloth warm` does it ahead)', file=sys.stderr)
@@ -394,7 +394,7 @@ def main(args: list[str] | None = None) -> int:
         # cache file whole or not at all.
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, _stop_compiling)
-        warm_kernels()
+        warm_kernels(crowd=False)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
                           else signal.default_int_handler)

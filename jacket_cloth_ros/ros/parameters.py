@@ -153,7 +153,17 @@ def parse_override(text: str, known: dict) -> tuple[str, object]:
         value = yaml.safe_load(raw) if raw else ''
     except yaml.YAMLError:
         value = raw
-    current = known[name]
+    return name, typed_value(name, raw if isinstance(known[name], str) else value,
+                             known[name], f'-p {name}', raw)
+
+
+def typed_value(name: str, value: object, current: object, where: str,
+                raw: str | None = None) -> object:
+    """Return ``value`` for parameter ``name`` typed as its ``current`` value, validated.
+
+    Errors are ValueError starting with ``where``; ``raw`` is the text the value came from.
+    """
+    shown = repr(raw) if raw is not None else repr(value)
     if isinstance(current, bool):
         ok = isinstance(value, bool)
     elif isinstance(current, int):
@@ -162,18 +172,18 @@ def parse_override(text: str, known: dict) -> tuple[str, object]:
         value = _as_float(value)
         ok = isinstance(value, float)
     elif isinstance(current, str):
-        value, ok = raw, True
+        ok = isinstance(value, str)
     else:
         ok = isinstance(value, list)
         value = [_as_float(v) for v in value] if ok else value
         ok = ok and all(isinstance(v, float) for v in value)
     if not ok:
-        raise ValueError(f'-p {name}: {raw!r} is not a {type(current).__name__}')
+        raise ValueError(f'{where}: {shown} is not a {type(current).__name__}')
     spec = NODE_PARAMETERS.get(name)
     rng = spec[2] if spec else FABRIC_RANGES.get(name[len('fabric.'):])
     if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1]:
-        raise ValueError(f'-p {name}: {value} is outside [{rng[0]}, {rng[1]}]')
+        raise ValueError(f'{where}: {value} is outside [{rng[0]}, {rng[1]}]')
     reason = check_value(name, value)
     if reason:
-        raise ValueError(f'-p {name}: {reason}')
-    return name, value
+        raise ValueError(f'{where}: {reason}')
+    return value

@@ -11,12 +11,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.crowd import CrowdSteps, stepped
 from ..core.simulation import JacketSimulation, StepReport
 from ..recording.writer import qos_profile_yaml
 from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
 
 if TYPE_CHECKING:           # for the annotations only
+    from collections.abc import Sequence
+
     from ..core.fabric import Fabric
     from ..core.rig import Rig
     from ..core.skeleton import Skeleton
@@ -109,13 +112,20 @@ class SessionPipeline:
     def on_joint_state(self, msg: 'JointStateContent',
                        stamp_ns: int) -> tuple[StepReport, list[tuple[str, bytes]]]:
         """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
+        report = self.sim.process(stamp_ns, msg.name, msg.position)
+        return report, self.account(report, stamp_ns)
+
+    def account(self, report: StepReport, stamp_ns: int) -> list[tuple[str, bytes]]:
+        """Count a processed input and return its outputs ([(output key, CDR bytes), ...]).
+
+        The part after the simulation, which a crowd (CrowdPipeline) runs for each character.
+        """
         self.inputs += 1
         self._window['inputs'] += 1
-        report = self.sim.process(stamp_ns, msg.name, msg.position)
         if not report.accepted:
             self.dropped += 1
             self._window['dropped'] += 1
-            return report, []
+            return []
         self._window['accepted'] += 1
         if report.reset:
             self.last_reset_reason = report.reset
@@ -126,7 +136,7 @@ class SessionPipeline:
         else:
             self._reset_streak = 0
         self._costs.append(report.step_cost_ns)
-        return report, self._outputs(stamp_ns)
+        return self._outputs(stamp_ns)
 
     def _outputs(self, stamp_ns):
         bones = self.sim.bones()
@@ -229,3 +239,26 @@ _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
 def _due(last, stamp_ns, rate):
     # 5% slack: stamps rounded to whole ns must not turn every 2nd input into every 3rd.
     return last is None or stamp_ns - last >= 0.95e9 / rate or stamp_ns < last
+
+
+class CrowdPipeline:
+    """The pipelines of many characters, their inputs' steps run together (core.crowd).
+
+    Each character's outputs are those its pipeline gives alone, byte for byte.
+    """
+
+    def __init__(self, threads: int = 0):
+        self.pipelines = []
+        self.steps = CrowdSteps(threads)
+
+    def add(self, pipeline: SessionPipeline) -> int:
+        """Add a character's pipeline; returns its index."""
+        self.pipelines.append(pipeline)
+        return self.steps.add(pipeline.sim)
+
+    def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
+            tuple[StepReport, list[tuple[str, bytes]]]]:
+        """Process (character index, JointState) inputs; (report, outputs) of each, in order."""
+        reports = stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs])
+        return [(r, self.pipelines[i].account(r, m.stamp_ns))
+                for (i, m), r in zip(inputs, reports)]

@@ -15,15 +15,17 @@ from ..core.skeleton import load_shipped_character
 from ..motion.clips import joint_state_content
 from . import cdr
 from .parameters import default_values
-from .pipeline import SessionPipeline
+from .pipeline import CrowdPipeline, SessionPipeline
 
 
-def warm_kernels() -> tuple:
+def warm_kernels(crowd: bool = True) -> tuple:
     """Load, or compile and cache, every kernel of the node's per-input path.
 
-    Returns (seconds taken, whether they were cached already).
+    With ``crowd``, also the crowd's one call for many characters (jacket_cloth_crowd; a single
+    node leaves it out, its first start needs only its own). Returns (seconds taken, whether
+    they were cached already).
     """
-    cached = kernels_cached()
+    cached = kernels_cached(crowd)
     started = time.perf_counter()
     skeleton = load_shipped_character()
     fabrics = load_fabrics()
@@ -34,4 +36,14 @@ def warm_kernels() -> tuple:
         content = cdr.JointStateReader().read(cdr.joint_state(10**9 + k * 10**7, names,
                                                               positions))
         pipeline.on_joint_state(content, content.stamp_ns)
+    if not crowd:
+        return time.perf_counter() - started, cached
+    # The crowd's one call for many characters (jacket_cloth_crowd), compiled on its own.
+    many = CrowdPipeline()
+    many.add(SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+                             default_values(fabrics['tweed_jacket'])))
+    for k in range(3):
+        content = cdr.JointStateReader().read(cdr.joint_state(10**9 + k * 10**7, names,
+                                                              positions))
+        many.on_joint_states([(0, content)])
     return time.perf_counter() - started, cached

@@ -168,6 +168,8 @@ def _session(args):
 def cmd_replay(args: argparse.Namespace) -> int:
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
+    if _is_crowd(args.input):
+        return _replay_crowd(args)
     session = _session(args)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
@@ -176,6 +178,26 @@ def cmd_replay(args: argparse.Namespace) -> int:
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
           f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
           f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
+    return 0
+
+
+def _is_crowd(path):
+    from ..recording.reader import read_recording
+    from .crowd_replay import is_crowd
+    return is_crowd(read_recording(path))
+
+
+def _replay_crowd(args):
+    """Replay a crowd's recording: every character with its recorded set-up."""
+    from .crowd_replay import replay_crowd
+    given = [o for o, v in (('--urdf', args.urdf), ('--rig', args.rig), ('--fabric', args.fabric),
+                            ('--topic', args.topic), ('-p', args.param)) if v]
+    if given:
+        raise ConfigError(f'{args.input} is a crowd\'s recording: it replays with each '
+                          f'character\'s recorded set-up ({", ".join(given)} not taken)')
+    characters, took = replay_crowd(args.input, args.output)
+    inputs = sum(c.pipeline.inputs for c in characters.values())
+    print(f'{args.output}: {len(characters)} characters, {inputs} JointState in {took:.2f} s')
     return 0
 
 

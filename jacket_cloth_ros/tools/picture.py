@@ -163,24 +163,29 @@ def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
     return [frames[k] for k in picks]
 
 
-def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0: int,
-                   labels: Callable[[int], str] | None = None,
-                   title: str | None = None, world_axes: np.ndarray | None = None) -> None:
+def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]', png_path: str,
+                   t0: int, labels: Callable[[int], str] | None = None,
+                   title: str | None = None, world_axes: np.ndarray | None = None,
+                   columns: Sequence[str] | None = None) -> None:
     """Two rows (side and front view), one column per frame, in the world (see in_view).
 
-    ``world_axes``: the rig's forward, left and up (Rig.world_axes); default x, y, z.
+    ``skeleton``: one for every frame, or one per frame (a crowd's characters side by side,
+    each column titled by ``columns``). ``world_axes``: the rig's forward, left and up
+    (Rig.world_axes); default x, y, z.
     """
+    skeletons = list(skeleton) if isinstance(skeleton, (list, tuple)) else [skeleton] * len(
+        frames)
     world_axes = WORLD_AXES if world_axes is None else world_axes
-    centre = body_link(skeleton)
-    across, upward = view_limits(skeleton, world_axes, centre)
+    centres = [body_link(s) for s in skeletons]
+    across, upward = view_limits(skeletons[0], world_axes, centres[0])
     xlabels = (axis_label(world_axes[:, 0], 'forward'), axis_label(world_axes[:, 1], 'left'))
     ylabel = axis_label(world_axes[:, 2], 'up')
     fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
-    for col, f in enumerate(in_view(f, world_axes, centre) for f in frames):
+    for col, f in enumerate(in_view(f, world_axes, c) for f, c in zip(frames, centres)):
         for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
             for i in range(1, len(f.links)):
-                p = f.links[[skeleton.parent[i], i]]
+                p = f.links[[skeletons[col].parent[i], i]]
                 ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
             ax.add_collection(matplotlib.collections.PolyCollection(
                 f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
@@ -200,12 +205,14 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton', png_path: str, t0:
             ax.tick_params(labelsize=7)
             if col == 0:
                 ax.set_ylabel(f'{view} view: {ylabel}', fontsize=8)
-            if row == 0:
+            if row == 0 and columns:
+                ax.set_title(columns[col], fontsize=9)
+            elif row == 0:
                 name = labels(f.stamp_ns - t0) if labels else ''
                 ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
     fig.suptitle((title or 'jacket (brown), hood pendulum (orange), jacket bones (navy);\n'
                   'dashed blue: skinned hem and hood at rest')
-                 + f'\nin the world, each frame centred on {skeleton.link_names[centre]}',
+                 + f'\nin the world, each frame centred on {skeletons[0].link_names[centres[0]]}',
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(png_path, dpi=110)

@@ -1,0 +1,365 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The crowd part of ``bench speed``: a crowd node against one node process per character.
+
+Everything runs live over DDS on this machine, driven by one JointState stream at 120 Hz
+that every character hears (the crowd's characters remapped onto it), so both sides do the
+same work per tick; the driver only publishes and reads ``/diagnostics``:
+
+- held: the most characters that one core (the processes pinned to core 0, the driver to
+  another) and all cores hold, each character's latency p99 (its diagnostics: arrival to
+  /tf handed to DDS, per 1 s window) under one step (8.33 ms) and every input answered;
+  for the crowd node (jacket_cloth_crowd) and for single-character node processes;
+- cost: CPU per character per input against N, and memory per character, for both;
+- tf: one TFMessage for the crowd's characters against one per character (encode and
+  publish, in this process), which the node's choice rests on.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from jacket_cloth_ros.core.skeleton import shipped_character_urdf
+
+RATE = 120.0
+STEP_US = 1e6 / RATE
+COUNTS = (1, 4, 16, 64, 256)               # cost per character against N
+CROWD_LADDER = (16, 32, 64, 96, 128, 192, 256)
+SINGLE_LADDER = (1, 2, 4, 8, 16, 32)
+
+
+def _cpu_s(pid):
+    with open(f'/proc/{pid}/stat', encoding='ascii') as f:
+        fields = f.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _rss_mb(pid):
+    try:
+        with open(f'/proc/{pid}/status', encoding='ascii') as f:
+            for line in f:
+                if line.startswith('VmRSS:'):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float('nan')
+
+
+def crowd_command(n, folder, threads, name='c'):
+    """Return the argv of a crowd node of ``n`` characters, all hearing /joint_states."""
+    path = os.path.join(folder, f'crowd_{n}.yaml')
+    with open(path, 'w', encoding='utf-8') as f:
+        f.write(f'characters:\n  - name: {name}\n    count: {n}\n    urdf: character.urdf\n')
+    width = len(str(n - 1))
+    names = [name] if n == 1 else [f'{name}_{k:0{width}d}' for k in range(n)]
+    remaps = [a for each in names for a in ('-r', f'/{each}/joint_states:=/joint_states')]
+    return [sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args', '-p',
+            f'characters:={path}', '-p', f'threads:={threads}'] + remaps
+
+
+def single_commands(n):
+    """Return the argv of ``n`` single-character nodes (the ROS default), one per character."""
+    return [[sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args', '-r',
+             f'__node:=jacket_cloth_node_{k}', '-p', f'frame_prefix:=s{k}/'] for k in range(n)]
+
+
+def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0):
+    """Drive node processes with one JointState stream at RATE; say if the characters hold.
+
+    ``commands``: argv lists (started at once, pinned to ``cores`` if given, the driver to
+    the other cores); ``characters``: how many diagnostics statuses to wait for. Returns
+    {held, latency_us_p99 (worst window of any character), answered (worst share of the
+    inputs a character took), cpu_us (per character per input), rss_mb_per_character}.
+    """
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    from jacket_cloth_ros.motion.messages import clip_messages
+    from jacket_cloth_ros.ros.node import LATCHED
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               NUMBA_NUM_THREADS=str(len(cores) if cores else os.cpu_count()))
+    all_cores = set(range(os.cpu_count()))
+    mine = (all_cores - set(cores)) or all_cores if cores else all_cores
+    os.sched_setaffinity(0, mine)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    node = rclpy.create_node('jacket_cloth_crowd_driver', context=ctx)
+    windows = {}                    # status -> [(latency p99, inputs so far)]
+
+    def on_diag(msg):
+        for s in msg.status:
+            values = {kv.key: kv.value for kv in s.values}
+            if 'latency_us_p99' in values:
+                windows.setdefault(s.name, []).append(
+                    (float(values['latency_us_p99']), int(values['inputs']),
+                     msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9))
+    node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 1000)
+    pub = node.create_publisher(JointState, 'joint_states',
+                                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    node.create_publisher(String, '/robot_description', LATCHED).publish(
+        String(data=shipped_character_urdf()))
+    walk = [m for _, m in clip_messages(skeleton, 'walk', RATE, 4.0, 10 ** 10)]
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(node)
+    sent = [0]
+
+    def send_for(duration, until=lambda: False):
+        t0 = time.monotonic()
+        j = 0
+        while time.monotonic() - t0 < duration and not until():
+            msg = walk[sent[0] % len(walk)]
+            stamp = 10 ** 10 + int(round(sent[0] / RATE * 1e9))
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10 ** 9)
+            if pub.get_subscription_count():
+                pub.publish(msg)
+                sent[0] += 1
+            j += 1
+            while True:
+                left = t0 + j / RATE - time.monotonic()
+                if left <= 0:
+                    break
+                ex.spin_once(timeout_sec=left)
+
+    def pin():
+        if cores:
+            os.sched_setaffinity(0, cores)
+    procs = [subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, preexec_fn=pin) for argv in commands]
+    try:
+        send_for(start_limit_s, until=lambda: len(windows) >= characters)
+        if len(windows) < characters:
+            raise RuntimeError(f'{len(windows)} of {characters} characters answered within '
+                               f'{start_limit_s:g} s')
+        send_for(1.5)                                   # warm-up, past the first windows
+        first = {k: len(v) for k, v in windows.items()}
+        cpu0 = sum(_cpu_s(p.pid) for p in procs)
+        sent0 = sent[0]
+        send_for(seconds)
+        cpu1 = sum(_cpu_s(p.pid) for p in procs)
+        rss = sum(_rss_mb(p.pid) for p in procs)
+        n = sent[0] - sent0
+        end = time.monotonic() + 1.2
+        while time.monotonic() < end:
+            ex.spin_once(timeout_sec=0.05)
+    finally:
+        for p in procs:
+            p.send_signal(signal.SIGINT)
+        for p in procs:
+            try:
+                p.wait(10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        ex.shutdown()
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+        os.sched_setaffinity(0, all_cores)
+    worst, answered = 0.0, 1.0
+    for name, w in windows.items():
+        measured = w[first.get(name, 0):]
+        if len(measured) < 2:
+            answered = 0.0
+            continue
+        worst = max(worst, max(lat for lat, _, _ in measured[1:]))
+        span = (measured[-1][2] - measured[0][2]) * RATE        # inputs sent in between
+        answered = min(answered, (measured[-1][1] - measured[0][1]) / max(span, 1.0))
+    return {'held': worst <= STEP_US and answered >= 0.95, 'latency_us_p99': worst,
+            'answered': min(answered, 1.0), 'cpu_us': (cpu1 - cpu0) / max(1, n * characters) * 1e6,
+            'rss_mb_per_character': rss / characters, 'sent': n}
+
+
+def tf_batching(n=64, repeat=200):
+    """Time /tf for ``n`` characters: one TFMessage each against one for all (CPU us per tick).
+
+    Encode (the templates the node uses) and publish, to a subscriber in this process.
+    """
+    import rclpy
+    from tf2_msgs.msg import TFMessage
+
+    from jacket_cloth_ros.ros.cdr import TfTemplate
+    from jacket_cloth_ros.ros.node import TF_QOS
+    bones = 68
+    names = [f'jacket_bone_{i:02d}' for i in range(bones)]
+    poses = np.tile([0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (bones, 1))
+    each = [TfTemplate(names, ['spine'] * bones, f'c{k}/') for k in range(n)]
+    crowd = TfTemplate([f'c{k}/{b}' for k in range(n) for b in names], ['spine'] * bones * n)
+    all_poses = np.tile(poses, (n, 1))
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=99)
+    node = rclpy.create_node('tf_batching', context=ctx)
+    pub = node.create_publisher(TFMessage, '/tf', TF_QOS)
+    node.create_subscription(TFMessage, '/tf', lambda m: None, TF_QOS, raw=True)
+    try:
+        per, one = [], []
+        for r in range(repeat):
+            t0 = time.thread_time_ns()
+            for k, template in enumerate(each):
+                pub.publish(template.encode(poses, r))
+            t1 = time.thread_time_ns()
+            pub.publish(crowd.encode(all_poses, r))
+            t2 = time.thread_time_ns()
+            per.append(t1 - t0)
+            one.append(t2 - t1)
+    finally:
+        node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    per_us, one_us = np.median(per) * 1e-3, np.median(one) * 1e-3
+    return {'characters': n, 'per_character_us': float(per_us), 'one_message_us': float(one_us),
+            'ratio': float(per_us / one_us), 'one_message_bytes': len(crowd.encode(all_poses, 0))}
+
+
+def _ladder(measure, ladder):
+    """Measure up the ladder until a count is not held; returns (most held, rows)."""
+    rows, best = [], 0
+    for n in ladder:
+        row = dict(measure(n), characters=n)
+        rows.append(row)
+        if not row['held']:
+            break
+        best = n
+    return best, rows
+
+
+def crowd_bench(skeleton, quick=False, seconds=None, say=print):
+    """Run the crowd part; returns its figures (see the module's docstring)."""
+    seconds = seconds or (1.5 if quick else 4.0)
+    domain = 20 + os.getpid() % 20
+    one, every = {0}, set(range(os.cpu_count()))
+    out = {'quick': quick, 'cores': os.cpu_count()}
+    with tempfile.TemporaryDirectory() as tmp:
+        def crowd(n, cores):
+            return live(skeleton, [crowd_command(n, tmp, len(cores))], n, seconds, domain,
+                        cores)
+
+        def singles(n, cores):
+            return live(skeleton, single_commands(n), n, seconds, domain, cores)
+        counts = (1, 4) if quick else COUNTS
+        say('crowd: cost per character against N (one core)')
+        out['cost'] = [dict(crowd(n, one), characters=n) for n in counts]
+        say('crowd: one single-character node process per character (one core)')
+        single_counts = (1,) if quick else (1, 4)
+        out['single_cost'] = [dict(singles(n, one), characters=n) for n in single_counts]
+        out['tf'] = tf_batching(8 if quick else 64, 50 if quick else 300)
+        if not quick:
+            for label, cores in (('one_core', one), ('all_cores', every)):
+                say(f'crowd: characters held on {label.replace("_", " ")}')
+                out[f'crowd_{label}'] = _ladder(lambda n: crowd(n, cores), CROWD_LADDER)
+                say(f'single nodes: characters held on {label.replace("_", " ")}')
+                out[f'single_{label}'] = _ladder(lambda n: singles(n, cores), SINGLE_LADDER)
+    single = out['single_cost'][0]
+    out['cost_ratio'] = {r['characters']: r['cpu_us'] / single['cpu_us'] for r in out['cost']}
+    return out
+
+
+def summary(c):
+    """Markdown lines of the crowd part."""
+    single = c['single_cost'][0]
+    lines = ['## Crowd: many characters in one node (jacket_cloth_crowd)', '',
+             'One 120 Hz JointState stream that every character hears; processes pinned to one '
+             'core unless said; figures from one run.', '',
+             '| characters | crowd CPU us per character-input | / single node | latency p99 '
+             'us (worst window) | answered | RSS MB per character |', '|---|---|---|---|---|---|']
+    for r in c['cost']:
+        lines.append(f'| {r["characters"]} | {r["cpu_us"]:.0f} | '
+                     f'{r["cpu_us"] / single["cpu_us"]:.2f}x | {r["latency_us_p99"]:.0f} | '
+                     f'{r["answered"]:.2f} | {r["rss_mb_per_character"]:.1f} |')
+    for r in c['single_cost']:
+        lines.append(f'| {r["characters"]} single-node process(es) | {r["cpu_us"]:.0f} | 1x | '
+                     f'{r["latency_us_p99"]:.0f} | {r["answered"]:.2f} | '
+                     f'{r["rss_mb_per_character"]:.1f} |')
+    if 'crowd_one_core' in c:
+        co, ca = c['crowd_one_core'][0], c['crowd_all_cores'][0]
+        so, sa = c['single_one_core'][0], c['single_all_cores'][0]
+        lines += ['', f'Characters held at 120 Hz (every character\'s latency p99 under one '
+                  f'step, {STEP_US:.0f} us, every input answered): crowd node {co} on one core, '
+                  f'{ca} on all {c["cores"]} ({ca / max(co, 1):.2f}x); single-character node '
+                  f'processes {so} on one core, {sa} on all cores. Ladders: crowd '
+                  f'{", ".join(str(r["characters"]) for r in c["crowd_one_core"][1])}; '
+                  f'single {", ".join(str(r["characters"]) for r in c["single_one_core"][1])} '
+                  '(each stops at the first count not held).']
+    t = c['tf']
+    lines += ['', f'/tf for {t["characters"]} characters per tick: one TFMessage each '
+              f'{t["per_character_us"]:.0f} us, one for all {t["one_message_us"]:.0f} us '
+              f'({t["ratio"]:.1f}x; {t["one_message_bytes"] / 1024:.0f} KiB).']
+    return lines
+
+
+def chart(c, path):
+    """Cost per character against N (log-log), the single node's as a line."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    n = [r['characters'] for r in c['cost']]
+    ax.plot(n, [r['cpu_us'] for r in c['cost']], 'o-', label='crowd node, per character')
+    single = c['single_cost'][0]['cpu_us']
+    ax.axhline(single, color='C1', ls='--', label='one node process per character')
+    ax.axhline(single / 3, color='C1', ls=':', label='a third of that (target)')
+    ax.set_xscale('log')
+    ax.set_yscale('log')
+    ax.set_xlabel('characters in the node')
+    ax.set_ylabel('CPU us per character per input')
+    ax.set_title('cost per character at 120 Hz (one core)', fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+PICTURE = (('npc1', 'walk', 'tweed_jacket', None), ('npc2', 'run', 'down_jacket', None),
+           ('npc3', 'dodge', 'veil', None), ('npc4', 'idle', 'tweed_jacket', 'mannequin'),
+           ('npc5', 'arms_up', 'down_jacket', None), ('npc6', 'jump', 'tweed_jacket', None))
+
+
+def crowd_picture(png_path, at_s=1.15):
+    """Draw six characters of one crowd (its one compiled call) at one instant, side by side.
+
+    Each its own clip and fabric, one of them on another skeleton (the mannequin example).
+    """
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import CrowdPipeline, SessionPipeline
+    from jacket_cloth_ros.tools.picture import draw_filmstrip, sim_frame
+    fabrics = load_fabrics()
+    crowd = CrowdPipeline()
+    for name, _, fabric, other in PICTURE:
+        if other:
+            with open(shipped(f'examples/{other}.urdf'), encoding='utf-8') as f:
+                skeleton = Skeleton(f.read())
+            rig = load_rig(skeleton, shipped(f'examples/{other}_rig.yaml'))
+        else:
+            skeleton = Skeleton(shipped_character_urdf())
+            rig = load_rig(skeleton)
+        values = dict(default_values(fabrics[fabric]), fabric=fabric)
+        crowd.add(SessionPipeline(skeleton, rig, fabrics, values, name, timing=False))
+    rate, start = 60.0, 10 ** 10
+    for k in range(int(at_s * rate) + 1):
+        stamp = start + int(round(k / rate * 1e9))
+        inputs = []
+        for i, (_, clip, _, _) in enumerate(PICTURE):
+            sim = crowd.pipelines[i].sim
+            names, pos = joint_state_content(sim.skeleton.joint_names, clip, k / rate)
+            inputs.append((i, JointStateContent(stamp, tuple(names), np.asarray(pos, float))))
+        crowd.on_joint_states(inputs)
+    frames = [sim_frame(p.sim, stamp) for p in crowd.pipelines]
+    draw_filmstrip(frames, [p.sim.skeleton for p in crowd.pipelines], png_path, start,
+                   columns=[f'{n}: {c}, {f.replace("_", " ")}' + (f' ({o})' if o else '')
+                            for n, c, f, o in PICTURE],
+                   title=f'one crowd node, six characters at t = {at_s:g} s: each its own '
+                   'motion, fabric and skeleton, stepped in one compiled call')
+
+
+if __name__ == '__main__':
+    crowd_picture(sys.argv[1] if len(sys.argv) > 1 else 'crowd.png')

@@ -1,0 +1,182 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Many simulations stepped together: one compiled call per round of inputs, in parallel.
+
+Each simulation prepares its input in Python as it does alone (JacketSimulation.prepare);
+the steps of all of them then run in crowd_kernel.advance_crowd, spread over numba's threads;
+each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
+"""
+
+import os
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numba
+import numpy as np
+from numba import typed
+
+from . import crowd_kernel
+from .bundles import CrowdSlot, StepOutput, ints
+from .kernel_cache import FixedTypes
+from .simulation import Bones
+
+# GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
+# the executor thread and the machine's other processes; read when the pool first starts.
+os.environ.setdefault('OMP_WAIT_POLICY', 'PASSIVE')
+
+if TYPE_CHECKING:           # for the annotations only
+    from .simulation import JacketSimulation, StepJob
+
+
+def threads_for(wanted: int) -> int:
+    """Return the threads a crowd uses for ``wanted`` (0: one per core numba sees)."""
+    most = numba.config.NUMBA_NUM_THREADS
+    return most if wanted <= 0 else min(int(wanted), most)
+
+
+def threading_layer() -> str:
+    """Return numba's threading layer once a parallel kernel ran (omp, tbb or workqueue).
+
+    Every one of them is safe here: the crowd's kernel is only ever called from one thread
+    (the node's executor, or the replay's loop), and the node never forks.
+    """
+    try:
+        return numba.threading_layer()
+    except ValueError:              # no parallel kernel ran yet
+        return 'not started'
+
+
+class CrowdSteps:
+    """The compiled steps of many simulations, run together.
+
+    ``threads``: how many threads the call spreads over (0: all cores, as NUMBA_NUM_THREADS).
+    """
+
+    def __init__(self, threads: int = 0):
+        self.threads = threads_for(threads)
+        self.sims = []
+        self._slots = typed.List()
+        self._mine = []             # the same slots, read from Python (the typed list boxes)
+        self._keys = []
+        self._call = None
+        self.calls = 0              # compiled calls made (one per round of inputs)
+
+    def add(self, sim: 'JacketSimulation') -> int:
+        """Add a simulation; returns its index."""
+        self.sims.append(sim)
+        slot, key = self._slot(sim)
+        self._slots.append(slot)
+        self._mine.append(slot)
+        self._keys.append(key)
+        if self._call is None:      # typed once: every slot has the same types
+            self._call = FixedTypes(crowd_kernel.advance_crowd)
+        return len(self.sims) - 1
+
+    @staticmethod
+    def _key(sim):
+        return (sim.tuning, sim.x, sim.xp, sim.contact, sim.hood_p, sim.hood_pp, sim.root,
+                sim._lam, sim._started)
+
+    def _slot(self, sim):
+        """Make a slot on the simulation's own arrays, with motion and output arrays of its own."""
+        state = sim.state           # coerces the arrays first: the key holds the coerced ones
+        q = len(sim.skeleton.joint_names)
+        out = sim.step_output()
+        layer = sim.rig.layer
+        parents = ints(layer.parent_index if layer else [])
+        slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
+                         np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
+                         np.zeros(5, dtype=np.int64), out, ints(sim._bone_rc), parents,
+                         np.zeros((len(sim.bone_names), 7)))
+        return slot, self._key(sim)
+
+    def _current(self, index):
+        """Return the slot of simulation ``index``, made again if one of its arrays changed.
+
+        A reset makes new state arrays, a live parameter change a new Tuning.
+        """
+        sim = self.sims[index]
+        key = self._key(sim)
+        if any(a is not b for a, b in zip(key, self._keys[index])):
+            slot, key = self._slot(sim)
+            self._slots[index] = self._mine[index] = slot
+            self._keys[index] = key
+        return self._mine[index]
+
+    def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, int]]:
+        """Run each (simulation index, prepared job) in one call; returns (output, status) each.
+
+        The status is crowd_kernel's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
+        one job per simulation. Each output is that simulation's own arrays, written again by
+        its next job: JacketSimulation.complete takes them at once.
+        """
+        if not jobs:
+            return []
+        active = np.empty(len(jobs), dtype=np.int64)
+        for j, (index, job) in enumerate(jobs):
+            slot = self._current(index)
+            if slot.tuning is not job.tuning:      # the level of detail's tuning, this input
+                slot = slot._replace(tuning=job.tuning)
+                self._slots[index] = self._mine[index] = slot
+            m = job.motion
+            slot.q_a[:] = m.q_a
+            slot.q_b[:] = m.q_b
+            slot.quat_a[:] = m.quat_a
+            slot.quat_b[:] = m.quat_b
+            slot.pos_a[:] = m.pos_a
+            slot.pos_b[:] = m.pos_b
+            slot.clock[:] = (m.stamp_a, m.span, m.t_sim, m.dt_ns, m.steps)
+            slot.out.stats[:] = 0.0
+            active[j] = index
+        ran = np.zeros(len(jobs), dtype=np.int64)
+        numba.set_num_threads(self.threads)
+        # Characters handed out one at a time: a thread that the host slows takes fewer.
+        numba.set_parallel_chunksize(1)
+        self._call(self._slots, active, ran)
+        self.calls += 1
+        out = []
+        for j, (index, _) in enumerate(jobs):
+            slot = self._mine[index]
+            self.sims[index].t_sim = int(slot.clock[2])
+            out.append((slot.out, int(ran[j])))
+        return out
+
+    def bones(self, index: int, finite: bool) -> Bones:
+        """Return simulation ``index``'s bones as the last call left them (a copy)."""
+        sim = self.sims[index]
+        return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
+
+
+def stepped(steps: CrowdSteps,
+            inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]]) -> list:
+    """Process inputs (simulation index, stamp ns, names, positions) as rounds of one call.
+
+    A round takes at most one input per simulation, in their order. Returns each input's
+    StepReport, in the inputs' order; ``step_cost_ns`` is its round's wall time.
+    """
+    sims = steps.sims
+    reports = [None] * len(inputs)
+    pending = list(range(len(inputs)))
+    while pending:
+        seen, this, later = set(), [], []
+        for k in pending:
+            (later if inputs[k][0] in seen else this).append(k)
+            seen.add(inputs[k][0])
+        started = time.perf_counter_ns()
+        jobs = []
+        for k in this:
+            index, stamp, names, positions = inputs[k]
+            reports[k], job = sims[index].prepare(stamp, names, positions)
+            if job is not None:
+                jobs.append((k, index, job))
+        results = steps.run([(index, job) for _, index, job in jobs])
+        for (k, index, job), (out, status) in zip(jobs, results):
+            sim = sims[index]
+            sim.complete(reports[k], job, out, status != crowd_kernel.STEPS_FAILED)
+            if not reports[k].reset:        # the bones the call made are the state's
+                sim.ready_bones = steps.bones(index, status == crowd_kernel.BONES_FINITE)
+        cost = time.perf_counter_ns() - started
+        for k in this:
+            reports[k].step_cost_ns = cost
+        pending = later
+    return reports

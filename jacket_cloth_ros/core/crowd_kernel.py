@@ -1,0 +1,50 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The steps of every character of a crowd with an input, in one compiled call, in parallel.
+
+Each character runs step_kernel.advance on its own bundles (core.bundles.CrowdSlot), as a
+character alone does, so its results are the same to the bit; numba's prange spreads the
+characters over the threads numba.set_num_threads allows. One call instead of one per
+character: the Python between calls, not the steps, was most of a small character's cost.
+"""
+
+from numba import prange
+
+from .bundles import Motion
+from .kernel_cache import njit
+from .pose_kernel import bone_poses
+from .step_kernel import advance
+
+STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE = range(3)      # what advance_slot returns
+
+
+@njit(cache=True, nogil=True)
+def advance_slot(slot):
+    """Run one character's prepared steps (JacketSimulation.prepare's Motion, in the slot).
+
+    Then the bones' poses into ``slot.bones``, as JacketSimulation.bones computes them.
+    Returns STEPS_FAILED if the steps stopped on a division by zero (the caller resets that
+    character, as JacketSimulation.process does), else whether the bones are finite; the step
+    clock's t_sim moves on to the last step.
+    """
+    c = slot.clock
+    motion = Motion(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
+                    c[0], c[1], c[2], c[3], c[4])
+    try:
+        c[2] = advance(slot.model, slot.tuning, slot.state, slot.before, motion, slot.out)
+    except Exception:  # noqa: BLE001 - numba names no exception object; only division raises
+        return STEPS_FAILED
+    cloth, out, state, poses = slot.model.cloth, slot.out, slot.state, slot.bones
+    try:
+        finite = bone_poses(state.x, cloth.pin_local.shape[0], slot.bone_rc, out.links,
+                            cloth.hood_link, cloth.hood_pivot, state.hood_p, slot.layer_parents,
+                            out.layer_rot, out.layer_pos, poses[:, :3], poses[:, 3:])
+    except Exception:  # noqa: BLE001 - a degenerate frame, as in JacketSimulation.bones
+        finite = False
+    return BONES_FINITE if finite else BONES_NOT_FINITE
+
+
+@njit(cache=True, parallel=True)
+def advance_crowd(slots, active, ran):
+    """advance_slot for ``slots[active[j]]`` into ``ran[j]``, characters spread over threads."""
+    for j in prange(active.shape[0]):
+        ran[j] = advance_slot(slots[active[j]])

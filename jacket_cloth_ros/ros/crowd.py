@@ -1,0 +1,357 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""jacket_cloth_crowd: many characters in one node, their steps in one compiled call.
+
+Each character of the characters file (ros/characters.py) is what a jacket_cloth_node under
+its namespace would be: its own ``<name>/joint_states`` in, its bones on ``/tf`` (its frame
+prefix), ``<name>/jacket_cloth_node/markers``, its status on ``/diagnostics``, its own resets
+and bad-input handling. What it shares is the process: one executor, one DDS participant, one
+recording, and one compiled call for the steps of every character with an input
+(core/crowd.py), spread over the cores. Inputs are gathered as they arrive and processed
+together once the executor has taken every message that was ready.
+"""
+
+import argparse
+import signal
+import sys
+import time
+from typing import TYPE_CHECKING
+
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from rcl_interfaces.msg import ParameterType as T
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from diagnostic_msgs.msg import DiagnosticArray
+from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
+
+from ..core.config import ConfigError, shipped
+from ..core.fabric import load_fabrics
+from ..core.kernel_cache import kernels_cached
+from ..core.rig import load_rig
+from ..core.skeleton import Skeleton, shipped_character_urdf
+from ..recording.writer import SessionRecorder
+from . import cdr
+from .characters import CharacterSpec, crowd_slice, load_characters
+from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, _read, _stop_compiling
+from .parameters import check_value, descriptor
+from .pipeline import CrowdPipeline, SessionPipeline, session_topics
+from .warm import warm_kernels
+
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.simulation import JacketSimulation
+
+# name: (type, default, (lo, hi) or None, read_only, description)
+CROWD_PARAMETERS = {
+    'characters': (T.PARAMETER_STRING, '', None, True,
+                   'the characters file (YAML, see config/crowd.yaml)'),
+    'slice_index': (T.PARAMETER_INTEGER, 0, (0, 4095), True,
+                    'which slice of the characters this process runs (0 .. slice_count-1)'),
+    'slice_count': (T.PARAMETER_INTEGER, 1, (1, 4096), True,
+                    'into how many processes the characters are split'),
+    'threads': (T.PARAMETER_INTEGER, 0, (0, 256), True,
+                'threads for the characters\' steps; 0: one per core (NUMBA_NUM_THREADS)'),
+    'record': (T.PARAMETER_STRING, '', None, True,
+               'record the whole crowd to this MCAP file (.mcap) or bag folder; empty: off'),
+    'record_compression': (T.PARAMETER_STRING, 'lz4', None, True,
+                           'MCAP chunk compression: lz4, zstd or none'),
+}
+
+
+class Character:
+    """One character of the crowd node: its set-up, and its pipeline once its URDF is known."""
+
+    def __init__(self, spec: CharacterSpec):
+        self.spec = spec
+        self.index = -1                 # in the crowd's pipeline, once loaded
+        self.pipeline = None
+        self.urdf = None
+        self.subscription = None
+        self.markers = None             # its ~/markers publisher
+        self.description = self.fallback = None
+        self.reader = cdr.JointStateReader()
+        self.inputs = 0
+        self.sequences = {}
+        self.log_times = {}
+        self.diag_wall = 0.0
+        ns = spec.namespace
+        self.topics = session_topics(f'{ns}/joint_states', f'{ns}/jacket_cloth_node/wind',
+                                     f'{ns}/jacket_cloth_node/markers')
+
+    @property
+    def sim(self) -> 'JacketSimulation | None':
+        return self.pipeline.sim if self.pipeline else None
+
+    def count_lost(self, info: dict) -> None:
+        """Count a gap in a publisher's numbering as lost inputs (as JacketClothNode does)."""
+        seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
+        if not seq or not gid:
+            return
+        key = gid['data'] if isinstance(gid, dict) else gid
+        last = self.sequences.pop(key, None)
+        if last is not None and seq > last + 1:
+            self.pipeline.note_lost(seq - last - 1)
+        self.sequences[key] = seq if last is None else max(seq, last)
+        if len(self.sequences) > 64:
+            del self.sequences[next(iter(self.sequences))]
+
+
+class JacketCrowdNode(Node):
+    """Runs the jacket and hood simulation of every character of a characters file."""
+
+    def __init__(self, **kwargs: object):
+        super().__init__('jacket_cloth_crowd', **kwargs)
+        for name, spec in CROWD_PARAMETERS.items():
+            self._declare(name, spec)
+        path = self._p('characters')
+        if not path:
+            raise ConfigError('parameter characters: give the characters file '
+                              '(-p characters:=crowd.yaml)')
+        every = load_characters(path)
+        mine = crowd_slice(every, self._p('slice_index'), self._p('slice_count'))
+        self.characters = [Character(spec) for spec in mine]
+        self.crowd = CrowdPipeline(self._p('threads'))
+        self.recorder = None
+        self._pending = []
+        self._models = {}
+        self.tf = self.create_publisher(TFMessage, '/tf', TF_QOS)
+        self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
+                                                 event_callbacks=NO_PUB_EVENTS)
+        self._batch = self.create_guard_condition(self._process_pending)
+        self._open_recorder(self._p('record'))
+        for c in self.characters:
+            if c.spec.urdf:
+                try:
+                    self._load(c, _read(c.spec.urdf), c.spec.urdf)
+                except ConfigError as e:
+                    raise ConfigError(f'character {c.spec.name}: {e}') from None
+            else:
+                c.description = self.create_subscription(
+                    String, f'{c.spec.namespace}/robot_description',
+                    lambda raw, c=c: self._on_description(c, raw), LATCHED, raw=True)
+                c.fallback = self.create_timer(c.spec.values['robot_description_timeout'],
+                                               lambda c=c: self._use_shipped(c))
+        rate = max((c.spec.values['diagnostics_rate'] for c in self.characters), default=1.0)
+        self.create_timer(1.0 / rate, self._diagnostics_watchdog)
+        self.get_logger().info(
+            f'{len(self.characters)} of {len(every)} characters (slice '
+            f'{self._p("slice_index")} of {self._p("slice_count")}), steps on '
+            f'{self.crowd.steps.threads} thread(s)')
+
+    def _declare(self, name, spec):
+        kind, default, rng, ro, text = spec
+        try:
+            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        except ParameterException as e:
+            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
+            raise ConfigError(f'parameter {name}: {reason}') from None
+        reason = check_value(name, self._p(name))
+        if reason:
+            raise ConfigError(f'parameter {name}: {reason}')
+
+    def _p(self, name):
+        return self.get_parameter(name).value
+
+    # -- characters ---------------------------------------------------------------------------
+    def _on_description(self, c, raw):
+        if c.pipeline is not None:
+            return
+        try:
+            msg = cdr.deserialize(raw, String)
+            self._load(c, msg.data, f'{c.spec.namespace}/robot_description')
+        except cdr.DECODE_ERRORS as e:     # ConfigError is a ValueError too
+            self._warn(c, 'description', f'{c.spec.name}: robot_description rejected: {e}')
+
+    def _use_shipped(self, c):
+        c.fallback.cancel()
+        if c.pipeline is None:
+            self._load(c, shipped_character_urdf(), 'the shipped character')
+
+    def _load(self, c, urdf, source):
+        spec = c.spec
+        # Characters of one URDF and rig share them (read-only): loaded once, not per copy.
+        key = (urdf, spec.rig, spec.fabric_file)
+        if key not in self._models:
+            skeleton = Skeleton(urdf)
+            self._models[key] = (skeleton, load_rig(skeleton, spec.rig),
+                                 load_fabrics(spec.fabric_file))
+        skeleton, rig, fabrics = self._models[key]
+        pipeline = SessionPipeline(skeleton, rig, fabrics, spec.values, spec.name, timing=True)
+        clash = set(spec.values['frame_prefix'] + b for b in pipeline.sim.bone_names) & set(
+            skeleton.link_names)
+        if clash:
+            raise ConfigError(f'{spec.name}: bone frame(s) {", ".join(sorted(clash))} would '
+                              'republish URDF links: change its frame_prefix')
+        c.pipeline, c.urdf = pipeline, urdf
+        c.index = self.crowd.add(pipeline)
+        if c.description is not None:
+            self.destroy_subscription(c.description)
+            self.destroy_timer(c.fallback)
+            c.description = c.fallback = None
+        c.markers = self.create_publisher(MarkerArray, c.topics['markers'][0], 10,
+                                          event_callbacks=NO_PUB_EVENTS)
+        if self.recorder is not None:
+            self._add_character_to_recording(c)
+        c.diag_wall = time.monotonic()
+        c.subscription = self.create_subscription(
+            JointState, c.topics['joint_states'][0],
+            lambda raw, info, c=c: self._on_joint_state(c, raw, info),
+            qos_profile_sensor_data, raw=True)
+        self.get_logger().debug(f'{spec.name}: {skeleton.name!r} from {source}')
+
+    # -- recording ----------------------------------------------------------------------------
+    def _open_recorder(self, path):
+        if not path:
+            return
+        try:
+            self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
+            for key in ('tf', 'diagnostics'):
+                self.recorder.add_topic(*session_topics()[key])
+        except OSError as e:
+            self.recorder = None
+            self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
+                                    'recording')
+
+    def _add_character_to_recording(self, c):
+        for key in ('joint_states', 'markers'):
+            self.recorder.add_topic(*c.topics[key])
+        spec = c.spec
+        self.recorder.add_session_config(
+            c.urdf, _read(spec.rig or shipped('jacket_rig.yaml')),
+            _read(spec.fabric_file or shipped('fabrics.yaml')), c.pipeline.values, spec.name)
+
+    def _record(self, topic, data, stamp_ns):
+        if self.recorder is None:
+            return
+        try:
+            self.recorder.write(topic, data, stamp_ns)
+        except (OSError, ValueError) as e:
+            self.get_logger().error(f'recording stopped: {e}')
+            self.recorder = None
+
+    def close(self) -> None:
+        if self.recorder is not None:
+            self.recorder.close()
+            self.recorder = None
+
+    # -- inputs -------------------------------------------------------------------------------
+    def _warn(self, c, code, text, period=5.0):
+        """One line per character and kind of bad input per ``period`` seconds."""
+        now = time.monotonic()
+        if now - c.log_times.get(code, -1e9) >= period:
+            c.log_times[code] = now
+            self.get_logger().warning(text)
+
+    def _on_joint_state(self, c: Character, raw: bytes, info: dict) -> None:
+        """Gather one input; the batch runs once the executor has taken every ready message."""
+        # Latency counts from the message's arrival in this process, as the single node's.
+        arrived = info.get('received_timestamp') or time.time_ns()
+        if not self._pending:
+            self._batch.trigger()
+        self._pending.append((c, raw, info, arrived))
+
+    def on_joint_states(self, batch: list) -> None:
+        """Process (character, raw bytes, message info, arrival ns) inputs together.
+
+        Public so a harness can feed the node without DDS, as the lab's crowd bench does.
+        """
+        entries = []
+        for c, raw, info, arrived in batch:
+            c.count_lost(info)
+            try:
+                msg = c.reader.read(raw)
+            except cdr.DECODE_ERRORS as e:
+                c.pipeline.note_undecodable()
+                self._warn(c, 'decode', f'{c.spec.name}: a JointState that does not decode '
+                           f'({e}): message dropped')
+                continue
+            c.inputs += 1
+            entries.append((c, raw, msg, arrived))
+        results = self.crowd.on_joint_states([(c.index, msg) for c, _, msg, _ in entries])
+        for (c, raw, msg, arrived), (report, outputs) in zip(entries, results):
+            stamp_ns = msg.stamp_ns
+            self._record(c.topics['joint_states'][0], raw, stamp_ns)
+            name = c.spec.name
+            for code, text in report.warnings:
+                self._warn(c, code, f'{name}: {text}')
+            if report.reset and report.reset != 'first sample':
+                self._warn(c, 'reset', f'{name}: cloth reset to the skinned pose: '
+                           f'{report.reset}')
+            if report.skipped_steps:
+                self._warn(c, 'overrun', f'{name}: {report.skipped_steps} steps skipped (cap '
+                           'max_steps_per_input)')
+            if report.accepted and not any(key == 'tf' for key, _ in outputs):
+                self._warn(c, 'nan', f'{name}: non-finite bone pose: nothing published')
+            for key, out in outputs:
+                if key == 'tf':
+                    self.tf.publish(out)
+                    c.pipeline.note_latency(time.time_ns() - arrived)
+                elif key == 'markers':
+                    c.markers.publish(out)
+                else:
+                    self.diagnostics.publish(out)
+                    c.diag_wall = time.monotonic()
+                self._record(c.topics[key][0], out, stamp_ns)
+
+    def _process_pending(self):
+        batch, self._pending = self._pending, []
+        if batch:
+            self.on_joint_states(batch)
+
+    def _diagnostics_watchdog(self):
+        """Diagnostics of each character whose inputs' own have not gone out for a period."""
+        now = time.monotonic()
+        for c in self.characters:
+            if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
+                continue
+            last = c.sim.last
+            stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
+            out = c.pipeline.diagnostics_now(stamp_ns)
+            self.diagnostics.publish(out)
+            c.diag_wall = now
+            self._record(c.topics['diagnostics'][0], out, stamp_ns)
+
+
+def main(args: list[str] | None = None) -> int:
+    argv = sys.argv if args is None else args
+    parser = argparse.ArgumentParser(
+        prog='jacket_cloth_crowd',
+        description='Many jacketed characters in one node: each subscribes <name>/joint_states '
+        'and publishes its bones on /tf, <name>/jacket_cloth_node/markers and /diagnostics. '
+        'Start with --ros-args -p characters:=crowd.yaml (see docs/crowd.md).')
+    parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
+    if not kernels_cached():
+        print('jacket_cloth_crowd: compiling the simulation kernels into numba\'s cache (about '
+              'a minute; `jacket_cloth warm` does it ahead)', file=sys.stderr)
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, _stop_compiling)
+        warm_kernels()
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
+                          else signal.default_int_handler)
+    rclpy.init(args=argv)
+    node = None
+    try:
+        node = JacketCrowdNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except ConfigError as e:
+        print(f'jacket_cloth_crowd: {e}', file=sys.stderr)
+        return 1
+    except Exception:
+        if rclpy.ok():
+            raise
+    finally:
+        if node is not None:
+            node.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

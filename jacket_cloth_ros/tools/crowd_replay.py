@@ -1,0 +1,106 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A crowd's recording (jacket_cloth_crowd) replayed: every character through its own pipeline.
+
+The crowd node records, per character, its set-up (metadata ``jacket_cloth_session/<name>``)
+and each input followed by its outputs, in the order it processed them. A character's outputs
+depend on its own inputs only (the crowd's one compiled call gives each character the bits it
+gets alone), so running each input through that character's pipeline, in file order, writes
+the same messages in the same order: the recorded /tf, byte for byte.
+"""
+
+import json
+import os
+import time
+from dataclasses import dataclass
+
+from ..core.config import ConfigError, parse_yaml
+from ..core.fabric import fabrics_from_data
+from ..core.rig import Rig
+from ..core.skeleton import Skeleton
+from ..recording.reader import Recording, RecordingError, read_recording
+from ..recording.writer import SESSION_CONFIG, SessionRecorder
+from ..ros.cdr import DECODE_ERRORS, JointStateReader
+from ..ros.parameters import default_values
+from ..ros.pipeline import SessionPipeline, session_topics
+from .outputs import replacing
+
+PREFIX = SESSION_CONFIG + '/'
+
+
+@dataclass
+class CrowdCharacter:
+    name: str
+    values: dict
+    pipeline: SessionPipeline
+    topics: dict
+    setup: dict                 # the recorded metadata, written again into the replay
+
+
+def is_crowd(recording: Recording) -> bool:
+    """Tell whether a recording is a crowd's (one set-up per character)."""
+    return any(name.startswith(PREFIX) for name in recording.metadata)
+
+
+def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
+    """Read a crowd's recording; returns it and its characters by JointState topic."""
+    recording = read_recording(path)
+    characters = {}
+    for key, meta in recording.metadata.items():
+        if not key.startswith(PREFIX):
+            continue
+        name = key[len(PREFIX):]
+        where = f'{path}: {name}'
+        skeleton = Skeleton(meta['urdf'])
+        rig = Rig(parse_yaml(meta['rig_yaml'], f'{where} rig'), skeleton, where=f'{where} rig')
+        fabrics = fabrics_from_data(parse_yaml(meta['fabrics_yaml'], f'{where} fabrics'),
+                                    f'{where} fabrics')
+        recorded = json.loads(meta['parameters_json'])
+        if recorded.get('fabric') not in fabrics:
+            raise ConfigError(f'{where}: fabric {recorded.get("fabric")!r} is not a preset')
+        values = default_values(fabrics[recorded['fabric']])
+        values.update({k: v for k, v in recorded.items() if k in values})
+        ns = '/' + name
+        topics = session_topics(f'{ns}/joint_states', f'{ns}/jacket_cloth_node/wind',
+                                f'{ns}/jacket_cloth_node/markers')
+        pipeline = SessionPipeline(skeleton, rig, fabrics, values, name, timing=False)
+        characters[topics['joint_states'][0]] = CrowdCharacter(name, values, pipeline, topics,
+                                                               dict(meta))
+    if not characters:
+        raise RecordingError(f'{path}: not a crowd recording (no {PREFIX}<name> metadata)')
+    return recording, characters
+
+
+def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], float]:
+    """Write the replay of the crowd recording ``path``; returns (characters, seconds taken)."""
+    recording, characters = load_crowd(path)
+    with replacing(out_path, recording=True) as tmp:
+        recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),
+                                   background=True, compression='lz4')
+        try:
+            first = next(iter(characters.values()))
+            for key in ('tf', 'diagnostics'):
+                recorder.add_topic(*first.topics[key])
+            for c in characters.values():
+                for key in ('joint_states', 'markers'):
+                    recorder.add_topic(*c.topics[key])
+                recorder.add_metadata(PREFIX + c.name, c.setup)
+            started = time.perf_counter()
+            readers = {topic: JointStateReader() for topic in characters}
+            for m in recording.messages:
+                c = characters.get(m.topic)
+                if c is None:
+                    continue
+                try:
+                    msg = readers[m.topic].read(m.data)
+                except DECODE_ERRORS:
+                    c.pipeline.note_undecodable()       # recorded only if it decoded: never
+                    continue
+                _, outputs = c.pipeline.on_joint_state(msg, msg.stamp_ns)
+                recorder.write(m.topic, m.data, msg.stamp_ns)
+                for key, data in outputs:
+                    recorder.write(c.topics[key][0], data, msg.stamp_ns)
+            recorder.close()
+            took = time.perf_counter() - started
+        finally:
+            recorder.close()
+    return characters, took

@@ -1,0 +1,48 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+r"""Launch a crowd split over K jacket_cloth_crowd processes, each taking a slice of the file.
+
+Example::
+
+    ros2 launch jacket_cloth_ros jacket_cloth_crowd.launch.py characters:=/path/crowd.yaml \\
+        processes:=4 threads:=2
+
+Every process reads the same characters file and runs its slice (slice_index of
+slice_count, contiguous and near-equal, ros/characters.py crowd_slice); together they run
+each character once. Across machines, launch this file on each with the same characters file
+and ``processes``, and ``first``/``count`` choosing that machine's processes; ROS_DOMAIN_ID and
+the DDS discovery settings join them (docs/crowd.md says how to size K).
+"""
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+
+
+def _processes(context):
+    total = int(LaunchConfiguration('processes').perform(context))
+    first = int(LaunchConfiguration('first').perform(context))
+    count = LaunchConfiguration('count').perform(context)
+    count = total - first if count == '' else int(count)
+    characters = LaunchConfiguration('characters').perform(context)
+    threads = int(LaunchConfiguration('threads').perform(context))
+    return [Node(package='jacket_cloth_ros', executable='jacket_cloth_crowd',
+                 name=f'jacket_cloth_crowd_{i}', output='screen',
+                 parameters=[{'characters': characters, 'slice_index': i,
+                              'slice_count': total, 'threads': threads}])
+            for i in range(first, first + count)]
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('characters', description='the characters file (YAML)'),
+        DeclareLaunchArgument('processes', default_value='1',
+                              description='K: node processes the crowd is split over'),
+        DeclareLaunchArgument('threads', default_value='0',
+                              description='threads per process for the steps; 0: all cores'),
+        DeclareLaunchArgument('first', default_value='0',
+                              description='the first of the K processes launched here'),
+        DeclareLaunchArgument('count', default_value='',
+                              description='how many of them (empty: the rest)'),
+        OpaqueFunction(function=_processes),
+    ])
