@@ -36,7 +36,8 @@ def advance_slot(slot):
     cloth, out, state, poses = slot.model.cloth, slot.out, slot.state, slot.bones
     try:
         finite = bone_poses(state.x, cloth.pin_local.shape[0], slot.bone_rc, out.links,
-                            cloth.hood_link, cloth.hood_pivot, state.hood_p, slot.layer_parents,
+                            cloth.hood_link, cloth.hood_pivot, cloth.hood_side, state.hood_p,
+                            slot.layer_parents,
                             out.layer_rot, out.layer_pos, poses[:, :3], poses[:, 3:])
     except Exception:  # noqa: BLE001 - a degenerate frame, as in JacketSimulation.bones
         finite = False
