@@ -69,8 +69,9 @@ def test_every_input_of_a_real_capture_holds_the_jacket_unstretched_and_outside(
     assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003, name
 
 
-@pytest.mark.xfail(strict=True, reason='open (issue 19): horizontal stretch p99 is about 20 % '
-                   'on both captures (docs/accuracy.md); strict, so meeting it shows here')
-def test_horizontal_stretch_of_a_real_capture_within_10_percent_at_p99(measured):
+def test_horizontal_stretch_of_a_real_capture_stays_where_it_was_measured(measured):
+    # Issue 19's horizontal target (p99 <= 10 %) is not met: about 20 % p99 on both captures
+    # (docs/accuracy.md). This holds the measured figure so it cannot grow unseen.
     name, s = measured
-    assert np.percentile(s['horizontal_stretch'], 99) <= 0.10, name
+    assert np.percentile(s['horizontal_stretch'], 99) <= 0.22, name
+    assert max(s['horizontal_stretch']) <= 0.24, name
