@@ -11,14 +11,12 @@ together once the executor has taken every message that was ready.
 """
 
 import argparse
-import signal
 import sys
 import time
 from typing import TYPE_CHECKING
 
 import rclpy
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rcl_interfaces.msg import ParameterType as T
@@ -30,16 +28,14 @@ from visualization_msgs.msg import MarkerArray
 
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
-from ..core.kernel_cache import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, _read, _stop_compiling
+from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, _read, run
 from .parameters import check_value, descriptor
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics
-from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.simulation import JacketSimulation
@@ -323,34 +319,7 @@ def main(args: list[str] | None = None) -> int:
         'and publishes its bones on /tf, <name>/jacket_cloth_node/markers and /diagnostics. '
         'Start with --ros-args -p characters:=crowd.yaml (see docs/crowd.md).')
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
-    if not kernels_cached():
-        print('jacket_cloth_crowd: compiling the simulation kernels into numba\'s cache (about '
-              'a minute; `jacket_cloth warm` does it ahead)', file=sys.stderr)
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, _stop_compiling)
-        warm_kernels()
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
-                          else signal.default_int_handler)
-    rclpy.init(args=argv)
-    node = None
-    try:
-        node = JacketCrowdNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ConfigError as e:
-        print(f'jacket_cloth_crowd: {e}', file=sys.stderr)
-        return 1
-    except Exception:
-        if rclpy.ok():
-            raise
-    finally:
-        if node is not None:
-            node.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run('jacket_cloth_crowd', JacketCrowdNode, argv, crowd=True)
 
 
 if __name__ == '__main__':

@@ -6,6 +6,7 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import rclpy
@@ -370,11 +371,6 @@ def _read(path):
         return f.read()
 
 
-def _stop_compiling(signum, frame):
-    print('jacket_cloth_node: stopped while compiling the kernels', file=sys.stderr, flush=True)
-    os._exit(128 + signum)
-
-
 def main(args: list[str] | None = None) -> int:
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
@@ -383,30 +379,43 @@ def main(args: list[str] | None = None) -> int:
         '(sensor_msgs/JointState), publishes bones on /tf, ~/markers and /diagnostics. '
         'Parameters are set with --ros-args -p name:=value (see README).')
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
+    return run('jacket_cloth_node', JacketClothNode, argv, crowd=False)
+
+
+def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: bool) -> int:
+    """Compile the kernels if need be, then spin ``make_node()`` until shutdown; the exit code.
+
+    Shared by jacket_cloth_node and jacket_cloth_crowd (``crowd``: its one call is compiled too).
+    """
     # Compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut the context
     # down, the compile ran on for half a minute and ended in a traceback.
-    if not kernels_cached(crowd=False):
-        print('jacket_cloth_node: compiling the simulation kernels into numba\'s cache (a first '
-              'start after an install or an edit of a kernel; about half a minute; '
+    if not kernels_cached(crowd=crowd):
+        print(f'{program}: compiling the simulation kernels into numba\'s cache (a first '
+              'start after an install or an edit of a kernel; about a minute; '
               '`jacket_cloth warm` does it ahead)', file=sys.stderr)
+
+        def stop_compiling(signum, frame):
+            print(f'{program}: stopped while compiling the kernels', file=sys.stderr,
+                  flush=True)
+            os._exit(128 + signum)
         # Ctrl-C or SIGTERM stop it at once: raised as KeyboardInterrupt, numba can swallow it
         # inside a compiler callback and go on compiling. Nothing is lost: numba writes each
         # cache file whole or not at all.
         for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, _stop_compiling)
-        warm_kernels(crowd=False)
+            signal.signal(signum, stop_compiling)
+        warm_kernels(crowd=crowd)
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
                           else signal.default_int_handler)
     rclpy.init(args=argv)
     node = None
     try:
-        node = JacketClothNode()
+        node = make_node()
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ConfigError as e:
-        print(f'jacket_cloth_node: {e}', file=sys.stderr)
+        print(f'{program}: {e}', file=sys.stderr)
         return 1
     except Exception:
         if rclpy.ok():
