@@ -80,7 +80,7 @@ $(MOCAP_FILES): $(MOCAP)/bvhtoolbox-0.1.3.tar.gz
 # JVRC-1 model of jvrc_description 1.1.1 (Apache-2.0, a 0.7 MB wheel), its URDF only.
 $(JVRC): | $(READY)
 	$(PIP) download --no-deps jvrc_description==1.1.1 -d $(MOCAP)
-	cd $(MOCAP) && $(PY) -c "import zipfile; z = zipfile.ZipFile('jvrc_description-1.1.1-py3-none-any.whl'); open('jvrc1.urdf', 'wb').write(z.read('jvrc_description/urdf/jvrc1.urdf'))"
+	$(PY) -c "import zipfile; z = zipfile.ZipFile('$(MOCAP)/jvrc_description-1.1.1-py3-none-any.whl'); open('$@', 'wb').write(z.read('jvrc_description/urdf/jvrc1.urdf'))"
 
 test: $(READY) $(MOCAP_FILES) $(JVRC)
 	$(PY) -m pytest -q test
