@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING
 
 import rclpy
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rcl_interfaces.msg import ParameterType as T
 from sensor_msgs.msg import JointState
@@ -33,7 +32,7 @@ from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, _read, run
+from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, RecordingNode, _read, run
 from .parameters import check_value, descriptor
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics
 
@@ -95,7 +94,7 @@ class Character:
             del self.sequences[next(iter(self.sequences))]
 
 
-class JacketCrowdNode(Node):
+class JacketCrowdNode(RecordingNode):
     """Runs the jacket and hood simulation of every character of a characters file."""
 
     def __init__(self, **kwargs: object):
@@ -218,20 +217,6 @@ class JacketCrowdNode(Node):
         self.recorder.add_session_config(
             c.urdf, _read(spec.rig or shipped('jacket_rig.yaml')),
             _read(spec.fabric_file or shipped('fabrics.yaml')), c.pipeline.values, spec.name)
-
-    def _record(self, topic, data, stamp_ns):
-        if self.recorder is None:
-            return
-        try:
-            self.recorder.write(topic, data, stamp_ns)
-        except (OSError, ValueError) as e:
-            self.get_logger().error(f'recording stopped: {e}')
-            self.recorder = None
-
-    def close(self) -> None:
-        if self.recorder is not None:
-            self.recorder.close()
-            self.recorder = None
 
     # -- inputs -------------------------------------------------------------------------------
     def _warn(self, c, code, text, period=5.0):

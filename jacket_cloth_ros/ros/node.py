@@ -51,7 +51,28 @@ NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
 
-class JacketClothNode(Node):
+class RecordingNode(Node):
+    """A node that may record its session; a write error stops the recording, not the node."""
+
+    recorder: 'SessionRecorder | None' = None
+
+    def _record(self, topic, data, stamp_ns):
+        if self.recorder is None:
+            return
+        try:
+            self.recorder.write(topic, data, stamp_ns)
+        except (OSError, ValueError) as e:
+            self.get_logger().error(f'recording stopped: {e}')
+            self.recorder = None
+
+    def close(self) -> None:
+        """Close the recording, if any."""
+        if self.recorder is not None:
+            self.recorder.close()
+            self.recorder = None
+
+
+class JacketClothNode(RecordingNode):
     """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
 
     def __init__(self, **kwargs: object):
@@ -253,20 +274,6 @@ class JacketClothNode(Node):
         rig_file = self._p('rig_file') or shipped('jacket_rig.yaml')
         self.recorder.add_session_config(self._urdf, _read(rig_file), _read(self._fabric_file),
                                          self._values())
-
-    def _record(self, topic, data, stamp_ns):
-        if self.recorder is None:
-            return
-        try:
-            self.recorder.write(topic, data, stamp_ns)
-        except (OSError, ValueError) as e:
-            self.get_logger().error(f'recording stopped: {e}')
-            self.recorder = None
-
-    def close(self) -> None:
-        if self.recorder is not None:
-            self.recorder.close()
-            self.recorder = None
 
     # -- the input ----------------------------------------------------------------------------
     def _warn(self, code, text, period=5.0):
