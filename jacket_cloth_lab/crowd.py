@@ -15,7 +15,6 @@ same work per tick; the driver only publishes and reads ``/diagnostics``:
 """
 
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -150,13 +149,8 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
         while time.monotonic() < end:
             ex.spin_once(timeout_sec=0.05)
     finally:
-        for p in procs:
-            p.send_signal(signal.SIGINT)
-        for p in procs:
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        from .speed import stop_processes      # speed imports this module
+        stop_processes(procs)
         ex.shutdown()
         node.destroy_node()
         rclpy.shutdown(context=ctx)

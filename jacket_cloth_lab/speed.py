@@ -272,13 +272,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
         while time.monotonic() < end:
             ex.spin_once(timeout_sec=0.05)
     finally:
-        for p in procs.values():
-            p.send_signal(signal.SIGINT)
-        for p in procs.values():
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs.values())
         ex.shutdown()
         node.destroy_node()
         rclpy.shutdown(context=ctx)
@@ -585,3 +579,15 @@ def main(args):
                   endurance_s=args.endurance, only=args.only)
     print(summary(results))
     return 0
+
+
+def stop_processes(procs) -> None:
+    """SIGINT every process, then wait for each (10 s) and kill what is still running."""
+    procs = list(procs)
+    for p in procs:
+        p.send_signal(signal.SIGINT)
+    for p in procs:
+        try:
+            p.wait(10)
+        except subprocess.TimeoutExpired:
+            p.kill()

@@ -16,7 +16,6 @@ import time
 from typing import TYPE_CHECKING
 
 import rclpy
-from rclpy.exceptions import ParameterException
 from rclpy.qos import qos_profile_sensor_data
 from rcl_interfaces.msg import ParameterType as T
 from sensor_msgs.msg import JointState
@@ -32,8 +31,7 @@ from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, RecordingNode, _read, run
-from .parameters import check_value, descriptor
+from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, JacketNodeBase, _read, run
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics
 
 if TYPE_CHECKING:           # for the annotations only
@@ -94,7 +92,7 @@ class Character:
             del self.sequences[next(iter(self.sequences))]
 
 
-class JacketCrowdNode(RecordingNode):
+class JacketCrowdNode(JacketNodeBase):
     """Runs the jacket and hood simulation of every character of a characters file."""
 
     def __init__(self, **kwargs: object):
@@ -135,20 +133,6 @@ class JacketCrowdNode(RecordingNode):
             f'{len(self.characters)} of {len(every)} characters (slice '
             f'{self._p("slice_index")} of {self._p("slice_count")}), steps on '
             f'{self.crowd.steps.threads} thread(s)')
-
-    def _declare(self, name, spec):
-        kind, default, rng, ro, text = spec
-        try:
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
-        except ParameterException as e:
-            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
-            raise ConfigError(f'parameter {name}: {reason}') from None
-        reason = check_value(name, self._p(name))
-        if reason:
-            raise ConfigError(f'parameter {name}: {reason}')
-
-    def _p(self, name):
-        return self.get_parameter(name).value
 
     # -- characters ---------------------------------------------------------------------------
     def _on_description(self, c, raw):

@@ -51,10 +51,30 @@ NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
 
-class RecordingNode(Node):
-    """A node that may record its session; a write error stops the recording, not the node."""
+class JacketNodeBase(Node):
+    """What both jacket nodes share: parameters checked as declared, an optional recording.
+
+    A write error stops the recording, not the node.
+    """
 
     recorder: 'SessionRecorder | None' = None
+
+    def _declare(self, name, spec):
+        """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
+        kind, default, rng, ro, text = spec
+        try:
+            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
+        except ParameterException as e:
+            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
+            raise ConfigError(f'parameter {name}: {reason}') from None
+        reason = check_value(name, self._p(name))
+        if reason:
+            raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
+                              f'parameter {name}: {reason}')
+
+    # -- model --------------------------------------------------------------------------------
+    def _p(self, name):
+        return self.get_parameter(name).value
 
     def _record(self, topic, data, stamp_ns):
         if self.recorder is None:
@@ -72,7 +92,7 @@ class RecordingNode(Node):
             self.recorder = None
 
 
-class JacketClothNode(RecordingNode):
+class JacketClothNode(JacketNodeBase):
     """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
 
     def __init__(self, **kwargs: object):
@@ -134,23 +154,6 @@ class JacketClothNode(RecordingNode):
     @property
     def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
-
-    def _declare(self, name, spec):
-        """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
-        kind, default, rng, ro, text = spec
-        try:
-            self.declare_parameter(name, default, descriptor(name, kind, rng, ro, text))
-        except ParameterException as e:
-            reason = str(e).removesuffix(f': {name}').rpartition('Reason: ')[2]
-            raise ConfigError(f'parameter {name}: {reason}') from None
-        reason = check_value(name, self._p(name))
-        if reason:
-            raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
-                              f'parameter {name}: {reason}')
-
-    # -- model --------------------------------------------------------------------------------
-    def _p(self, name):
-        return self.get_parameter(name).value
 
     def _values(self):
         """Every parameter's current value, by name (arrays as lists)."""
