@@ -72,7 +72,6 @@ class JacketNodeBase(Node):
             raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
                               f'parameter {name}: {reason}')
 
-    # -- model --------------------------------------------------------------------------------
     def _p(self, name):
         return self.get_parameter(name).value
 
@@ -155,6 +154,7 @@ class JacketClothNode(JacketNodeBase):
     def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
 
+    # -- model --------------------------------------------------------------------------------
     def _values(self):
         """Every parameter's current value, by name (arrays as lists)."""
         out = {}
