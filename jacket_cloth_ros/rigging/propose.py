@@ -405,8 +405,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
         lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
                      + ', '.join(with_shapes))
     else:
-        # Wide enough for the shoulders and for the thighs' colliders below (sized as in
-        # _colliders), whichever is wider.
+        # Wide enough for the shoulders and for fleshy thighs below (0.19 of their length,
+        # wider than their colliders), whichever is wider.
         hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
         ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s)
         rx = 0.8 * ry
@@ -422,9 +422,10 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     if rpy is not None:
         shape['rpy_deg'] = rpy
     names = {k: body.name(k) for k in range(len(sk.link_names))}
-    lt, rt = body.thighs['left'], body.thighs['right']
+    # M11 references ride the trunk only: a thigh turns 90 degrees when the character sits, and
+    # references on it pull the two halves of the hem apart.
     cloth = {'cols': 9, 'rows': rows, 'shape': shape, 'pin_link': body.name(shape_link),
-             'reference_bones': [body.name(shape_link), names[body.pelvis], names[lt], names[rt]],
+             'reference_bones': [body.name(shape_link), names[body.pelvis]],
              'max_distance': {'top': round(0.02 * s, 3), 'hem': round(0.40 * s, 3)},
              'bone_column_step': 2}
     sleeves = []
@@ -479,8 +480,10 @@ def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
     pelvis = P(body.pelvis)
     torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward) \
         * body.forward
-    out = [_ellipsoid(body, 'torso', shape_link, torso_c, [rx - 0.02 * s, ry - 0.02 * s,
-                                                           0.22 * s]),
+    # Torso and thighs thinner than the flesh: when the character sits bent forward, colliders
+    # the size of the body meet and leave the front of the jacket no room outside them all.
+    out = [_ellipsoid(body, 'torso', shape_link, torso_c, [0.8 * (rx - 0.02 * s),
+                                                           ry - 0.02 * s, 0.22 * s]),
            _ellipsoid(body, 'pelvis', body.pelvis, pelvis - 0.03 * s * up,
                       [0.13 * s, 0.9 * ry, 0.14 * s])]
     for side in ('left', 'right'):
@@ -489,8 +492,8 @@ def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
         bone = knee - P(k)
         out.append({'name': f'{side[0]}_thigh', 'type': 'capsule', 'link': body.name(k),
                     'a': _r(_in_link(body, k, P(k) + 0.07 * bone)),
-                    'b': _r(_in_link(body, k, P(k) + 0.93 * bone)),
-                    'radius': round(0.19 * thigh_len, 3)})
+                    'b': _r(_in_link(body, k, P(k) + 0.82 * bone)),
+                    'radius': round(0.13 * thigh_len, 3)})
     out.append(floor)
     return out, 'sized from bone lengths (no primitive <collision> shape on ' + ', '.join(
         body.name(k) for k in wanted if body.name(k) not in shapes) + ')'
