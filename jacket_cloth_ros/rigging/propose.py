@@ -23,6 +23,7 @@ from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
+FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
 
 #  Name tables: token sets that name a part, strongest first (tokens: the name cut at _ : . -,
 #  digits and camel case, lower case, side tokens removed).
@@ -229,7 +230,11 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     arms_roots = sorted(arms_roots, key=lambda c: -reach[c])[:2]
     neck_path = _groups(_main_path(neck_root, kids, reach), rest)
     up = _snap(pts[neck_path[-1][-1]] - pts[pelvis])
-    fwd = np.array([1.0, 0.0, 0.0]) if forward is None else np.asarray(forward, float)
+    if forward is None:
+        fwd, why_fwd = _infer_forward(sk, rest, kids, reach, pelvis, legs[:2], arms_roots, up,
+                                      size)
+    else:
+        fwd, why_fwd = np.asarray(forward, float), 'given by --forward'
     fwd = fwd - (fwd @ up) * up
     if np.linalg.norm(fwd) < 1e-3:
         raise Refusal('forward is along up: give another forward direction')
@@ -244,7 +249,8 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
                'the spine part'),
         Choice('chest', sk.link_names[chest], 'first link up the spine where two arms and the '
                'neck part'),
-        Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}')]
+        Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}'),
+        Choice('forward', '[' + ', '.join(f'{v:g}' for v in _r(fwd)) + ']', why_fwd)]
     for root in arms_roots:
         _arm(body, root, kids, reach)
     for root in legs[:2]:
@@ -254,6 +260,49 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     if set(body.thighs) != {'left', 'right'}:
         raise Refusal('cannot find two legs: both leg chains are on one side')
     return body
+
+
+def _infer_forward(sk, rest, kids, reach, pelvis, legs, arms, up, size):
+    """Return forward (root frame) and why: the feet, else the named sides, else +x.
+
+    The toes point forward from the ankles in every rest pose (T, A or standing), whatever the
+    names; the knees are straight at rest and the hips' offsets lean either way, so neither
+    says it. Legs that end at the ankle leave the names: left and right links give left, and
+    forward is left x up.
+    """
+    pts = rest[:, :3, 3]
+    feet = []
+    for root in legs:
+        groups = _groups([pelvis] + _main_path(root, kids, reach), rest)
+        seg = [np.linalg.norm(pts[groups[i + 1][0]] - pts[groups[i][0]])
+               for i in range(len(groups) - 1)]
+        if not seg:
+            continue
+        thigh = max(1, next(j for j, b in enumerate(seg) if b >= 0.5 * max(seg)))
+        if len(groups) <= thigh + 3:                  # no link beyond the ankle
+            continue
+        foot = pts[groups[-1][0]] - pts[groups[thigh + 2][0]]
+        foot -= (foot @ up) * up
+        if np.linalg.norm(foot) >= FOOT_AHEAD * size:
+            feet.append(foot / np.linalg.norm(foot))
+    if len(feet) == 2 and feet[0] @ feet[1] > 0.7:
+        return feet[0] + feet[1], 'the toes point forward from the ankles'
+    sides = {'left': [], 'right': []}
+    for root in legs + arms:
+        stack = [root]
+        while stack:
+            k = stack.pop()
+            stack += kids[k]
+            s = side_of(sk.link_names[k])
+            if s:
+                sides[s].append(pts[k])
+    if sides['left'] and sides['right']:
+        left = np.mean(sides['left'], axis=0) - np.mean(sides['right'], axis=0)
+        left -= (left @ up) * up
+        if np.linalg.norm(left) >= 0.02 * size:
+            return np.cross(left, up), 'left and right by the names, forward = left x up'
+    return np.array([1.0, 0.0, 0.0]), ('assumed +x: no toes ahead of the ankles and no named '
+                                       'sides (give --forward)')
 
 
 def _side(body, root, link):
