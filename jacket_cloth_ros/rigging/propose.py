@@ -446,7 +446,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     for k, h in spine_pts:
         if h <= top_h:
             shape_link = k
-    torso_links = [k for k in body.spine]
+    # The thighs too: a hem narrower than their shapes would start inside them.
+    torso_links = body.spine + [body.thighs['left'], body.thighs['right']]
     depth, width, with_shapes = _torso_extent(body, torso_links)
     if with_shapes:
         ry = width + 0.02 * s
@@ -474,7 +475,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     # M11 references ride the trunk only: a thigh turns 90 degrees when the character sits, and
     # references on it pull the two halves of the hem apart.
     cloth = {'cols': 9, 'rows': rows, 'shape': shape, 'pin_link': body.name(shape_link),
-             'reference_bones': [body.name(shape_link), names[body.pelvis]],
+             'reference_bones': list(dict.fromkeys([body.name(shape_link),
+                                                    names[body.pelvis]])),
              'max_distance': {'top': round(0.02 * s, 3), 'hem': round(0.40 * s, 3)},
              'bone_column_step': 2}
     sleeves = []
