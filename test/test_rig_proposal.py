@@ -318,6 +318,18 @@ def test_forward_is_inferred_from_the_toes_whatever_the_names(tmp_path):
     assert _forward_of(swapped)[0] == [0.0, -1.0, 0.0]
 
 
+@pytest.mark.parametrize('seed', [1, 2])
+def test_forward_is_inferred_whatever_the_link_axes(seed):
+    from reframe import random_rotations, root_link, rotate_urdf
+    text = _text(shipped('examples/mannequin.urdf'))
+    turns = random_rotations(Skeleton(text).link_names, seed)
+    turned = rotate_urdf(text, turns)
+    # Every link frame turned: the character's forward (+x of the old root) in the new root.
+    want = turns[root_link(text)].T @ [1.0, 0.0, 0.0]
+    fwd, why = _forward_of(turned)
+    assert np.allclose(fwd, want, atol=1e-6) and 'by the names' in why
+
+
 def test_forward_without_toes_or_named_sides_is_assumed_and_says_so():
     fwd, why = _forward_of(_renamed(_text(shipped('character.urdf'))))
     assert fwd == [1.0, 0.0, 0.0] and 'assumed' in why and '--forward' in why
