@@ -28,7 +28,7 @@ RATE = 30.0
 def _fetched(name):
     path = os.path.join(MOCAP, name)
     if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+        pytest.fail(f'{path} is missing: run `make test` (it fetches it)')
     return path
 
 
