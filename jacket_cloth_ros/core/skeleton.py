@@ -8,6 +8,7 @@ per tree depth, so the cost grows with the depth of the tree, not its size.
 
 import io
 import contextlib
+import re
 from xml.etree import ElementTree
 
 import numpy as np
@@ -135,7 +136,7 @@ def _readable(text):
     trailing NUL byte is dropped. Other URDFs are passed on unchanged.
     """
     text = text.rstrip('\0 \r\n\t')
-    if 'spherical' not in text and '<capsule' not in text:
+    if not re.search(r'type\s*=\s*["\']spherical|<capsule', text):
         return text
     try:
         robot = ElementTree.fromstring(text)
