@@ -82,7 +82,18 @@ $(JVRC): | $(READY)
 	$(PIP) download --no-deps jvrc_description==1.1.1 -d $(MOCAP)
 	$(PY) -c "import zipfile; z = zipfile.ZipFile('$(MOCAP)/jvrc_description-1.1.1-py3-none-any.whl'); open('$@', 'wb').write(z.read('jvrc_description/urdf/jvrc1.urdf'))"
 
-test: $(READY) $(MOCAP_FILES) $(JVRC)
+# A Y-up humanoid URDF with primitive collision shapes and pybullet's spherical joints (never
+# committed): the DeepMimic humanoid of pybullet 3.2.7's pybullet_data (zlib), from its 80 MB
+# source distribution, which is removed once the URDF is out.
+HUMANOID := $(MOCAP)/humanoid.urdf
+$(HUMANOID): | $(READY)
+	$(PIP) download --no-deps --no-binary :all: pybullet==3.2.7 -d $(MOCAP)
+	tar -xzf $(MOCAP)/pybullet-3.2.7.tar.gz -C $(MOCAP) --strip-components=6 \
+	    pybullet-3.2.7/examples/pybullet/gym/pybullet_data/humanoid/humanoid.urdf
+	rm -f $(MOCAP)/pybullet-3.2.7.tar.gz
+	touch $@
+
+test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

@@ -221,8 +221,9 @@ def test_the_proposal_uses_the_urdf_shapes_for_colliders_and_cloth_size():
     sk, rig, lines, body = _rig_of(_with_collisions(_text(shipped('character.urdf'))))
     assert rig['colliders']['from_urdf'] == ['base_link', 'spine', 'chest', 'l_thigh', 'r_thigh']
     assert rig['colliders']['add'][0]['type'] == 'plane'
-    # The box on the spine is 0.34 m wide: the cloth clears it by 2 cm (scaled by height).
-    assert rig['cloth']['shape']['radii'][1] == pytest.approx(0.17 + 0.02 * body.height / 1.75,
+    # The box on the spine is 0.34 m wide, the thighs' cylinders reach 0.1 + 0.08 m to the
+    # side: the cloth clears the wider by 2 cm (scaled by height), or its hem starts inside.
+    assert rig['cloth']['shape']['radii'][1] == pytest.approx(0.18 + 0.02 * body.height / 1.75,
                                                               abs=2e-3)
     assert 'from the <collision> shapes' in ' '.join(lines)
     Rig(yaml.safe_load(to_yaml(rig, lines, 'c.urdf', body)), sk)
@@ -269,9 +270,69 @@ def test_links_whose_axes_are_not_the_bodys_get_rpy_deg_on_shape_upper_and_ellip
     assert rig['cloth']['shape']['radii'] == _rig_of(_text(shipped('character.urdf')))[1][
         'cloth']['shape']['radii']
     # Told that it faces +x, the links' x is its left: every frame-bound key is turned back.
-    sk, rig, lines, body = _rig_of(turned)
+    sk, rig, lines, body = _rig_of(turned, forward=[1, 0, 0])
     for turned_key in (rig['cloth']['shape'], rig['jacket_bones']['upper'], rig['colliders'][0]):
         assert turned_key['rpy_deg'] == [0.0, 0.0, -90.0]
+
+
+def _under_new_root(text, root, rpy):
+    """The skeleton under a new root link, turned by a fixed joint."""
+    return text.replace(f'<link name="{root}"', '<link name="turned_root"/>'
+                        '<joint name="turn" type="fixed"><parent link="turned_root"/>'
+                        f'<child link="{root}"/><origin xyz="0 0 0" rpy="{rpy}"/></joint>'
+                        f'<link name="{root}"', 1)
+
+
+def _forward_of(text, forward=None):
+    sk, rig, lines, body = _rig_of(text, forward)
+    why = next(line for line in lines if line.strip().startswith('forward:'))
+    return [round(float(v), 6) + 0.0 for v in body.forward], why
+
+
+@pytest.mark.parametrize('urdf', ['character.urdf', 'examples/mannequin.urdf'])
+def test_forward_is_inferred_from_the_named_sides_when_the_legs_end_at_the_ankle(urdf):
+    text = _text(shipped(urdf))
+    root = Skeleton(text).link_names[0]
+    fwd, why = _forward_of(text)
+    assert fwd == [1.0, 0.0, 0.0] and 'by the names' in why
+    # Turned to face +y (a yaw of 90 degrees under a new root) and +z (Y-up: a roll of -90).
+    assert _forward_of(_under_new_root(text, root, '0 0 1.5707963'))[0] == [0.0, 1.0, 0.0]
+    assert _forward_of(_under_new_root(text, root, '0 0 3.1415926'))[0] == [-1.0, 0.0, 0.0]
+    assert _forward_of(_under_new_root(text, root, '-1.5707963 0 0'))[0] == [1.0, 0.0, 0.0]
+    # --forward still overrides, and says so.
+    fwd, why = _forward_of(_under_new_root(text, root, '0 0 1.5707963'), [1, 0, 0])
+    assert fwd == [1.0, 0.0, 0.0] and 'given by --forward' in why
+
+
+def test_forward_is_inferred_from_the_toes_whatever_the_names(tmp_path):
+    urdf = tmp_path / 'mocapbank.urdf'
+    assert main(['import', _fetched('test_mocapbank.bvh'), '-o', str(tmp_path / 's.mcap'),
+                 '--urdf-out', str(urdf)]) == 0
+    text = urdf.read_text()
+    fwd, why = _forward_of(text)
+    assert fwd == [1.0, 0.0, 0.0] and 'toes' in why
+    turned = _under_new_root(text, Skeleton(text).link_names[0], '0 0 -1.5707963')
+    assert _forward_of(turned)[0] == [0.0, -1.0, 0.0]
+    # With left and right named the other way round, the toes still say where the front is.
+    swapped = re.sub(r'Left|Right', lambda m: 'Right' if m.group(0) == 'Left' else 'Left', turned)
+    assert _forward_of(swapped)[0] == [0.0, -1.0, 0.0]
+
+
+@pytest.mark.parametrize('seed', [1, 2])
+def test_forward_is_inferred_whatever_the_link_axes(seed):
+    from reframe import random_rotations, root_link, rotate_urdf
+    text = _text(shipped('examples/mannequin.urdf'))
+    turns = random_rotations(Skeleton(text).link_names, seed)
+    turned = rotate_urdf(text, turns)
+    # Every link frame turned: the character's forward (+x of the old root) in the new root.
+    want = turns[root_link(text)].T @ [1.0, 0.0, 0.0]
+    fwd, why = _forward_of(turned)
+    assert np.allclose(fwd, want, atol=1e-6) and 'by the names' in why
+
+
+def test_forward_without_toes_or_named_sides_is_assumed_and_says_so():
+    fwd, why = _forward_of(_renamed(_text(shipped('character.urdf'))))
+    assert fwd == [1.0, 0.0, 0.0] and 'assumed' in why and '--forward' in why
 
 
 def test_the_y_up_proposal_loads_and_rests_where_the_z_up_one_does():

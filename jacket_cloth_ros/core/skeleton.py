@@ -8,6 +8,8 @@ per tree depth, so the cost grows with the depth of the tree, not its size.
 
 import io
 import contextlib
+import re
+from xml.etree import ElementTree
 
 import numpy as np
 from urdf_parser_py import urdf
@@ -29,7 +31,7 @@ class Skeleton:
         try:
             # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
             with contextlib.redirect_stderr(io.StringIO()):
-                robot = urdf.URDF.from_xml_string(_without_declaration(urdf_xml))
+                robot = urdf.URDF.from_xml_string(_readable(_without_declaration(urdf_xml)))
             root = robot.get_root()
         except Exception as e:  # noqa: BLE001 - the parser raises many kinds; all mean "bad URDF"
             msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
@@ -119,6 +121,51 @@ def _without_declaration(text):
         if end > 0:
             return stripped[end + 2:]
     return text
+
+
+BALL_AXES = (('Z', '0 0 1'), ('X', '1 0 0'), ('Y', '0 1 0'))
+
+
+def _readable(text):
+    """Return the URDF text in the terms urdf_parser_py reads: pybullet's extensions turned.
+
+    A ``spherical`` joint becomes three continuous joints about its frame's z, x and y (the
+    usual BVH order, Zrotation Xrotation Yrotation), named and chained as BVH import names them
+    (``<joint>_Zrotation`` ... through massless links ``<joint>_Zrotation_link`` ...); a
+    ``<capsule>`` becomes a cylinder for the parser only (the colliders read the capsule); a
+    trailing NUL byte is dropped. Other URDFs are passed on unchanged.
+    """
+    text = text.rstrip('\0 \r\n\t')
+    if not re.search(r'type\s*=\s*["\']spherical|<capsule', text):
+        return text
+    try:
+        robot = ElementTree.fromstring(text)
+    except ElementTree.ParseError:
+        return text                       # urdf_parser_py says what is wrong with it
+    for geometry in robot.iter('geometry'):
+        for g in geometry.findall('capsule'):
+            g.tag = 'cylinder'
+    for joint in list(robot.findall('joint')):
+        if joint.get('type') != 'spherical':
+            continue
+        name, child = joint.get('name', ''), joint.find('child')
+        index = list(robot).index(joint)
+        robot.remove(joint)
+        parent = joint.find('parent').get('link') if joint.find('parent') is not None else ''
+        for i, (axis, xyz) in enumerate(BALL_AXES):
+            last = i == len(BALL_AXES) - 1
+            link = child.get('link') if last else f'{name}_{axis}rotation_link'
+            if not last:
+                ElementTree.SubElement(robot, 'link', name=link)
+            part = ElementTree.Element('joint', name=f'{name}_{axis}rotation', type='continuous')
+            ElementTree.SubElement(part, 'parent', link=parent)
+            ElementTree.SubElement(part, 'child', link=link)
+            if i == 0 and joint.find('origin') is not None:
+                part.append(joint.find('origin'))
+            ElementTree.SubElement(part, 'axis', xyz=xyz)
+            robot.insert(index + i, part)
+            parent = link
+    return ElementTree.tostring(robot, encoding='unicode')
 
 
 def _check_numbers(joint, what, values, limit):

@@ -23,6 +23,7 @@ from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
+FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
 
 #  Name tables: token sets that name a part, strongest first (tokens: the name cut at _ : . -,
 #  digits and camel case, lower case, side tokens removed).
@@ -229,7 +230,11 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     arms_roots = sorted(arms_roots, key=lambda c: -reach[c])[:2]
     neck_path = _groups(_main_path(neck_root, kids, reach), rest)
     up = _snap(pts[neck_path[-1][-1]] - pts[pelvis])
-    fwd = np.array([1.0, 0.0, 0.0]) if forward is None else np.asarray(forward, float)
+    if forward is None:
+        fwd, why_fwd = _infer_forward(sk, rest, kids, reach, pelvis, legs[:2], arms_roots, up,
+                                      size)
+    else:
+        fwd, why_fwd = np.asarray(forward, float), 'given by --forward'
     fwd = fwd - (fwd @ up) * up
     if np.linalg.norm(fwd) < 1e-3:
         raise Refusal('forward is along up: give another forward direction')
@@ -244,7 +249,8 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
                'the spine part'),
         Choice('chest', sk.link_names[chest], 'first link up the spine where two arms and the '
                'neck part'),
-        Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}')]
+        Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}'),
+        Choice('forward', '[' + ', '.join(f'{v:g}' for v in _r(fwd)) + ']', why_fwd)]
     for root in arms_roots:
         _arm(body, root, kids, reach)
     for root in legs[:2]:
@@ -254,6 +260,49 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     if set(body.thighs) != {'left', 'right'}:
         raise Refusal('cannot find two legs: both leg chains are on one side')
     return body
+
+
+def _infer_forward(sk, rest, kids, reach, pelvis, legs, arms, up, size):
+    """Return forward (root frame) and why: the feet, else the named sides, else +x.
+
+    The toes point forward from the ankles in every rest pose (T, A or standing), whatever the
+    names; the knees are straight at rest and the hips' offsets lean either way, so neither
+    says it. Legs that end at the ankle leave the names: left and right links give left, and
+    forward is left x up.
+    """
+    pts = rest[:, :3, 3]
+    feet = []
+    for root in legs:
+        groups = _groups([pelvis] + _main_path(root, kids, reach), rest)
+        seg = [np.linalg.norm(pts[groups[i + 1][0]] - pts[groups[i][0]])
+               for i in range(len(groups) - 1)]
+        if not seg:
+            continue
+        thigh = max(1, next(j for j, b in enumerate(seg) if b >= 0.5 * max(seg)))
+        if len(groups) <= thigh + 3:                  # no link beyond the ankle
+            continue
+        foot = pts[groups[-1][0]] - pts[groups[thigh + 2][0]]
+        foot -= (foot @ up) * up
+        if np.linalg.norm(foot) >= FOOT_AHEAD * size:
+            feet.append(foot / np.linalg.norm(foot))
+    if len(feet) == 2 and feet[0] @ feet[1] > 0.7:
+        return feet[0] + feet[1], 'the toes point forward from the ankles'
+    sides = {'left': [], 'right': []}
+    for root in legs + arms:
+        stack = [root]
+        while stack:
+            k = stack.pop()
+            stack += kids[k]
+            s = side_of(sk.link_names[k])
+            if s:
+                sides[s].append(pts[k])
+    if sides['left'] and sides['right']:
+        left = np.mean(sides['left'], axis=0) - np.mean(sides['right'], axis=0)
+        left -= (left @ up) * up
+        if np.linalg.norm(left) >= 0.02 * size:
+            return np.cross(left, up), 'left and right by the names, forward = left x up'
+    return np.array([1.0, 0.0, 0.0]), ('assumed +x: no toes ahead of the ankles and no named '
+                                       'sides (give --forward)')
 
 
 def _side(body, root, link):
@@ -397,7 +446,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     for k, h in spine_pts:
         if h <= top_h:
             shape_link = k
-    torso_links = [k for k in body.spine]
+    # The thighs too: a hem narrower than their shapes would start inside them.
+    torso_links = body.spine + [body.thighs['left'], body.thighs['right']]
     depth, width, with_shapes = _torso_extent(body, torso_links)
     if with_shapes:
         ry = width + 0.02 * s
@@ -405,8 +455,8 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
         lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
                      + ', '.join(with_shapes))
     else:
-        # Wide enough for the shoulders and for the thighs' colliders below (sized as in
-        # _colliders), whichever is wider.
+        # Wide enough for the shoulders and for fleshy thighs below (0.19 of their length,
+        # wider than their colliders), whichever is wider.
         hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
         ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s)
         rx = 0.8 * ry
@@ -422,9 +472,11 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     if rpy is not None:
         shape['rpy_deg'] = rpy
     names = {k: body.name(k) for k in range(len(sk.link_names))}
-    lt, rt = body.thighs['left'], body.thighs['right']
+    # M11 references ride the trunk only: a thigh turns 90 degrees when the character sits, and
+    # references on it pull the two halves of the hem apart.
     cloth = {'cols': 9, 'rows': rows, 'shape': shape, 'pin_link': body.name(shape_link),
-             'reference_bones': [body.name(shape_link), names[body.pelvis], names[lt], names[rt]],
+             'reference_bones': list(dict.fromkeys([body.name(shape_link),
+                                                    names[body.pelvis]])),
              'max_distance': {'top': round(0.02 * s, 3), 'hem': round(0.40 * s, 3)},
              'bone_column_step': 2}
     sleeves = []
@@ -479,8 +531,10 @@ def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
     pelvis = P(body.pelvis)
     torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward) \
         * body.forward
-    out = [_ellipsoid(body, 'torso', shape_link, torso_c, [rx - 0.02 * s, ry - 0.02 * s,
-                                                           0.22 * s]),
+    # Torso and thighs thinner than the flesh: when the character sits bent forward, colliders
+    # the size of the body meet and leave the front of the jacket no room outside them all.
+    out = [_ellipsoid(body, 'torso', shape_link, torso_c, [0.8 * (rx - 0.02 * s),
+                                                           ry - 0.02 * s, 0.22 * s]),
            _ellipsoid(body, 'pelvis', body.pelvis, pelvis - 0.03 * s * up,
                       [0.13 * s, 0.9 * ry, 0.14 * s])]
     for side in ('left', 'right'):
@@ -489,8 +543,8 @@ def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
         bone = knee - P(k)
         out.append({'name': f'{side[0]}_thigh', 'type': 'capsule', 'link': body.name(k),
                     'a': _r(_in_link(body, k, P(k) + 0.07 * bone)),
-                    'b': _r(_in_link(body, k, P(k) + 0.93 * bone)),
-                    'radius': round(0.19 * thigh_len, 3)})
+                    'b': _r(_in_link(body, k, P(k) + 0.82 * bone)),
+                    'radius': round(0.13 * thigh_len, 3)})
     out.append(floor)
     return out, 'sized from bone lengths (no primitive <collision> shape on ' + ', '.join(
         body.name(k) for k in wanted if body.name(k) not in shapes) + ')'

@@ -374,7 +374,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('-o', '--output', required=True, help='the rig YAML to write')
     g.add_argument('--picture', default=None, help='also draw the rig at rest into this PNG')
     g.add_argument('--forward', default=None,
-                   help="the character's forward in the URDF root frame (default 1,0,0)")
+                   help="the character's forward in the URDF root frame (default: where the "
+                   'toes point, else from the left and right names, else 1,0,0)')
     g.add_argument('--force', action='store_true', help='overwrite the output files')
     g.set_defaults(func=cmd_rig)
     w = sub.add_parser('warm', help="compile the node's kernels into numba's cache now, so its "

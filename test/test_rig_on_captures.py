@@ -1,0 +1,69 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Issue 18 done on real captures: import, propose the rig, replay, and the figures hold.
+
+No rig key typed by hand: each capture ``make`` fetches (bvhtoolbox 0.1.3's MocapBank and
+free-BVH files, see test_mocap_targets.py) goes through ``jacket_cloth import`` and
+``jacket_cloth rig``, then the replay's pipeline at the default settings with the proposed rig,
+measured after every input as ``jacket_cloth analyze`` measures it (core.measures).
+"""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+import yaml
+
+from jacket_cloth_ros.core.measures import collider_labels, depth_inside
+from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.session import load_session, run_session
+
+MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
+
+
+@pytest.fixture(scope='module', params=['test_freebvh.bvh', 'test_mocapbank.bvh'])
+def proposed(request, tmp_path_factory):
+    """Import a capture, propose its rig, replay it and measure after every input."""
+    path = os.path.join(MOCAP, request.param)
+    if not os.path.isfile(path):
+        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+    tmp = tmp_path_factory.mktemp('proposed')
+    session, urdf, rig = tmp / 'session.mcap', tmp / 'skeleton.urdf', tmp / 'rig.yaml'
+    assert main(['import', path, '-o', str(session), '--urdf-out', str(urdf)]) == 0
+    assert main(['rig', '--urdf', str(urdf), '-o', str(rig)]) == 0
+    loaded = load_session(str(session), urdf=str(urdf), rig=str(rig))
+    labels = collider_labels(loaded.setup.rig)
+    series = {'vertical': [], 'horizontal': [], 'inside': []}
+
+    def probe(pipeline, report, stamp, outputs):
+        sim = pipeline.sim
+        assert report.accepted and np.isfinite(sim.x).all()
+        vs, _, hs, _ = sim.edge_strains()
+        series['vertical'].append(vs.value)
+        series['horizontal'].append(hs.value)
+        series['inside'].append(depth_inside(sim.x, sim.rig.free,
+                                             sim.collider_frames(sim.links), labels).value)
+
+    pipeline = run_session(loaded, probe=probe)
+    assert pipeline.inputs == len(series['vertical']) > 60
+    with open(rig, encoding='utf-8') as f:
+        text = yaml.safe_load(f)
+    return request.param, {k: np.array(v) for k, v in series.items()}, text
+
+
+def test_a_proposed_rig_holds_the_jacket_unstretched_and_outside_on_a_real_capture(proposed):
+    # Issue 19 item 3's limits, as the hand-fitted rigs hold them (test_mocap_targets.py).
+    name, s, _ = proposed
+    assert s['vertical'].max() <= 0.10 and np.percentile(s['vertical'], 99) <= 0.03, name
+    assert s['inside'].max() <= 0.01 and np.percentile(s['inside'], 99) <= 0.003, name
+
+
+def test_a_proposed_rig_stretches_no_more_across_than_the_hand_fitted_one(proposed):
+    # The hand-fitted rigs' figures as test_mocap_targets.py holds them (p99 0.22, max 0.24).
+    # Before the proposer put M11 references on the trunk only and sized the thigh and torso
+    # colliders thinner than the flesh, the MocapBank capture reached 0.77 (p99 0.76): the
+    # sitting thighs pulled the hem's halves apart and left the jacket's front no room.
+    name, s, rig = proposed
+    assert np.percentile(s['horizontal'], 99) <= 0.22, name
+    assert s['horizontal'].max() <= 0.24, name
+    assert len(rig['cloth']['reference_bones']) == 2            # trunk: shape link and pelvis
