@@ -66,7 +66,8 @@ analysis: $(READY)
 # MocapBank and free-BVH examples that bvhtoolbox 0.1.3's source distribution (MIT) ships.
 MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
 JVRC := $(MOCAP)/jvrc1.urdf
-mocap: $(MOCAP_FILES) $(JVRC)
+HUMANOID := $(MOCAP)/humanoid.urdf
+mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID)
 
 $(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: bvhtoolbox==0.1.3 -d $(MOCAP)
@@ -85,7 +86,6 @@ $(JVRC): | $(READY)
 # A Y-up humanoid URDF with primitive collision shapes and pybullet's spherical joints (never
 # committed): the DeepMimic humanoid of pybullet 3.2.7's pybullet_data (zlib), from its 80 MB
 # source distribution, which is removed once the URDF is out.
-HUMANOID := $(MOCAP)/humanoid.urdf
 $(HUMANOID): | $(READY)
 	$(PIP) download --no-deps --no-binary :all: pybullet==3.2.7 -d $(MOCAP)
 	tar -xzf $(MOCAP)/pybullet-3.2.7.tar.gz -C $(MOCAP) --strip-components=6 \
