@@ -16,7 +16,9 @@ import time
 from typing import TYPE_CHECKING
 
 import rclpy
+from rclpy.callback_groups import CallbackGroup
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.waitable import NumberOfEntities, Waitable
 from rcl_interfaces.msg import ParameterType as T
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -31,7 +33,7 @@ from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .node import LATCHED, NO_PUB_EVENTS, TF_QOS, JacketNodeBase, _read, run
+from .node import LATCHED, NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, JacketNodeBase, _read, run
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics
 
 if TYPE_CHECKING:           # for the annotations only
@@ -92,6 +94,73 @@ class Character:
             del self.sequences[next(iter(self.sequences))]
 
 
+class _TakenElsewhere(CallbackGroup):
+    """A callback group the executor never runs: CrowdInputs takes its subscriptions' messages."""
+
+    def can_execute(self, entity: object) -> bool:
+        return False
+
+    def beginning_execution(self, entity: object) -> bool:
+        return False
+
+    def ending_execution(self, entity: object) -> None:
+        pass
+
+
+class CrowdInputs(Waitable):
+    """Every character's joint_states subscription, waited on and taken as one entity.
+
+    rclpy's executor makes a task, a handler and a wake-up's bookkeeping per ready
+    subscription: in a crowd that was a large share of each character's input
+    (docs/crowd.md). Here one wake-up takes one message from each ready subscription and hands
+    them to ``on_inputs`` as [(character, raw bytes, message info)]; the subscriptions are in
+    a callback group the executor never runs, so it does not take them itself.
+    """
+
+    def __init__(self, callback_group: CallbackGroup, on_inputs):
+        super().__init__(callback_group)
+        self._on_inputs = on_inputs
+        self._subs = []             # (character, subscription handle, its pointer)
+        self._ready = []
+
+    def add(self, character: 'Character', subscription: object) -> None:
+        """Wait on ``subscription`` (raw JointState bytes) for ``character``."""
+        handle = subscription.handle
+        self._subs.append((character, handle, handle.pointer))
+
+    def __enter__(self) -> None:
+        pass
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+    def get_num_entities(self) -> NumberOfEntities:
+        return NumberOfEntities(len(self._subs))
+
+    def add_to_wait_set(self, wait_set: object) -> None:
+        for _, handle, _ in self._subs:
+            wait_set.add_subscription(handle)
+
+    def is_ready(self, wait_set: object) -> bool:
+        ready = wait_set.get_ready_entities('subscription')
+        if ready:
+            ready = set(ready)
+            self._ready = [(c, h) for c, h, pointer in self._subs if pointer in ready]
+        return bool(self._ready)
+
+    def take_data(self) -> list:
+        taken = []
+        for c, handle in self._ready:
+            got = handle.take_message(JointState, True)
+            if got is not None:
+                taken.append((c, got[0], got[1]))
+        self._ready = []
+        return taken
+
+    async def execute(self, taken: list) -> None:
+        self._on_inputs(taken)
+
+
 class JacketCrowdNode(JacketNodeBase):
     """Runs the jacket and hood simulation of every character of a characters file."""
 
@@ -114,6 +183,9 @@ class JacketCrowdNode(JacketNodeBase):
         self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
                                                  event_callbacks=NO_PUB_EVENTS)
         self._batch = self.create_guard_condition(self._process_pending)
+        self._inputs = CrowdInputs(self.default_callback_group, self._on_inputs)
+        self._taken_elsewhere = _TakenElsewhere()
+        self.add_waitable(self._inputs)
         self._open_recorder(self._p('record'))
         for c in self.characters:
             if c.spec.urdf:
@@ -175,10 +247,12 @@ class JacketCrowdNode(JacketNodeBase):
         if self.recorder is not None:
             self._add_character_to_recording(c)
         c.diag_wall = time.monotonic()
+        # Taken by CrowdInputs, without QoS event handlers (2 per character per wake-up);
+        # a publisher with incompatible QoS is still warned on its own side.
         c.subscription = self.create_subscription(
-            JointState, c.topics['joint_states'][0],
-            lambda raw, info, c=c: self._on_joint_state(c, raw, info),
-            qos_profile_sensor_data, raw=True)
+            JointState, c.topics['joint_states'][0], _never_called, qos_profile_sensor_data,
+            raw=True, callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
+        self._inputs.add(c, c.subscription)
         self.get_logger().debug(f'{spec.name}: {skeleton.name!r} from {source}')
 
     # -- recording ----------------------------------------------------------------------------
@@ -210,13 +284,14 @@ class JacketCrowdNode(JacketNodeBase):
             c.log_times[code] = now
             self.get_logger().warning(text)
 
-    def _on_joint_state(self, c: Character, raw: bytes, info: dict) -> None:
-        """Gather one input; the batch runs once the executor has taken every ready message."""
-        # Latency counts from the message's arrival in this process, as the single node's.
-        arrived = info.get('received_timestamp') or time.time_ns()
+    def _on_inputs(self, taken: list) -> None:
+        """Gather inputs; the batch runs once the executor has taken every ready message."""
         if not self._pending:
             self._batch.trigger()
-        self._pending.append((c, raw, info, arrived))
+        now = time.time_ns()
+        # Latency counts from the message's arrival in this process, as the single node's.
+        self._pending += [(c, raw, info, info.get('received_timestamp') or now)
+                          for c, raw, info in taken]
 
     def on_joint_states(self, batch: list) -> None:
         """Process (character, raw bytes, message info, arrival ns) inputs together.
@@ -278,6 +353,10 @@ class JacketCrowdNode(JacketNodeBase):
             self.diagnostics.publish(out)
             c.diag_wall = now
             self._record(c.topics['diagnostics'][0], out, stamp_ns)
+
+
+def _never_called(raw: bytes) -> None:
+    """The characters' subscriptions' callback: CrowdInputs takes their messages instead."""
 
 
 def main(args: list[str] | None = None) -> int:
