@@ -13,7 +13,7 @@ together once the executor has taken every message that was ready.
 import argparse
 import sys
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import rclpy
 from rclpy.callback_groups import CallbackGroup
@@ -117,7 +117,8 @@ class CrowdInputs(Waitable):
     a callback group the executor never runs, so it does not take them itself.
     """
 
-    def __init__(self, callback_group: CallbackGroup, on_inputs):
+    def __init__(self, callback_group: CallbackGroup,
+                 on_inputs: Callable[[list], None]) -> None:
         super().__init__(callback_group)
         self._on_inputs = on_inputs
         self._subs = []             # (character, subscription handle, its pointer)
@@ -356,7 +357,7 @@ class JacketCrowdNode(JacketNodeBase):
 
 
 def _never_called(raw: bytes) -> None:
-    """The characters' subscriptions' callback: CrowdInputs takes their messages instead."""
+    """Do nothing: CrowdInputs takes the characters' messages, the executor never calls this."""
 
 
 def main(args: list[str] | None = None) -> int:
