@@ -333,12 +333,13 @@ def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.
     ints = np.zeros(0, dtype=np.int64)
     cloth = ClothModel(0, x[:1].copy(), ints, none3, ints, none3, np.zeros(0), free, ca, cb,
                        rest, np.arange(n - 1), np.arange(1, n), np.full(n - 1, spacing),
+                       ints, ints, np.zeros(0), ints, np.zeros(0),
                        np.zeros(n, dtype=np.int64), np.arange(n) * spacing, 0, np.zeros(3), 0.0,
                        np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]))
     colliders = ColliderModel(ints, none3, np.zeros((0, 3, 3)), none3, ints,
                               np.zeros((0, 2, 3)), np.zeros(0), ints, none3, none3)
     tuning = Tuning(stiffness, method.iterations, compliance, np.full(n, 1e3),
-                    int(StretchLimit.parse(method.stretch_limit, 'stretch_limit')),
+                    int(StretchLimit.parse(method.stretch_limit, 'stretch_limit')), -1.0,
                     int(Solver.parse(method.solver, 'solver')),
                     method.substeps, 0.0, method.tolerance * AUTO_SWEEP_SHARE, np.zeros(n), 0.0,
                     0.0, 1.0, np.zeros(n), 0.0, np.zeros(n), 0.0, gravity, np.zeros(3), 0.0, 1.0)

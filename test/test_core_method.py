@@ -328,3 +328,40 @@ def test_m12_keeps_each_vertical_at_its_length_and_outside_the_body():
     lengths = np.linalg.norm(x[upper] - x[lower], axis=1)
     assert np.allclose(lengths, rest, rtol=1e-3)       # alternating projections: to 0.1 %
     assert (np.linalg.norm(x[1:] - center, axis=1) >= radius - 1e-9).all()
+
+
+def test_strain_limit_shortens_overlong_horizontals_moving_free_ends_only():
+    # The horizontals' strain limit (after M12): an edge over (1 + limit) rest is shortened
+    # to that length, a pinned end does not move, and edges under it are left alone (folds
+    # and compression are the solve's).
+    from jacket_cloth_ros.core.kernel import limit_stretch
+    x = np.array([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.5, 0.0, 0.0], [0.55, 0.0, 0.0]])
+    free = np.array([False, True, True, True])
+    ea, eb, rest = np.array([0, 1, 2]), np.array([1, 2, 3]), np.full(3, 0.1)
+    was = x.copy()
+    assert limit_stretch(x, free, ea, eb, rest, 0.05, 50) > 0
+    lengths = np.linalg.norm(x[eb] - x[ea], axis=1)
+    assert np.all(lengths <= 0.105 + 1e-6) and lengths[0] == pytest.approx(0.105)
+    assert (x[0] == was[0]).all()
+    # An edge at 0.05 (half its rest) stays compressed: only stretch is limited.
+    short = np.array([[0.0, 0.0, 0.0], [0.05, 0.0, 0.0]])
+    assert limit_stretch(short, np.array([True, True]), ea[:1], eb[:1], rest[:1], 0.05, 2) == 0
+    assert short[1, 0] == 0.05
+
+
+def test_fabric_files_without_the_horizontal_limit_keep_working(tmp_path):
+    # max_horizontal_stretch is optional: fabric files written before it load with the
+    # default; a value out of range is refused naming file and key.
+    import yaml
+    from jacket_cloth_ros.core.config import ConfigError, load_yaml, shipped
+    from jacket_cloth_ros.core.fabric import DEFAULT_MAX_HORIZONTAL_STRETCH, load_fabric
+    data = load_yaml(shipped('fabrics.yaml'))
+    data['tweed_jacket'].pop('max_horizontal_stretch', None)
+    path = tmp_path / 'fabrics.yaml'
+    path.write_text(yaml.safe_dump(data))
+    fabric = load_fabric('tweed_jacket', str(path))
+    assert fabric.max_horizontal_stretch == DEFAULT_MAX_HORIZONTAL_STRETCH
+    data['tweed_jacket']['max_horizontal_stretch'] = -0.1
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ConfigError, match='max_horizontal_stretch'):
+        load_fabric('tweed_jacket', str(path))

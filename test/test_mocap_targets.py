@@ -69,9 +69,8 @@ def test_every_input_of_a_real_capture_holds_the_jacket_unstretched_and_outside(
     assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003, name
 
 
-def test_horizontal_stretch_of_a_real_capture_stays_where_it_was_measured(measured):
-    # Issue 19's horizontal target (p99 <= 10 %) is not met: about 20 % p99 on both captures
-    # (docs/accuracy.md). This holds the measured figure so it cannot grow unseen.
+def test_horizontal_stretch_of_a_real_capture_is_within_the_target(measured):
+    # Issue 19's horizontal target: p99 <= 10 % over rest. Before the horizontals' strain
+    # limit (after M12, then M12 again) both captures were at about 20 % p99 (0.20 / 0.20).
     name, s = measured
-    assert np.percentile(s['horizontal_stretch'], 99) <= 0.22, name
-    assert max(s['horizontal_stretch']) <= 0.24, name
+    assert np.percentile(s['horizontal_stretch'], 99) <= 0.10, name

@@ -58,12 +58,11 @@ def test_a_proposed_rig_holds_the_jacket_unstretched_and_outside_on_a_real_captu
     assert s['inside'].max() <= 0.01 and np.percentile(s['inside'], 99) <= 0.003, name
 
 
-def test_a_proposed_rig_stretches_no_more_across_than_the_hand_fitted_one(proposed):
-    # The hand-fitted rigs' figures as test_mocap_targets.py holds them (p99 0.22, max 0.24).
-    # Before the proposer put M11 references on the trunk only and sized the thigh and torso
-    # colliders thinner than the flesh, the MocapBank capture reached 0.77 (p99 0.76): the
-    # sitting thighs pulled the hem's halves apart and left the jacket's front no room.
+def test_a_proposed_rig_holds_the_horizontal_target_on_real_captures(proposed):
+    # Issue 19's horizontal target (p99 <= 10 %), as the hand-fitted rigs hold it
+    # (test_mocap_targets.py). Before the proposer put M11 references on the trunk only and
+    # sized the thigh and torso colliders thinner than the flesh, the MocapBank capture
+    # reached 0.77 (p99 0.76): the sitting thighs pulled the hem's halves apart.
     name, s, rig = proposed
-    assert np.percentile(s['horizontal'], 99) <= 0.22, name
-    assert s['horizontal'].max() <= 0.24, name
+    assert np.percentile(s['horizontal'], 99) <= 0.10, name
     assert len(rig['cloth']['reference_bones']) == 2            # trunk: shape link and pelvis

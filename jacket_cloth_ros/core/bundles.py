@@ -97,6 +97,11 @@ class ClothModel(NamedTuple):
     vert_a: np.ndarray              # M12 vertical edges, top to bottom
     vert_b: np.ndarray
     vert_rest: np.ndarray
+    horiz_a: np.ndarray             # horizontal edges with a free end, held by the strain limit
+    horiz_b: np.ndarray
+    horiz_rest: np.ndarray
+    row_a: np.ndarray               # the pinned top row's own horizontal edges (C-1,)
+    row_rest: np.ndarray
     tether_anchor: np.ndarray       # long-range attachments: pinned anchor and length
     tether_length: np.ndarray
     hood_link: int
@@ -138,6 +143,7 @@ class Tuning(NamedTuple):
     compliance: np.ndarray          # XPBD, per constraint
     max_distance: np.ndarray        # M11 per vertex
     limit_mode: int                 # kernel.LIMIT_*
+    horizontal_limit: float         # most stretch of a horizontal edge over its rest length
     solver: int                     # kernel.SOLVER_*
     max_substeps: int
     quality_tolerance: float        # m; > 0: automatic substeps
@@ -288,12 +294,18 @@ def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
 
 def cloth_model(rig: 'Rig') -> ClothModel:
     """Return a core.rig.Rig's cloth, pins, references and hood."""
+    pinned_a, pinned_b = ~rig.free[rig.con_a], ~rig.free[rig.con_b]
+    held, top_row = rig.horiz & ~(pinned_a & pinned_b), rig.horiz & pinned_a & pinned_b
+    # Row by row, as the hard pass walks them (kernel.hard_pass_with_strain_limit).
+    held = np.flatnonzero(held)[np.argsort(rig.con_a[held] // rig.cols, kind='stable')]
     return ClothModel(
         int(rig.pin_link), floats(rig.pin_local), ints(rig.reference_link),
         floats(rig.reference_local), ints(rig.pin_below), floats(rig.pin_below_local),
         floats(rig.pin_weight), flags(rig.free), ints(rig.con_a), ints(rig.con_b),
         floats(rig.con_rest), ints(rig.vert_a), ints(rig.vert_b), floats(rig.vert_rest),
-        ints(rig.tether_anchor), floats(rig.tether_length), int(rig.hood.link),
+        ints(rig.con_a[held]), ints(rig.con_b[held]), floats(rig.con_rest[held]),
+        ints(rig.con_a[top_row]), floats(rig.con_rest[top_row]), ints(rig.tether_anchor),
+        floats(rig.tether_length), int(rig.hood.link),
         floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side), floats(rig.up))
 
 

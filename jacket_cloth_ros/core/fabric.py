@@ -6,6 +6,9 @@ from dataclasses import dataclass, fields, replace
 from .config import ConfigError, Section, shown, load_yaml, shipped
 
 
+DEFAULT_MAX_HORIZONTAL_STRETCH = 0.05
+
+
 @dataclass(frozen=True)
 class Fabric:
     damping: float             # M4: share of velocity lost per step
@@ -20,6 +23,9 @@ class Fabric:
     edge_wind_scale: float
     edge_max_distance_scale: float
     hood_damping: float
+    # Most stretch of a horizontal edge over its rest length after each step (a strain limit;
+    # optional in a fabric file).
+    max_horizontal_stretch: float = DEFAULT_MAX_HORIZONTAL_STRETCH
 
     def with_values(self, **changes: float) -> 'Fabric':
         return replace(self, **changes)
@@ -30,8 +36,9 @@ FABRIC_RANGES = {
     'iterations': (1, 100), 'world_share': (0.0, 1.0), 'wind_scale': (0.0, 10.0),
     'contact_damping': (0.0, 0.99), 'edge_damping': (0.0, 0.99), 'edge_world_share': (0.0, 1.0),
     'edge_wind_scale': (0.0, 10.0), 'edge_max_distance_scale': (0.1, 5.0),
-    'hood_damping': (0.0, 0.99),
+    'hood_damping': (0.0, 0.99), 'max_horizontal_stretch': (0.0, 10.0),
 }
+OPTIONAL = {'max_horizontal_stretch': DEFAULT_MAX_HORIZONTAL_STRETCH}
 
 
 def load_fabrics(path: str | None = None) -> dict[str, Fabric]:
@@ -51,7 +58,7 @@ def fabrics_from_data(data: dict, path: str) -> dict[str, Fabric]:
             if f.name == 'iterations':
                 values[f.name] = sec.integer(f.name, lo=lo, hi=hi)
             else:
-                values[f.name] = sec.number(f.name, lo=lo, hi=hi)
+                values[f.name] = sec.number(f.name, OPTIONAL.get(f.name), lo=lo, hi=hi)
         sec.reject_unknown()
         out[name] = Fabric(**values)
     return out

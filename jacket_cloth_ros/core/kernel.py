@@ -7,7 +7,8 @@ relaxes colour by colour is many times slower (`make bench-kernel`, docs/perform
 Order within a step, as in the article and the yardstick: Verlet (M4) with per-vertex damping
 (M13, M15), Gauss-Seidel sweeps over both constraint groups (M5), tethers when chosen instead
 of M12, ellipsoid push-out in ellipsoid space (M10) plus capsules and planes, maximum distance
-(M11), and the top-down hard vertical pass (M12), which keeps the cloth outside the colliders.
+(M11), and the top-down hard vertical pass (M12), which keeps the cloth outside the colliders;
+then a strain limit on the horizontals and M12 once more.
 """
 
 import numpy as np
@@ -233,8 +234,16 @@ def hard_vertical_pass_outside(x, upper, lower, rest, contact, centers, axes, ra
     ne = centers.shape[0]
     to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
     _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
+    return _verticals_outside(x, upper, lower, rest, contact, 0, upper.shape[0], centers,
+                              to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+
+
+@njit(cache=True)
+def _verticals_outside(x, upper, lower, rest, contact, first, end, centers, to_unit, from_unit,
+                       reach2, cap_a, cap_b, cap_r, plane_p, plane_n):
+    """hard_vertical_pass_outside over the vertical edges ``first`` to ``end`` - 1."""
     deepest = 0.0
-    for j in range(upper.shape[0]):
+    for j in range(first, end):
         a, b = upper[j], lower[j]
         for _ in range(VERTICAL_COLLISION_ITERATIONS):
             d0 = x[a, 0] - x[b, 0]
@@ -253,6 +262,85 @@ def hard_vertical_pass_outside(x, upper, lower, rest, contact, centers, axes, ra
             contact[b] = True           # M15: it touched the body during this step
             deepest = max(deepest, depth)
     return deepest
+
+
+@njit(cache=True)
+def hard_pass_with_strain_limit(x, free, cloth, limit, contact, centers, axes, radii, cap_a,
+                                cap_b, cap_r, plane_p, plane_n):
+    """M12 outside the body, row by row, each row's horizontals held to (1 + ``limit``) rest.
+
+    Top-down: a row's verticals at their length from the row above and outside the body
+    (hard_vertical_pass_outside), then its horizontals shortened (limit_stretch) and its
+    verticals put back, a few rounds, before the next row hangs from it. Nothing else limits
+    the horizontals once the push-out and M12 have moved their ends (docs/accuracy.md), and a
+    row settled before the next keeps the work to the rows that need it.
+    """
+    upper, lower, rest = cloth.vert_a, cloth.vert_b, cloth.vert_rest
+    ha, hb, hrest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
+    cols = cloth.pin_local.shape[0]
+    ne = centers.shape[0]
+    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
+    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
+    nv, nh = upper.shape[0], ha.shape[0]
+    j, h = 0, 0
+    while j < nv:
+        row = lower[j] // cols
+        end = j
+        while end < nv and lower[end] // cols == row:
+            end += 1
+        _verticals_outside(x, upper, lower, rest, contact, j, end, centers, to_unit, from_unit,
+                           reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+        while h < nh and ha[h] // cols < row:
+            h += 1
+        h_end = h
+        while h_end < nh and ha[h_end] // cols == row:
+            h_end += 1
+        for _ in range(STRAIN_LIMIT_ROUNDS):
+            if not limit_stretch(x, free, ha[h:h_end], hb[h:h_end], hrest[h:h_end], limit,
+                                 STRAIN_LIMIT_SWEEPS):
+                break
+            _verticals_outside(x, upper, lower, rest, contact, j, end, centers, to_unit,
+                               from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+        j, h = end, h_end
+
+
+# Sweeps of the horizontal strain limit: two bring a row's excess from one edge to its
+# neighbours and back.
+STRAIN_LIMIT_SWEEPS = 2
+STRAIN_LIMIT_ROUNDS = 5
+
+
+@njit(cache=True)
+def limit_stretch(x, free, ea, eb, rest, limit, sweeps):
+    """Provot's strain limit: shorten each edge over (1 + ``limit``) rest, moving free ends.
+
+    Only shortens, never lengthens, so folds and compression are left to the solve. Both
+    ends move half the excess when both are free. Returns the shortenings made.
+    """
+    shortened = 0
+    for _ in range(sweeps):
+        for j in range(ea.shape[0]):
+            a, b = ea[j], eb[j]
+            d0 = x[b, 0] - x[a, 0]
+            d1 = x[b, 1] - x[a, 1]
+            d2 = x[b, 2] - x[a, 2]
+            length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            most = (1.0 + limit) * rest[j]
+            if length <= most:
+                continue
+            shortened += 1
+            f = (length - most) / length
+            fa = 0.5 * f if free[b] else f
+            fb = 0.5 * f if free[a] else f
+            if free[a]:
+                x[a, 0] += d0 * fa
+                x[a, 1] += d1 * fa
+                x[a, 2] += d2 * fa
+            if free[b]:
+                x[b, 0] -= d0 * fb
+                x[b, 1] -= d1 * fb
+                x[b, 2] -= d2 * fb
+    return shortened
 
 
 @njit(cache=True)
@@ -419,6 +507,8 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
     free, ca, cb, rest = cloth.free, cloth.con_a, cloth.con_b, cloth.con_rest
     upper, lower, vrest = cloth.vert_a, cloth.vert_b, cloth.vert_rest
     anchor, tether = cloth.tether_anchor, cloth.tether_length
+    ha, hb, hrest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
+    limit_horizontal = tuning.horizontal_limit >= 0.0
     radii, cap_r = colliders.radii, colliders.capsule_radii
     stiffness, iterations, compliance = tuning.stiffness, tuning.iterations, tuning.compliance
     max_distance, limit_mode, solver = tuning.max_distance, tuning.limit_mode, tuning.solver
@@ -464,6 +554,9 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
             tethers(x, free, anchor, tether)
         deepest = max(deepest, collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r,
                                        plane_p, plane_n, contact))
+        if limit_horizontal and limit_mode != LIMIT_HARD_PASS:
+            # Without M12 the horizontals' limit runs before M11, which then has the last word.
+            limit_stretch(x, free, ha, hb, hrest, tuning.horizontal_limit, STRAIN_LIMIT_SWEEPS)
         limited += limit_distance(x, free, ref, max_distance)
         if limit_mode == LIMIT_HARD_PASS:
             # M12 run last, as the article does, but agreeing with the colliders: a plain
@@ -471,8 +564,13 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
             # again (docs/method.md).
             # Its push-outs measure the pass (the straight line it starts from), not the cloth:
             # they stay out of the deepest push-out reported.
-            hard_vertical_pass_outside(x, upper, lower, vrest, contact, centers, axes, radii,
-                                       cap_a, cap_b, cap_r, plane_p, plane_n)
+            if limit_horizontal:
+                hard_pass_with_strain_limit(x, free, cloth, tuning.horizontal_limit, contact,
+                                            centers, axes, radii, cap_a, cap_b, cap_r, plane_p,
+                                            plane_n)
+            else:
+                hard_vertical_pass_outside(x, upper, lower, vrest, contact, centers, axes,
+                                           radii, cap_a, cap_b, cap_r, plane_p, plane_n)
     if substeps > 1:        # leave the frames exactly where the step ends (lerp rounds)
         centers[:], axes[:], cap_a[:], cap_b[:] = c_to, a_to, ka_to, kb_to
         plane_p[:], plane_n[:], ref[:] = pp_to, pn_to, ref_to

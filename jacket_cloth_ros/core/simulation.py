@@ -184,7 +184,8 @@ class JacketSimulation:
         p, f = self.params, self.fabric
         return Tuning(
             floats(self.stiffness), int(f.iterations), floats(self.compliance),
-            floats(self.max_distance), int(p.stretch_limit_mode), int(p.solver_mode),
+            floats(self.max_distance), int(p.stretch_limit_mode),
+            float(f.max_horizontal_stretch), int(p.solver_mode),
             int(p.substeps), float(p.quality_tolerance),
             float(AUTO_SWEEP_SHARE * p.quality_tolerance), floats(self.damping),
             float(f.contact_damping), float(f.hood_damping), float(DESIGN_RATE / p.sim_rate),
@@ -258,7 +259,8 @@ class JacketSimulation:
         """(pinned top row, M11 reference points) for a skeleton pose.
 
         M6: the top row is carried by its link and, near the shoulders, by the M2 bones below
-        the shoulder pads (``layer``, solved for ``links``), then put outside the colliders
+        the shoulder pads (``layer``, solved for ``links``), its spread held to the fabric's
+        ``max_horizontal_stretch``, then put outside the colliders
         (posed with ``self.root`` for the floor), as the compiled step does. A column hangs
         from its top vertex, so the column's reference points are lifted with it, or M11 would
         pull the cloth away from its own pinned row.
@@ -266,7 +268,13 @@ class JacketSimulation:
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
         top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
-        pose_kernel.skinned_pose(links, self.model.cloth, below, top, ref)
+        cloth = self.model.cloth
+        pose_kernel.skinned_pose(links, cloth, below, top, ref)
+        limit = self.fabric.max_horizontal_stretch
+        if below.shape[0]:              # the pads' spread held as the compiled step holds it
+            kernel.limit_stretch(top, np.ones(rig.cols, dtype=np.bool_), cloth.row_a,
+                                 cloth.row_a + 1, cloth.row_rest, limit,
+                                 kernel.STRAIN_LIMIT_SWEEPS)
         c = self._posed(links, self.root)       # M10: the pinned row outside the body
         kernel.push_out_points(top, c.centers, c.axes, self.model.colliders.radii, c.cap_a,
                                c.cap_b, self.model.colliders.capsule_radii, c.plane_p, c.plane_n)
