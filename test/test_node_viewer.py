@@ -147,3 +147,25 @@ def test_a_live_session_near_far_near_replays_byte_for_byte(harness, tmp_path):
     # The level changes during the session, at the inputs the live node changed it.
     assert replay_levels[:48] == [0] * 48 and replay_levels[-1] == 0
     assert replay_levels[48:96] == [2] * 48
+
+
+def test_a_recording_started_after_the_viewer_replays_from_it(harness, tmp_path):
+    """`record` set live while a far viewer stands: the file starts with that viewer, so
+    its replay runs far from its first input, as the node did."""
+    from jacket_cloth_ros.tools.session import load_session, run_session
+    from rclpy.parameter import Parameter
+    path = tmp_path / 'late.mcap'
+    h = harness()
+    pub = h.peer.create_publisher(PointStamped, TOPIC, VIEWER_QOS)
+    h.spin_until(lambda: pub.get_subscription_count() > 0)
+    pub.publish(_viewer(FAR))
+    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    _walk(h, 0, 30)
+    assert h.node.set_parameters([Parameter('record', value=str(path))])[0].successful
+    _walk(h, 30, 30)
+    h.node.close()
+    session = load_session(str(path))
+    assert [e[2] for e in session.events][0] == 'viewer'
+    levels = []
+    run_session(session, probe=lambda p, r, stamp, outs: levels.append(r.lod_level))
+    assert levels[1:] == [2] * 29          # the first input starts the cloth: no steps
