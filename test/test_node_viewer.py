@@ -3,6 +3,7 @@
 
 import math
 
+import numpy as np
 import pytest
 import rclpy
 from conftest import DOMAIN_ID
@@ -169,3 +170,16 @@ def test_a_recording_started_after_the_viewer_replays_from_it(harness, tmp_path)
     levels = []
     run_session(session, probe=lambda p, r, stamp, outs: levels.append(r.lod_level))
     assert levels[1:] == [2] * 29          # the first input starts the cloth: no steps
+
+
+def test_a_root_far_off_gives_the_far_level_without_an_overflow():
+    # Found by the ~/viewer fuzz: a finite but huge root position overflowed numpy's norm.
+    import warnings
+
+    from jacket_cloth_ros.core.lod import LevelOfDetail
+    lod = LevelOfDetail()
+    lod.set_viewer((1.0, 2.0, 3.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        step = lod.plan(np.array([1e200, 0.0, 0.0]), (10.0, 30.0), 0.5, 2, 1 / 120)
+    assert step.level == 2

@@ -7,6 +7,7 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 ``timing`` is on (live), keeping a replay's output file byte-identical run after run.
 """
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -189,7 +190,7 @@ class SessionPipeline:
         viewer, last = self.sim.lod.viewer, self.sim.last
         if viewer is None or last is None:
             return ''
-        return f'{np.linalg.norm(viewer - last.root[:3, 3]):.2f}'
+        return f'{math.dist(viewer, last.root[:3, 3]):.2f}'
 
     def _status(self, slow):
         """Level and message of the inputs since the last diagnostics."""
