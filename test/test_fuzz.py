@@ -21,7 +21,7 @@ import pytest
 import rclpy
 import yaml
 from conftest import DOMAIN_ID
-from geometry_msgs.msg import Vector3Stamped
+from geometry_msgs.msg import PointStamped, Vector3Stamped
 from rclpy.context import Context
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import serialize_message
@@ -34,6 +34,7 @@ from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.motion.clips import joint_state_content
 from jacket_cloth_ros.ros import cdr
 from jacket_cloth_ros.ros.parameters import check_value
+from jacket_cloth_ros.ros.viewer import VIEWER_QOS
 from jacket_cloth_ros.tools.cli import main
 
 SECONDS = float(os.environ.get('JACKET_CLOTH_FUZZ_SECONDS', '2'))
@@ -88,6 +89,17 @@ def _wind_applies(raw):
         return None
     v = [msg.vector.x, msg.vector.y, msg.vector.z]
     return None if check_value('wind', v) else tuple(v)
+
+
+def _viewer_applies(raw):
+    try:
+        msg = cdr.deserialize(raw, PointStamped)
+    except cdr.DECODE_ERRORS:
+        return None
+    p = (msg.point.x, msg.point.y, msg.point.z)
+    ok = msg.header.frame_id == 'world' and all(math.isfinite(v) for v in p) and \
+        sum(v * v for v in p) <= 1e18
+    return p if ok else None
 
 
 def test_fuzz_every_subscribed_topic(urdf_text):
@@ -148,6 +160,30 @@ def test_fuzz_every_subscribed_topic(urdf_text):
             else:
                 assert h.node.refused['wind'] == before, (SEED, data)
                 assert h.node.sim.params.wind == expected, (SEED, data)
+
+        # ~/viewer: each message sets the viewer or is refused (the last good one kept).
+        viewer = h.peer.create_publisher(PointStamped, '/jacket_cloth_node/viewer', VIEWER_QOS)
+        h.spin_until(lambda: viewer.get_subscription_count() > 0)
+        seeds = []
+        for p in ([1.0, 2.0, 3.0], [0.0, -40.0, 0.0], [5e8, 0.0, -5e8]):
+            msg = PointStamped()
+            msg.header.frame_id = 'world'
+            msg.point.x, msg.point.y, msg.point.z = p
+            seeds.append(serialize_message(msg))
+        sent = 0
+        for _ in _until(SECONDS):
+            data = fuzzed(rng, seeds)
+            before = (h.node.refused['viewer'], h.node.sim.lod.viewer)
+            viewer.publish(data)
+            sent += 1
+            h.spin_until(lambda: h.node.received['viewer'] == sent)
+            expected = _viewer_applies(data)
+            if expected is None:
+                assert h.node.refused['viewer'] == before[0] + 1, (SEED, data)
+                assert h.node.sim.lod.viewer is before[1], (SEED, data)
+            else:
+                assert h.node.refused['viewer'] == before[0], (SEED, data)
+                assert tuple(h.node.sim.lod.viewer) == expected, (SEED, data)
 
         # joint_states: each message is used, or counted as dropped or undecodable.
         sk = h.node.sim.skeleton

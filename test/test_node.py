@@ -278,7 +278,8 @@ def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
         assert {s.encoding for s in summary.schemas.values()} == {'ros2msg'}
         topics = {c.topic: c for c in summary.channels.values()}
         assert set(topics) == {'/joint_states', '/tf', '/jacket_cloth_node/markers',
-                               '/diagnostics', '/jacket_cloth_node/wind', '/parameter_events'}
+                               '/diagnostics', '/jacket_cloth_node/wind', '/parameter_events',
+                               '/jacket_cloth_node/viewer'}
         assert all(c.message_encoding == 'cdr' and 'reliability' in
                    c.metadata['offered_qos_profiles'] for c in topics.values())
         counts = summary.statistics.channel_message_counts

@@ -68,6 +68,7 @@ def test_replay_writes_what_the_node_records_and_an_independent_reader_decodes_i
             '/jacket_cloth_node/markers': 'visualization_msgs/msg/MarkerArray',
             '/diagnostics': 'diagnostic_msgs/msg/DiagnosticArray',
             '/jacket_cloth_node/wind': 'geometry_msgs/msg/Vector3Stamped',
+            '/jacket_cloth_node/viewer': 'geometry_msgs/msg/PointStamped',
             '/parameter_events': 'rcl_interfaces/msg/ParameterEvent'}
         assert all('offered_qos_profiles' in c.metadata for c in summary.channels.values())
         # Compressed as the node would have (record_compression, lz4 by default).

@@ -62,7 +62,8 @@ class LevelOfDetail:
         if self.viewer is None:
             distance = 0.0
         else:
-            distance = float(np.linalg.norm(self.viewer - np.asarray(root_position)))
+            # math.dist scales: a root far off (a bad but finite input) gives no overflow.
+            distance = math.dist(self.viewer, np.asarray(root_position, dtype=float))
         self.level = self._level_at(distance, sorted(distances))
         target = 1.0 if self.level >= 2 else 0.0
         start = self.skin

@@ -21,7 +21,7 @@ from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Vector3Stamped
+from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
@@ -34,6 +34,7 @@ from ..recording.writer import SessionRecorder
 from . import cdr
 from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
 from .pipeline import SessionPipeline, session_topics
+from .viewer import VIEWER_QOS, read_viewer
 from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
@@ -118,8 +119,9 @@ class JacketClothNode(JacketNodeBase):
         self.inputs = 0
         self._sequences = {}        # publisher gid -> the last sequence number it sent us
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
-        self.received = dict.fromkeys(('wind', 'robot_description'), 0)
-        self.refused = dict.fromkeys(('wind', 'robot_description'), 0)
+        self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        self._viewer = None         # the last accepted ~/viewer: (position, raw, header stamp)
         self._diag_timer = None
         self._diag_wall = 0.0
 
@@ -132,10 +134,13 @@ class JacketClothNode(JacketNodeBase):
         }
         self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True,
                                  event_callbacks=NO_SUB_EVENTS)
+        # Latched: a viewer published once, before the character is loaded, waits for it.
+        self.create_subscription(PointStamped, '~/viewer', self._on_viewer, VIEWER_QOS,
+                                 raw=True, event_callbacks=NO_SUB_EVENTS)
         # Recorded under the names the topics have in the graph (resolved once).
         self._topics = session_topics(
             self.resolve_topic_name('joint_states'), self.resolve_topic_name('~/wind'),
-            self.publishers_by_key['markers'].topic_name)
+            self.publishers_by_key['markers'].topic_name, self.resolve_topic_name('~/viewer'))
         self._open_recorder(self._p('record'))
         self._description = self._fallback = None
         urdf = self._p('robot_description')
@@ -202,6 +207,8 @@ class JacketClothNode(JacketNodeBase):
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: change frame_prefix')
         self.pipeline = pipeline
+        if self._viewer is not None:        # it came before the character
+            pipeline.set_viewer(self._viewer[0])
         self._urdf = urdf
         # Done waiting: every entity left in the node is work for each executor wake-up.
         if self._description is not None:
@@ -269,6 +276,11 @@ class JacketClothNode(JacketNodeBase):
                                     'recording')
             return
         self._write_session_config()
+        if self._viewer is not None:
+            # A file opened after the viewer came starts from it, so its replay does too.
+            last = self.sim.last if self.sim else None
+            self._record(self._topics['viewer'][0], self._viewer[1],
+                         last.stamp_ns if last else self._viewer[2])
 
     def _write_session_config(self):
         """Record the character, rig, fabrics and parameters, so a replay needs only the file."""
@@ -332,6 +344,23 @@ class JacketClothNode(JacketNodeBase):
         header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         self._record(self._topics['wind'][0], raw,
                      last.stamp_ns if last else header)
+
+    def _on_viewer(self, raw):
+        """~/viewer: the viewer's world position for the level of detail, from the next input.
+
+        Recorded as an input at the last input's stamp: a replay applies it at the same point.
+        """
+        self.received['viewer'] += 1
+        reading = read_viewer(raw, self._p('world_frame'))
+        if reading.position is None:
+            self.refused['viewer'] += 1
+            self._warn('viewer', f'~/viewer rejected: {reading.reason}; the last viewer is kept')
+            return
+        self._viewer = (reading.position, bytes(raw), reading.stamp_ns)
+        if self.pipeline is not None:
+            self.pipeline.set_viewer(reading.position)
+        last = self.sim.last if self.sim else None
+        self._record(self._topics['viewer'][0], raw, last.stamp_ns if last else reading.stamp_ns)
 
     def on_joint_state(self, raw: bytes, info: dict) -> None:
         """One serialized JointState in (the joint_states callback): simulate, publish, record.

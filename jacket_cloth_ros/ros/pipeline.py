@@ -7,6 +7,7 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 ``timing`` is on (live), keeping a replay's output file byte-identical run after run.
 """
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,16 +28,19 @@ if TYPE_CHECKING:           # for the annotations only
 
 
 def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_cloth_node/wind',
-                   markers: str = '/jacket_cloth_node/markers') -> dict[str, tuple[str, str, str]]:
+                   markers: str = '/jacket_cloth_node/markers',
+                   viewer: str = '/jacket_cloth_node/viewer') -> dict[str, tuple[str, str, str]]:
     """Return a session's topics by key: (name, type, offered QoS as rosbag2 records it).
 
-    Inputs (JointState, wind, parameter changes) and outputs (/tf, markers, diagnostics): the
-    node records them all, a replay reads the inputs and writes them all again.
+    Inputs (JointState, wind, viewer, parameter changes) and outputs (/tf, markers,
+    diagnostics): the node records them all, a replay reads the inputs and writes them all again.
     """
     return {
         'joint_states': (joint_states, 'sensor_msgs/msg/JointState',
                          qos_profile_yaml(reliable=False)),
         'wind': (wind, 'geometry_msgs/msg/Vector3Stamped', qos_profile_yaml()),
+        'viewer': (viewer, 'geometry_msgs/msg/PointStamped',
+                   qos_profile_yaml(transient_local=True, depth=1)),
         'parameter_events': ('/parameter_events', 'rcl_interfaces/msg/ParameterEvent',
                              qos_profile_yaml(depth=1000)),
         'tf': ('/tf', 'tf2_msgs/msg/TFMessage', qos_profile_yaml(depth=100)),
@@ -94,6 +98,10 @@ class SessionPipeline:
             self.sim.parser.set_world_joint(self.values['world_joint'])
         if 'frame_prefix' in changes:
             self._tf = self._tf_template()
+
+    def set_viewer(self, position: 'np.ndarray | None') -> None:
+        """Set the viewer's world position for the level of detail, from the next input on."""
+        self.sim.set_viewer(position)
 
     def note_latency(self, ns: int) -> None:
         """Note the live node's time from a JointState's arrival to its /tf going out."""
@@ -177,6 +185,13 @@ class SessionPipeline:
         """Diagnostics whatever the stamps: the live node's own rate, when inputs stop."""
         return self._diagnostics(stamp_ns)
 
+    def _viewer_distance(self):
+        """Return the viewer's distance to the root at the last input ('' without a viewer)."""
+        viewer, last = self.sim.lod.viewer, self.sim.last
+        if viewer is None or last is None:
+            return ''
+        return f'{math.dist(viewer, last.root[:3, 3]):.2f}'
+
     def _status(self, slow):
         """Level and message of the inputs since the last diagnostics."""
         w = self._window
@@ -225,6 +240,8 @@ class SessionPipeline:
             'undecodable_inputs': self.undecodable,
             'lost_inputs': self.lost,
             'sim_steps': sim.steps_total,
+            'lod_level': sim.lod.level,
+            'viewer_distance_m': self._viewer_distance(),
             'recording': self.values['record'],
         })
         level, message = self._status(slow)

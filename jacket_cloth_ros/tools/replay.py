@@ -1,9 +1,9 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``jacket_cloth replay``: a recording through the live node's pipeline, as fast as it runs.
 
-Writes what the node would have recorded: the input JointState (and wind and parameter
-changes) as they were, and the /tf, markers and diagnostics the simulation gives now. Same
-input and set-up: a byte-identical file (no wall-clock figure goes into it).
+Writes what the node would have recorded: the input JointState (and wind, viewer and
+parameter changes) as they were, and the /tf, markers and diagnostics the simulation gives
+now. Same input and set-up: a byte-identical file (no wall-clock figure goes into it).
 """
 
 import os

@@ -27,6 +27,7 @@ from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, parse_override
 from ..ros.pipeline import SessionPipeline, session_topics
+from ..ros.viewer import VIEWER_TYPE, read_viewer
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 PARAMETER_EVENT = 'rcl_interfaces/msg/ParameterEvent'
@@ -163,7 +164,7 @@ def _header_stamp(raw):
 
 
 def _events(recording, topic):
-    """Return JointState, wind and parameter changes in recorded order.
+    """Return JointState, wind, viewer and parameter changes in recorded order.
 
     The order they were written, which is the order the node received them (log times can go
     back, or differ from the stamps). A JointState carries its header stamp, the time the node
@@ -180,6 +181,8 @@ def _events(recording, topic):
             events.append((m.log_time, order, 'parameter_events', m.data))
         elif m.type_name == WIND and m.topic.endswith('/wind'):
             events.append((m.log_time, order, 'wind', m.data))
+        elif m.type_name == VIEWER_TYPE and m.topic.endswith('/viewer'):
+            events.append((m.log_time, order, 'viewer', m.data))
     if not any(e[2] == 'joint_states' for e in events):
         raise RecordingError(f'{recording.path}: {topic} has no messages')
     return events
@@ -232,6 +235,12 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
             if kind == 'parameter_events':
                 pipeline.apply(_parameter_changes(data, pipeline.values))
                 stamp = last.stamp_ns if last else 0
+            elif kind == 'viewer':
+                # The node recorded only viewers it took, and takes them as it does.
+                reading = read_viewer(data, pipeline.values['world_frame'])
+                if reading.position is not None:
+                    pipeline.set_viewer(reading.position)
+                stamp = last.stamp_ns if last else reading.stamp_ns
             else:
                 stamp = last.stamp_ns if last else _header_stamp(data) or 0
             if sink:
@@ -242,8 +251,9 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
 def output_topics(session: SessionInput) -> dict[str, tuple[str, str, str]]:
     """Return the topics a replay writes, named as the node names them (inputs keep theirs)."""
     topics = session_topics(joint_states=session.topic)
-    for m in session.recording.messages:
-        if m.type_name == WIND and m.topic.endswith('/wind'):
-            topics['wind'] = (m.topic,) + topics['wind'][1:]
-            break
+    for key, kind in (('wind', WIND), ('viewer', VIEWER_TYPE)):
+        for m in session.recording.messages:
+            if m.type_name == kind and m.topic.endswith('/' + key):
+                topics[key] = (m.topic,) + topics[key][1:]
+                break
     return topics

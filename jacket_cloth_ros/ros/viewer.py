@@ -1,0 +1,53 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The ``~/viewer`` input: where the viewer stands, for the level of detail (core/lod.py).
+
+A ``geometry_msgs/PointStamped`` in the node's ``world_frame``. Latched (transient local,
+depth 1): a viewer published once, before or after the node starts, reaches it.
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from geometry_msgs.msg import PointStamped
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from . import cdr
+
+VIEWER_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                        history=HistoryPolicy.KEEP_LAST)
+VIEWER_TYPE = 'geometry_msgs/msg/PointStamped'
+MAX_DISTANCE_M = 1e9        # farther is a unit or encoding error, not a viewer
+
+
+class ViewerReading(NamedTuple):
+    """A ``~/viewer`` message as read: its position, or None and why it was refused."""
+
+    position: np.ndarray | None     # (3,) in the world frame
+    stamp_ns: int                   # the header's stamp (0 if it did not decode)
+    reason: str                     # '' when accepted
+
+
+def read_viewer(raw: bytes, world_frame: str) -> ViewerReading:
+    """Read a viewer position from CDR bytes; never raises on bad bytes or values.
+
+    Refuses bytes that are no PointStamped, a ``frame_id`` other than ``world_frame`` (the
+    node does not look frames up), a non-finite coordinate, or a point farther than
+    ``MAX_DISTANCE_M``.
+    """
+    try:
+        msg = cdr.deserialize(raw, PointStamped)
+    except cdr.DECODE_ERRORS as e:
+        return ViewerReading(None, 0, f'does not decode ({e})')
+    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    frame = msg.header.frame_id
+    if frame != world_frame:
+        return ViewerReading(None, stamp,
+                             f'frame_id {frame!r} is not the world frame {world_frame!r}')
+    p = (msg.point.x, msg.point.y, msg.point.z)
+    if not all(math.isfinite(v) for v in p):
+        return ViewerReading(None, stamp, f'a non-finite coordinate {list(p)}')
+    if math.hypot(*p) > MAX_DISTANCE_M:
+        return ViewerReading(None, stamp, f'farther than {MAX_DISTANCE_M:g} m {list(p)}')
+    return ViewerReading(np.array(p, dtype=float), stamp, '')
