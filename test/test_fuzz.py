@@ -367,6 +367,22 @@ def test_found_by_fuzzing_a_short_message_and_a_huge_quaternion(make_sim, rest_i
     for data in [whole[:cut] for cut in range(len(whole))] + [b'\x00\x01\x01\x01']:
         with pytest.raises(ValueError):
             cdr.deserialize(data, Vector3Stamped)
+    # Reading past the end was a segmentation fault on the CI machine: every subscribed type
+    # is checked whole before rclpy sees it, cut anywhere or with a length beyond the bytes.
+    from geometry_msgs.msg import PointStamped
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+    joint_state = JointState(name=['a', 'bb'], position=[1.0, 2.0], velocity=[3.0], effort=[4.0])
+    for msg in (joint_state, String(data='reset'), PointStamped()):
+        whole = serialize_message(msg)
+        assert cdr.deserialize(whole, type(msg)) == msg
+        for cut in range(len(whole)):
+            with pytest.raises(ValueError):
+                cdr.deserialize(whole[:cut], type(msg))
+        at = 4 if isinstance(msg, String) else 12           # the first string's length
+        huge = whole[:at] + b'\xff\xff\xff\x7f' + whole[at + 4:]
+        with pytest.raises(ValueError):
+            cdr.deserialize(huge, type(msg))
     # A world rotation of 1e200 components: its squares overflowed to a division by zero.
     names, pos = rest_input
     names = list(names)

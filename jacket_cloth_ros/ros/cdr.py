@@ -375,15 +375,15 @@ class JointStateReader:
 
 def deserialize(raw: bytes, msg_type: type) -> object:
     """Deserialize as rclpy does, failing with ValueError on bytes that are no ``msg_type``."""
-    from rclpy.serialization import deserialize_message, serialize_message
+    from rclpy.serialization import deserialize_message
+
+    from .cdr_bounds import check_whole
+    raw = bytes(raw)
+    check_whole(raw, msg_type)      # Fast CDR would read past the end of short bytes
     try:
-        msg = deserialize_message(raw, msg_type)
+        return deserialize_message(raw, msg_type)
     except Exception as e:  # noqa: BLE001 - rclpy raises its own error types
         raise ValueError(str(e)) from None
-    # Fast CDR reads past the end of a short buffer without an error: compare with a whole one.
-    if len(serialize_message(msg)) > len(raw):
-        raise ValueError(f'cut short ({len(raw)} bytes)')
-    return msg
 
 
 def _joint_state_by_rclpy(raw):
