@@ -111,6 +111,10 @@ def continuous_zxy(angles: np.ndarray) -> np.ndarray:
     out = np.array(angles, dtype=float)
     for k in range(1, len(out)):
         a, b, c = out[k]
+        if abs(abs(b) - math.pi / 2) < 1e-9:
+            # Locked: Rz(a) Rx(+-pi/2) Ry(c) depends on a +- c only; keep c where it was.
+            c = out[k - 1, 2]
+            a -= c if b > 0 else -c
         best = None
         for cand in ((a, b, c), (a + math.pi, math.pi - b, c + math.pi)):
             cand = np.asarray(cand)
