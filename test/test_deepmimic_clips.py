@@ -161,6 +161,7 @@ def test_uneven_frames_are_resampled_at_the_clips_rate():
     ('{"Frames": [[0.1, 0, 1]]}', 'frame 0 is not 44 numbers'),
     ('{"Frames": [[' + ', '.join(['NaN'] + ['0'] * 43) + ']]}', 'not a finite number'),
     ('{"Frames": [[' + ', '.join(['0'] * 44) + ']]}', 'frames last 0 s'),
+    ('{"Frames": [[' + ', '.join(['-0.1'] + ['0'] * 43) + ']]}', 'frame 0 lasts less than 0 s'),
     ('{"Frames": [[' + ', '.join(['0.1'] + ['0'] * 43) + ']]}', 'a quaternion is zero'),
 ])
 def test_a_malformed_clip_is_one_line_and_exit_1(tmp_path, capsys, content, words):

@@ -12,8 +12,8 @@ order ``humanoid_stable_pd.py`` hands them to ``resetJointStatesMultiDof``).
 Conventions of the result:
 
 - Axes: the clip's world and the humanoid are both Y-up; nothing is turned. The root pose is
-  the URDF root link's (``base``, whose inertial frame pybullet places is at its origin) and
-  travels on ``world_joint`` as BVH import's does.
+  the URDF root link's (``base``: pybullet places a base by its inertial frame, which is at
+  this link's origin) and travels on ``world_joint`` as BVH import's does.
 - Units: pybullet loads the humanoid at ``globalScaling=0.25`` (``humanoid_stable_pd.py``);
   the URDF as written is four times that, so root positions are multiplied by ``scale`` (URDF
   lengths per clip length, default ``PYBULLET_SCALING``). Angles do not scale.
@@ -157,6 +157,8 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
     """Convert a clip's frames (F, 44) into JointState content for ``urdf`` (its text)."""
     if not (scale > 0 and math.isfinite(scale)):
         raise ClipError(f'scale must be a positive number, not {scale}')
+    if (frames[:, 0] < 0).any():
+        raise ClipError(f'frame {int(np.argmax(frames[:, 0] < 0))} lasts less than 0 s')
     dt = frame_time(frames[:, 0])
     if not dt > 0:
         raise ClipError('its frames last 0 s')
