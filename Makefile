@@ -67,7 +67,8 @@ analysis: $(READY)
 MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
 JVRC := $(MOCAP)/jvrc1.urdf
 HUMANOID := $(MOCAP)/humanoid.urdf
-mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID)
+DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a,$(MOCAP)/humanoid3d_$(c).txt)
+mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS)
 
 $(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: bvhtoolbox==0.1.3 -d $(MOCAP)
@@ -83,17 +84,21 @@ $(JVRC): | $(READY)
 	$(PIP) download --no-deps jvrc_description==1.1.1 -d $(MOCAP)
 	$(PY) -c "import zipfile; z = zipfile.ZipFile('$(MOCAP)/jvrc_description-1.1.1-py3-none-any.whl'); open('$@', 'wb').write(z.read('jvrc_description/urdf/jvrc1.urdf'))"
 
-# A Y-up humanoid URDF with primitive collision shapes and pybullet's spherical joints (never
-# committed): the DeepMimic humanoid of pybullet 3.2.7's pybullet_data (zlib), from its 80 MB
-# source distribution, which is removed once the URDF is out.
-$(HUMANOID): | $(READY)
+# A Y-up humanoid URDF with primitive collision shapes and pybullet's spherical joints, and
+# DeepMimic motion clips made for it (never committed): the DeepMimic humanoid of pybullet
+# 3.2.7's pybullet_data (zlib) and some of its data/motions, from its 80 MB source
+# distribution, which is removed once they are out (one grouped rule: one download for all).
+$(HUMANOID) $(DEEPMIMIC_CLIPS) &: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: pybullet==3.2.7 -d $(MOCAP)
 	tar -xzf $(MOCAP)/pybullet-3.2.7.tar.gz -C $(MOCAP) --strip-components=6 \
 	    pybullet-3.2.7/examples/pybullet/gym/pybullet_data/humanoid/humanoid.urdf
+	tar -xzf $(MOCAP)/pybullet-3.2.7.tar.gz -C $(MOCAP) --strip-components=7 \
+	    $(addprefix pybullet-3.2.7/examples/pybullet/gym/pybullet_data/data/motions/, \
+	    $(notdir $(DEEPMIMIC_CLIPS)))
 	rm -f $(MOCAP)/pybullet-3.2.7.tar.gz
-	touch $@
+	touch $(HUMANOID) $(DEEPMIMIC_CLIPS)
 
-test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID)
+test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

@@ -103,19 +103,26 @@ def _motion_to_file(args, skeleton, duration):
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    """Turn a BVH capture into a JointState recording and, with --urdf-out, its URDF."""
+    """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording."""
     from ..motion.bvh import BvhError, joint_state_content, load_capture, stamps_ns
+    from ..motion.deepmimic import ClipError, load_clip
     from ..recording.writer import SessionRecorder, qos_profile_yaml
     from ..ros.cdr import joint_state
     from .outputs import replacing
+    if args.urdf and args.urdf_out:
+        raise ToolError('--urdf-out is for a BVH capture; a DeepMimic clip moves the --urdf given')
     if args.urdf_out and os.path.abspath(args.urdf_out) == os.path.abspath(args.output):
         raise ToolError('--urdf-out and -o are the same file')
-    _check_output(args.output, args.force, [args.input], recording=True)
+    _check_output(args.output, args.force, [args.input, args.urdf], recording=True)
     if args.urdf_out:
         _check_output(args.urdf_out, args.force, [args.input, args.output])
+    if not args.urdf and _looks_like_json(args.input):
+        raise ToolError(f'{args.input} is JSON, not BVH: a DeepMimic clip needs --urdf (the '
+                        "humanoid it moves, pybullet's humanoid.urdf)")
     try:
-        capture = load_capture(args.input, args.scale)
-    except BvhError as e:
+        capture = load_clip(args.input, args.urdf, args.scale) if args.urdf else \
+            load_capture(args.input, args.scale)
+    except (BvhError, ClipError) as e:
         raise ToolError(str(e)) from None
     stamps = stamps_ns(capture, int(round(args.start * 1e9)))
     with replacing(args.output, recording=True) as tmp:
@@ -129,11 +136,24 @@ def cmd_import(args: argparse.Namespace) -> int:
         with replacing(args.urdf_out) as tmp:
             with open(tmp, 'w', encoding='utf-8') as f:
                 f.write(capture.urdf)
+    if args.urdf:
+        print(f'wrote {capture.frames} JointState messages at {1.0 / capture.frame_time:.6g} Hz '
+              f'to {args.output} ({len(capture.joint_names)} joints of {args.urdf}, root '
+              f'positions times {capture.scale:g})')
+        return 0
     print(f'wrote {capture.frames} JointState messages at {1.0 / capture.frame_time:.6g} Hz '
           f'to {args.output}' + (f' and the URDF to {args.urdf_out}' if args.urdf_out else '')
           + f' ({len(capture.joint_names)} joints, scale {capture.scale:g} m per unit, '
           f'{capture.height_m:.2f} m tall)')
     return 0
+
+
+def _looks_like_json(path):
+    try:
+        with open(path, 'rb') as f:
+            return f.read(64).lstrip().startswith(b'{')
+    except OSError:
+        return False            # the reader says what is wrong with it
 
 
 def _check_output(path, force, inputs=(), recording=False):
@@ -357,14 +377,18 @@ def build_parser() -> argparse.ArgumentParser:
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
-    i = sub.add_parser('import', help='a BVH motion capture as a JointState recording and a URDF')
-    i.add_argument('input', help='a .bvh file')
+    i = sub.add_parser('import', help='a BVH motion capture, or a DeepMimic clip, as a '
+                       'JointState recording (and a BVH skeleton as a URDF)')
+    i.add_argument('input', help='a .bvh file, or a DeepMimic clip (humanoid3d_*.txt) with --urdf')
     i.add_argument('-o', '--output', required=True,
                    help='the recording: an MCAP file (.mcap), else a rosbag2 bag folder')
     i.add_argument('--urdf-out', default=None, help="write the capture's skeleton as a URDF")
+    i.add_argument('--urdf', default=None,
+                   help="the humanoid a DeepMimic clip moves (pybullet's humanoid.urdf)")
     i.add_argument('--scale', type=float, default=None,
-                   help='metres per BVH unit (default: m, cm, mm or in, whichever makes the '
-                   'rest skeleton nearest 1.7 m tall)')
+                   help='BVH: metres per unit (default: m, cm, mm or in, whichever makes the '
+                   'rest skeleton nearest 1.7 m tall); DeepMimic: URDF lengths per clip length '
+                   '(default 4: pybullet loads the humanoid at a quarter)')
     i.add_argument('--start', type=float, default=1000.0, help='first stamp (s)')
     i.add_argument('--world-joint', default='world_joint')
     i.add_argument('--force', action='store_true', help='overwrite the output files')

@@ -1,0 +1,200 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A DeepMimic motion clip as JointState content for pybullet's DeepMimic humanoid (no ROS).
+
+The clips (``humanoid3d_*.txt`` in pybullet's ``pybullet_data/data/motions``) are JSON:
+``{"Loop": ..., "Frames": [[duration, ...], ...]}``. Each frame is 44 numbers, laid out as
+pybullet's own reader takes them apart (``pybullet_envs/deep_mimic/env/
+humanoid_pose_interpolator.py``, ``Slerp``): the frame's duration (s to the next frame), the
+root position (3), then quaternions written w, x, y, z for the root orientation and each
+``spherical`` joint and single angles for the ``revolute`` ones, in ``LAYOUT``'s order (the
+order ``humanoid_stable_pd.py`` hands them to ``resetJointStatesMultiDof``).
+
+Conventions of the result:
+
+- Axes: the clip's world and the humanoid are both Y-up; nothing is turned. The root pose is
+  the URDF root link's (``base``: pybullet places a base by its inertial frame, which is at
+  this link's origin) and travels on ``world_joint`` as BVH import's does.
+- Units: pybullet loads the humanoid at ``globalScaling=0.25`` (``humanoid_stable_pd.py``);
+  the URDF as written is four times that, so root positions are multiplied by ``scale`` (URDF
+  lengths per clip length, default ``PYBULLET_SCALING``). Angles do not scale.
+- Joints: a spherical joint's quaternion q becomes the three continuous joints about z, x and
+  y that ``core.skeleton`` chains for it (``BALL_AXES``): R(q) = Rz(a) Rx(b) Ry(c), about the
+  joint frame, which is parallel to the parent link's in this URDF (every joint origin has
+  rpy 0). Knees and elbows are the file's angle about their z axis.
+- Continuity: a, b, c of every frame are taken on the branch (of the two, (a, b, c) and
+  (a + pi, pi - b, c + pi)) and whole turns nearest the previous frame's, so the node's linear
+  interpolation never swings a joint the long way round, also near b = +-pi/2 (a shoulder
+  raised sideways, where a and c alone turn fast).
+- Rate: one sample per ``frame_time``, the clip's usual frame duration; a clip whose frames
+  are not all that long is resampled at it (slerp for rotations, linear for the rest).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+from ..core.transforms import quat_slerp, quat_to_matrix
+from .bvh import Capture
+
+# Each joint of pybullet's humanoid.urdf that a frame moves, in the frame's order, and its
+# count of numbers: 4 for a spherical joint's quaternion, 1 for a revolute joint's angle.
+LAYOUT = (('chest', 4), ('neck', 4), ('right_hip', 4), ('right_knee', 1), ('right_ankle', 4),
+          ('right_shoulder', 4), ('right_elbow', 1), ('left_hip', 4), ('left_knee', 1),
+          ('left_ankle', 4), ('left_shoulder', 4), ('left_elbow', 1))
+FRAME_LENGTH = 1 + 3 + 4 + sum(n for _, n in LAYOUT)
+# The humanoid's scale in pybullet's DeepMimic environment, which the clips were made for.
+PYBULLET_SCALING = 0.25
+_BALL = ('Z', 'X', 'Y')
+
+
+class ClipError(ValueError):
+    """A DeepMimic clip that cannot be imported; the message is one line naming the file."""
+
+
+def joint_names() -> list:
+    """Return the URDF joints a clip moves, in its columns' order (three per ball joint)."""
+    names = []
+    for joint, n in LAYOUT:
+        names += [f'{joint}_{a}rotation' for a in _BALL] if n == 4 else [joint]
+    return names
+
+
+def read_frames(path: str) -> np.ndarray:
+    """Return a clip's frames (F, 44); every failure is one ClipError line naming the file."""
+    if not os.path.isfile(path):
+        raise ClipError(f'{path}: no such file')
+    try:
+        with open(path, encoding='utf-8') as f:
+            data = json.load(f)
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ClipError(f'{path}: not a DeepMimic clip (not JSON: {e})') from None
+    frames = data.get('Frames') if isinstance(data, dict) else None
+    if not isinstance(frames, list) or not frames:
+        raise ClipError(f'{path}: not a DeepMimic clip (no "Frames" list)')
+    for k, frame in enumerate(frames):
+        if not isinstance(frame, list) or len(frame) != FRAME_LENGTH or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in frame):
+            raise ClipError(f'{path}: frame {k} is not {FRAME_LENGTH} numbers (duration, root '
+                            'position and quaternion, 12 joints)')
+    out = np.array(frames, dtype=float)
+    if not np.isfinite(out).all():
+        raise ClipError(f'{path}: a value is not a finite number')
+    return out
+
+
+def frame_time(durations: np.ndarray) -> float:
+    """Return the clip's frame duration: the most common of its frames' (the last may be 0)."""
+    steps = durations[:-1] if len(durations) > 1 else durations
+    values, counts = np.unique(np.round(steps, 9), return_counts=True)
+    return float(values[np.argmax(counts)])
+
+
+def zxy_angles(r: np.ndarray) -> np.ndarray:
+    """Return (..., 3) angles a, b, c with R = Rz(a) Rx(b) Ry(c), b in [-pi/2, pi/2]."""
+    cb = np.hypot(r[..., 0, 1], r[..., 1, 1])
+    b = np.arctan2(r[..., 2, 1], cb)
+    a = np.arctan2(-r[..., 0, 1], r[..., 1, 1])
+    c = np.arctan2(-r[..., 2, 0], r[..., 2, 2])
+    # At b = +-pi/2 only a + c (or a - c) is defined: c = 0 takes it all into a.
+    lock = cb < 1e-12
+    a = np.where(lock, np.arctan2(r[..., 1, 0], r[..., 0, 0]), a)
+    c = np.where(lock, 0.0, c)
+    return np.stack([a, b, c], axis=-1)
+
+
+def continuous_zxy(angles: np.ndarray) -> np.ndarray:
+    """Return (F, 3) angles of the same rotations, each frame nearest the frame before."""
+    out = np.array(angles, dtype=float)
+    for k in range(1, len(out)):
+        a, b, c = out[k]
+        if abs(abs(b) - math.pi / 2) < 1e-9:
+            # Locked: Rz(a) Rx(+-pi/2) Ry(c) depends on a +- c only; keep c where it was.
+            c = out[k - 1, 2]
+            a -= c if b > 0 else -c
+        best = None
+        for cand in ((a, b, c), (a + math.pi, math.pi - b, c + math.pi)):
+            cand = np.asarray(cand)
+            cand = cand - 2 * math.pi * np.round((cand - out[k - 1]) / (2 * math.pi))
+            if best is None or np.abs(cand - out[k - 1]).max() < np.abs(best - out[k - 1]).max():
+                best = cand
+        out[k] = best
+    return out
+
+
+def _xyzw(wxyz: np.ndarray) -> np.ndarray:
+    q = np.roll(wxyz, -1, axis=-1)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    if (norm < 1e-6).any():
+        raise ClipError('a quaternion is zero')
+    return q / norm
+
+
+def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
+    """Return frames at every multiple of ``dt`` over the clip (slerp for quaternions)."""
+    times = np.concatenate([[0.0], np.cumsum(frames[:-1, 0])])
+    count = int(math.floor(times[-1] / dt + 1e-6)) + 1
+    out = np.empty((count, frames.shape[1]))
+    quats = [4] + [8 + sum(n for _, n in LAYOUT[:i]) for i, (_, n) in enumerate(LAYOUT)
+                   if n == 4]
+    for j in range(count):
+        t = j * dt
+        k = min(int(np.searchsorted(times, t, side='right')) - 1, len(frames) - 2)
+        w = (t - times[k]) / max(times[k + 1] - times[k], 1e-12)
+        out[j] = frames[k] + w * (frames[k + 1] - frames[k])
+        for i in quats:
+            q = quat_slerp(_xyzw(frames[k, i:i + 4]), _xyzw(frames[k + 1, i:i + 4]), w)
+            out[j, i:i + 4] = np.roll(q, 1)
+    out[:, 0] = dt
+    return out
+
+
+def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBULLET_SCALING
+            ) -> Capture:
+    """Convert a clip's frames (F, 44) into JointState content for ``urdf`` (its text)."""
+    if not (scale > 0 and math.isfinite(scale)):
+        raise ClipError(f'scale must be a positive number, not {scale}')
+    if (frames[:, 0] < 0).any():
+        raise ClipError(f'frame {int(np.argmax(frames[:, 0] < 0))} lasts less than 0 s')
+    dt = frame_time(frames[:, 0])
+    if not dt > 0:
+        raise ClipError('its frames last 0 s')
+    if len(frames) > 1 and np.abs(frames[:-1, 0] - dt).max() > 1e-9:
+        frames = _resample(frames, dt)
+    columns, i = [], 8
+    for _, n in LAYOUT:
+        if n == 4:
+            rot = quat_to_matrix(_xyzw(frames[:, i:i + 4]))
+            columns.append(continuous_zxy(zxy_angles(rot)))
+        else:
+            columns.append(np.unwrap(frames[:, i:i + 1], axis=0))
+        i += n
+    root_q = _xyzw(frames[:, 4:8])
+    # One sign throughout: q and -q are one rotation, and a flip would read as a jump.
+    flips = np.sum(root_q[1:] * root_q[:-1], axis=1) < 0.0
+    root_q[1:] *= np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+    return Capture(name=name, urdf=urdf, frame_time=dt, scale=scale, joint_names=joint_names(),
+                   positions=np.hstack(columns), root=np.hstack([frames[:, 1:4] * scale, root_q]),
+                   link_names=[], height_m=float('nan'))
+
+
+def load_clip(path: str, urdf_path: str, scale: float | None = None) -> Capture:
+    """Read the clip ``path`` and convert it for the humanoid ``urdf_path`` (checked to fit)."""
+    from ..core.config import read_text
+    from ..core.skeleton import skeleton_from
+    frames = read_frames(path)
+    text = read_text(urdf_path, 'URDF')
+    skeleton = skeleton_from(text, f'URDF {urdf_path}')
+    missing = [j for j in joint_names() if j not in skeleton.joint_index]
+    if missing:
+        raise ClipError(f'{urdf_path} has no joint {missing[0]!r}: a DeepMimic clip moves '
+                        "pybullet's humanoid.urdf (chest, neck, hips, knees, ankles, shoulders, "
+                        'elbows)')
+    name = os.path.splitext(os.path.basename(path))[0] or 'clip'
+    try:
+        return convert(frames, name, text, 1.0 / PYBULLET_SCALING if scale is None else scale)
+    except ClipError as e:
+        raise ClipError(f'{path}: {e}') from None
