@@ -25,10 +25,11 @@ from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session, run_session
 
 MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
-# Per clip: inputs, then the horizontal stretch measured at the default settings (p99, max)
-# rounded up to 0.01 plus 0.02, as test_mocap_targets.py holds it (docs/motion_capture.md).
-CLIPS = {'walk': (39, 0.19, 0.23), 'run': (25, 0.42, 0.46), 'jump': (107, 0.14, 0.14),
-         'cartwheel': (164, 0.43, 0.45), 'dance_a': (98, 0.36, 0.37)}
+# Per clip: its inputs. Issue 19's horizontal target (p99 <= 10 %) holds on all but the
+# cartwheel, whose measured figures (p99 19.0 %, max 20.3 %) are held here rounded up to 0.01
+# plus 0.02 so they cannot grow unseen (docs/motion_capture.md says why they stay).
+CLIPS = {'walk': 39, 'run': 25, 'jump': 107, 'cartwheel': 164, 'dance_a': 98}
+CARTWHEEL_HORIZONTAL = (0.21, 0.23)
 
 
 def _fetched(name):
@@ -87,7 +88,7 @@ def test_forward_kinematics_of_the_imported_joints_is_the_clips_pose(name):
     sk = load_skeleton(urdf)
     frames = read_frames(_clip(name))
     cap = load_clip(_clip(name), urdf)
-    assert cap.frames == len(frames) == CLIPS[name][0]
+    assert cap.frames == len(frames) == CLIPS[name]
     assert cap.frame_time == pytest.approx(frames[0, 0], abs=1e-9)
     columns = [sk.joint_index[j] for j in cap.joint_names]
     worst = 0.0
@@ -229,26 +230,25 @@ def test_every_input_of_a_clip_holds_the_jacket_unstretched_and_outside(measured
     # vertical edge over 10 % (p99 3 %), never over 1 cm inside a collider (p99 3 mm), no
     # reset but the first sample's (none of these clips teleports).
     name, s = measured
-    assert s['published'] == s['inputs'] == len(s['vertical_stretch']) == CLIPS[name][0]
+    assert s['published'] == s['inputs'] == len(s['vertical_stretch']) == CLIPS[name]
     assert s['resets'] == ['first sample']
     stretch, inside = np.array(s['vertical_stretch']), np.array(s['inside_m'])
     assert np.percentile(stretch, 99) <= 0.03, name
     assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003, name
 
 
-def test_no_vertical_edge_of_a_clip_stretches_over_10_percent(measured, request):
+def test_no_vertical_edge_of_a_clip_stretches_over_10_percent(measured):
+    # The cartwheel's 11.3 % at one input went with the horizontal strain limit in M12.
     name, s = measured
-    if name == 'cartwheel':
-        request.applymarker(pytest.mark.xfail(strict=True, reason=(
-            'cartwheel: 11.3 % at input 52 only (vertex 46, row 5; the next input 3e-7); '
-            'the lead decides (docs/motion_capture.md)')))
     assert max(s['vertical_stretch']) <= 0.10, name
 
 
-def test_horizontal_stretch_of_a_clip_stays_where_it_was_measured(measured):
-    # Issue 19's horizontal target (p99 <= 10 %) is not met (docs/motion_capture.md): this
-    # holds each clip's measured figure so it cannot grow unseen.
+def test_horizontal_stretch_of_a_clip_is_within_the_target(measured):
     name, s = measured
-    _, p99, most = CLIPS[name]
-    assert np.percentile(s['horizontal_stretch'], 99) <= p99, name
-    assert max(s['horizontal_stretch']) <= most, name
+    p99, most = np.percentile(s['horizontal_stretch'], 99), max(s['horizontal_stretch'])
+    if name == 'cartwheel' and p99 > 0.10:
+        # Held where it was measured, then reported as the target it misses.
+        assert p99 <= CARTWHEEL_HORIZONTAL[0] and most <= CARTWHEEL_HORIZONTAL[1]
+        pytest.xfail(f'cartwheel: p99 {p99:.1%}, the hem between the thighs in the splits, '
+                     'both ends of the worst edge on a thigh collider (docs/motion_capture.md)')
+    assert p99 <= 0.10, name
