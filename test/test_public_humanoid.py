@@ -122,11 +122,11 @@ def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
     pipeline = run_session(loaded, probe=probe)
     assert pipeline.inputs == 181
     s = {k: np.array(v) for k, v in series.items()}
-    # Issue 19's limits and the hand-fitted rigs' horizontal figures (test_mocap_targets.py),
-    # on a body about four times a person's size (pybullet loads it at a quarter).
+    # Issue 19's targets, as test_mocap_targets.py asserts them, on a body about four times
+    # a person's size (pybullet loads it at a quarter).
     assert s['vertical'].max() <= 0.10 and np.percentile(s['vertical'], 99) <= 0.03
     assert s['inside'].max() <= 0.01 and np.percentile(s['inside'], 99) <= 0.003
-    assert s['horizontal'].max() <= 0.24 and np.percentile(s['horizontal'], 99) <= 0.22
+    assert np.percentile(s['horizontal'], 99) <= 0.10
     # Seated (3 to 4 s), the thighs part the front edges of the hem: each is outboard of its
     # thigh (the hips are 0.34 to the side, z is the right), not caught between the thighs.
     rig = loaded.setup.rig
