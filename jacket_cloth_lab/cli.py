@@ -47,7 +47,16 @@ def cmd_bench(args):
         write_lod(results, args.out)
         far = results['rows'][-1]
         print(f'{os.path.join(args.out, "lod.md")}: at {far["distance_m"]:g} m, '
-              f'{far["cost_vs_full"]:.2f}x the full-detail cost')
+              f'{far["cost_vs_full"]:.2f}x the full-detail cost', flush=True)
+        from .lod import crowd_lod_bench, write_crowd
+        crowd = crowd_lod_bench(crowds=(4, 16) if args.quick else (4, 16, 64),
+                                seconds=0.5 if args.quick else 2.0,
+                                repeats=1 if args.quick else 3)
+        write_crowd(crowd, args.out)
+        big = crowd['rows'][-1]
+        print(f'{os.path.join(args.out, "crowd_lod.md")}: {big["characters"]} characters '
+              f'spread to {crowd["spread_m"]:g} m, LOD on {big["on_vs_off"]:.2f}x the cost of '
+              'LOD off')
         return 0
     from .bench import CLIPS, bench, write
     clips = tuple(args.clips.split(',')) if args.clips else (('walk',) if args.quick else CLIPS)

@@ -3,7 +3,9 @@
 
 One clip per run with the viewer held at a distance from the character (core/lod.py); cost is
 the measured CPU time of ``process()`` per simulated second, error the cloth's against the
-same clip at full detail (no viewer), both measured in one process, side by side.
+same clip at full detail (no viewer), both measured in one process, side by side. Then a
+crowd (issue 23 item 5): N characters spread evenly from 0 to CROWD_SPREAD_M from the viewer,
+stepped together (core/crowd.py) with the level of detail on and off, alternately.
 """
 
 import json
@@ -20,6 +22,8 @@ from .accuracy import CLIP_RATE, clip_inputs
 
 DISTANCES = (None, 5.0, 12.0, 20.0, 35.0, 60.0)      # m; None: no viewer, full detail
 REPEATS = 3                                             # interleaved, the median kept
+CROWDS = (4, 16, 64)                                    # characters
+CROWD_SPREAD_M = 60.0                                   # the farthest character's distance
 
 
 def _run(skeleton, rig, fabric, inputs, distance):
@@ -61,6 +65,88 @@ def lod_bench(clip='walk', seconds=3.0, distances=DISTANCES, repeats=REPEATS):
                     'cloth_max_m': float(err.max())})
     return {'clip': clip, 'seconds': seconds, 'lod_distances': list(SimParams().lod_distances),
             'rows': out}
+
+
+def _crowd_run(skeleton, rig, fabric, inputs, n, lod, threads):
+    from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
+    steps = CrowdSteps(threads=threads)
+    for _ in range(n):
+        steps.add(JacketSimulation(skeleton, rig, fabric, SimParams()))
+    distances = np.linspace(0.0, CROWD_SPREAD_M, n) if n > 1 else np.zeros(1)
+    joints = len(skeleton.joint_names)
+    spent, levels = [], np.zeros(3, dtype=int)
+    for k, (stamp, names, pos) in enumerate(inputs):
+        root = np.asarray(pos[joints:joints + 3], dtype=float)
+        for sim, d in zip(steps.sims, distances):
+            sim.set_viewer(root + [d, 0.0, 0.0] if lod else None)
+        t0 = time.process_time_ns()             # every thread of the process: the whole call
+        reports = stepped(steps, [(i, stamp, names, pos) for i in range(n)])
+        if k:                                   # the first input is the reset
+            spent.append(time.process_time_ns() - t0)
+            for r in reports:
+                levels[r.lod_level] += 1
+    return float(np.median(spent)), levels
+
+
+def crowd_lod_bench(crowds=CROWDS, seconds=2.0, repeats=REPEATS, threads=1):
+    """Return per crowd size: CPU per character-input with the level of detail on and off.
+
+    ``threads``: the crowd call's threads (1: one core, the issue's first target).
+    """
+    skeleton = load_shipped_character()
+    rig = load_rig(skeleton)
+    fabric = load_fabric('tweed_jacket')
+    inputs = clip_inputs(skeleton, 'walk', seconds)
+    rows = []
+    for n in crowds:
+        cost = {True: [], False: []}
+        for _ in range(repeats):
+            for lod in (False, True):
+                spent, levels = _crowd_run(skeleton, rig, fabric, inputs, n, lod, threads)
+                cost[lod].append(spent / n)
+                if lod:
+                    on_levels = levels
+        off, on = float(np.median(cost[False])), float(np.median(cost[True]))
+        rows.append({'characters': n, 'us_per_character_off': off * 1e-3,
+                     'us_per_character_on': on * 1e-3, 'on_vs_off': on / off,
+                     'inputs_per_level': [int(v) for v in on_levels]})
+    return {'spread_m': CROWD_SPREAD_M, 'threads': threads, 'seconds': seconds,
+            'lod_distances': list(SimParams().lod_distances), 'rows': rows}
+
+
+def write_crowd(results, out_dir):
+    """crowd_lod.json, crowd_lod.md and crowd_lod.png."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, 'crowd_lod.json'), 'w', encoding='utf-8') as f:
+        json.dump(results, f, indent=1)
+    lines = [f'# A crowd spread from 0 to {results["spread_m"]:g} m, level of detail on and off '
+             f'(walk, {results["seconds"]} s, {results["threads"]} thread(s), lod_distances '
+             f'{results["lod_distances"]})', '',
+             '| characters | CPU us per character-input, off | on | on / off '
+             '| inputs at level 0 / 1 / 2 |', '|---' * 5 + '|']
+    for r in results['rows']:
+        lines.append(f'| {r["characters"]} | {r["us_per_character_off"]:.0f} | '
+                     f'{r["us_per_character_on"]:.0f} | {r["on_vs_off"]:.2f} | '
+                     + ' / '.join(str(v) for v in r['inputs_per_level']) + ' |')
+    with open(os.path.join(out_dir, 'crowd_lod.md'), 'w', encoding='utf-8') as f:
+        f.write('\n'.join(lines) + '\n')
+    n = [r['characters'] for r in results['rows']]
+    fig, a = plt.subplots(figsize=(6.4, 3.6))
+    a.plot(n, [r['us_per_character_off'] for r in results['rows']], 'o-', label='LOD off')
+    a.plot(n, [r['us_per_character_on'] for r in results['rows']], 's-', label='LOD on')
+    a.set_xscale('log', base=2)
+    a.set_xlabel('characters, spread evenly 0 to %g m from the viewer' % results['spread_m'])
+    a.set_ylabel('CPU per character-input (us)')
+    a.set_ylim(bottom=0)
+    a.legend()
+    a.set_title('A crowd with the level of detail on and off (offline, one call per round)',
+                fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, 'crowd_lod.png'), dpi=100)
+    plt.close(fig)
 
 
 def write(results, out_dir):

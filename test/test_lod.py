@@ -89,3 +89,12 @@ def test_bench_lod_charts_error_against_distance(tmp_path):
     assert [r['level'] for r in rows] == [0, 0, 1, 1, 2, 2]
     assert rows[1]['cloth_rms_m'] == 0.0 < rows[2]['cloth_rms_m'] < rows[4]['cloth_rms_m']
     assert (tmp_path / 'lod.png').stat().st_size > 10_000
+    # The crowd (issue 23 item 5): 4 and 16 characters evenly from 0 to 60 m, each at the
+    # level its distance gives at every input after the first (coming from level 0, a level
+    # is entered 10 % past its boundary: 32 m is still level 1), charted on and off.
+    crowd = json.loads((tmp_path / 'crowd_lod.json').read_text())['rows']
+    inputs = 29                                       # 0.5 s at 60 Hz, the reset left out
+    assert [r['inputs_per_level'] for r in crowd] == [[inputs, inputs, 2 * inputs],
+                                                       [3 * inputs, 6 * inputs, 7 * inputs]]
+    assert all(r['us_per_character_on'] > 0 and r['us_per_character_off'] > 0 for r in crowd)
+    assert (tmp_path / 'crowd_lod.png').stat().st_size > 10_000
