@@ -94,7 +94,8 @@ def test_bench_lod_charts_error_against_distance(tmp_path):
     # is entered 10 % past its boundary: 32 m is still level 1), charted on and off.
     crowd = json.loads((tmp_path / 'crowd_lod.json').read_text())['rows']
     inputs = 29                                       # 0.5 s at 60 Hz, the reset left out
-    assert [r['inputs_per_level'] for r in crowd] == [[inputs, inputs, 2 * inputs],
-                                                       [3 * inputs, 6 * inputs, 7 * inputs]]
+    levels = [[1, 1, 2], [3, 6, 7]]                   # characters per level
+    assert [r['inputs_per_level'] for r in crowd] == [[inputs * n for n in row]
+                                                      for row in levels]
     assert all(r['us_per_character_on'] > 0 and r['us_per_character_off'] > 0 for r in crowd)
     assert (tmp_path / 'crowd_lod.png').stat().st_size > 10_000
