@@ -38,6 +38,8 @@ from .viewer import VIEWER_QOS, read_viewer
 from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
+    import numpy as np
+
     from ..core.simulation import JacketSimulation
 
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
@@ -55,10 +57,11 @@ NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 class JacketNodeBase(Node):
     """What both jacket nodes share: parameters checked as declared, an optional recording.
 
-    A write error stops the recording, not the node.
+    And the ``~/viewer`` input (ros/viewer.py). A write error stops the recording, not the node.
     """
 
     recorder: 'SessionRecorder | None' = None
+    _viewer: 'tuple[bytes, int] | None' = None   # the last accepted ~/viewer: (raw, stamp)
 
     def _declare(self, name, spec):
         """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
@@ -91,6 +94,58 @@ class JacketNodeBase(Node):
             self.recorder.close()
             self.recorder = None
 
+    def _throttled(self, log_times, code, text, period=5.0):
+        """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``."""
+        now = time.monotonic()
+        if now - log_times.get(code, -1e9) >= period:
+            log_times[code] = now
+            self.get_logger().warning(text)
+
+    # -- the viewer (one for the node, whatever the characters) ------------------------------
+    def _subscribe_viewer(self) -> str:
+        """Subscribe ``~/viewer``; returns its name in the graph, the one it is recorded under."""
+        # Latched: a viewer published once, before a character is loaded, waits for it.
+        self.create_subscription(PointStamped, '~/viewer', self._on_viewer, VIEWER_QOS,
+                                 raw=True, event_callbacks=NO_SUB_EVENTS)
+        return self.resolve_topic_name('~/viewer')
+
+    def _world_frames(self) -> 'list[str]':
+        """Return the world frames a viewer may be given in (its characters')."""
+        raise NotImplementedError
+
+    def _apply_viewer(self, frame: str, position: 'np.ndarray') -> None:
+        """Set the viewer for the characters in ``frame``, from their next input."""
+        raise NotImplementedError
+
+    def _last_input_stamp(self, default: int) -> int:
+        """Return the last input's stamp (ns), or ``default`` before the first one."""
+        raise NotImplementedError
+
+    def _on_viewer(self, raw):
+        """~/viewer: the viewer's world position for the level of detail, from the next input.
+
+        Recorded as an input at the last input's stamp: a replay applies it at the same point.
+        """
+        self.received['viewer'] += 1
+        frames = self._world_frames()
+        readings = [read_viewer(raw, frame) for frame in frames]
+        if all(r.position is None for r in readings):
+            self.refused['viewer'] += 1
+            self._throttled(self._log_times, 'viewer', f'~/viewer rejected: '
+                            f'{readings[0].reason}; the last viewer is kept')
+            return
+        self._viewer = (bytes(raw), readings[0].stamp_ns)
+        for frame, reading in zip(frames, readings):
+            if reading.position is not None:
+                self._apply_viewer(frame, reading.position)
+        self._record_viewer()
+
+    def _record_viewer(self):
+        """Record the last accepted viewer, if any; a file opened after it starts with it."""
+        if self._viewer is not None:
+            raw, stamp = self._viewer
+            self._record(self._topics['viewer'][0], raw, self._last_input_stamp(stamp))
+
 
 class JacketClothNode(JacketNodeBase):
     """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
@@ -121,7 +176,7 @@ class JacketClothNode(JacketNodeBase):
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
-        self._viewer = None         # the last accepted ~/viewer: (position, raw, header stamp)
+        self._viewer_position = None        # the last accepted ~/viewer's
         self._diag_timer = None
         self._diag_wall = 0.0
 
@@ -134,13 +189,11 @@ class JacketClothNode(JacketNodeBase):
         }
         self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True,
                                  event_callbacks=NO_SUB_EVENTS)
-        # Latched: a viewer published once, before the character is loaded, waits for it.
-        self.create_subscription(PointStamped, '~/viewer', self._on_viewer, VIEWER_QOS,
-                                 raw=True, event_callbacks=NO_SUB_EVENTS)
+        viewer = self._subscribe_viewer()
         # Recorded under the names the topics have in the graph (resolved once).
         self._topics = session_topics(
             self.resolve_topic_name('joint_states'), self.resolve_topic_name('~/wind'),
-            self.publishers_by_key['markers'].topic_name, self.resolve_topic_name('~/viewer'))
+            self.publishers_by_key['markers'].topic_name, viewer)
         self._open_recorder(self._p('record'))
         self._description = self._fallback = None
         urdf = self._p('robot_description')
@@ -207,8 +260,8 @@ class JacketClothNode(JacketNodeBase):
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: change frame_prefix')
         self.pipeline = pipeline
-        if self._viewer is not None:        # it came before the character
-            pipeline.set_viewer(self._viewer[0])
+        if self._viewer_position is not None:       # it came before the character
+            pipeline.set_viewer(self._viewer_position)
         self._urdf = urdf
         # Done waiting: every entity left in the node is work for each executor wake-up.
         if self._description is not None:
@@ -251,8 +304,7 @@ class JacketClothNode(JacketNodeBase):
         values = self._values()
         self.pipeline.apply({n: values[n] for n in names})
         # Recorded at the last input's stamp: a replay applies them after the same input.
-        last = self.pipeline.sim.last
-        stamp = last.stamp_ns if last else 0
+        stamp = self._last_input_stamp(0)
         self._record(self._topics['parameter_events'][0], cdr.parameter_event(
             stamp, self.get_fully_qualified_name(), [p.to_parameter_msg() for p in params]),
             stamp)
@@ -276,11 +328,7 @@ class JacketClothNode(JacketNodeBase):
                                     'recording')
             return
         self._write_session_config()
-        if self._viewer is not None:
-            # A file opened after the viewer came starts from it, so its replay does too.
-            last = self.sim.last if self.sim else None
-            self._record(self._topics['viewer'][0], self._viewer[1],
-                         last.stamp_ns if last else self._viewer[2])
+        self._record_viewer()
 
     def _write_session_config(self):
         """Record the character, rig, fabrics and parameters, so a replay needs only the file."""
@@ -293,10 +341,7 @@ class JacketClothNode(JacketNodeBase):
     # -- the input ----------------------------------------------------------------------------
     def _warn(self, code, text, period=5.0):
         """One line per kind of bad input per ``period`` seconds."""
-        now = time.monotonic()
-        if now - self._log_times.get(code, -1e9) >= period:
-            self._log_times[code] = now
-            self.get_logger().warning(text)
+        self._throttled(self._log_times, code, text, period)
 
     def _diagnostics_watchdog(self):
         """Diagnostics, when the inputs' own have not gone out for a period of wall time."""
@@ -340,27 +385,20 @@ class JacketClothNode(JacketNodeBase):
             self.refused['wind'] += 1
             self._warn('wind', f'~/wind rejected: {result.reason}')
             return
-        last = self.sim.last if self.sim else None
         header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        self._record(self._topics['wind'][0], raw,
-                     last.stamp_ns if last else header)
+        self._record(self._topics['wind'][0], raw, self._last_input_stamp(header))
 
-    def _on_viewer(self, raw):
-        """~/viewer: the viewer's world position for the level of detail, from the next input.
+    def _world_frames(self):
+        return [self._p('world_frame')]
 
-        Recorded as an input at the last input's stamp: a replay applies it at the same point.
-        """
-        self.received['viewer'] += 1
-        reading = read_viewer(raw, self._p('world_frame'))
-        if reading.position is None:
-            self.refused['viewer'] += 1
-            self._warn('viewer', f'~/viewer rejected: {reading.reason}; the last viewer is kept')
-            return
-        self._viewer = (reading.position, bytes(raw), reading.stamp_ns)
+    def _apply_viewer(self, frame, position):
+        self._viewer_position = position
         if self.pipeline is not None:
-            self.pipeline.set_viewer(reading.position)
+            self.pipeline.set_viewer(position)
+
+    def _last_input_stamp(self, default):
         last = self.sim.last if self.sim else None
-        self._record(self._topics['viewer'][0], raw, last.stamp_ns if last else reading.stamp_ns)
+        return last.stamp_ns if last else default
 
     def on_joint_state(self, raw: bytes, info: dict) -> None:
         """One serialized JointState in (the joint_states callback): simulate, publish, record.
