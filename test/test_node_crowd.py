@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """jacket_cloth_crowd over real DDS in one process: each character as it would be alone."""
 
+import contextlib
 import math
 import time
 
@@ -13,6 +14,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message, serialize_message
 from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
@@ -20,7 +22,7 @@ from tf2_msgs.msg import TFMessage
 from jacket_cloth_ros.core.config import ConfigError, shipped
 from jacket_cloth_ros.core.fabric import load_fabrics
 from jacket_cloth_ros.core.rig import load_rig
-from jacket_cloth_ros.core.skeleton import Skeleton
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 from jacket_cloth_ros.motion.clips import joint_state_content
 from jacket_cloth_ros.recording.reader import read_recording
 from jacket_cloth_ros.ros import cdr
@@ -28,6 +30,7 @@ from jacket_cloth_ros.ros.characters import crowd_slice, load_characters
 from jacket_cloth_ros.ros.crowd import JacketCrowdNode
 from jacket_cloth_ros.ros.node import LATCHED
 from jacket_cloth_ros.ros.pipeline import SessionPipeline
+from jacket_cloth_ros.ros.viewer import VIEWER_QOS
 from jacket_cloth_ros.tools.crowd_replay import replay_crowd
 
 CROWD = """
@@ -56,12 +59,17 @@ def _stamp(k):
     return 100 * 10 ** 9 + int(round(k / 60 * 1e9))
 
 
-def _inputs(skeleton, clip, count, garbage=False):
-    """Serialized JointStates of a clip at 60 Hz; with ``garbage``, bad ones among them."""
+def _inputs(skeleton, clip, count, garbage=False, x=0.0, first=0):
+    """Serialized JointStates of a clip at 60 Hz; with ``garbage``, bad ones among them.
+
+    ``x`` moves the character along the world's x axis (m); ``first`` is the first input's index.
+    """
     out = []
-    for k in range(count):
+    for k in range(first, first + count):
         names, pos = joint_state_content(skeleton.joint_names, clip, k / 60)
         pos = [float(p) for p in pos]
+        if x:
+            pos[list(names).index('world_joint/trans_x')] += x
         if garbage and k == 5:
             out.append(b'\x00\x01\x00\x00\x07')                  # does not decode
         if garbage and k == 8:
@@ -75,11 +83,13 @@ def _inputs(skeleton, clip, count, garbage=False):
     return out
 
 
-def _alone(spec, urdf, raws):
-    """The /tf a character's own pipeline gives for these inputs, alone."""
+def _alone(spec, urdf, raws, viewer=None):
+    """The /tf a character's own pipeline gives for these inputs, alone (and this viewer)."""
     skeleton = Skeleton(urdf)
     pipeline = SessionPipeline(skeleton, load_rig(skeleton, spec.rig),
                                load_fabrics(spec.fabric_file), spec.values, spec.name)
+    if viewer is not None:
+        pipeline.set_viewer(np.array(viewer))
     reader = cdr.JointStateReader()
     tf = []
     for raw in raws:
@@ -210,3 +220,200 @@ def test_copies_are_characters_of_their_own(tmp_path):
     assert specs[11].values['frame_prefix'] == 'walker_11/'
     assert len({s.namespace for s in specs}) == 12
     assert np.all([s.urdf == specs[0].urdf for s in specs])
+
+
+# The crowd's ~/viewer (issue 23 item 5): one camera, each character's level by its own distance.
+VIEWER_TOPIC = '/jacket_cloth_crowd/viewer'
+NEAR_FAR = """
+defaults:
+  parameters: {diagnostics_rate: 20.0}
+characters:
+  - name: near                   # walks at the origin
+    urdf: character.urdf
+  - name: far                    # walks 100 m along x; its URDF comes after the viewer
+    parameters: {robot_description_timeout: 60.0}
+"""
+FAR_X = 100.0
+
+
+def _viewer(point, frame='world'):
+    msg = PointStamped()
+    msg.header.frame_id = frame
+    msg.point.x, msg.point.y, msg.point.z = point
+    return msg
+
+
+class _Crowd:
+    """A crowd node and a peer over real DDS in one process, with /tf and diagnostics heard."""
+
+    def __init__(self, tmp_path, text, **params):
+        path = tmp_path / 'crowd.yaml'
+        path.write_text(text)
+        self.ctx = Context()
+        rclpy.init(context=self.ctx, domain_id=DOMAIN_ID)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.node = None
+        try:
+            self.node = JacketCrowdNode(context=self.ctx, parameter_overrides=[
+                Parameter('characters', value=str(path))] + [
+                Parameter(k, value=v) for k, v in params.items()])
+        except Exception:
+            self.close()
+            raise
+        self.peer = rclpy.create_node('crowd_peer', context=self.ctx)
+        self.tf, self.diagnostics = [], []
+        self.peer.create_subscription(TFMessage, '/tf', self.tf.append, 1000, raw=True)
+        self.peer.create_subscription(DiagnosticArray, '/diagnostics', self.diagnostics.append,
+                                      1000)
+        self.viewer = self.peer.create_publisher(PointStamped, VIEWER_TOPIC, VIEWER_QOS)
+        self.ex.add_node(self.node)
+        self.ex.add_node(self.peer)
+        self.chars = {c.spec.name: c for c in self.node.characters}
+        self.pubs = {}
+
+    def spin_until(self, predicate):
+        _spin_until(self.ex, predicate)
+
+    def look_from(self, point, frame='world'):
+        """Publish a viewer; returns once the node has taken (or refused) it."""
+        sent = self.node.received['viewer'] + 1
+        self.viewer.publish(_viewer(point, frame))
+        self.spin_until(lambda: self.node.received['viewer'] == sent)
+
+    def send(self, raws):
+        """Send each character's inputs, one of each at a time (one batch), all processed."""
+        for n in raws:
+            if n not in self.pubs:
+                self.pubs[n] = self.peer.create_publisher(JointState, f'/{n}/joint_states', 10)
+        self.spin_until(lambda: all(self.pubs[n].get_subscription_count() for n in raws))
+        for k in range(max(len(r) for r in raws.values())):
+            want = {n: self.chars[n].inputs + (k < len(r)) for n, r in raws.items()}
+            for n, r in raws.items():
+                if k < len(r):
+                    self.pubs[n].publish(r[k])
+            self.spin_until(lambda: all(self.chars[n].inputs == want[n] for n in raws))
+
+    def statuses(self):
+        """Each character's last diagnostics values, by character name."""
+        out = {}
+        for m in self.diagnostics:
+            for s in m.status:
+                out[s.name.split(':')[0]] = {kv.key: kv.value for kv in s.values}
+        return out
+
+    def close(self):
+        self.ex.shutdown()
+        if self.node is not None:
+            self.node.close()
+            self.node.destroy_node()
+        rclpy.shutdown(context=self.ctx)
+
+
+@contextlib.contextmanager
+def _crowd(tmp_path, text, **params):
+    crowd = _Crowd(tmp_path, text, **params)
+    try:
+        yield crowd
+    finally:
+        crowd.close()
+
+
+def _tf_of(tf, name):
+    return [bytes(m) for m in tf
+            if deserialize_message(m, TFMessage).transforms[0].child_frame_id.startswith(
+                name + '/')]
+
+
+def test_one_viewer_gives_each_character_of_a_crowd_its_own_level_of_detail(tmp_path):
+    """One ~/viewer near one character and 100 m from the other: the far one runs the far
+    level (its /tf differs from a crowd without a viewer), the near one full detail (its /tf
+    the same, byte for byte), each with its own lod_level and distance in diagnostics; the far
+    one is loaded after the viewer came and gets it all the same."""
+    urdf = shipped_character_urdf()
+    view = (0.0, 1.0, 0.0)
+    with _crowd(tmp_path, NEAR_FAR) as crowd:
+        crowd.spin_until(lambda: crowd.viewer.get_subscription_count() > 0)
+        crowd.look_from(view)
+        assert crowd.chars['far'].pipeline is None           # not loaded yet
+        crowd.peer.create_publisher(String, '/far/robot_description', LATCHED).publish(
+            String(data=urdf))
+        crowd.spin_until(lambda: crowd.chars['far'].pipeline is not None)
+        skeleton = crowd.chars['near'].sim.skeleton
+        raws = {'near': _inputs(skeleton, 'walk', 40), 'far': _inputs(skeleton, 'walk', 40,
+                                                                      x=FAR_X)}
+        crowd.send(raws)
+        crowd.spin_until(lambda: len(crowd.tf) >= 80)
+        assert [crowd.chars[n].sim.lod.level for n in ('near', 'far')] == [0, 2]
+        # Diagnostics written after the last input (by it, or by the wall-time watchdog).
+        crowd.spin_until(lambda: {n: s.get('inputs') for n, s in crowd.statuses().items()} ==
+                         {'near': '40', 'far': '40'})
+        statuses = crowd.statuses()
+        assert [statuses[n]['lod_level'] for n in ('near', 'far')] == ['0', '2']
+        assert 0.5 < float(statuses['near']['viewer_distance_m']) < 3.0
+        assert 95.0 < float(statuses['far']['viewer_distance_m']) < 105.0
+        got = {n: _tf_of(crowd.tf, n) for n in raws}
+    for n, c in crowd.chars.items():
+        without = _alone(c.spec, urdf, raws[n])
+        assert len(got[n]) == len(without) == 40
+        assert (got[n] == without) == (n == 'near'), n
+        assert got[n] == _alone(c.spec, urdf, raws[n], viewer=view), n
+
+
+def test_a_bad_viewer_is_refused_and_each_character_keeps_its_last(tmp_path):
+    """A viewer in no character's world frame, or not finite, is refused with one throttled
+    warning, the last kept by every character; one in a frame only some characters live in
+    goes to those only."""
+    text = NEAR_FAR.replace('    parameters: {robot_description_timeout: 60.0}\n',
+                            '    urdf: character.urdf\n') + (
+        '  - name: mapped                 # at the origin of another world frame\n'
+        '    urdf: character.urdf\n'
+        '    parameters: {world_frame: map}\n')
+    view = (0.0, 1.0, 0.0)
+    with _crowd(tmp_path, text) as crowd:
+        node = crowd.node
+        crowd.spin_until(lambda: crowd.viewer.get_subscription_count() > 0)
+        crowd.look_from(view)
+        crowd.look_from((FAR_X, 1.0, 0.0), 'camera')     # would make the near one far
+        crowd.look_from((math.nan, 1.0, 0.0))
+        assert node.refused['viewer'] == 2 and 'viewer' in node._log_times
+        crowd.look_from((0.0, 50.0, 0.0), 'map')         # mapped's world only
+        assert node.received['viewer'] == 4 and node.refused['viewer'] == 2
+        skeleton = crowd.chars['near'].sim.skeleton
+        crowd.send({'near': _inputs(skeleton, 'walk', 20),
+                    'far': _inputs(skeleton, 'walk', 20, x=FAR_X),
+                    'mapped': _inputs(skeleton, 'walk', 20)})
+        sims = {n: c.sim for n, c in crowd.chars.items()}
+        assert [list(sims[n].lod.viewer) for n in ('near', 'far')] == [list(view)] * 2
+        assert list(sims['mapped'].lod.viewer) == [0.0, 50.0, 0.0]
+        assert [sims[n].lod.level for n in ('near', 'far', 'mapped')] == [0, 2, 2]
+        crowd.spin_until(lambda: len(crowd.tf) >= 60)
+
+
+def test_a_crowd_recording_with_a_moving_viewer_replays_bit_for_bit(tmp_path):
+    """The viewer moves from the near character to the far one mid-session: each swaps its
+    level at the input it did live, and the recording replays to the same /tf, in order."""
+    record = str(tmp_path / 'crowd.mcap')
+    text = NEAR_FAR.replace('    parameters: {robot_description_timeout: 60.0}\n',
+                            '    urdf: character.urdf\n')
+    levels = []
+    with _crowd(tmp_path, text, record=record) as crowd:
+        crowd.spin_until(lambda: crowd.viewer.get_subscription_count() > 0)
+        skeleton = crowd.chars['near'].sim.skeleton
+        for k, view in enumerate([(0.0, 1.0, 0.0), (FAR_X, 1.0, 0.0)]):
+            crowd.look_from(view)
+            crowd.send({'near': _inputs(skeleton, 'walk', 30, first=30 * k),
+                        'far': _inputs(skeleton, 'walk', 30, x=FAR_X, first=30 * k)})
+            levels.append([crowd.chars[n].sim.lod.level for n in ('near', 'far')])
+        crowd.spin_until(lambda: len(crowd.tf) >= 120)
+        live = [bytes(m) for m in crowd.tf]
+    assert levels == [[0, 2], [2, 0]]
+    recorded = read_recording(record)
+    assert [m.topic for m in recorded.messages].count(VIEWER_TOPIC) == 2
+    out = str(tmp_path / 'replay.mcap')
+    characters, _ = replay_crowd(record, out)
+    assert [c.pipeline.sim.lod.level for c in characters.values()] == [2, 0]
+    replayed = read_recording(out)
+    tf = [m.data for m in recorded.messages if m.topic == '/tf']
+    assert len(tf) == 120 and tf == live
+    assert [m.data for m in replayed.messages if m.topic == '/tf'] == tf
+    assert [m.topic for m in replayed.messages].count(VIEWER_TOPIC) == 2

@@ -5,7 +5,8 @@ Each character of the characters file (ros/characters.py) is what a jacket_cloth
 its namespace would be: its own ``<name>/joint_states`` in, its bones on ``/tf`` (its frame
 prefix), ``<name>/jacket_cloth_node/markers``, its status on ``/diagnostics``, its own resets
 and bad-input handling. What it shares is the process: one executor, one DDS participant, one
-recording, and one compiled call for the steps of every character with an input
+recording, one ``~/viewer`` (a camera for the whole crowd: each character's level of detail is
+by its own distance to it), and one compiled call for the steps of every character with an input
 (core/crowd.py), spread over the cores. Inputs are gathered as they arrive and processed
 together once the executor has taken every message that was ready.
 """
@@ -63,6 +64,7 @@ class Character:
         self.spec = spec
         self.index = -1                 # in the crowd's pipeline, once loaded
         self.pipeline = None
+        self.viewer = None              # the last ~/viewer in its world frame, for a late load
         self.urdf = None
         self.subscription = None
         self.markers = None             # its ~/markers publisher
@@ -180,6 +182,10 @@ class JacketCrowdNode(JacketNodeBase):
         self.recorder = None
         self._pending = []
         self._models = {}
+        self._last_stamp = None         # the last input's, for recording the viewer after it
+        self._log_times = {}            # the crowd's own warnings (each character has its own)
+        self.received, self.refused = {'viewer': 0}, {'viewer': 0}
+        self._topics = session_topics(viewer=self._subscribe_viewer())
         self.tf = self.create_publisher(TFMessage, '/tf', TF_QOS)
         self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
                                                  event_callbacks=NO_PUB_EVENTS)
@@ -238,6 +244,8 @@ class JacketCrowdNode(JacketNodeBase):
             raise ConfigError(f'{spec.name}: bone frame(s) {", ".join(sorted(clash))} would '
                               'republish URDF links: change its frame_prefix')
         c.pipeline, c.urdf = pipeline, urdf
+        if c.viewer is not None:        # it came before the character
+            pipeline.set_viewer(c.viewer)
         c.index = self.crowd.add(pipeline)
         if c.description is not None:
             self.destroy_subscription(c.description)
@@ -262,12 +270,14 @@ class JacketCrowdNode(JacketNodeBase):
             return
         try:
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
-            for key in ('tf', 'diagnostics'):
-                self.recorder.add_topic(*session_topics()[key])
+            for key in ('tf', 'diagnostics', 'viewer'):
+                self.recorder.add_topic(*self._topics[key])
         except OSError as e:
             self.recorder = None
             self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
                                     'recording')
+            return
+        self._record_viewer()
 
     def _add_character_to_recording(self, c):
         for key in ('joint_states', 'markers'):
@@ -280,10 +290,20 @@ class JacketCrowdNode(JacketNodeBase):
     # -- inputs -------------------------------------------------------------------------------
     def _warn(self, c, code, text, period=5.0):
         """One line per character and kind of bad input per ``period`` seconds."""
-        now = time.monotonic()
-        if now - c.log_times.get(code, -1e9) >= period:
-            c.log_times[code] = now
-            self.get_logger().warning(text)
+        self._throttled(c.log_times, code, text, period)
+
+    def _world_frames(self):
+        return sorted({c.spec.values['world_frame'] for c in self.characters})
+
+    def _apply_viewer(self, frame, position):
+        for c in self.characters:
+            if c.spec.values['world_frame'] == frame:
+                c.viewer = position
+                if c.pipeline is not None:
+                    c.pipeline.set_viewer(position)
+
+    def _last_input_stamp(self, default):
+        return default if self._last_stamp is None else self._last_stamp
 
     def _on_inputs(self, taken: list) -> None:
         """Gather inputs; the batch runs once the executor has taken every ready message."""
@@ -312,6 +332,8 @@ class JacketCrowdNode(JacketNodeBase):
             c.inputs += 1
             entries.append((c, raw, msg, arrived))
         results = self.crowd.on_joint_states([(c.index, msg) for c, _, msg, _ in entries])
+        if entries:
+            self._last_stamp = entries[-1][2].stamp_ns
         for (c, raw, msg, arrived), (report, outputs) in zip(entries, results):
             stamp_ns = msg.stamp_ns
             self._record(c.topics['joint_states'][0], raw, stamp_ns)

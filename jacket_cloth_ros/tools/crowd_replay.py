@@ -5,7 +5,9 @@ The crowd node records, per character, its set-up (metadata ``jacket_cloth_sessi
 and each input followed by its outputs, in the order it processed them. A character's outputs
 depend on its own inputs only (the crowd's one compiled call gives each character the bits it
 gets alone), so running each input through that character's pipeline, in file order, writes
-the same messages in the same order: the recorded /tf, byte for byte.
+the same messages in the same order: the recorded /tf, byte for byte. The crowd's ``~/viewer``
+messages are inputs too: each goes, at its place in the file, to every character whose world
+frame it is in, as the node applied it.
 """
 
 import json
@@ -22,6 +24,7 @@ from ..recording.writer import SESSION_CONFIG, SessionRecorder
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values
 from ..ros.pipeline import SessionPipeline, session_topics
+from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
 
 PREFIX = SESSION_CONFIG + '/'
@@ -80,6 +83,10 @@ def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], f
             first = next(iter(characters.values()))
             for key in ('tf', 'diagnostics'):
                 recorder.add_topic(*first.topics[key])
+            viewers = sorted(t for t, kind in recording.topics.items()
+                             if kind == VIEWER_TYPE and t.endswith('/viewer'))
+            for topic in viewers:
+                recorder.add_topic(topic, *first.topics['viewer'][1:])
             for c in characters.values():
                 for key in ('joint_states', 'markers'):
                     recorder.add_topic(*c.topics[key])
@@ -89,6 +96,9 @@ def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], f
             for m in recording.messages:
                 c = characters.get(m.topic)
                 if c is None:
+                    if m.topic in viewers:
+                        _apply_viewer(characters.values(), m.data)
+                        recorder.write(m.topic, m.data, m.log_time)
                     continue
                 try:
                     msg = readers[m.topic].read(m.data)
@@ -104,3 +114,11 @@ def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], f
         finally:
             recorder.close()
     return characters, took
+
+
+def _apply_viewer(characters, raw):
+    """Set a recorded viewer on each character whose world frame it is in (as the node did)."""
+    for c in characters:
+        reading = read_viewer(raw, c.values['world_frame'])
+        if reading.position is not None:
+            c.pipeline.set_viewer(reading.position)
