@@ -53,6 +53,20 @@ def test_far_characters_run_fewer_sweeps_and_then_none(skeleton, rig):
     assert not np.allclose(sim.x, xs[-1])
 
 
+def test_a_level_keeps_handing_the_same_tuning_while_it_holds(skeleton, rig):
+    # A crowd replaces a character's compiled slot whenever its tuning object changes: a new
+    # one per input cost the far characters most of what their level saves (docs/crowd.md).
+    from jacket_cloth_ros.core.lod import LevelOfDetail, LodStep
+    sim, _, _ = _walk(skeleton, rig, lambda t: 50.0, 0.1)
+    lod, far, mid = LevelOfDetail(), LodStep(2, 1.0, 1.0), LodStep(1, 0.0, 0.0)
+    held = lod.tuned(sim.tuning, far)
+    assert held == LevelOfDetail.tuning(sim.tuning, far) and held != sim.tuning
+    assert lod.tuned(sim.tuning, LodStep(2, 1.0, 1.0)) is held
+    assert lod.tuned(sim.tuning, mid) == LevelOfDetail.tuning(sim.tuning, mid)
+    changed = sim.tuning._replace(iterations=sim.tuning.iterations + 1)
+    assert lod.tuned(changed, far).iterations == changed.iterations // 2
+
+
 def test_a_level_change_blends_without_a_pop(skeleton, rig):
     # The viewer walks away at 1 s and back at 2 s: no vertex jumps further in one input than
     # the cloth moves anyway in the walk at full detail.

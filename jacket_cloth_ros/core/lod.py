@@ -43,6 +43,7 @@ class LevelOfDetail:
         self.viewer = None          # (3,) world position, or None
         self.level = 0
         self.skin = 0.0             # share of the skinned pose in the published cloth
+        self._tuned = (None, None, None)    # (tuning, step, the tuning at that step)
 
     def set_viewer(self, position: np.ndarray | None) -> None:
         """Set the viewer's world position (None: no viewer, full detail)."""
@@ -70,6 +71,19 @@ class LevelOfDetail:
         reach = steps * dt_s / blend_s if blend_s > 0 else math.inf
         self.skin = min(target, start + reach) if target > start else max(target, start - reach)
         return LodStep(self.level, start, self.skin)
+
+    def tuned(self, tuning: Tuning, step: LodStep) -> Tuning:
+        """Return ``tuning`` at ``step``'s level, the same object while neither changes.
+
+        A crowd hands a character's tuning to its compiled slot only when the object changes
+        (core/crowd.py), so a new one per input would cost the far characters what the level
+        saves them.
+        """
+        base, last, tuned = self._tuned
+        if base is not tuning or last != step:
+            tuned = self.tuning(tuning, step)
+            self._tuned = (tuning, step, tuned)
+        return tuned
 
     @staticmethod
     def tuning(tuning: Tuning, step: LodStep) -> Tuning:

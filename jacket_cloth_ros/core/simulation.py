@@ -380,7 +380,7 @@ class JacketSimulation:
                              self.params.lod_blend_s, n, self.dt_ns * 1e-9)
         report.lod_level = plan.level
         return report, StepJob(sample, int(n), self._motion(a, sample, n),
-                               LevelOfDetail.tuning(self.tuning, plan))
+                               self.lod.tuned(self.tuning, plan))
 
     def complete(self, report: StepReport, job: 'StepJob', out: StepOutput, ran: bool) -> None:
         """Take a job's steps into the simulation; a non-finite cloth is reset.
