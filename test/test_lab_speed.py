@@ -70,3 +70,17 @@ def test_the_floor_node_runs_one_bare_kernel_step_per_message(skeleton):
     step()
     moved = [not np.array_equal(s[3].x, b) for s, b in zip(steps, before)]
     assert moved[:2] == [True, True] and not any(moved[2:])
+
+
+def test_a_ladder_rung_whose_characters_never_answer_is_not_held():
+    # The bench once died with a traceback after six minutes, all figures lost, because 16
+    # single-node processes did not all start on a busy machine.
+    from jacket_cloth_lab.crowd import NotAnswering, _ladder
+
+    def measure(n):
+        if n > 4:
+            raise NotAnswering(f'3 of {n} characters answered within 120 s')
+        return {'held': True}
+    best, rows = _ladder(measure, (1, 4, 8, 16))
+    assert best == 4 and [r['characters'] for r in rows] == [1, 4, 8]
+    assert rows[-1]['held'] is False and 'answered within' in rows[-1]['not_answering']
