@@ -50,14 +50,15 @@ def _rss_mb(pid):
 
 def crowd_command(n, folder, threads, name='c'):
     """Return the argv of a crowd node of ``n`` characters, all hearing /joint_states."""
-    path = os.path.join(folder, f'crowd_{n}.yaml')
+    path = os.path.join(folder, f'crowd_{name}_{n}.yaml')
     with open(path, 'w', encoding='utf-8') as f:
         f.write(f'characters:\n  - name: {name}\n    count: {n}\n    urdf: character.urdf\n')
     width = len(str(n - 1))
     names = [name] if n == 1 else [f'{name}_{k:0{width}d}' for k in range(n)]
     remaps = [a for each in names for a in ('-r', f'/{each}/joint_states:=/joint_states')]
-    return [sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args', '-p',
-            f'characters:={path}', '-p', f'threads:={threads}'] + remaps
+    return [sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args', '-r',
+            f'__node:=jacket_cloth_crowd_{name}', '-p', f'characters:={path}', '-p',
+            f'threads:={threads}'] + remaps
 
 
 def single_commands(n):
@@ -66,11 +67,13 @@ def single_commands(n):
              f'__node:=jacket_cloth_node_{k}', '-p', f'frame_prefix:=s{k}/'] for k in range(n)]
 
 
-def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0):
+def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0,
+         cores_each=None):
     """Drive node processes with one JointState stream at RATE; say if the characters hold.
 
-    ``commands``: argv lists (started at once, pinned to ``cores`` if given, the driver to
-    the other cores); ``characters``: how many diagnostics statuses to wait for. Returns
+    ``commands``: argv lists (started at once, pinned to ``cores`` if given, or each to its
+    own set of ``cores_each``; the driver to the other cores); ``characters``: how many
+    diagnostics statuses to wait for. Returns
     {held, latency_us_p99 (worst window of any character), answered (worst share of the
     inputs a character took), cpu_us (per character per input), rss_mb_per_character}.
     """
@@ -83,6 +86,8 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
 
     from jacket_cloth_ros.motion.messages import clip_messages
     from jacket_cloth_ros.ros.node import LATCHED
+    if cores_each:
+        cores = set().union(*cores_each)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                NUMBA_NUM_THREADS=str(len(cores) if cores else os.cpu_count()))
     all_cores = set(range(os.cpu_count()))
@@ -127,11 +132,15 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
                     break
                 ex.spin_once(timeout_sec=left)
 
-    def pin():
-        if cores:
-            os.sched_setaffinity(0, cores)
-    procs = [subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL, preexec_fn=pin) for argv in commands]
+    def pinned(own):
+        def pin():
+            if own:
+                os.sched_setaffinity(0, own)
+        return pin
+    own = cores_each or [cores] * len(commands)
+    procs = [subprocess.Popen(argv, env=dict(env, NUMBA_NUM_THREADS=str(len(c or all_cores))),
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              preexec_fn=pinned(c)) for argv, c in zip(commands, own)]
     try:
         send_for(start_limit_s, until=lambda: len(windows) >= characters)
         if len(windows) < characters:
@@ -245,6 +254,13 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
 
         def singles(n, cores):
             return live(skeleton, single_commands(n), n, seconds, domain, cores)
+
+        def per_core(n):
+            k = os.cpu_count()
+            shares = [n * (i + 1) // k - n * i // k for i in range(k)]
+            commands = [crowd_command(m, tmp, 1, name=f'p{i}') for i, m in enumerate(shares)]
+            return live(skeleton, commands, n, seconds, domain,
+                        cores_each=[{i} for i in range(k)])
         counts = (1, 4) if quick else COUNTS
         say('crowd: cost per character against N (one core)')
         out['cost'] = [dict(crowd(n, one), characters=n) for n in counts]
@@ -258,6 +274,9 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
                 out[f'crowd_{label}'] = _ladder(lambda n: crowd(n, cores), CROWD_LADDER)
                 say(f'single nodes: characters held on {label.replace("_", " ")}')
                 out[f'single_{label}'] = _ladder(lambda n: singles(n, cores), SINGLE_LADDER)
+            # Item 4's answer on one machine: K crowd processes, one per core, each its share.
+            say('crowd: characters held by one crowd process per core')
+            out['crowd_per_core'] = _ladder(lambda n: per_core(n), CROWD_LADDER)
     single = out['single_cost'][0]
     out['cost_ratio'] = {r['characters']: r['cpu_us'] / single['cpu_us'] for r in out['cost']}
     return out
@@ -289,6 +308,12 @@ def summary(c):
                   f'{", ".join(str(r["characters"]) for r in c["crowd_one_core"][1])}; '
                   f'single {", ".join(str(r["characters"]) for r in c["single_one_core"][1])} '
                   '(each stops at the first count not held).']
+    if 'crowd_per_core' in c:
+        pc = c['crowd_per_core'][0]
+        co = c['crowd_one_core'][0]
+        lines += ['', f'One crowd process per core ({c["cores"]}, each one thread and its '
+                  f'share of the characters): {pc} held ({pc / max(co, 1):.2f}x one crowd on '
+                  'one core).']
     t = c['tf']
     lines += ['', f'/tf for {t["characters"]} characters per tick: one TFMessage each '
               f'{t["per_character_us"]:.0f} us, one for all {t["one_message_us"]:.0f} us '
