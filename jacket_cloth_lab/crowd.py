@@ -27,7 +27,7 @@ from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 RATE = 120.0
 STEP_US = 1e6 / RATE
 COUNTS = (1, 4, 16, 64, 256)               # cost per character against N
-CROWD_LADDER = (16, 32, 64, 96, 128, 192, 256)
+CROWD_LADDER = (16, 20, 24, 28, 32, 40, 48, 56, 64, 96, 128, 192, 256)
 SINGLE_LADDER = (1, 2, 4, 8, 16, 32)
 
 
@@ -138,10 +138,12 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
                 os.sched_setaffinity(0, own)
         return pin
     own = cores_each or [cores] * len(commands)
-    procs = [subprocess.Popen(argv, env=dict(env, NUMBA_NUM_THREADS=str(len(c or all_cores))),
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                              preexec_fn=pinned(c)) for argv, c in zip(commands, own)]
+    procs = []
     try:
+        for argv, c in zip(commands, own):      # in the try: a failed start stops the others
+            procs.append(subprocess.Popen(
+                argv, env=dict(env, NUMBA_NUM_THREADS=str(len(c or all_cores))),
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=pinned(c)))
         send_for(start_limit_s, until=lambda: len(windows) >= characters)
         if len(windows) < characters:
             raise NotAnswering(f'{len(windows)} of {characters} characters answered within '
@@ -256,11 +258,12 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
             return live(skeleton, single_commands(n), n, seconds, domain, cores)
 
         def per_core(n):
-            k = os.cpu_count()
+            usable = sorted(os.sched_getaffinity(0))[:n]     # a cpuset may hide some cores
+            k = len(usable)
             shares = [n * (i + 1) // k - n * i // k for i in range(k)]
             commands = [crowd_command(m, tmp, 1, name=f'p{i}') for i, m in enumerate(shares)]
             return live(skeleton, commands, n, seconds, domain,
-                        cores_each=[{i} for i in range(k)])
+                        cores_each=[{c} for c in usable])
         counts = (1, 4) if quick else COUNTS
         say('crowd: cost per character against N (one core)')
         out['cost'] = [dict(crowd(n, one), characters=n) for n in counts]

@@ -1,10 +1,11 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Checks that CDR bytes hold a whole message before rclpy decodes them.
 
-Why: rclpy's ``deserialize_message`` (Fast CDR) reads past the end of a short buffer, so a
-cut or hostile message on a subscribed topic returned garbage on one machine and crashed the
-process with a segmentation fault on another. Walking the message's layout from its rosidl
-type description costs a few microseconds and makes those reads impossible.
+Why: rclpy's ``deserialize_message`` (Fast CDR) decodes a 4-byte ``00 01 01 01`` as a whole
+Vector3Stamped, from memory past the end (different values each run): the encapsulation
+options' padding count shortens the buffer's end below its start. A fuzzed ~/wind like that
+ended a CI run with a segmentation fault. Walking the message's layout from its rosidl type
+description, the padding included, costs a few microseconds and rejects such bytes first.
 """
 
 import functools
@@ -24,6 +25,9 @@ def check_whole(raw: bytes, msg_type: type) -> None:
         raise ValueError('not a CDR message')
     walker = _Walker(raw, '<' if raw[1] == 1 else '>')
     walker.message(msg_type)
+    padding = raw[3] & 0x03             # the options' count of padding bytes at the end
+    if walker.at + padding > len(raw):
+        raise ValueError(f'cut short ({len(raw)} bytes, {padding} of them padding)')
 
 
 class _Walker:
