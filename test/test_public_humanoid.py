@@ -126,7 +126,7 @@ def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
     # a person's size (pybullet loads it at a quarter).
     assert s['vertical'].max() <= 0.10 and np.percentile(s['vertical'], 99) <= 0.03
     assert s['inside'].max() <= 0.01 and np.percentile(s['inside'], 99) <= 0.003
-    assert np.percentile(s['horizontal'], 99) <= 0.10
+    assert s['horizontal'].max() <= 0.10 and np.percentile(s['horizontal'], 99) <= 0.10
     # Seated (3 to 4 s), the thighs part the front edges of the hem: each is outboard of its
     # thigh (the hips are 0.34 to the side, z is the right), not caught between the thighs.
     rig = loaded.setup.rig
