@@ -67,7 +67,7 @@ analysis: $(READY)
 MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
 JVRC := $(MOCAP)/jvrc1.urdf
 HUMANOID := $(MOCAP)/humanoid.urdf
-DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a,$(MOCAP)/humanoid3d_$(c).txt)
+DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a spinkick,$(MOCAP)/humanoid3d_$(c).txt)
 mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS)
 
 $(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
