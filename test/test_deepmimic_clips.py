@@ -16,13 +16,13 @@ import sys
 import numpy as np
 import pytest
 
-from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.core.transforms import quat_to_matrix
 from jacket_cloth_ros.motion.deepmimic import (LAYOUT, continuous_zxy, convert, load_clip,
                                                read_frames, zxy_angles)
 from jacket_cloth_ros.tools.cli import main
-from jacket_cloth_ros.tools.session import load_session, run_session
+from jacket_cloth_ros.tools.session import load_session
+from per_input import measure_every_input
 
 MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 # Per clip: its inputs.
@@ -206,24 +206,7 @@ def measured(request, rig, tmp_path_factory):
     session = tmp_path_factory.mktemp('clip') / f'{name}.mcap'
     assert main(['import', _clip(name), '--urdf', urdf, '-o', str(session)]) == 0
     loaded = load_session(str(session), urdf=urdf, rig=rig)
-    labels = collider_labels(loaded.setup.rig)
-    series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [], 'resets': [],
-              'published': 0}
-
-    def probe(pipeline, report, stamp, outputs):
-        sim = pipeline.sim
-        assert report.accepted and np.isfinite(sim.x).all()
-        series['published'] += any(key == 'tf' for key, _ in outputs)
-        if report.reset:
-            series['resets'].append(report.reset)
-        vs, _, hs, _ = sim.edge_strains()
-        series['vertical_stretch'].append(vs.value)
-        series['horizontal_stretch'].append(hs.value)
-        series['inside_m'].append(depth_inside(sim.x, sim.rig.free,
-                                               sim.collider_frames(sim.links), labels).value)
-
-    pipeline = run_session(loaded, probe=probe)
-    series['inputs'] = pipeline.inputs
+    series = measure_every_input(loaded)
     return name, series
 
 

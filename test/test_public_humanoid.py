@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 import yaml
 
-from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.tools.cli import main
-from jacket_cloth_ros.tools.session import load_session, run_session
+from jacket_cloth_ros.tools.session import load_session
+from per_input import measure_every_input
 
 MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 RATE = 30.0
@@ -106,27 +106,14 @@ def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
     assert main(['rig', '--urdf', urdf, '-o', str(rig_path)]) == 0
     write_sit_down(load_skeleton(urdf), session)
     loaded = load_session(str(session), urdf=urdf, rig=str(rig_path))
-    labels = collider_labels(loaded.setup.rig)
-    series = {'vertical': [], 'horizontal': [], 'inside': [], 'x': []}
-
-    def probe(pipeline, report, stamp, outputs):
-        sim = pipeline.sim
-        assert report.accepted and np.isfinite(sim.x).all()
-        vs, _, hs, _ = sim.edge_strains()
-        series['vertical'].append(vs.value)
-        series['horizontal'].append(hs.value)
-        series['inside'].append(depth_inside(sim.x, sim.rig.free,
-                                             sim.collider_frames(sim.links), labels).value)
-        series['x'].append(sim.x.copy())
-
-    pipeline = run_session(loaded, probe=probe)
-    assert pipeline.inputs == 181
-    s = {k: np.array(v) for k, v in series.items()}
+    s = measure_every_input(loaded, keep_x=True)
+    assert s['inputs'] == 181
+    vertical, horizontal, inside = s['vertical_stretch'], s['horizontal_stretch'], s['inside_m']
     # Issue 19's targets, as test_mocap_targets.py asserts them, on a body about four times
     # a person's size (pybullet loads it at a quarter).
-    assert s['vertical'].max() <= 0.10 and np.percentile(s['vertical'], 99) <= 0.03
-    assert s['inside'].max() <= 0.01 and np.percentile(s['inside'], 99) <= 0.003
-    assert s['horizontal'].max() <= 0.10 and np.percentile(s['horizontal'], 99) <= 0.10
+    assert vertical.max() <= 0.10 and np.percentile(vertical, 99) <= 0.03
+    assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003
+    assert horizontal.max() <= 0.10 and np.percentile(horizontal, 99) <= 0.10
     # Seated (3 to 4 s), the thighs part the front edges of the hem: each is outboard of its
     # thigh (the hips are 0.34 to the side, z is the right), not caught between the thighs.
     rig = loaded.setup.rig

@@ -1,0 +1,45 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A loaded session replayed and measured after every input, as ``jacket_cloth analyze`` does.
+
+Shared by the tests that hold issue 19's per-input targets on real captures and proposed
+rigs (test_mocap_targets, test_rig_on_captures, test_public_humanoid, test_deepmimic_clips).
+"""
+
+import numpy as np
+
+from jacket_cloth_ros.core.measures import collider_labels, depth_inside
+from jacket_cloth_ros.tools.session import run_session
+
+
+def measure_every_input(loaded, keep_x: bool = False) -> dict:
+    """Replay ``loaded`` (tools.session.load_session) and measure the cloth after each input.
+
+    Returns numpy arrays ``vertical_stretch``, ``horizontal_stretch``, ``inside_m`` (and
+    ``x``, the cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
+    counts ``published`` (inputs that put bones on /tf) and ``inputs``. Every input must be
+    accepted and leave a finite cloth.
+    """
+    labels = collider_labels(loaded.setup.rig)
+    series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [], 'x': []}
+    resets, published = [], 0
+
+    def probe(pipeline, report, stamp, outputs):
+        nonlocal published
+        sim = pipeline.sim
+        assert report.accepted and np.isfinite(sim.x).all()
+        published += any(key == 'tf' for key, _ in outputs)
+        if report.reset:
+            resets.append(report.reset)
+        vs, _, hs, _ = sim.edge_strains()
+        series['vertical_stretch'].append(vs.value)
+        series['horizontal_stretch'].append(hs.value)
+        series['inside_m'].append(depth_inside(sim.x, sim.rig.free,
+                                               sim.collider_frames(sim.links), labels).value)
+        if keep_x:
+            series['x'].append(sim.x.copy())
+
+    pipeline = run_session(loaded, probe=probe)
+    if not keep_x:
+        del series['x']
+    out = {k: np.array(v) for k, v in series.items()}
+    return out | {'resets': resets, 'published': published, 'inputs': pipeline.inputs}
