@@ -114,14 +114,28 @@ def crowd_lod_bench(crowds=CROWDS, seconds=2.0, repeats=REPEATS, threads=1):
             'lod_distances': list(SimParams().lod_distances), 'rows': rows}
 
 
-def write_crowd(results, out_dir):
-    """crowd_lod.json, crowd_lod.md and crowd_lod.png."""
+def _pyplot():
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+    return plt
+
+
+def _save(out_dir, stem, results, lines, fig):
+    """Write STEM.json (the results), STEM.md (the table's lines) and STEM.png (the figure)."""
     os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, 'crowd_lod.json'), 'w', encoding='utf-8') as f:
+    with open(os.path.join(out_dir, f'{stem}.json'), 'w', encoding='utf-8') as f:
         json.dump(results, f, indent=1)
+    with open(os.path.join(out_dir, f'{stem}.md'), 'w', encoding='utf-8') as f:
+        f.write('\n'.join(lines) + '\n')
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, f'{stem}.png'), dpi=100)
+    _pyplot().close(fig)
+
+
+def write_crowd(results, out_dir):
+    """crowd_lod.json, crowd_lod.md and crowd_lod.png."""
+    plt = _pyplot()
     lines = [f'# A crowd spread from 0 to {results["spread_m"]:g} m, level of detail on and off '
              f'(walk, {results["seconds"]} s, {results["threads"]} thread(s), lod_distances '
              f'{results["lod_distances"]})', '',
@@ -131,8 +145,6 @@ def write_crowd(results, out_dir):
         lines.append(f'| {r["characters"]} | {r["us_per_character_off"]:.0f} | '
                      f'{r["us_per_character_on"]:.0f} | {r["on_vs_off"]:.2f} | '
                      + ' / '.join(str(v) for v in r['inputs_per_level']) + ' |')
-    with open(os.path.join(out_dir, 'crowd_lod.md'), 'w', encoding='utf-8') as f:
-        f.write('\n'.join(lines) + '\n')
     n = [r['characters'] for r in results['rows']]
     fig, a = plt.subplots(figsize=(6.4, 3.6))
     a.plot(n, [r['us_per_character_off'] for r in results['rows']], 'o-', label='LOD off')
@@ -144,19 +156,12 @@ def write_crowd(results, out_dir):
     a.legend()
     a.set_title('A crowd with the level of detail on and off (offline, one call per round)',
                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, 'crowd_lod.png'), dpi=100)
-    plt.close(fig)
+    _save(out_dir, 'crowd_lod', results, lines, fig)
 
 
 def write(results, out_dir):
     """lod.json, lod.md and lod.png."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, 'lod.json'), 'w', encoding='utf-8') as f:
-        json.dump(results, f, indent=1)
+    plt = _pyplot()
     lines = [f'# Level of detail against distance ({results["clip"]}, {results["seconds"]} s, '
              f'lod_distances {results["lod_distances"]})', '',
              '| viewer at m | level | cost ms/s | cost vs full | cloth RMS vs full cm '
@@ -166,8 +171,6 @@ def write(results, out_dir):
         lines.append(f'| {d} | {r["level"]} | {r["cost_ms_per_s"]:.1f} | '
                      f'{r["cost_vs_full"]:.2f} | {r["cloth_rms_m"] * 100:.2f} | '
                      f'{r["cloth_max_m"] * 100:.2f} |')
-    with open(os.path.join(out_dir, 'lod.md'), 'w', encoding='utf-8') as f:
-        f.write('\n'.join(lines) + '\n')
     rows = [r for r in results['rows'] if r['distance_m'] is not None]
     fig, a = plt.subplots(figsize=(6.4, 3.6))
     dist = [r['distance_m'] for r in rows]
@@ -181,6 +184,4 @@ def write(results, out_dir):
         a.axvline(x, color='k', ls=':', lw=0.8)
     a.set_title(f'Level of detail: cost and error against distance ({results["clip"]})',
                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, 'lod.png'), dpi=100)
-    plt.close(fig)
+    _save(out_dir, 'lod', results, lines, fig)
