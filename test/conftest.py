@@ -71,3 +71,17 @@ def rest_input(skeleton):
     """Return JointState content of the character standing still at the world origin."""
     names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
     return names, np.array(pos)
+
+
+@pytest.fixture
+def harness():
+    """Make node harnesses (test_node.Harness: a node and a peer over real DDS), closed after."""
+    from test_node import Harness        # test_node imports this module: import when used
+    made = []
+
+    def make(**params):
+        made.append(Harness(**params))
+        return made[-1]
+    yield make
+    for h in made:
+        h.close()

@@ -72,18 +72,6 @@ class Harness:
         rclpy.shutdown(context=self.ctx)
 
 
-@pytest.fixture
-def harness(request):
-    made = []
-
-    def make(**params):
-        made.append(Harness(**params))
-        return made[-1]
-    yield make
-    for h in made:
-        h.close()
-
-
 def _all_finite(tf):
     return all(math.isfinite(v) for t in tf.transforms for v in (
         t.transform.translation.x, t.transform.translation.y, t.transform.translation.z,

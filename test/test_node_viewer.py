@@ -4,14 +4,13 @@
 import math
 
 import numpy as np
-import pytest
 import rclpy
 from conftest import DOMAIN_ID
 from rclpy.context import Context
 from rclpy.serialization import serialize_message
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped
-from test_node import Harness, _all_finite
+from test_node import _all_finite
 
 from jacket_cloth_ros.motion.clips import joint_state_content
 from jacket_cloth_ros.ros.viewer import VIEWER_QOS, read_viewer
@@ -26,18 +25,6 @@ def _viewer(point, frame='world'):
     msg.header.frame_id = frame
     msg.point.x, msg.point.y, msg.point.z = point
     return msg
-
-
-@pytest.fixture
-def harness():
-    made = []
-
-    def make(**params):
-        made.append(Harness(**params))
-        return made[-1]
-    yield make
-    for h in made:
-        h.close()
 
 
 def _walk(h, first, count):
