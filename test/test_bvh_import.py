@@ -9,7 +9,6 @@ share/mocap, so nothing here was written by this project.
 import json
 import os
 import shutil
-import sys
 
 import numpy as np
 import pytest
@@ -23,23 +22,16 @@ from jacket_cloth_ros.core.transforms import make_transform, quat_to_matrix
 from jacket_cloth_ros.motion.bvh import (Y_UP_TO_Z_UP, continuous_angles, convert, load_capture,
                                          read_bvh)
 from jacket_cloth_ros.tools.cli import main
+from fetched import fetched
 
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 CAPTURES = {'test_mocapbank.bvh': (455, 24), 'test_freebvh.bvh': (69, 70)}   # frames, nodes
 RIG = os.path.join(os.path.dirname(shipped('character.urdf')), 'examples',
                    'mocapbank_rig.yaml')
 
 
-def _capture_path(name):
-    path = os.path.join(MOCAP, name)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
-    return path
-
-
 @pytest.fixture(scope='module', params=sorted(CAPTURES))
 def capture(request):
-    path = _capture_path(request.param)
+    path = fetched(request.param)
     bvh = read_bvh(path)
     return request.param, bvh, convert(bvh, request.param.split('.')[0])
 
@@ -71,7 +63,7 @@ def test_the_urdf_moves_every_joint_where_the_reader_puts_it(capture):
 
 
 def test_rest_link_frames_are_z_up_facing_x():
-    cap = load_capture(_capture_path('test_mocapbank.bvh'))
+    cap = load_capture(fetched('test_mocapbank.bvh'))
     skeleton = Skeleton(cap.urdf)
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
     at = {n: rest[skeleton.link_index[n], :3, 3] for n in ('Head', 'LeftAnkle', 'LeftWrist',
@@ -86,7 +78,7 @@ def test_rest_link_frames_are_z_up_facing_x():
 
 
 def test_a_wrap_at_pi_is_unwrapped_so_interpolation_takes_the_short_way():
-    bvh = read_bvh(_capture_path('test_mocapbank.bvh'))
+    bvh = read_bvh(fetched('test_mocapbank.bvh'))
     raw = bvh.joint_angles
     # The capture itself wraps: LeftHip's first angle goes from 179.99 to -179.96 degrees.
     hip = [n.name for n in bvh.nodes if not n.is_end_site()].index('LeftHip')
@@ -111,7 +103,7 @@ def test_a_wrap_at_pi_is_unwrapped_so_interpolation_takes_the_short_way():
 
 
 def test_import_writes_joint_states_at_the_capture_rate_and_the_urdf(tmp_path, capsys):
-    src = _capture_path('test_freebvh.bvh')
+    src = fetched('test_freebvh.bvh')
     out, urdf = tmp_path / 'session.mcap', tmp_path / 'char.urdf'
     assert main(['import', src, '-o', str(out), '--urdf-out', str(urdf), '--start', '5']) == 0
     assert '69 JointState messages at 30 Hz' in capsys.readouterr().out
@@ -149,7 +141,7 @@ def test_import_writes_joint_states_at_the_capture_rate_and_the_urdf(tmp_path, c
 def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
     bad = tmp_path / 'bad.bvh'
     if content is None:
-        with open(_capture_path('test_mocapbank.bvh'), encoding='utf-8') as f:
+        with open(fetched('test_mocapbank.bvh'), encoding='utf-8') as f:
             content = f.read()[:20_000]
     bad.write_text(content)
     out = tmp_path / 'out.mcap'
@@ -162,7 +154,7 @@ def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
 
 def test_a_mocap_session_replays_with_the_jacket_fitted_to_its_skeleton(tmp_path):
     src = str(tmp_path / 'mocapbank.bvh')
-    shutil.copy(_capture_path('test_mocapbank.bvh'), src)
+    shutil.copy(fetched('test_mocapbank.bvh'), src)
     session, urdf = tmp_path / 'mocap.mcap', tmp_path / 'mocapbank.urdf'
     assert main(['import', src, '-o', str(session), '--urdf-out', str(urdf)]) == 0
     jacket, again = tmp_path / 'jacket.mcap', tmp_path / 'again.mcap'

@@ -10,8 +10,6 @@ does for the BVH captures. Whole clips: 39 to 164 inputs (0.8 to 2.7 s).
 """
 
 import math
-import os
-import sys
 
 import numpy as np
 import pytest
@@ -22,9 +20,9 @@ from jacket_cloth_ros.motion.deepmimic import (LAYOUT, continuous_zxy, convert, 
                                                read_frames, zxy_angles)
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session
+from fetched import fetched
 from per_input import measure_every_input
 
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 # Per clip: its inputs.
 CLIPS = {'walk': 39, 'run': 25, 'jump': 107, 'cartwheel': 164, 'dance_a': 98, 'spinkick': 78}
 # Horizontal stretch allowed at p99: issue 19's target, 10 %. The cartwheel misses it (a row
@@ -34,15 +32,8 @@ HORIZONTAL_P99 = dict.fromkeys(CLIPS, 0.10) | {'cartwheel': 0.21}
 CARTWHEEL_HORIZONTAL_MAX = 0.23
 
 
-def _fetched(name):
-    path = os.path.join(MOCAP, name)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make test` (it fetches it)')
-    return path
-
-
 def _clip(name):
-    return _fetched(f'humanoid3d_{name}.txt')
+    return fetched(f'humanoid3d_{name}.txt')
 
 
 def _rot(axis, angle):
@@ -86,7 +77,7 @@ def test_angles_follow_the_motion_through_the_lock_not_the_short_branch():
 def test_forward_kinematics_of_the_imported_joints_is_the_clips_pose(name):
     # Every ball joint: the rotation from its parent link to its link, through the three
     # continuous joints, is the clip's quaternion (w, x, y, z); knees and elbows its angle.
-    urdf = _fetched('humanoid.urdf')
+    urdf = fetched('humanoid.urdf')
     sk = load_skeleton(urdf)
     frames = read_frames(_clip(name))
     cap = load_clip(_clip(name), urdf)
@@ -125,7 +116,7 @@ def test_forward_kinematics_of_the_imported_joints_is_the_clips_pose(name):
 def test_the_walking_humanoid_stands_on_the_y_up_floor():
     # Scale and up checked together: the standing foot's ankle is its box's half height plus
     # the box's offset (0.11 + 0.09 m) above y = 0 at its lowest, within 5 cm.
-    urdf = _fetched('humanoid.urdf')
+    urdf = fetched('humanoid.urdf')
     sk = load_skeleton(urdf)
     cap = load_clip(_clip('walk'), urdf)
     columns = [sk.joint_index[j] for j in cap.joint_names]
@@ -147,7 +138,7 @@ def test_uneven_frames_are_resampled_at_the_clips_rate():
     uneven = frames[keep].copy()
     for j, k in enumerate(keep[:-1]):
         uneven[j, 0] = frames[k:keep[j + 1], 0].sum()
-    text = open(_fetched('humanoid.urdf'), encoding='utf-8').read()
+    text = open(fetched('humanoid.urdf'), encoding='utf-8').read()
     cap, even = convert(uneven, 'uneven', text), convert(frames, 'walk', text)
     assert cap.frame_time == pytest.approx(frames[0, 0]) and cap.frames == len(frames)
     # The kept frames come out as they are; the dropped ones halfway between their neighbours.
@@ -170,7 +161,7 @@ def test_uneven_frames_are_resampled_at_the_clips_rate():
 def test_a_malformed_clip_is_one_line_and_exit_1(tmp_path, capsys, content, words):
     bad, out = tmp_path / 'bad.txt', tmp_path / 'out.mcap'
     bad.write_text(content)
-    assert main(['import', str(bad), '--urdf', _fetched('humanoid.urdf'), '-o', str(out)]) == 1
+    assert main(['import', str(bad), '--urdf', fetched('humanoid.urdf'), '-o', str(out)]) == 1
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and err.startswith('jacket_cloth import: ') and words in err
     assert not out.exists()
@@ -185,7 +176,7 @@ def test_a_clip_needs_the_humanoid_it_moves(tmp_path, capsys):
                  '-o', str(out)]) == 1
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and "has no joint 'chest_Zrotation'" in err
-    assert main(['import', _clip('walk'), '--urdf', _fetched('humanoid.urdf'), '-o', str(out),
+    assert main(['import', _clip('walk'), '--urdf', fetched('humanoid.urdf'), '-o', str(out),
                  '--urdf-out', str(tmp_path / 'x.urdf')]) == 1
     assert '--urdf-out is for a BVH capture' in capsys.readouterr().err
     assert not out.exists()
@@ -195,14 +186,14 @@ def test_a_clip_needs_the_humanoid_it_moves(tmp_path, capsys):
 def rig(tmp_path_factory):
     """The rig ``jacket_cloth rig`` proposes for the humanoid (as test_public_humanoid's)."""
     path = tmp_path_factory.mktemp('rig') / 'rig.yaml'
-    assert main(['rig', '--urdf', _fetched('humanoid.urdf'), '-o', str(path)]) == 0
+    assert main(['rig', '--urdf', fetched('humanoid.urdf'), '-o', str(path)]) == 0
     return str(path)
 
 
 @pytest.fixture(scope='module', params=sorted(CLIPS))
 def measured(request, rig, tmp_path_factory):
     """Import, replay at the default settings, and measure one clip after every input."""
-    name, urdf = request.param, _fetched('humanoid.urdf')
+    name, urdf = request.param, fetched('humanoid.urdf')
     session = tmp_path_factory.mktemp('clip') / f'{name}.mcap'
     assert main(['import', _clip(name), '--urdf', urdf, '-o', str(session)]) == 0
     loaded = load_session(str(session), urdf=urdf, rig=rig)

@@ -9,7 +9,6 @@ every input as ``jacket_cloth analyze`` measures it (core.measures). Whole captu
 """
 
 import os
-import sys
 
 import numpy as np
 import pytest
@@ -17,9 +16,9 @@ import pytest
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session
+from fetched import fetched
 from per_input import measure_every_input
 
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 EXAMPLES = os.path.join(os.path.dirname(shipped('character.urdf')), 'examples')
 CAPTURES = {'test_mocapbank.bvh': 'mocapbank_rig.yaml', 'test_freebvh.bvh': 'freebvh_rig.yaml'}
 
@@ -27,9 +26,7 @@ CAPTURES = {'test_mocapbank.bvh': 'mocapbank_rig.yaml', 'test_freebvh.bvh': 'fre
 @pytest.fixture(scope='module', params=sorted(CAPTURES))
 def measured(request, tmp_path_factory):
     """Import, replay at the default settings, and measure one capture after every input."""
-    path = os.path.join(MOCAP, request.param)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+    path = fetched(request.param)
     tmp = tmp_path_factory.mktemp('capture')
     session, urdf = tmp / 'session.mcap', tmp / 'skeleton.urdf'
     assert main(['import', path, '-o', str(session), '--urdf-out', str(urdf)]) == 0

@@ -8,8 +8,6 @@ ankles are pybullet ``spherical`` joints, its collision shapes spheres, ``<capsu
 boxes, and its file ends in a NUL byte. It is read as it is: no edit of the URDF.
 """
 
-import os
-import sys
 
 import numpy as np
 import pytest
@@ -19,17 +17,10 @@ from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session
+from fetched import fetched
 from per_input import measure_every_input
 
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 RATE = 30.0
-
-
-def _fetched(name):
-    path = os.path.join(MOCAP, name)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make test` (it fetches it)')
-    return path
 
 
 def _pose(t):
@@ -66,7 +57,7 @@ def write_sit_down(skeleton, path):
 
 
 def test_pybullets_spherical_joints_and_capsules_are_read_as_bvh_import_does():
-    sk = load_skeleton(_fetched('humanoid.urdf'))
+    sk = load_skeleton(fetched('humanoid.urdf'))
     # Each ball joint: three continuous joints about z, x, y through two massless links.
     assert [j for j in sk.joint_names if j.startswith('left_hip')] == [
         'left_hip_Zrotation', 'left_hip_Xrotation', 'left_hip_Yrotation']
@@ -82,7 +73,7 @@ def test_pybullets_spherical_joints_and_capsules_are_read_as_bvh_import_does():
 
 
 def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_path, capsys):
-    urdf = _fetched('humanoid.urdf')
+    urdf = fetched('humanoid.urdf')
     rig_path = tmp_path / 'rig.yaml'
     assert main(['rig', '--urdf', urdf, '-o', str(rig_path)]) == 0
     out = capsys.readouterr().out
@@ -101,7 +92,7 @@ def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_pat
 
 
 def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
-    urdf = _fetched('humanoid.urdf')
+    urdf = fetched('humanoid.urdf')
     rig_path, session = tmp_path / 'rig.yaml', tmp_path / 'sit.mcap'
     assert main(['rig', '--urdf', urdf, '-o', str(rig_path)]) == 0
     write_sit_down(load_skeleton(urdf), session)

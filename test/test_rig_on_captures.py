@@ -7,8 +7,6 @@ free-BVH files, see test_mocap_targets.py) goes through ``jacket_cloth import`` 
 measured after every input as ``jacket_cloth analyze`` measures it (core.measures).
 """
 
-import os
-import sys
 
 import numpy as np
 import pytest
@@ -16,17 +14,14 @@ import yaml
 
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session
+from fetched import fetched
 from per_input import measure_every_input
-
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
 
 
 @pytest.fixture(scope='module', params=['test_freebvh.bvh', 'test_mocapbank.bvh'])
 def proposed(request, tmp_path_factory):
     """Import a capture, propose its rig, replay it and measure after every input."""
-    path = os.path.join(MOCAP, request.param)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
+    path = fetched(request.param)
     tmp = tmp_path_factory.mktemp('proposed')
     session, urdf, rig = tmp / 'session.mcap', tmp / 'skeleton.urdf', tmp / 'rig.yaml'
     assert main(['import', path, '-o', str(session), '--urdf-out', str(urdf)]) == 0

@@ -5,9 +5,7 @@ The public skeleton (JVRC-1 of jvrc_description, Apache-2.0) and the MocapBank c
 fetched by ``make mocap`` into share/mocap, never committed.
 """
 
-import os
 import re
-import sys
 
 import numpy as np
 import pytest
@@ -18,15 +16,7 @@ from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.skeleton import Skeleton, load_skeleton
 from jacket_cloth_ros.rigging.propose import name_rank, propose, side_of, to_yaml, tokens
 from jacket_cloth_ros.tools.cli import main
-
-MOCAP = os.path.join(sys.prefix, 'share', 'mocap')
-
-
-def _fetched(name):
-    path = os.path.join(MOCAP, name)
-    if not os.path.isfile(path):
-        pytest.fail(f'{path} is missing: run `make mocap` (the set-up fetches it)')
-    return path
+from fetched import fetched
 
 
 def _text(path):
@@ -306,7 +296,7 @@ def test_forward_is_inferred_from_the_named_sides_when_the_legs_end_at_the_ankle
 
 def test_forward_is_inferred_from_the_toes_whatever_the_names(tmp_path):
     urdf = tmp_path / 'mocapbank.urdf'
-    assert main(['import', _fetched('test_mocapbank.bvh'), '-o', str(tmp_path / 's.mcap'),
+    assert main(['import', fetched('test_mocapbank.bvh'), '-o', str(tmp_path / 's.mcap'),
                  '--urdf-out', str(urdf)]) == 0
     text = urdf.read_text()
     fwd, why = _forward_of(text)
@@ -392,7 +382,7 @@ def test_shipped_and_mannequin_replay_a_clip_with_their_proposed_rig(tmp_path, c
 
 def test_the_mocapbank_capture_replays_with_its_proposed_rig(tmp_path, capsys):
     session, urdf = tmp_path / 'mocap.mcap', tmp_path / 'mocapbank.urdf'
-    assert main(['import', _fetched('test_mocapbank.bvh'), '-o', str(session),
+    assert main(['import', fetched('test_mocapbank.bvh'), '-o', str(session),
                  '--urdf-out', str(urdf)]) == 0
     rig = _propose_cli(tmp_path, urdf, capsys)
     text = rig.read_text()
@@ -401,7 +391,7 @@ def test_the_mocapbank_capture_replays_with_its_proposed_rig(tmp_path, capsys):
 
 
 def test_a_public_humanoid_urdf_replays_with_its_proposed_rig(tmp_path, capsys):
-    urdf = _fetched('jvrc1.urdf')              # JVRC-1, jvrc_description 1.1.1 (Apache-2.0)
+    urdf = fetched('jvrc1.urdf')              # JVRC-1, jvrc_description 1.1.1 (Apache-2.0)
     rig = _propose_cli(tmp_path, urdf, capsys)
     text = rig.read_text()
     assert 'L_SHOULDER_Y_S' in text and 'R_ELBOW_P_S' in text and 'NECK_P_S' in text
