@@ -137,6 +137,17 @@ def continuous_angles(angles: np.ndarray) -> np.ndarray:
     return np.unwrap(np.asarray(angles, dtype=float), axis=0)
 
 
+def continuous_quaternions(quat: np.ndarray) -> np.ndarray:
+    """Return (F, 4) quaternions with one sign throughout (q and -q are one rotation).
+
+    A flip between frames would read as a jump: interpolation would turn the long way.
+    """
+    quat = np.array(quat, dtype=float)
+    flips = np.sum(quat[1:] * quat[:-1], axis=1) < 0.0
+    quat[1:] *= np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+    return quat
+
+
 def _urdf(bvh, name: str, scale: float) -> tuple[str, list, list]:
     """Return the URDF text, its revolute joints' names and the node links' names."""
     robot = ElementTree.Element('robot', name=name)
@@ -204,10 +215,7 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     rot = np.tile(np.eye(3), (len(angles), 1, 1))
     for i, ch in enumerate(root.rot_channels):
         rot = rot @ axis_rotations(Y_UP_TO_Z_UP[:, _AXIS[ch]], angles[:, 0, i])
-    quat = matrix_to_quat(rot)
-    # One sign throughout: q and -q are one rotation, and a flip would read as a jump.
-    flips = np.sum(quat[1:] * quat[:-1], axis=1) < 0.0
-    quat[1:] *= np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+    quat = continuous_quaternions(matrix_to_quat(rot))
     trans = bvh.root_pos @ Y_UP_TO_Z_UP.T * scale
     height = float(np.ptp(rest_offsets(bvh)[:, 1])) * scale
     return Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,

@@ -38,7 +38,7 @@ import os
 import numpy as np
 
 from ..core.transforms import quat_slerp, quat_to_matrix
-from .bvh import Capture
+from .bvh import Capture, continuous_angles, continuous_quaternions
 
 # Each joint of pybullet's humanoid.urdf that a frame moves, in the frame's order, and its
 # count of numbers: 4 for a spherical joint's quaternion, 1 for a revolute joint's angle.
@@ -170,12 +170,9 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
             rot = quat_to_matrix(_xyzw(frames[:, i:i + 4]))
             columns.append(continuous_zxy(zxy_angles(rot)))
         else:
-            columns.append(np.unwrap(frames[:, i:i + 1], axis=0))
+            columns.append(continuous_angles(frames[:, i:i + 1]))
         i += n
-    root_q = _xyzw(frames[:, 4:8])
-    # One sign throughout: q and -q are one rotation, and a flip would read as a jump.
-    flips = np.sum(root_q[1:] * root_q[:-1], axis=1) < 0.0
-    root_q[1:] *= np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+    root_q = continuous_quaternions(_xyzw(frames[:, 4:8]))
     return Capture(name=name, urdf=urdf, frame_time=dt, scale=scale, joint_names=joint_names(),
                    positions=np.hstack(columns), root=np.hstack([frames[:, 1:4] * scale, root_q]),
                    link_names=[], height_m=float('nan'))
