@@ -311,6 +311,20 @@ STRAIN_LIMIT_ROUNDS = 5
 
 
 @njit(cache=True)
+def hold_pinned_row(top, cloth, has_pads, limit):
+    """M6 with the strain limit: the pinned row's own edges held to (1 + ``limit``) rest.
+
+    The M2 pads (``has_pads``) spread the skinned row as the arms swing and the rows below
+    hang from it; no pads, or a negative limit (off), leave the row as skinned.
+    """
+    if not has_pads or limit < 0.0:
+        return
+    a = cloth.row_a
+    ends = np.ones(top.shape[0], dtype=np.bool_)       # every vertex of the row may move
+    limit_stretch(top, ends, a, a + 1, cloth.row_rest, limit, STRAIN_LIMIT_SWEEPS)
+
+
+@njit(cache=True)
 def limit_stretch(x, free, ea, eb, rest, limit, sweeps):
     """Provot's strain limit: shorten each edge over (1 + ``limit``) rest, moving free ends.
 

@@ -268,13 +268,9 @@ class JacketSimulation:
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
         top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
-        cloth = self.model.cloth
-        pose_kernel.skinned_pose(links, cloth, below, top, ref)
-        limit = self.fabric.max_horizontal_stretch
-        if below.shape[0]:              # the pads' spread held as the compiled step holds it
-            kernel.limit_stretch(top, np.ones(rig.cols, dtype=np.bool_), cloth.row_a,
-                                 cloth.row_a + 1, cloth.row_rest, limit,
-                                 kernel.STRAIN_LIMIT_SWEEPS)
+        pose_kernel.skinned_pose(links, self.model.cloth, below, top, ref)
+        kernel.hold_pinned_row(top, self.model.cloth, below.shape[0] > 0,
+                               self.fabric.max_horizontal_stretch)
         c = self._posed(links, self.root)       # M10: the pinned row outside the body
         kernel.push_out_points(top, c.centers, c.axes, self.model.colliders.radii, c.cap_a,
                                c.cap_b, self.model.colliders.capsule_radii, c.plane_p, c.plane_n)

@@ -15,7 +15,7 @@ import numpy as np
 
 from .bundles import Posed, StepControl
 from .kernel_cache import njit
-from .kernel import STRAIN_LIMIT_SWEEPS, cloth_step, limit_stretch, push_out_points
+from .kernel import cloth_step, hold_pinned_row, push_out_points
 from .pose_kernel import (
     _transform_point, collider_poses, forward_kinematics, share_world_motion, skinned_pose,
     solve_layer)
@@ -154,7 +154,6 @@ def advance(model, tuning, state, before, motion, out):
     acc = np.empty((nv, 3))
     hood_acc = np.empty(3)
     top = np.empty((cols, 3))
-    top_free = np.ones(cols, dtype=np.bool_)
     k_caps = colliders.capsule_links.shape[0]
     now = Posed(np.empty(colliders.centers.shape), np.empty(colliders.rotations.shape),
                 np.empty((k_caps, 3)), np.empty((k_caps, 3)),
@@ -215,11 +214,7 @@ def advance(model, tuning, state, before, motion, out):
         solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
                     below)
         skinned_pose(links, cloth, below, top, now.ref)
-        if tuning.horizontal_limit >= 0.0 and below.shape[0]:
-            # The M2 pads spread the pinned row as the arms swing; the rows below hang from
-            # it, so the row is held to the horizontals' limit too.
-            limit_stretch(top, top_free, cloth.row_a, cloth.row_a + 1, cloth.row_rest,
-                          tuning.horizontal_limit, STRAIN_LIMIT_SWEEPS)
+        hold_pinned_row(top, cloth, below.shape[0] > 0, tuning.horizontal_limit)
         # M10 before M6: the colliders where this step ends, and the pinned row outside them.
         collider_poses(links, colliders, now)
         plane_poses(links, root, colliders, now)
