@@ -179,6 +179,12 @@ def test_each_character_of_a_crowd_gets_the_tf_it_gets_alone_and_replays_bit_for
     replayed = [m.data for m in read_recording(out).messages if m.topic == '/tf']
     assert len(recorded) == len(tf) and replayed == recorded
     assert [bytes(m) for m in tf] == [bytes(m) for m in recorded]
+    # Markers too, each character's at the inputs of its own output phase.
+    markers = {t for t in read_recording(record).topics if t.endswith('/markers')}
+    assert len(markers) == 3
+    for topic in markers:
+        assert ([m.data for m in read_recording(out).messages if m.topic == topic]
+                == [m.data for m in read_recording(record).messages if m.topic == topic])
 
 
 def test_a_characters_file_is_validated_with_one_line(tmp_path):
@@ -417,3 +423,40 @@ def test_a_crowd_recording_with_a_moving_viewer_replays_bit_for_bit(tmp_path):
     assert len(tf) == 120 and tf == live
     assert [m.data for m in replayed.messages if m.topic == '/tf'] == tf
     assert [m.topic for m in replayed.messages].count(VIEWER_TOPIC) == 2
+
+
+def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(tmp_path):
+    """Characters started together do not all publish markers and diagnostics on one input.
+
+    Each is its character's periodic work: on one input's tick, a crowd's all at once made
+    the inputs behind them late (docs/crowd.md). After each character's first, they spread.
+    """
+    n = 12
+    path = tmp_path / 'crowd.yaml'
+    path.write_text('defaults:\n  parameters: {markers_rate: 20.0, diagnostics_rate: 4.0}\n'
+                    f'characters:\n  - name: c\n    count: {n}\n    urdf: character.urdf\n')
+    record = str(tmp_path / 'crowd.mcap')
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    try:
+        node = JacketCrowdNode(context=ctx, parameter_overrides=[
+            Parameter('characters', value=str(path)), Parameter('record', value=record)])
+        raws = _inputs(node.characters[0].sim.skeleton, 'walk', 40)      # 60 Hz
+        for raw in raws:
+            node.on_joint_states([(c, raw, {}, time.time_ns()) for c in node.characters])
+        node.close()
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=ctx)
+    per_input = {}          # stamp -> [markers, diagnostics]
+    for m in read_recording(record).messages:
+        kind = 0 if m.topic.endswith('/markers') else 1 if m.topic == '/diagnostics' else None
+        if kind is not None:
+            per_input.setdefault(m.log_time, [0, 0])[kind] += 1
+    first, *later = sorted(per_input)
+    assert per_input[first] == [n, n]                       # everyone's first, at once
+    # Then markers every 3rd input (20 Hz) and diagnostics every 15th (4 Hz), spread: all n
+    # on one input without the phases.
+    assert max(per_input[t][0] for t in later) <= n // 2
+    assert max(per_input[t][1] for t in later) <= 2
+    assert sum(per_input[t][1] for t in later) >= n         # nobody skipped one

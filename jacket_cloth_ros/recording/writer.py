@@ -169,15 +169,19 @@ class SessionRecorder:
             self._last_flush = stamp_ns
 
     def add_session_config(self, urdf: str, rig_yaml: str, fabrics_yaml: str,
-                           parameters: dict, character: str = '') -> None:
+                           parameters: dict, character: str = '',
+                           output_phase: float = 0.0) -> None:
         """Add what a replay needs besides the inputs: character, rig, fabrics, parameters.
 
-        In a crowd's recording, one per ``character`` (its name): ``SESSION_CONFIG/<name>``.
+        In a crowd's recording, one per ``character`` (its name): ``SESSION_CONFIG/<name>``,
+        with the character's ``output_phase`` (SessionPipeline).
         """
         name = f'{SESSION_CONFIG}/{character}' if character else SESSION_CONFIG
-        self._writer.add_metadata(name, {
-            'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
-            'parameters_json': json.dumps(parameters, sort_keys=True)})
+        setup = {'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
+                 'parameters_json': json.dumps(parameters, sort_keys=True)}
+        if character:
+            setup['output_phase'] = repr(output_phase)
+        self._writer.add_metadata(name, setup)
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         """Add an MCAP metadata record (a crowd replay copies its characters' set-ups)."""

@@ -34,8 +34,9 @@ from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .node import LATCHED, NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, JacketNodeBase, _read, run
-from .pipeline import CrowdPipeline, SessionPipeline, session_topics
+from .node import (LATCHED, NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, JacketNodeBase, _read,
+                   keep_loaded_out_of_collections, run)
+from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.simulation import JacketSimulation
@@ -237,7 +238,8 @@ class JacketCrowdNode(JacketNodeBase):
             self._models[key] = (skeleton, load_rig(skeleton, spec.rig),
                                  load_fabrics(spec.fabric_file))
         skeleton, rig, fabrics = self._models[key]
-        pipeline = SessionPipeline(skeleton, rig, fabrics, spec.values, spec.name, timing=True)
+        pipeline = SessionPipeline(skeleton, rig, fabrics, spec.values, spec.name, timing=True,
+                                   output_phase=spread_phase(len(self.crowd.pipelines)))
         clash = set(spec.values['frame_prefix'] + b for b in pipeline.sim.bone_names) & set(
             skeleton.link_names)
         if clash:
@@ -263,6 +265,7 @@ class JacketCrowdNode(JacketNodeBase):
             raw=True, callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
         self._inputs.add(c, c.subscription)
         self.get_logger().debug(f'{spec.name}: {skeleton.name!r} from {source}')
+        keep_loaded_out_of_collections()
 
     # -- recording ----------------------------------------------------------------------------
     def _open_recorder(self, path):
@@ -285,7 +288,8 @@ class JacketCrowdNode(JacketNodeBase):
         spec = c.spec
         self.recorder.add_session_config(
             c.urdf, _read(spec.rig or shipped('jacket_rig.yaml')),
-            _read(spec.fabric_file or shipped('fabrics.yaml')), c.pipeline.values, spec.name)
+            _read(spec.fabric_file or shipped('fabrics.yaml')), c.pipeline.values, spec.name,
+            c.pipeline.output_phase)
 
     # -- inputs -------------------------------------------------------------------------------
     def _warn(self, c, code, text, period=5.0):

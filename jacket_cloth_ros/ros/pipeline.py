@@ -54,7 +54,17 @@ class SessionPipeline:
     """A simulation plus the cadence and content of its output messages."""
 
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
-                 values: dict, node_name: str = 'jacket_cloth_node', timing: bool = True):
+                 values: dict, node_name: str = 'jacket_cloth_node', timing: bool = True,
+                 output_phase: float = 0.0):
+        """Set up the simulation; ``output_phase`` staggers markers and diagnostics.
+
+        After the first of each, they come ``output_phase`` (0 to 0.9) of their period earlier
+        than they would: a crowd gives its characters spread phases, so their markers and
+        diagnostics do not all fall on one input's tick.
+        """
+        if not 0.0 <= output_phase <= 0.9:
+            raise ValueError(f'output_phase {output_phase} is not in [0, 0.9]')
+        self.output_phase = output_phase
         self.fabrics = fabrics
         self.values = dict(values)
         self.node_name = node_name
@@ -156,16 +166,23 @@ class SessionPipeline:
             self._window['published'] += 1
             rate = self.values['markers_rate']
             if rate > 0 and _due(self._last_marker, stamp_ns, rate):
-                self._last_marker = stamp_ns
+                self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
                 out.append(('markers', messages.marker_array(
                     self.sim, stamp_ns, self.sim.skeleton.link_names[0],
                     reset=self._marker_reset)))
                 self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
-            self._last_diag = stamp_ns
+            self._last_diag = self._phased(self._last_diag, stamp_ns,
+                                           self.values['diagnostics_rate'])
             out.append(('diagnostics', self._diagnostics(stamp_ns)))
         return out
+
+    def _phased(self, last, stamp_ns, rate):
+        """Return the stamp the next period counts from: the first one moved by the phase."""
+        if last is None:
+            return stamp_ns - int(self.output_phase * 1e9 / rate)
+        return stamp_ns
 
     def _world_transform(self, stamp_ns):
         """Encode world_frame -> the URDF root: the input's own world_joint variables.
@@ -251,6 +268,15 @@ class SessionPipeline:
 
 # What the inputs since the last diagnostics did, for its level.
 _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
+
+
+def spread_phase(index: int) -> float:
+    """Return the output phase of a crowd's ``index``-th character (0 for the first).
+
+    Golden-ratio steps (scaled into [0, 0.9]) spread any number of characters evenly without
+    knowing how many will come.
+    """
+    return 0.9 * ((index * 0.6180339887498949) % 1.0)
 
 
 def _due(last, stamp_ns, rate):

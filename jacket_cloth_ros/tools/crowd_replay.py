@@ -65,7 +65,13 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         ns = '/' + name
         topics = session_topics(f'{ns}/joint_states', f'{ns}/jacket_cloth_node/wind',
                                 f'{ns}/jacket_cloth_node/markers')
-        pipeline = SessionPipeline(skeleton, rig, fabrics, values, name, timing=False)
+        try:
+            phase = float(meta.get('output_phase', 0.0))
+            pipeline = SessionPipeline(skeleton, rig, fabrics, values, name, timing=False,
+                                       output_phase=phase)
+        except ValueError:
+            raise ConfigError(f'{where}: output_phase {meta.get("output_phase")!r} is not a '
+                              'number from 0 to 0.9') from None
         characters[topics['joint_states'][0]] = CrowdCharacter(name, values, pipeline, topics,
                                                                dict(meta))
     if not characters:
