@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The node over real DDS, in-process: a context and domain of its own, localhost discovery."""
 
+import gc
 import math
 import os
 import time
@@ -467,3 +468,17 @@ def test_dropped_inputs_count_undecodable_and_lost_messages(harness):
         pipeline.diagnostics_now(0), DiagnosticArray).status[0].values}
     assert int(values['dropped_inputs']) == pipeline.dropped + 3 == burst + 3 - pipeline.lost
     assert (values['undecodable_inputs'], values['lost_inputs']) == ('3', str(pipeline.lost))
+
+
+def test_a_loaded_node_keeps_what_it_loaded_out_of_full_collections(harness):
+    """A full collection walks what came after the load, not rclpy, numba and the model.
+
+    Walking them all paused a crowd's inputs for tens of milliseconds (docs/crowd.md).
+    """
+    gc.unfreeze()
+    h = harness()
+    frozen = gc.get_freeze_count()
+    assert frozen > 50_000
+    assert len(gc.get_objects(generation=2)) < frozen / 10
+    n = h.send_clip('walk', 60.0, 0.25)                       # and it runs on as before
+    h.spin_until(lambda: len(h.tf) == n)

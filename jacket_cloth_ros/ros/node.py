@@ -2,6 +2,7 @@
 """jacket_cloth_node: JointState in; jacket and hood bones on /tf, markers, diagnostics out."""
 
 import argparse
+import gc
 import os
 import signal
 import sys
@@ -52,6 +53,15 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 # warns too), which lowers the node's CPU per message (docs/performance.md).
 NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
+
+
+def keep_loaded_out_of_collections() -> None:
+    """Move every object alive now out of the cyclic garbage collector's reach (gc.freeze).
+
+    Called once a character is loaded: rclpy, numba's dispatchers and the models live as long
+    as the node, and a full collection that walked them all paused every input behind it.
+    """
+    gc.freeze()
 
 
 class JacketNodeBase(Node):
@@ -273,6 +283,7 @@ class JacketClothNode(JacketNodeBase):
         self._diag_wall = time.monotonic()
         self._diag_timer = self.create_timer(1.0 / self._p('diagnostics_rate'),
                                              self._diagnostics_watchdog)
+        keep_loaded_out_of_collections()
         # Subscribed only now: a publisher that waits for us knows we can simulate.
         self.create_subscription(JointState, 'joint_states', self.on_joint_state,
                                  qos_profile_sensor_data, raw=True)
