@@ -67,6 +67,20 @@ def single_commands(n):
              f'__node:=jacket_cloth_node_{k}', '-p', f'frame_prefix:=s{k}/'] for k in range(n)]
 
 
+def endless_walk(skeleton):
+    """Return the walk clip's JointStates, and how to walk on past its end without a teleport.
+
+    The clip's root jumps back to its start every loop, which made every character of a crowd
+    reset at once each 4 s. Returns (messages of one loop, (index of world_joint/trans_x, its
+    values), x to add per loop).
+    """
+    from jacket_cloth_ros.motion.messages import clip_messages
+    walk = [m for _, m in clip_messages(skeleton, 'walk', RATE, 4.0, 10 ** 10)][:-1]
+    i = list(walk[0].name).index('world_joint/trans_x')
+    x = [m.position[i] for m in walk]
+    return walk, (i, x), (x[-1] - x[0]) * len(x) / (len(x) - 1)
+
+
 def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0,
          cores_each=None):
     """Drive node processes with one JointState stream at RATE; say if the characters hold.
@@ -84,7 +98,6 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
 
-    from jacket_cloth_ros.motion.messages import clip_messages
     from jacket_cloth_ros.ros.node import LATCHED
     if cores_each:
         cores = set().union(*cores_each)
@@ -110,7 +123,7 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
     node.create_publisher(String, '/robot_description', LATCHED).publish(
         String(data=shipped_character_urdf()))
-    walk = [m for _, m in clip_messages(skeleton, 'walk', RATE, 4.0, 10 ** 10)]
+    walk, along_x, loop_x = endless_walk(skeleton)
     ex = SingleThreadedExecutor(context=ctx)
     ex.add_node(node)
     sent = [0]
@@ -119,7 +132,9 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
         t0 = time.monotonic()
         j = 0
         while time.monotonic() - t0 < duration and not until():
-            msg = walk[sent[0] % len(walk)]
+            loop, frame = divmod(sent[0], len(walk))
+            msg = walk[frame]
+            msg.position[along_x[0]] = along_x[1][frame] + loop * loop_x
             stamp = 10 ** 10 + int(round(sent[0] / RATE * 1e9))
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10 ** 9)
             if pub.get_subscription_count():
