@@ -330,6 +330,22 @@ def test_m12_keeps_each_vertical_at_its_length_and_outside_the_body():
     assert (np.linalg.norm(x[1:] - center, axis=1) >= radius - 1e-9).all()
 
 
+def test_m12_leaves_a_vertex_pulled_into_the_crease_of_two_colliders_outside_both():
+    # Where two colliders meet (a pelvis and a thigh raised in a cartwheel), pushing the
+    # lower vertex out of one puts it into the other; before the pass walked the edge back
+    # to its last point outside, it ended 10 cm inside (9 mm on the DeepMimic cartwheel).
+    from jacket_cloth_ros.core.kernel import hard_vertical_pass_outside
+    centers, radii = np.array([[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]), np.array([0.6, 0.5])
+    x = np.array([[0.05, 3.0, 0.0], [0.05, 0.0, 0.0]])
+    none3 = np.zeros((0, 3))
+    hard_vertical_pass_outside(
+        x, np.array([0]), np.array([1]), np.array([3.0]), np.zeros(2, dtype=np.bool_), centers,
+        np.repeat(np.eye(3)[None], 2, axis=0), np.repeat(radii[:, None], 3, axis=1), none3,
+        none3, np.zeros(0), none3, none3)
+    assert (np.linalg.norm(x[1] - centers, axis=1) >= radii - 1e-6).all()
+    assert np.linalg.norm(x[1] - x[0]) <= 3.0 + 1e-9         # shorter, as M12 allows
+
+
 def test_strain_limit_shortens_overlong_horizontals_moving_free_ends_only():
     # The horizontals' strain limit (after M12): an edge over (1 + limit) rest is shortened
     # to that length, a pinned end does not move, and edges under it are left alone (folds

@@ -261,7 +261,48 @@ def _verticals_outside(x, upper, lower, rest, contact, first, end, centers, to_u
                 break
             contact[b] = True           # M15: it touched the body during this step
             deepest = max(deepest, depth)
+        else:
+            # Not converged, as in the crease of two colliders: outside wins, in as many
+            # passes as the collision step takes (one pass can push into the other collider).
+            for _ in range(MAX_COLLISION_PASSES):
+                if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                             plane_p, plane_n) < CONVERGED:
+                    break
+            else:
+                _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
+                                 cap_r, plane_p, plane_n)
     return deepest
+
+
+# Halvings of the edge when its lower vertex is stuck inside: its length to 1e-6 of itself.
+OUTSIDE_BISECTIONS = 20
+
+
+@njit(cache=True)
+def _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                     plane_p, plane_n):
+    """Put b at the point of the edge a-b farthest from a that is outside, if a is outside.
+
+    The last resort where the push-out alternates between two colliders (the middle of a
+    crease): the edge gets shorter, which M12 allows, and the vertex ends outside.
+    """
+    b0, b1, b2 = x[b, 0], x[b, 1], x[b, 2]
+    x[b, 0], x[b, 1], x[b, 2] = x[a, 0], x[a, 1], x[a, 2]
+    if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+                 plane_n) >= CONVERGED:
+        x[b, 0], x[b, 1], x[b, 2] = b0, b1, b2      # a is inside too: nothing to walk to
+        return
+    d0, d1, d2 = b0 - x[a, 0], b1 - x[a, 1], b2 - x[a, 2]
+    out, inside = 0.0, 1.0
+    for _ in range(OUTSIDE_BISECTIONS):
+        t = 0.5 * (out + inside)
+        x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + t * d0, x[a, 1] + t * d1, x[a, 2] + t * d2
+        if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+                     plane_n) < CONVERGED:
+            out = t
+        else:
+            inside = t
+    x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + out * d0, x[a, 1] + out * d1, x[a, 2] + out * d2
 
 
 @njit(cache=True)
