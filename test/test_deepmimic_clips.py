@@ -25,11 +25,6 @@ from per_input import measure_every_input
 
 # Per clip: its inputs.
 CLIPS = {'walk': 39, 'run': 25, 'jump': 107, 'cartwheel': 164, 'dance_a': 98, 'spinkick': 78}
-# Horizontal stretch allowed at p99: issue 19's target, 10 %. The cartwheel misses it (a row
-# wraps a thigh raised sideways, docs/motion_capture.md): its measured p99 is held instead,
-# rounded up to 0.01 plus 0.02, so it cannot grow unseen.
-HORIZONTAL_P99 = dict.fromkeys(CLIPS, 0.10) | {'cartwheel': 0.21}
-CARTWHEEL_HORIZONTAL_MAX = 0.23
 
 
 def _clip(name):
@@ -219,8 +214,8 @@ def test_no_vertical_edge_of_a_clip_stretches_over_10_percent(measured):
     assert max(s['vertical_stretch']) <= 0.10, name
 
 
-def test_horizontal_stretch_of_a_clip_is_within_the_target_or_where_it_was_measured(measured):
+def test_horizontal_stretch_of_a_clip_is_within_the_target(measured):
+    # Issue 19's 10 % at p99. The cartwheel, where a row wraps a thigh raised sideways, met
+    # it once the row's limit and verticals ran until they agree (19.0 % at 5 rounds).
     name, s = measured
-    assert np.percentile(s['horizontal_stretch'], 99) <= HORIZONTAL_P99[name], name
-    if name == 'cartwheel':
-        assert max(s['horizontal_stretch']) <= CARTWHEEL_HORIZONTAL_MAX
+    assert np.percentile(s['horizontal_stretch'], 99) <= 0.10, name

@@ -346,9 +346,11 @@ def hard_pass_with_strain_limit(x, free, cloth, limit, contact, centers, axes, r
 
 
 # Sweeps of the horizontal strain limit: two bring a row's excess from one edge to its
-# neighbours and back.
+# neighbours and back. Rounds of the limit and the verticals, until the row holds: a row that
+# wraps a thigh raised sideways converges slowly (docs/motion_capture.md), and a row that
+# holds after one round ends there, so the bound costs only where it is needed.
 STRAIN_LIMIT_SWEEPS = 2
-STRAIN_LIMIT_ROUNDS = 5
+STRAIN_LIMIT_ROUNDS = 40
 
 
 @njit(cache=True)
