@@ -214,6 +214,26 @@ def _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, pl
     return deepest
 
 
+# Pushed out of one collider, a vertex can land in an overlapping one (a split ellipsoid, the
+# crease of pelvis and thigh): passes until one moves it less than ``settled`` (bounded:
+# corners may not settle).
+@njit(cache=True, inline='always')
+def _push_out_passes(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+                     plane_n, settled):
+    """Push vertex i out in up to MAX_COLLISION_PASSES passes.
+
+    Returns (deepest push-out or -1 if it was inside none, the last pass's push-out).
+    """
+    deepest, depth = -1.0, -1.0
+    for _ in range(MAX_COLLISION_PASSES):
+        depth = _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                          plane_p, plane_n)
+        if depth < settled:
+            break
+        deepest = max(deepest, depth)
+    return deepest, depth
+
+
 # Projections of one vertical edge's lower vertex onto its rest length and out of the body,
 # and the push-out (m) under which they have converged.
 VERTICAL_COLLISION_ITERATIONS = 8
@@ -261,14 +281,10 @@ def _verticals_outside(x, upper, lower, rest, contact, first, end, centers, to_u
                 break
             contact[b] = True           # M15: it touched the body during this step
             deepest = max(deepest, depth)
-        else:
-            # Not converged, as in the crease of two colliders: outside wins, in as many
-            # passes as the collision step takes (one pass can push into the other collider).
-            for _ in range(MAX_COLLISION_PASSES):
-                if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                             plane_p, plane_n) < CONVERGED:
-                    break
-            else:
+        else:       # not converged, as in the crease of two colliders: outside wins
+            _, depth = _push_out_passes(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
+                                        cap_r, plane_p, plane_n, CONVERGED)
+            if depth >= CONVERGED:
                 _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
                                  cap_r, plane_p, plane_n)
     return deepest
@@ -287,22 +303,35 @@ def _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
     crease): the edge gets shorter, which M12 allows, and the vertex ends outside.
     """
     b0, b1, b2 = x[b, 0], x[b, 1], x[b, 2]
-    x[b, 0], x[b, 1], x[b, 2] = x[a, 0], x[a, 1], x[a, 2]
-    if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-                 plane_n) >= CONVERGED:
+    d0, d1, d2 = b0 - x[a, 0], b1 - x[a, 1], b2 - x[a, 2]
+    if not _outside_at(x, a, b, 0.0, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a,
+                       cap_b, cap_r, plane_p, plane_n):
         x[b, 0], x[b, 1], x[b, 2] = b0, b1, b2      # a is inside too: nothing to walk to
         return
-    d0, d1, d2 = b0 - x[a, 0], b1 - x[a, 1], b2 - x[a, 2]
     out, inside = 0.0, 1.0
     for _ in range(OUTSIDE_BISECTIONS):
         t = 0.5 * (out + inside)
-        x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + t * d0, x[a, 1] + t * d1, x[a, 2] + t * d2
-        if _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-                     plane_n) < CONVERGED:
+        if _outside_at(x, a, b, t, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a,
+                       cap_b, cap_r, plane_p, plane_n):
             out = t
         else:
             inside = t
-    x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + out * d0, x[a, 1] + out * d1, x[a, 2] + out * d2
+    _place_on_edge(x, a, b, out, d0, d1, d2)
+
+
+@njit(cache=True, inline='always')
+def _place_on_edge(x, a, b, t, d0, d1, d2):
+    """Put vertex b at x[a] + t (d0, d1, d2)."""
+    x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + t * d0, x[a, 1] + t * d1, x[a, 2] + t * d2
+
+
+@njit(cache=True, inline='always')
+def _outside_at(x, a, b, t, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a, cap_b,
+                cap_r, plane_p, plane_n):
+    """Put b at x[a] + t d; True if it is outside there (a push-out under CONVERGED)."""
+    _place_on_edge(x, a, b, t, d0, d1, d2)
+    return _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+                     plane_n) < CONVERGED
 
 
 @njit(cache=True)
@@ -416,17 +445,10 @@ def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n
     for i in range(x.shape[0]):
         if not free[i]:
             continue
-        touching = False
-        # Pushed out of one piece of a split ellipsoid, a particle can land in its overlapping
-        # neighbour: test again until a pass moves nothing (bounded: corners may not settle).
-        for _ in range(MAX_COLLISION_PASSES):
-            depth = _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                              plane_p, plane_n)
-            if depth < 0.0:
-                break
-            deepest = max(deepest, depth)
-            touching = True
-        contact[i] = touching
+        depth, _ = _push_out_passes(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b,
+                                    cap_r, plane_p, plane_n, 0.0)
+        deepest = max(deepest, depth)
+        contact[i] = depth >= 0.0
     return deepest
 
 
@@ -443,12 +465,9 @@ def push_out_points(points, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, 
     _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
     deepest = 0.0
     for i in range(points.shape[0]):
-        for _ in range(MAX_COLLISION_PASSES):
-            depth = _push_out(points, i, centers, to_unit, from_unit, reach2, cap_a, cap_b,
-                              cap_r, plane_p, plane_n)
-            if depth < 0.0:
-                break
-            deepest = max(deepest, depth)
+        depth, _ = _push_out_passes(points, i, centers, to_unit, from_unit, reach2, cap_a,
+                                    cap_b, cap_r, plane_p, plane_n, 0.0)
+        deepest = max(deepest, depth)
     return deepest
 
 
