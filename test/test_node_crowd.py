@@ -425,13 +425,11 @@ def test_a_crowd_recording_with_a_moving_viewer_replays_bit_for_bit(tmp_path):
     assert [m.topic for m in replayed.messages].count(VIEWER_TOPIC) == 2
 
 
-def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(tmp_path):
-    """Characters started together do not all publish markers and diagnostics on one input.
+def _outputs_per_input(tmp_path, n, inputs):
+    """Feed a crowd of ``n`` (markers 20 Hz, diagnostics 4 Hz) every input of ``inputs``.
 
-    Each is its character's periodic work: on one input's tick, a crowd's all at once made
-    the inputs behind them late (docs/crowd.md). After each character's first, they spread.
+    Returns {stamp: [markers, diagnostics]} as recorded.
     """
-    n = 12
     path = tmp_path / 'crowd.yaml'
     path.write_text('defaults:\n  parameters: {markers_rate: 20.0, diagnostics_rate: 4.0}\n'
                     f'characters:\n  - name: c\n    count: {n}\n    urdf: character.urdf\n')
@@ -441,8 +439,7 @@ def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(
     try:
         node = JacketCrowdNode(context=ctx, parameter_overrides=[
             Parameter('characters', value=str(path)), Parameter('record', value=record)])
-        raws = _inputs(node.characters[0].sim.skeleton, 'walk', 40)      # 60 Hz
-        for raw in raws:
+        for raw in inputs(node.characters[0].sim.skeleton):
             node.on_joint_states([(c, raw, {}, time.time_ns()) for c in node.characters])
         node.close()
         node.destroy_node()
@@ -453,6 +450,17 @@ def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(
         kind = 0 if m.topic.endswith('/markers') else 1 if m.topic == '/diagnostics' else None
         if kind is not None:
             per_input.setdefault(m.log_time, [0, 0])[kind] += 1
+    return per_input
+
+
+def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(tmp_path):
+    """Characters started together do not all publish markers and diagnostics on one input.
+
+    Each is its character's periodic work: on one input's tick, a crowd's all at once made
+    the inputs behind them late (docs/crowd.md). After each character's first, they spread.
+    """
+    n = 12
+    per_input = _outputs_per_input(tmp_path, n, lambda skeleton: _inputs(skeleton, 'walk', 40))
     first, *later = sorted(per_input)
     assert per_input[first] == [n, n]                       # everyone's first, at once
     # Then markers every 3rd input (20 Hz) and diagnostics every 15th (4 Hz), spread: all n
@@ -460,3 +468,20 @@ def test_a_crowd_spreads_its_characters_markers_and_diagnostics_over_the_inputs(
     assert max(per_input[t][0] for t in later) <= n // 2
     assert max(per_input[t][1] for t in later) <= 2
     assert sum(per_input[t][1] for t in later) >= n         # nobody skipped one
+
+
+def test_a_crowd_keeps_its_output_phases_across_a_gap_in_the_inputs(tmp_path):
+    """A gap longer than the periods (a backlog taken at once, a pause) keeps the spread.
+
+    Seen live: a crowd's first batch held two inputs of each character, far apart, every
+    character's markers and diagnostics fell due on the second and, counted from it, came
+    on one input ever after (docs/crowd.md).
+    """
+    n = 12
+    per_input = _outputs_per_input(tmp_path, n, lambda skeleton: (
+        _inputs(skeleton, 'walk', 1) + _inputs(skeleton, 'walk', 40, first=21)))  # 350 ms gap
+    first, after_gap, *later = sorted(per_input)
+    assert per_input[first] == [n, n]
+    assert max(per_input[t][0] for t in later) <= n // 2
+    assert max(per_input[t][1] for t in later) <= 2
+    assert sum(per_input[t][1] for t in later) >= n

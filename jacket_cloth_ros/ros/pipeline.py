@@ -179,10 +179,18 @@ class SessionPipeline:
         return out
 
     def _phased(self, last, stamp_ns, rate):
-        """Return the stamp the next period counts from: the first one moved by the phase."""
-        if last is None:
-            return stamp_ns - int(self.output_phase * 1e9 / rate)
-        return stamp_ns
+        """Return the stamp the next period counts from, on this pipeline's grid of periods.
+
+        The first one is moved back by the phase. Later ones step whole periods from the last,
+        so a gap (a backlog of inputs, a pause) keeps the phase: snapping to the input's stamp
+        put every character of a crowd that came through one backlog on the same input, and
+        their markers and diagnostics all fell on one tick again (docs/crowd.md).
+        """
+        period = 1e9 / rate
+        if last is None or stamp_ns < last:
+            return stamp_ns - int(self.output_phase * period)
+        whole = (stamp_ns - last + 0.05 * period) // period
+        return min(last + round(whole * period), stamp_ns)
 
     def _world_transform(self, stamp_ns):
         """Encode world_frame -> the URDF root: the input's own world_joint variables.
