@@ -6,6 +6,7 @@ the steps of all of them then run in crowd_kernel.advance_crowd, spread over num
 each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
 """
 
+import operator
 import os
 import time
 from collections.abc import Sequence
@@ -59,6 +60,7 @@ class CrowdSteps:
         self._mine = []             # the same slots, read from Python (the typed list boxes)
         self._keys = []
         self._call = None
+        self._load = FixedTypes(crowd_kernel.load_motion)
         self.calls = 0              # compiled calls made (one per round of inputs)
 
     def add(self, sim: 'JacketSimulation') -> int:
@@ -97,7 +99,7 @@ class CrowdSteps:
         """
         sim = self.sims[index]
         key = self._key(sim)
-        if any(a is not b for a, b in zip(key, self._keys[index])):
+        if not all(map(operator.is_, key, self._keys[index])):
             slot, key = self._slot(sim)
             self._slots[index] = self._mine[index] = slot
             self._keys[index] = key
@@ -118,15 +120,11 @@ class CrowdSteps:
             if slot.tuning is not job.tuning:      # the level of detail's tuning, this input
                 slot = slot._replace(tuning=job.tuning)
                 self._slots[index] = self._mine[index] = slot
-            m = job.motion
-            slot.q_a[:] = m.q_a
-            slot.q_b[:] = m.q_b
-            slot.quat_a[:] = m.quat_a
-            slot.quat_b[:] = m.quat_b
-            slot.pos_a[:] = m.pos_a
-            slot.pos_b[:] = m.pos_b
-            slot.clock[:] = (m.stamp_a, m.span, m.t_sim, m.dt_ns, m.steps)
-            slot.out.stats[:] = 0.0
+            a, b = job.start, job.sample
+            self._load(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
+                       slot.clock, slot.out.stats, a.q, b.q, a.root_quat, b.root_quat, a.root,
+                       b.root, a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns,
+                       job.steps)
             active[j] = index
         ran = np.zeros(len(jobs), dtype=np.int64)
         numba.set_num_threads(self.threads)

@@ -17,6 +17,25 @@ from .step_kernel import advance
 STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE = range(3)      # what advance_slot returns
 
 
+@njit(cache=True)
+def load_motion(q_a, q_b, quat_a, quat_b, pos_a, pos_b, clock, stats, a_q, b_q, a_quat, b_quat,
+                a_root, b_root, stamp_a, span, t_sim, dt_ns, steps):
+    """Write one input's two samples and step clock into a slot's motion arrays, zero its stats.
+
+    What simulation.motion_between gives a character alone, in one call: as numpy copies,
+    one per array, they were the largest Python share of a crowd's character (docs/crowd.md).
+    """
+    q_a[:] = a_q
+    q_b[:] = b_q
+    quat_a[:] = a_quat
+    quat_b[:] = b_quat
+    for k in range(3):
+        pos_a[k] = a_root[k, 3]
+        pos_b[k] = b_root[k, 3]
+    clock[0], clock[1], clock[2], clock[3], clock[4] = stamp_a, span, t_sim, dt_ns, steps
+    stats[:] = 0.0
+
+
 @njit(cache=True, nogil=True)
 def advance_slot(slot):
     """Run one character's prepared steps (JacketSimulation.prepare's Motion, in the slot).

@@ -111,8 +111,22 @@ class StepJob:
 
     sample: Sample             # the input they run to
     steps: int
-    motion: Motion
+    start: Sample              # the input they run from (the last one)
+    t_sim: int                 # ns of the last step run before them
+    dt_ns: int
     tuning: Tuning             # the simulation's, or its level of detail's (core/lod.py)
+
+    @property
+    def motion(self) -> Motion:
+        """The steps as step_kernel.advance takes them (a crowd loads them in place instead)."""
+        return motion_between(self.start, self.sample, self.t_sim, self.dt_ns, self.steps)
+
+
+def motion_between(a: Sample, b: Sample, t_sim: int, dt_ns: int, steps: int) -> Motion:
+    """Return the Motion of ``steps`` fixed steps from sample ``a`` towards ``b``."""
+    return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
+                  floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
+                  int(b.stamp_ns - a.stamp_ns), int(t_sim), int(dt_ns), int(steps))
 
 
 @dataclass
@@ -375,7 +389,7 @@ class JacketSimulation:
         plan = self.lod.plan(sample.root[:3, 3], self.params.lod_distances,
                              self.params.lod_blend_s, n, self.dt_ns * 1e-9)
         report.lod_level = plan.level
-        return report, StepJob(sample, int(n), self._motion(a, sample, n),
+        return report, StepJob(sample, int(n), a, int(self.t_sim), int(self.dt_ns),
                                self.lod.tuned(self.tuning, plan))
 
     def complete(self, report: StepReport, job: 'StepJob', out: StepOutput, ran: bool) -> None:
@@ -430,12 +444,6 @@ class JacketSimulation:
                           np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
                           np.zeros(step_kernel.STAT_SLOTS))
 
-    def _motion(self, a, b, n):
-        """Return the Motion of ``n`` fixed steps from sample ``a`` towards ``b``."""
-        return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
-                      floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
-                      int(b.stamp_ns - a.stamp_ns), int(self.t_sim), int(self.dt_ns), int(n))
-
     def _take_output(self, out):
         """Take the last step's pose and layer bones as the steps left them in ``out``."""
         layer = self.rig.layer
@@ -459,7 +467,7 @@ class JacketSimulation:
         """
         out = self.step_output()
         self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
-                                          self._motion(a, b, n), out)
+                                          motion_between(a, b, self.t_sim, self.dt_ns, n), out)
         self._take_output(out)
         return out.stats
 
