@@ -260,7 +260,9 @@ def _ladder(measure, ladder):
 
 def crowd_bench(skeleton, quick=False, seconds=None, say=print):
     """Run the crowd part; returns its figures (see the module's docstring)."""
-    seconds = seconds or (1.5 if quick else 4.0)
+    # At least two diagnostics windows (about 1 s apart) after the warm-up, whatever their
+    # phase: 1.5 s gave one now and then, and a run with one window counts as not answering.
+    seconds = seconds or (2.5 if quick else 4.0)
     domain = 20 + os.getpid() % 20
     one, every = {0}, set(range(os.cpu_count()))
     out = {'quick': quick, 'cores': os.cpu_count()}

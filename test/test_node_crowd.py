@@ -479,7 +479,7 @@ def test_a_crowd_keeps_its_output_phases_across_a_gap_in_the_inputs(tmp_path):
     """
     n = 12
     per_input = _outputs_per_input(tmp_path, n, lambda skeleton: (
-        _inputs(skeleton, 'walk', 1) + _inputs(skeleton, 'walk', 40, first=21)))  # 350 ms gap
+        _inputs(skeleton, 'walk', 1) + _inputs(skeleton, 'walk', 40, first=55)))  # 0.9 s gap
     first, after_gap, *later = sorted(per_input)
     assert per_input[first] == [n, n]
     assert max(per_input[t][0] for t in later) <= n // 2

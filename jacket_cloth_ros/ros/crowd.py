@@ -335,11 +335,18 @@ class JacketCrowdNode(JacketNodeBase):
                 continue
             c.inputs += 1
             entries.append((c, raw, msg, arrived))
-        results = self.crowd.on_joint_states([(c.index, msg) for c, _, msg, _ in entries])
+        results = self.crowd.step_and_tf([(c.index, msg) for c, _, msg, _ in entries])
         if entries:
             self._last_stamp = entries[-1][2].stamp_ns
-        for (c, raw, msg, arrived), (report, outputs) in zip(entries, results):
+        # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
+        for (c, _, _, arrived), (_, tf) in zip(entries, results):
+            for _, out in tf:
+                self.tf.publish(out)
+            if tf:
+                c.pipeline.note_latency(time.time_ns() - arrived)
+        for (c, raw, msg, arrived), (report, tf) in zip(entries, results):
             stamp_ns = msg.stamp_ns
+            later = c.pipeline.periodic_outputs(report, stamp_ns)
             self._record(c.topics['joint_states'][0], raw, stamp_ns)
             name = c.spec.name
             for code, text in report.warnings:
@@ -350,13 +357,12 @@ class JacketCrowdNode(JacketNodeBase):
             if report.skipped_steps:
                 self._warn(c, 'overrun', f'{name}: {report.skipped_steps} steps skipped (cap '
                            'max_steps_per_input)')
-            if report.accepted and not any(key == 'tf' for key, _ in outputs):
+            if report.accepted and not tf:
                 self._warn(c, 'nan', f'{name}: non-finite bone pose: nothing published')
-            for key, out in outputs:
-                if key == 'tf':
-                    self.tf.publish(out)
-                    c.pipeline.note_latency(time.time_ns() - arrived)
-                elif key == 'markers':
+            for key, out in tf:
+                self._record(c.topics[key][0], out, stamp_ns)
+            for key, out in later:
+                if key == 'markers':
                     c.markers.publish(out)
                 else:
                     self.diagnostics.publish(out)

@@ -136,7 +136,16 @@ class SessionPipeline:
     def account(self, report: StepReport, stamp_ns: int) -> list[tuple[str, bytes]]:
         """Count a processed input and return its outputs ([(output key, CDR bytes), ...]).
 
-        The part after the simulation, which a crowd (CrowdPipeline) runs for each character.
+        Its /tf (:meth:`account_tf`), then its markers and diagnostics when due
+        (:meth:`periodic_outputs`).
+        """
+        return self.account_tf(report, stamp_ns) + self.periodic_outputs(report, stamp_ns)
+
+    def account_tf(self, report: StepReport, stamp_ns: int) -> list[tuple[str, bytes]]:
+        """Count a processed input and return its /tf outputs (none for a non-finite pose).
+
+        The part after the simulation that a listener waits for: a crowd (CrowdPipeline)
+        sends every character's /tf before any character's markers and diagnostics.
         """
         self.inputs += 1
         self._window['inputs'] += 1
@@ -154,23 +163,27 @@ class SessionPipeline:
         else:
             self._reset_streak = 0
         self._costs.append(report.step_cost_ns)
-        return self._outputs(stamp_ns)
-
-    def _outputs(self, stamp_ns):
         bones = self.sim.bones()
+        if not bones.finite:     # never a NaN on /tf (the simulation resets itself on one)
+            return []
+        out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
+        if self.values['publish_world_tf']:
+            out.append(('tf', self._world_transform(stamp_ns)))
+        self._window['published'] += 1
+        return out
+
+    def periodic_outputs(self, report: StepReport,
+                         stamp_ns: int) -> list[tuple[str, bytes]]:
+        """Return an accounted input's markers and diagnostics, those that are due."""
+        if not report.accepted:
+            return []
         out = []
-        if bones.finite:         # never a NaN on /tf (the simulation resets itself on one)
-            out.append(('tf', self._tf.encode(bones.poses, stamp_ns)))
-            if self.values['publish_world_tf']:
-                out.append(('tf', self._world_transform(stamp_ns)))
-            self._window['published'] += 1
-            rate = self.values['markers_rate']
-            if rate > 0 and _due(self._last_marker, stamp_ns, rate):
-                self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
-                out.append(('markers', messages.marker_array(
-                    self.sim, stamp_ns, self.sim.skeleton.link_names[0],
-                    reset=self._marker_reset)))
-                self._marker_reset = False
+        rate = self.values['markers_rate']
+        if self.sim.bones().finite and rate > 0 and _due(self._last_marker, stamp_ns, rate):
+            self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
+            out.append(('markers', messages.marker_array(
+                self.sim, stamp_ns, self.sim.skeleton.link_names[0], reset=self._marker_reset)))
+            self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
             self._last_diag = self._phased(self._last_diag, stamp_ns,
@@ -181,10 +194,11 @@ class SessionPipeline:
     def _phased(self, last, stamp_ns, rate):
         """Return the stamp the next period counts from, on this pipeline's grid of periods.
 
-        The first one is moved back by the phase. Later ones step whole periods from the last,
-        so a gap (a backlog of inputs, a pause) keeps the phase: snapping to the input's stamp
-        put every character of a crowd that came through one backlog on the same input, and
-        their markers and diagnostics all fell on one tick again (docs/crowd.md).
+        The first one is moved back by the phase. Later ones step whole periods from the last
+        (at most to the input), so a gap keeps the phase: counting from the input's stamp put
+        every character of a crowd that came through a backlog of inputs (several inputs a
+        character, some lost) on the same input, and their markers and diagnostics all fell
+        on one tick again (docs/crowd.md). With regular inputs, as before: from the input.
         """
         period = 1e9 / rate
         if last is None or stamp_ns < last:
@@ -310,6 +324,17 @@ class CrowdPipeline:
     def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
             tuple[StepReport, list[tuple[str, bytes]]]]:
         """Process (character index, JointState) inputs; (report, outputs) of each, in order."""
+        done = self.step_and_tf(inputs)
+        return [(r, tf + self.pipelines[i].periodic_outputs(r, m.stamp_ns))
+                for (i, m), (r, tf) in zip(inputs, done)]
+
+    def step_and_tf(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
+            tuple[StepReport, list[tuple[str, bytes]]]]:
+        """Process inputs as :meth:`on_joint_states` does; return (report, /tf outputs) of each.
+
+        A live crowd sends these at once, then asks each pipeline's ``periodic_outputs``: the
+        last character's /tf then waits for no character's markers or diagnostics.
+        """
         reports = stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs])
-        return [(r, self.pipelines[i].account(r, m.stamp_ns))
+        return [(r, self.pipelines[i].account_tf(r, m.stamp_ns))
                 for (i, m), r in zip(inputs, reports)]
