@@ -41,28 +41,39 @@ def integrate(x, xp, free, acc, damping, contact, contact_damping, dt):
 def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
     """M5: Gauss-Seidel over distance constraints; each end moves by its share of the error.
 
-    Stops early once a sweep moves no vertex more than ``tolerance`` (m; 0 never stops early),
-    the automatic quality mode. Returns the sweeps run.
+    Near its rest length a constraint's correction 1 - rest/length is the series of
+    1 - (1 + u)^(-1/2) in u = (length/rest)^2 - 1 to the third power, without a square root
+    or a division (the square-root approximation of Jakobsen's "Advanced Character Physics",
+    one order further); beyond about 12 % stretch or compression it is computed exactly.
+    Stops early once a sweep moves no vertex more than ``tolerance`` (m; 0 never stops
+    early), the automatic quality mode. Returns the sweeps run.
     """
-    # Each end's share (stiffness over the number of free ends, 0 when pinned), once per call:
-    # the sweeps then run without branches and with one division per constraint.
-    wa, wb = np.empty(ca.shape[0]), np.empty(ca.shape[0])
-    for j in range(ca.shape[0]):
+    # Each end's share (stiffness over the number of free ends, 0 when pinned) and the rest
+    # length's inverse square, once per call: the sweeps then run with no division at all.
+    n = ca.shape[0]
+    wa, wb, inv_rest2 = np.empty(n), np.empty(n), np.empty(n)
+    for j in range(n):
         fa, fb = free[ca[j]], free[cb[j]]
-        ends = int(fa) + int(fb)
-        wa[j] = stiffness[j] / ends if fa else 0.0
-        wb[j] = stiffness[j] / ends if fb else 0.0
+        share = stiffness[j] * (0.5 if fa and fb else 1.0)
+        wa[j] = share if fa else 0.0
+        wb[j] = share if fb else 0.0
+        inv_rest2[j] = 1.0 / (rest[j] * rest[j]) if rest[j] > 0.0 else 0.0
     for sweep in range(iterations):
         largest = 0.0
-        for j in range(ca.shape[0]):
+        for j in range(n):
             a, b = ca[j], cb[j]
             d0 = x[b, 0] - x[a, 0]
             d1 = x[b, 1] - x[a, 1]
             d2 = x[b, 2] - x[a, 2]
-            length = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            if length < 1e-9:
-                continue
-            f = 1.0 - rest[j] / length
+            length2 = d0 * d0 + d1 * d1 + d2 * d2
+            u = length2 * inv_rest2[j] - 1.0
+            if abs(u) < SERIES_REACH:
+                f = u * (0.5 + u * (-0.375 + u * 0.3125))
+            else:
+                length = np.sqrt(length2)
+                if length < 1e-9:
+                    continue
+                f = 1.0 - rest[j] / length
             fa, fb = f * wa[j], f * wb[j]
             x[a, 0] += d0 * fa
             x[a, 1] += d1 * fa
@@ -71,10 +82,15 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
             x[b, 1] -= d1 * fb
             x[b, 2] -= d2 * fb
             if tolerance > 0.0:
-                largest = max(largest, abs(f) * length * max(wa[j], wb[j]))
+                largest = max(largest, abs(f) * np.sqrt(length2) * max(wa[j], wb[j]))
         if largest < tolerance:
             return sweep + 1
     return iterations
+
+
+# Where relax uses its series: |u| under this, stretch within about -13 % .. +12 %; the
+# first term left out (35/128 u^4) is then at most 1 % of the correction.
+SERIES_REACH = 0.25
 
 
 @njit(cache=True)
