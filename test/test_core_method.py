@@ -172,7 +172,10 @@ def test_m5_one_sweep_brings_a_constraint_to_its_rest_length(stretch, within):
     x = np.array([[0.0, 0.0, 0.0], [0.6 * stretch, 0.8 * stretch, 0.0]])
     kernel.relax(x, np.ones(2, dtype=np.bool_), np.array([0]), np.array([1]), np.array([1.0]),
                  np.array([1.0]), 1, 0.0)
-    assert abs(np.linalg.norm(x[1] - x[0]) - 1.0) < within
+    error = abs(np.linalg.norm(x[1] - x[0]) - 1.0)
+    assert error < within
+    if within > 1e-12:              # the series, not the exact correction
+        assert error > within / 20
     assert np.allclose((x[0] + x[1]) / 2, [0.3 * stretch, 0.4 * stretch, 0.0])   # both ends
 
 

@@ -187,6 +187,44 @@ def test_each_character_of_a_crowd_gets_the_tf_it_gets_alone_and_replays_bit_for
                 == [m.data for m in read_recording(record).messages if m.topic == topic])
 
 
+def test_a_batch_with_two_inputs_of_each_character_gives_each_input_its_own_outputs(tmp_path):
+    """A backlog taken at once: each input's /tf and markers are its own, as alone and replayed.
+
+    Two inputs of a character in one batch run as two rounds; before, both inputs' outputs
+    were made after the second round, so the first input's /tf carried the second's bones.
+    """
+    path = tmp_path / 'crowd.yaml'
+    path.write_text('characters:\n  - name: c\n    count: 3\n    urdf: character.urdf\n')
+    record = str(tmp_path / 'crowd.mcap')
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    try:
+        node = JacketCrowdNode(context=ctx, parameter_overrides=[
+            Parameter('characters', value=str(path)), Parameter('record', value=record)])
+        chars = node.characters
+        raws = _inputs(chars[0].sim.skeleton, 'walk', 24)
+        for k in range(0, len(raws), 2):
+            node.on_joint_states([(c, raw, {}, time.time_ns()) for raw in raws[k:k + 2]
+                                  for c in chars])
+        node.close()
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=ctx)
+    recorded = read_recording(record).messages
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        urdf = f.read()
+    for c in chars:
+        got = [m.data for m in recorded if m.topic == '/tf' and deserialize_message(
+            m.data, TFMessage).transforms[0].child_frame_id.startswith(c.spec.name + '/')]
+        assert got == _alone(c.spec, urdf, raws), c.spec.name
+    out = str(tmp_path / 'replay.mcap')
+    replay_crowd(record, out)
+    replayed = read_recording(out).messages
+    for topic in {m.topic for m in recorded if m.topic == '/tf' or m.topic.endswith('/markers')}:
+        assert ([m.data for m in replayed if m.topic == topic]
+                == [m.data for m in recorded if m.topic == topic]), topic
+
+
 def test_a_characters_file_is_validated_with_one_line(tmp_path):
     path = tmp_path / 'bad.yaml'
     for text, error in (

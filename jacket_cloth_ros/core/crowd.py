@@ -9,7 +9,7 @@ each takes its steps back (JacketSimulation.complete). Same inputs, same bits as
 import operator
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numba
@@ -146,11 +146,15 @@ class CrowdSteps:
 
 
 def stepped(steps: CrowdSteps,
-            inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]]) -> list:
+            inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]],
+            after_round: Callable[[list[int], list, bool], None] | None = None) -> list:
     """Process inputs (simulation index, stamp ns, names, positions) as rounds of one call.
 
     A round takes at most one input per simulation, in their order. Returns each input's
-    StepReport, in the inputs' order; ``step_cost_ns`` is its round's wall time.
+    StepReport, in the inputs' order; ``step_cost_ns`` is its round's wall time. After each
+    round, ``after_round(its inputs' indices, the reports, whether it was the last)`` may take
+    the outputs of its inputs: a simulation with another input in a later round is stepped on
+    then, and its state is no longer this input's.
     """
     sims = steps.sims
     reports = [None] * len(inputs)
@@ -177,4 +181,6 @@ def stepped(steps: CrowdSteps,
         for k in this:
             reports[k].step_cost_ns = cost
         pending = later
+        if after_round is not None:
+            after_round(this, reports, not later)
     return reports

@@ -38,7 +38,7 @@ def load_motion(q_a, q_b, quat_a, quat_b, pos_a, pos_b, clock, stats, a_q, b_q, 
 
 @njit(cache=True, nogil=True)
 def advance_slot(slot):
-    """Run one character's prepared steps (JacketSimulation.prepare's Motion, in the slot).
+    """Run one character's prepared steps (its StepJob's motion, loaded by load_motion).
 
     Then the bones' poses into ``slot.bones``, as JacketSimulation.bones computes them.
     Returns STEPS_FAILED if the steps stopped on a division by zero (the caller resets that

@@ -57,7 +57,8 @@ def relax(x, free, ca, cb, rest, stiffness, iterations, tolerance):
         share = stiffness[j] * (0.5 if fa and fb else 1.0)
         wa[j] = share if fa else 0.0
         wb[j] = share if fb else 0.0
-        inv_rest2[j] = 1.0 / (rest[j] * rest[j]) if rest[j] > 0.0 else 0.0
+        rest2 = rest[j] * rest[j]
+        inv_rest2[j] = 1.0 / rest2 if rest2 > 0.0 else 0.0        # not if it underflows
     for sweep in range(iterations):
         largest = 0.0
         for j in range(n):

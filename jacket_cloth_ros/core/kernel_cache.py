@@ -87,7 +87,8 @@ class FixedTypes:
     (compiling or loading, and checking the types), and later calls go straight to the
     entry point compiled for those types, which reads any argument as the type it had then:
     every caller builds its arguments with core.bundles' builders, which fix each dtype and
-    layout. ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check``
+    layout (crowd_kernel.load_motion also takes InputParser's Samples, C float64 arrays it
+    makes itself; another layout would be misread, which the tests' type check catches). ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check``
     False never does (for timing).
     """
 

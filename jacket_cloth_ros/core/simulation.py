@@ -350,8 +350,9 @@ class JacketSimulation:
         """Do an input's work before its compiled steps; return the report and the steps to run.
 
         No steps (a refused input, a reset, no step due): the input is done and the job None.
-        Else run ``job.motion`` through step_kernel.advance (alone, or in a crowd's one call)
-        and hand its outcome to :meth:`complete`.
+        Else run the job's motion through step_kernel.advance (alone ``job.motion``; a crowd
+        loads it into its slot, crowd_kernel.load_motion) and hand the outcome to
+        :meth:`complete`.
         """
         report = StepReport(stamp_ns)
         self.ready_bones = None

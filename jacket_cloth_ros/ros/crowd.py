@@ -335,18 +335,19 @@ class JacketCrowdNode(JacketNodeBase):
                 continue
             c.inputs += 1
             entries.append((c, raw, msg, arrived))
-        results = self.crowd.step_and_tf([(c.index, msg) for c, _, msg, _ in entries])
+        inputs = [(c.index, msg) for c, _, msg, _ in entries]
+        results = self.crowd.step_and_tf(inputs)
         if entries:
             self._last_stamp = entries[-1][2].stamp_ns
         # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
-        for (c, _, _, arrived), (_, tf) in zip(entries, results):
+        for (c, _, _, arrived), (_, tf, _) in zip(entries, results):
             for _, out in tf:
                 self.tf.publish(out)
             if tf:
                 c.pipeline.note_latency(time.time_ns() - arrived)
-        for (c, raw, msg, arrived), (report, tf) in zip(entries, results):
+        for k, ((c, raw, msg, arrived), (report, tf, early)) in enumerate(zip(entries, results)):
             stamp_ns = msg.stamp_ns
-            later = c.pipeline.periodic_outputs(report, stamp_ns)
+            later = self.crowd.periodic_outputs(inputs, k, report, early)
             self._record(c.topics['joint_states'][0], raw, stamp_ns)
             name = c.spec.name
             for code, text in report.warnings:

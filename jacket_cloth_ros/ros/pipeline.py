@@ -82,6 +82,7 @@ class SessionPipeline:
         self._latencies = []
         self._last_marker = None
         self._last_diag = None
+        self._finite = False        # the last accounted input's bones (account_tf)
         self._marker_reset = True
         self._tf = self._tf_template()
         self._world_tf = None
@@ -164,6 +165,7 @@ class SessionPipeline:
             self._reset_streak = 0
         self._costs.append(report.step_cost_ns)
         bones = self.sim.bones()
+        self._finite = bones.finite
         if not bones.finite:     # never a NaN on /tf (the simulation resets itself on one)
             return []
         out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
@@ -174,12 +176,15 @@ class SessionPipeline:
 
     def periodic_outputs(self, report: StepReport,
                          stamp_ns: int) -> list[tuple[str, bytes]]:
-        """Return an accounted input's markers and diagnostics, those that are due."""
+        """Return an accounted input's markers and diagnostics, those that are due.
+
+        Right after its :meth:`account_tf`, before the simulation takes another input.
+        """
         if not report.accepted:
             return []
         out = []
         rate = self.values['markers_rate']
-        if self.sim.bones().finite and rate > 0 and _due(self._last_marker, stamp_ns, rate):
+        if self._finite and rate > 0 and _due(self._last_marker, stamp_ns, rate):
             self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
             out.append(('markers', messages.marker_array(
                 self.sim, stamp_ns, self.sim.skeleton.link_names[0], reset=self._marker_reset)))
@@ -195,15 +200,18 @@ class SessionPipeline:
         """Return the stamp the next period counts from, on this pipeline's grid of periods.
 
         The first one is moved back by the phase. Later ones step whole periods from the last
-        (at most to the input), so a gap keeps the phase: counting from the input's stamp put
-        every character of a crowd that came through a backlog of inputs (several inputs a
-        character, some lost) on the same input, and their markers and diagnostics all fell
-        on one tick again (docs/crowd.md). With regular inputs, as before: from the input.
+        (at least one, at most to the input), so a gap keeps the phase: counting from the
+        input's stamp put every character of a crowd that came through a backlog of inputs
+        (several inputs a character, some lost) on the same input, and their markers and
+        diagnostics all fell on one tick again (docs/crowd.md). Inputs whose interval divides
+        the period get the cadence they had (30 Hz markers on every 4th input at 120 Hz);
+        others now get the rate set on average (30 Hz markers from 50 Hz inputs: gaps of 20
+        and 40 ms, 25 Hz before).
         """
         period = 1e9 / rate
         if last is None or stamp_ns < last:
             return stamp_ns - int(self.output_phase * period)
-        whole = (stamp_ns - last + 0.05 * period) // period
+        whole = max(1.0, (stamp_ns - last + 0.05 * period) // period)
         return min(last + round(whole * period), stamp_ns)
 
     def _world_transform(self, stamp_ns):
@@ -324,17 +332,34 @@ class CrowdPipeline:
     def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
             tuple[StepReport, list[tuple[str, bytes]]]]:
         """Process (character index, JointState) inputs; (report, outputs) of each, in order."""
-        done = self.step_and_tf(inputs)
-        return [(r, tf + self.pipelines[i].periodic_outputs(r, m.stamp_ns))
-                for (i, m), (r, tf) in zip(inputs, done)]
+        return [(r, tf + self.periodic_outputs(inputs, k, r, early))
+                for k, (r, tf, early) in enumerate(self.step_and_tf(inputs))]
 
     def step_and_tf(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
-            tuple[StepReport, list[tuple[str, bytes]]]]:
-        """Process inputs as :meth:`on_joint_states` does; return (report, /tf outputs) of each.
+            tuple[StepReport, list[tuple[str, bytes]], list | None]]:
+        """Process inputs as :meth:`on_joint_states` does; (report, /tf outputs, early) of each.
 
-        A live crowd sends these at once, then asks each pipeline's ``periodic_outputs``: the
-        last character's /tf then waits for no character's markers or diagnostics.
+        A live crowd sends every /tf at once, then takes each input's markers and diagnostics
+        from :meth:`periodic_outputs`: the last character's /tf then waits for no character's
+        markers or diagnostics. ``early`` holds them already (else None) for an input whose
+        character had another input later in the batch, which moved its state on.
         """
-        reports = stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs])
-        return [(r, self.pipelines[i].account_tf(r, m.stamp_ns))
-                for (i, m), r in zip(inputs, reports)]
+        tf, early = [None] * len(inputs), [None] * len(inputs)
+
+        def after_round(ks, reports, last):
+            for k in ks:
+                i, m = inputs[k]
+                tf[k] = self.pipelines[i].account_tf(reports[k], m.stamp_ns)
+                if not last:
+                    early[k] = self.pipelines[i].periodic_outputs(reports[k], m.stamp_ns)
+        reports = stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs],
+                          after_round)
+        return list(zip(reports, tf, early))
+
+    def periodic_outputs(self, inputs: 'Sequence[tuple[int, JointStateContent]]', k: int,
+                         report: StepReport, early: list | None) -> list[tuple[str, bytes]]:
+        """Return input ``k``'s markers and diagnostics (``early`` if step_and_tf made them)."""
+        if early is not None:
+            return early
+        i, m = inputs[k]
+        return self.pipelines[i].periodic_outputs(report, m.stamp_ns)
