@@ -88,8 +88,9 @@ class FixedTypes:
     entry point compiled for those types, which reads any argument as the type it had then:
     every caller builds its arguments with core.bundles' builders, which fix each dtype and
     layout (crowd_kernel.load_motion also takes InputParser's Samples, C float64 arrays it
-    makes itself; another layout would be misread, which the tests' type check catches). ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check``
-    False never does (for timing).
+    makes itself; another layout would be misread, which the tests' type check catches).
+    ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check`` False never
+    does (for timing).
     """
 
     def __init__(self, dispatcher: 'Dispatcher', check: bool | None = None):
