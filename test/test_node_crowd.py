@@ -193,23 +193,10 @@ def test_a_batch_with_two_inputs_of_each_character_gives_each_input_its_own_outp
     Two inputs of a character in one batch run as two rounds; before, both inputs' outputs
     were made after the second round, so the first input's /tf carried the second's bones.
     """
-    path = tmp_path / 'crowd.yaml'
-    path.write_text('characters:\n  - name: c\n    count: 3\n    urdf: character.urdf\n')
-    record = str(tmp_path / 'crowd.mcap')
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
-    try:
-        node = JacketCrowdNode(context=ctx, parameter_overrides=[
-            Parameter('characters', value=str(path)), Parameter('record', value=record)])
-        chars = node.characters
-        raws = _inputs(chars[0].sim.skeleton, 'walk', 24)
-        for k in range(0, len(raws), 2):
-            node.on_joint_states([(c, raw, {}, time.time_ns()) for raw in raws[k:k + 2]
-                                  for c in chars])
-        node.close()
-        node.destroy_node()
-    finally:
-        rclpy.shutdown(context=ctx)
+    raws = _inputs(Skeleton(shipped_character_urdf()), 'walk', 24)
+    chars, record = _recorded_crowd(
+        tmp_path, 'characters:\n  - name: c\n    count: 3\n    urdf: character.urdf\n',
+        [raws[k:k + 2] for k in range(0, len(raws), 2)])
     recorded = read_recording(record).messages
     with open(shipped('character.urdf'), encoding='utf-8') as f:
         urdf = f.read()
@@ -463,26 +450,39 @@ def test_a_crowd_recording_with_a_moving_viewer_replays_bit_for_bit(tmp_path):
     assert [m.topic for m in replayed.messages].count(VIEWER_TOPIC) == 2
 
 
-def _outputs_per_input(tmp_path, n, inputs):
-    """Feed a crowd of ``n`` (markers 20 Hz, diagnostics 4 Hz) every input of ``inputs``.
+def _recorded_crowd(tmp_path, characters, batches):
+    """Run a recording crowd node of ``characters`` (the file's text) without DDS.
 
-    Returns {stamp: [markers, diagnostics]} as recorded.
+    Each batch of raw JointStates goes to every character at once. Returns (the node's
+    characters, the recording's path).
     """
     path = tmp_path / 'crowd.yaml'
-    path.write_text('defaults:\n  parameters: {markers_rate: 20.0, diagnostics_rate: 4.0}\n'
-                    f'characters:\n  - name: c\n    count: {n}\n    urdf: character.urdf\n')
+    path.write_text(characters)
     record = str(tmp_path / 'crowd.mcap')
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)
     try:
         node = JacketCrowdNode(context=ctx, parameter_overrides=[
             Parameter('characters', value=str(path)), Parameter('record', value=record)])
-        for raw in inputs(node.characters[0].sim.skeleton):
-            node.on_joint_states([(c, raw, {}, time.time_ns()) for c in node.characters])
+        for batch in batches:
+            node.on_joint_states([(c, raw, {}, time.time_ns()) for raw in batch
+                                  for c in node.characters])
         node.close()
         node.destroy_node()
     finally:
         rclpy.shutdown(context=ctx)
+    return node.characters, record
+
+
+def _outputs_per_input(tmp_path, n, inputs):
+    """Feed a crowd of ``n`` (markers 20 Hz, diagnostics 4 Hz) every input of ``inputs``.
+
+    Returns {stamp: [markers, diagnostics]} as recorded.
+    """
+    _, record = _recorded_crowd(
+        tmp_path, 'defaults:\n  parameters: {markers_rate: 20.0, diagnostics_rate: 4.0}\n'
+        f'characters:\n  - name: c\n    count: {n}\n    urdf: character.urdf\n',
+        [[raw] for raw in inputs(Skeleton(shipped_character_urdf()))])
     per_input = {}          # stamp -> [markers, diagnostics]
     for m in read_recording(record).messages:
         kind = 0 if m.topic.endswith('/markers') else 1 if m.topic == '/diagnostics' else None

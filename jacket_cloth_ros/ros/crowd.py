@@ -335,8 +335,7 @@ class JacketCrowdNode(JacketNodeBase):
                 continue
             c.inputs += 1
             entries.append((c, raw, msg, arrived))
-        inputs = [(c.index, msg) for c, _, msg, _ in entries]
-        results = self.crowd.step_and_tf(inputs)
+        results = self.crowd.step_and_tf([(c.index, msg) for c, _, msg, _ in entries])
         if entries:
             self._last_stamp = entries[-1][2].stamp_ns
         # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
@@ -345,9 +344,9 @@ class JacketCrowdNode(JacketNodeBase):
                 self.tf.publish(out)
             if tf:
                 c.pipeline.note_latency(time.time_ns() - arrived)
-        for k, ((c, raw, msg, arrived), (report, tf, early)) in enumerate(zip(entries, results)):
+        for (c, raw, msg, _), (report, tf, later) in zip(entries, results):
             stamp_ns = msg.stamp_ns
-            later = self.crowd.periodic_outputs(inputs, k, report, early)
+            periodic = later()
             self._record(c.topics['joint_states'][0], raw, stamp_ns)
             name = c.spec.name
             for code, text in report.warnings:
@@ -362,7 +361,7 @@ class JacketCrowdNode(JacketNodeBase):
                 self._warn(c, 'nan', f'{name}: non-finite bone pose: nothing published')
             for key, out in tf:
                 self._record(c.topics[key][0], out, stamp_ns)
-            for key, out in later:
+            for key, out in periodic:
                 if key == 'markers':
                     c.markers.publish(out)
                 else:

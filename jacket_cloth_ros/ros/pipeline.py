@@ -7,6 +7,7 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 ``timing`` is on (live), keeping a replay's output file byte-identical run after run.
 """
 
+import functools
 import math
 from typing import TYPE_CHECKING
 
@@ -19,7 +20,7 @@ from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
 
 if TYPE_CHECKING:           # for the annotations only
-    from collections.abc import Sequence
+    from collections.abc import Callable, Sequence
 
     from ..core.fabric import Fabric
     from ..core.rig import Rig
@@ -332,34 +333,29 @@ class CrowdPipeline:
     def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
             tuple[StepReport, list[tuple[str, bytes]]]]:
         """Process (character index, JointState) inputs; (report, outputs) of each, in order."""
-        return [(r, tf + self.periodic_outputs(inputs, k, r, early))
-                for k, (r, tf, early) in enumerate(self.step_and_tf(inputs))]
+        return [(r, tf + later()) for r, tf, later in self.step_and_tf(inputs)]
 
     def step_and_tf(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
-            tuple[StepReport, list[tuple[str, bytes]], list | None]]:
-        """Process inputs as :meth:`on_joint_states` does; (report, /tf outputs, early) of each.
+            tuple[StepReport, list[tuple[str, bytes]], 'Callable[[], list]']]:
+        """Process inputs as :meth:`on_joint_states` does; (report, /tf outputs, later) of each.
 
-        A live crowd sends every /tf at once, then takes each input's markers and diagnostics
-        from :meth:`periodic_outputs`: the last character's /tf then waits for no character's
-        markers or diagnostics. ``early`` holds them already (else None) for an input whose
-        character had another input later in the batch, which moved its state on.
+        ``later()`` returns the input's markers and diagnostics: a live crowd sends every /tf
+        at once, then calls each ``later``, so the last character's /tf waits for no
+        character's markers or diagnostics. An input whose character has another input later
+        in the batch has them made after its own round, before its state moves on.
         """
-        tf, early = [None] * len(inputs), [None] * len(inputs)
+        out = [None] * len(inputs)
 
         def after_round(ks, reports, last):
             for k in ks:
                 i, m = inputs[k]
-                tf[k] = self.pipelines[i].account_tf(reports[k], m.stamp_ns)
-                if not last:
-                    early[k] = self.pipelines[i].periodic_outputs(reports[k], m.stamp_ns)
-        reports = stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs],
-                          after_round)
-        return list(zip(reports, tf, early))
-
-    def periodic_outputs(self, inputs: 'Sequence[tuple[int, JointStateContent]]', k: int,
-                         report: StepReport, early: list | None) -> list[tuple[str, bytes]]:
-        """Return input ``k``'s markers and diagnostics (``early`` if step_and_tf made them)."""
-        if early is not None:
-            return early
-        i, m = inputs[k]
-        return self.pipelines[i].periodic_outputs(report, m.stamp_ns)
+                pipeline, report = self.pipelines[i], reports[k]
+                tf = pipeline.account_tf(report, m.stamp_ns)
+                if last:
+                    later = functools.partial(pipeline.periodic_outputs, report, m.stamp_ns)
+                else:
+                    later = functools.partial(list, pipeline.periodic_outputs(report, m.stamp_ns))
+                out[k] = (report, tf, later)
+        stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs],
+                after_round)
+        return out
