@@ -73,7 +73,7 @@ def xpbd_compliance(stiffness: npt.ArrayLike, iterations: int) -> np.ndarray | f
     return alpha
 
 
-@dataclass
+@dataclass(slots=True)
 class Bones:
     """Bone frames: ``parents[i]`` is a skeleton link; poses are relative to that link."""
 
@@ -105,7 +105,7 @@ class Colliders:
     plane_normals: np.ndarray
 
 
-@dataclass
+@dataclass(slots=True)
 class StepJob:
     """One input's compiled steps, prepared (JacketSimulation.prepare) and not yet run."""
 
@@ -129,7 +129,7 @@ def motion_between(a: Sample, b: Sample, t_sim: int, dt_ns: int, steps: int) -> 
                   int(b.stamp_ns - a.stamp_ns), int(t_sim), int(dt_ns), int(steps))
 
 
-@dataclass
+@dataclass(slots=True)
 class StepReport:
     """What one processed sample did, for logging, diagnostics and output."""
 
@@ -177,6 +177,10 @@ class JacketSimulation:
         self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
         self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         self.model = model_of(skeleton, rig)
+        # The horizontals edge_strains measures, picked once: every crowd character's
+        # diagnostics ask for them each second.
+        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
+        self._horizontal_edges = (rig.con_a[h], rig.con_b[h], rig.con_rest[h])
         self.lod = LevelOfDetail()
         # Colliders and M11 references where the last step ended: substeps start from them.
         self._started = np.zeros(1, dtype=np.bool_)
@@ -582,7 +586,6 @@ class JacketSimulation:
 
         The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.
         """
-        rig = self.rig
-        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
+        rig, (a, b, rest) = self.rig, self._horizontal_edges
         return (*edge_strain(self.x, rig.vert_a, rig.vert_b, rig.vert_rest),
-                *edge_strain(self.x, rig.con_a[h], rig.con_b[h], rig.con_rest[h]))
+                *edge_strain(self.x, a, b, rest))

@@ -267,14 +267,14 @@ class SessionPipeline:
         values = {}
         slow = False
         if self.timing:
-            costs = np.array(self._costs or [0]) * 1e-3
-            values['step_cost_us_median'] = f'{np.median(costs):.1f}'
-            values['step_cost_us_max'] = f'{costs.max():.1f}'
-            slow = costs.max() > 1e6 / sim.params.sim_rate
+            costs = sorted(self._costs or [0])
+            values['step_cost_us_median'] = f'{_quantile(costs, 0.5) * 1e-3:.1f}'
+            values['step_cost_us_max'] = f'{costs[-1] * 1e-3:.1f}'
+            slow = costs[-1] * 1e-3 > 1e6 / sim.params.sim_rate
             if self._latencies:
-                lat = np.array(self._latencies) * 1e-3
-                values['latency_us_p99'] = f'{np.percentile(lat, 99):.1f}'
-                values['latency_us_max'] = f'{lat.max():.1f}'
+                lat = sorted(self._latencies)
+                values['latency_us_p99'] = f'{_quantile(lat, 0.99) * 1e-3:.1f}'
+                values['latency_us_max'] = f'{lat[-1] * 1e-3:.1f}'
         self._costs = []
         self._latencies = []
         values.update({
@@ -299,6 +299,17 @@ class SessionPipeline:
 
 # What the inputs since the last diagnostics did, for its level.
 _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
+
+
+def _quantile(ordered: list, share: float) -> float:
+    """Return the ``share`` quantile of sorted numbers, interpolated as numpy's default.
+
+    Sorting a list of ints: numpy's percentile was a visible share of a crowd's diagnostics.
+    """
+    at = (len(ordered) - 1) * share
+    lo = int(at)
+    hi = min(lo + 1, len(ordered) - 1)
+    return ordered[lo] + (ordered[hi] - ordered[lo]) * (at - lo)
 
 
 def spread_phase(index: int) -> float:
