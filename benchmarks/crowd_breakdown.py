@@ -1,0 +1,133 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Where a live crowd's time goes: each part's wall time per character-input, over real DDS.
+
+    python benchmarks/crowd_breakdown.py [--characters 64] [--seconds 4]
+
+Runs a jacket_cloth_crowd node in this process (pinned to core 0, one step thread, spun as
+``ros2 run`` spins it) and the lab's live driver (``jacket_cloth_lab.crowd.live``: one 120 Hz
+JointState stream every character hears) in another process on the other cores. Named methods
+are wrapped with a timer (about 0.1 us a call), so the parts are as they run live, cold caches
+and all, which an in-process loop without DDS does not show (a part costs 1.2-2x there).
+Prints each part (they nest: the first line holds the others) and the process's CPU per
+character-input, which also counts the DDS threads. Run it alone on the machine.
+"""
+
+import argparse
+import collections
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+PARTS = (
+    ('ros.crowd', 'JacketCrowdNode', 'on_joint_states'),
+    ('ros.pipeline', 'CrowdPipeline', 'step_and_tf'),
+    ('core.crowd', 'CrowdSteps', 'run'),
+    ('core.simulation', 'JacketSimulation', 'prepare'),
+    ('ros.cdr', 'JointStateReader', 'read'),
+    ('ros.pipeline', 'SessionPipeline', 'account_tf'),
+    ('ros.pipeline', 'SessionPipeline', 'periodic_outputs'),
+    ('core.simulation', 'JacketSimulation', 'complete'),
+    ('ros.crowd', 'CrowdInputs', 'take_data'),
+    ('ros.crowd', 'CrowdInputs', 'add_to_wait_set'),
+    ('ros.crowd', 'CrowdInputs', 'is_ready'),
+    ('ros.crowd', 'Character', 'count_lost'),
+)
+
+
+def _timed(spent, label, f):
+    def timed(*args, **kwargs):
+        started = time.perf_counter_ns()
+        try:
+            return f(*args, **kwargs)
+        finally:
+            spent[label] += time.perf_counter_ns() - started
+    return timed
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--characters', type=int, default=64)
+    parser.add_argument('--seconds', type=float, default=4.0)
+    parser.add_argument('--driver', action='store_true', help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    sys.path.insert(0, root)
+    domain = 40 + os.getpid() % 20
+    if args.driver:                 # the other process: drive until the crowd has been measured
+        from jacket_cloth_lab.crowd import live
+        from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+        live(Skeleton(shipped_character_urdf()), [], args.characters, args.seconds + 8.0,
+             int(os.environ['ROS_DOMAIN_ID']))
+        return 0
+    os.environ['NUMBA_NUM_THREADS'] = '1'
+    os.sched_setaffinity(0, {0})
+    import importlib
+
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from jacket_cloth_lab.crowd import crowd_command
+    from jacket_cloth_ros.core import crowd as core_crowd
+    from jacket_cloth_ros.core.skeleton import shipped_character_urdf
+    from jacket_cloth_ros.ros.crowd import JacketCrowdNode
+    spent = collections.Counter()
+    for module, cls, method in PARTS:
+        owner = getattr(importlib.import_module(f'jacket_cloth_ros.{module}'), cls)
+        setattr(owner, method, _timed(spent, f'{cls}.{method}', getattr(owner, method)))
+    add = core_crowd.CrowdSteps.add
+
+    def add_timing_the_call(self, sim):
+        index = add(self, sim)
+        if index == 0:
+            self._call = _timed(spent, 'compiled steps (advance_crowd)', self._call)
+        return index
+    core_crowd.CrowdSteps.add = add_timing_the_call
+    with tempfile.TemporaryDirectory() as folder:
+        with open(os.path.join(folder, 'character.urdf'), 'w', encoding='utf-8') as f:
+            f.write(shipped_character_urdf())
+        argv = crowd_command(args.characters, folder, 1)
+        ctx = rclpy.Context()
+        rclpy.init(args=['crowd'] + argv[argv.index('--ros-args'):], context=ctx,
+                   domain_id=domain)
+        node = JacketCrowdNode(context=ctx)
+        executor = SingleThreadedExecutor(context=ctx)
+        executor.add_node(node)
+        others = set(range(os.cpu_count())) - {0} or {0}
+        driver = subprocess.Popen(
+            [sys.executable, os.path.abspath(__file__), '--driver', '--characters',
+             str(args.characters), '--seconds', str(args.seconds)],
+            env=dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONPATH=root),
+            preexec_fn=lambda: os.sched_setaffinity(0, others))
+
+        def inputs():
+            return sum(c.inputs for c in node.characters)
+
+        def spin(until):
+            while not until():
+                executor.spin_once(timeout_sec=0.05)
+        try:
+            limit = time.monotonic() + 120.0
+            # Past the kernels' loading and the first diagnostics: 3 s of inputs.
+            spin(lambda: inputs() >= args.characters * 360 or time.monotonic() > limit)
+            spent.clear()
+            cpu, taken, end = time.process_time(), inputs(), time.monotonic() + args.seconds
+            spin(lambda: time.monotonic() > end)
+            cpu, taken = time.process_time() - cpu, inputs() - taken
+        finally:
+            driver.wait(timeout=180)
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.shutdown(context=ctx)
+    expected = args.characters * 120 * args.seconds
+    print(f'{args.characters} characters, {taken} inputs in {args.seconds:g} s '
+          f'({taken / expected:.0%} of those sent); wall time per character-input:')
+    for label, ns in spent.most_common():
+        print(f'  {label:36s} {ns / max(taken, 1) / 1e3:6.1f} us')
+    print(f'CPU of this process per character-input: {cpu / max(taken, 1) * 1e6:.1f} us')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
