@@ -27,7 +27,7 @@ from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 RATE = 120.0
 STEP_US = 1e6 / RATE
 COUNTS = (1, 4, 16, 64, 256)               # cost per character against N
-CROWD_LADDER = (16, 20, 24, 28, 32, 40, 48, 56, 64, 96, 128, 192, 256)
+CROWD_LADDER = (16, 20, 24, 28, 32, 40, 48, 56, 64, 72, 80, 88, 96, 112, 128, 192, 256)
 SINGLE_LADDER = (1, 2, 4, 8, 16, 32)
 
 
