@@ -3,13 +3,15 @@
 
     python benchmarks/crowd_breakdown.py [--characters 64] [--seconds 4]
 
-Runs a jacket_cloth_crowd node in this process (pinned to core 0, one step thread, spun as
-``ros2 run`` spins it) and the lab's live driver (``jacket_cloth_lab.crowd.live``: one 120 Hz
-JointState stream every character hears) in another process on the other cores. Named methods
-are wrapped with a timer (about 0.1 us a call), so the parts are as they run live, cold caches
-and all, which an in-process loop without DDS does not show (a part costs 1.2-2x there).
-Prints each part (they nest: the first line holds the others) and the process's CPU per
-character-input, which also counts the DDS threads. Run it alone on the machine.
+Runs a jacket_cloth_crowd node in this process (pinned to core 0, one step thread, its
+executor spun in this thread) and the lab's live driver (``jacket_cloth_lab.crowd.live``: one
+120 Hz JointState stream every character hears) in another process on the other cores. Named
+methods are wrapped with a timer (about 0.4 us a call, in the figures), so the parts are as
+they run live, cold caches and all: an in-process loop without DDS ran them 0.5-0.9x as long.
+Prints each part's wall time per character-input (``on_joint_states`` holds ``step_and_tf``,
+which holds ``CrowdSteps.run``, which holds the compiled steps; the ``CrowdInputs`` parts run
+in the executor, outside the batch) and the process's CPU per character-input, which also
+counts the DDS threads. Exits 1 if the driver failed or no input came. Run it alone.
 """
 
 import argparse
@@ -58,8 +60,9 @@ def main() -> int:
     if args.driver:                 # the other process: drive until the crowd has been measured
         from jacket_cloth_lab.crowd import live
         from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+        # cores={0}: the driver keeps off the crowd's core (it starts no process of its own).
         live(Skeleton(shipped_character_urdf()), [], args.characters, args.seconds + 8.0,
-             int(os.environ['ROS_DOMAIN_ID']))
+             int(os.environ['ROS_DOMAIN_ID']), cores={0})
         return 0
     os.environ['NUMBA_NUM_THREADS'] = '1'
     os.sched_setaffinity(0, {0})
@@ -98,7 +101,9 @@ def main() -> int:
         driver = subprocess.Popen(
             [sys.executable, os.path.abspath(__file__), '--driver', '--characters',
              str(args.characters), '--seconds', str(args.seconds)],
-            env=dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONPATH=root),
+            env=dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                     PYTHONPATH=os.pathsep.join(filter(None, (root,
+                                                              os.environ.get('PYTHONPATH'))))),
             preexec_fn=lambda: os.sched_setaffinity(0, others))
 
         def inputs():
@@ -116,10 +121,19 @@ def main() -> int:
             spin(lambda: time.monotonic() > end)
             cpu, taken = time.process_time() - cpu, inputs() - taken
         finally:
-            driver.wait(timeout=180)
-            executor.shutdown()
-            node.destroy_node()
-            rclpy.shutdown(context=ctx)
+            try:
+                driver.wait(timeout=60 + args.seconds)
+            except subprocess.TimeoutExpired:
+                driver.kill()
+                driver.wait()
+            finally:
+                executor.shutdown()
+                node.destroy_node()
+                rclpy.shutdown(context=ctx)
+    if driver.returncode or not taken:
+        print(f'crowd_breakdown: the driver exited with {driver.returncode} after {taken} '
+              'inputs; no figures', file=sys.stderr)
+        return 1
     expected = args.characters * 120 * args.seconds
     print(f'{args.characters} characters, {taken} inputs in {args.seconds:g} s '
           f'({taken / expected:.0%} of those sent); wall time per character-input:')

@@ -339,8 +339,9 @@ class JacketCrowdNode(JacketNodeBase):
         if entries:
             self._last_stamp = entries[-1][2].stamp_ns
         # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
-        # Straight to the publisher's handle: rclpy's publish() type checks and guards each
-        # call, a visible share of 64 characters' /tf; this node publishes from one thread.
+        # Straight to the publisher's handle: publish() would type check and take the handle
+        # (against its destruction meanwhile) per message. Safe: run() destroys the node only
+        # after spinning ends, on this thread.
         publish_tf = self.tf.handle.publish_raw
         for (c, _, _, arrived), (_, tf, _) in zip(entries, results):
             if tf:
