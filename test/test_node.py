@@ -130,6 +130,19 @@ def test_latency_counts_from_the_messages_arrival_in_the_process(harness):
     assert h.node.pipeline._latencies[-1] >= 50_000_000
 
 
+def test_latency_is_noted_once_per_input_with_the_world_transform_too(harness):
+    # publish_world_tf sends two /tf per input; the diagnostics' p99 is over inputs, as the
+    # crowd's (ros/crowd.py notes one per input).
+    from rclpy.serialization import serialize_message
+    h = harness(publish_world_tf=True)
+    names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'walk', 0.4)
+    for k in range(5):
+        msg = JointState(name=list(names), position=[float(p) for p in pos])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = 100, k * 16_666_667
+        h.node.on_joint_state(serialize_message(msg), {})
+    assert len(h.node.pipeline._latencies) == 5
+
+
 def test_only_the_input_and_tf_keep_rclpys_qos_event_handlers(harness):
     # The executor visits every handler at each wake-up; markers, diagnostics and wind have
     # none (the peer warns), joint_states, /tf and /parameter_events keep rclpy's two each.

@@ -445,13 +445,18 @@ class JacketClothNode(JacketNodeBase):
                        f'max_steps_per_input); the cloth lags no further behind')
         if report.accepted and not any(key == 'tf' for key, _ in outputs):
             self._warn('nan', 'non-finite bone pose: nothing published')
+        tf_sent = None
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
-            if key == 'tf':      # latency: arrival to /tf handed to DDS
-                self.pipeline.note_latency(time.time_ns() - arrived)
+            if key == 'tf':
+                tf_sent = time.time_ns()
             elif key == 'diagnostics':
                 self._diag_wall = time.monotonic()
             self._record(self._topics[key][0], out, stamp_ns)
+        # Latency, once per input as in the crowd: arrival to its last /tf handed to DDS
+        # (publish_world_tf sends two).
+        if tf_sent is not None:
+            self.pipeline.note_latency(tf_sent - arrived)
 
 
 def _read(path):
