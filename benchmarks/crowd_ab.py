@@ -35,9 +35,7 @@ def main() -> int:
     skeleton = Skeleton(shipped_character_urdf())
     cores = {int(c) for c in args.cores.split(',')}
     runs = {'old': [], 'new': []}
-    with tempfile.TemporaryDirectory() as folder:
-        with open(os.path.join(folder, 'character.urdf'), 'w', encoding='utf-8') as f:
-            f.write(shipped_character_urdf())
+    with tempfile.TemporaryDirectory() as folder:       # the characters files (URDF shipped)
         for r in range(args.rounds):
             for name in (('old', 'new') if r % 2 == 0 else ('new', 'old')):
                 tree = os.path.abspath(getattr(args, name))

@@ -59,7 +59,6 @@ class CrowdSteps:
         self._slots = typed.List()
         self._mine = []             # the same slots, read from Python (the typed list boxes)
         self._keys = []
-        self._motion = []           # each slot's arrays load_motion writes, looked up once
         self._call = None
         self._load = FixedTypes(crowd_kernel.load_motion)
         self.calls = 0              # compiled calls made (one per round of inputs)
@@ -71,7 +70,6 @@ class CrowdSteps:
         self._slots.append(slot)
         self._mine.append(slot)
         self._keys.append(key)
-        self._motion.append(_motion_arrays(slot))
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
         return len(self.sims) - 1
@@ -105,7 +103,6 @@ class CrowdSteps:
             slot, key = self._slot(sim)
             self._slots[index] = self._mine[index] = slot
             self._keys[index] = key
-            self._motion[index] = _motion_arrays(slot)
         return self._mine[index]
 
     def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, int]]:
@@ -124,7 +121,8 @@ class CrowdSteps:
                 slot = slot._replace(tuning=job.tuning)
                 self._slots[index] = self._mine[index] = slot
             a, b = job.start, job.sample
-            self._load(*self._motion[index], a.q, b.q, a.root_quat, b.root_quat, a.root,
+            self._load(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
+                       slot.clock, slot.out.stats, a.q, b.q, a.root_quat, b.root_quat, a.root,
                        b.root, a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns,
                        job.steps)
             active[j] = index
@@ -145,11 +143,6 @@ class CrowdSteps:
         """Return simulation ``index``'s bones as the last call left them (a copy)."""
         sim = self.sims[index]
         return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
-
-
-def _motion_arrays(slot):
-    return (slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b, slot.clock,
-            slot.out.stats)
 
 
 def stepped(steps: CrowdSteps,

@@ -55,18 +55,14 @@ class InputParser:
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
-        self._last = (None, None)       # (names, plan) of the last message
 
     def _plan(self, names):
         """Work out where each name of a message goes, and the warnings its name list earns.
 
         Worked out once per distinct name list (a publisher sends the same list every time).
         """
-        if names is self._last[0]:      # the very tuple JointStateReader hands every time
-            return self._last[1]
         plan = self._plans.get(names)
         if plan is not None:
-            self._last = (names, plan)
             return plan
         index = self.skeleton.joint_index
         joint_from, joint_to, world_from, world_to, unknown = [], [], [], [], []
@@ -98,7 +94,6 @@ class InputParser:
         if len(self._plans) > 16:           # a publisher that changes its list every time
             self._plans.clear()
         self._plans[names] = plan
-        self._last = (names, plan)
         return plan
 
     def parse(self, stamp_ns: int, names: Sequence[str], positions: npt.ArrayLike) -> Sample:

@@ -339,34 +339,25 @@ class JacketCrowdNode(JacketNodeBase):
         if entries:
             self._last_stamp = entries[-1][2].stamp_ns
         # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
-        # Straight to the publisher's handle: publish() would type check and take the handle
-        # (against its destruction meanwhile) per message. Safe: run() destroys the node only
-        # after spinning ends, on this thread.
-        publish_tf = self.tf.handle.publish_raw
         for (c, _, _, arrived), (_, tf, _) in zip(entries, results):
             if tf:
                 for _, out in tf:
-                    publish_tf(out)
+                    self.tf.publish(out)
                 c.pipeline.note_latency(time.time_ns() - arrived)
-        recording = self.recorder is not None
         for (c, raw, msg, _), (report, tf, later) in zip(entries, results):
             stamp_ns = msg.stamp_ns
             periodic = later()
-            if recording:
-                self._record(c.topics['joint_states'][0], raw, stamp_ns)
-            if report.warnings or report.reset or report.skipped_steps or not tf:
-                self._warn_about(c, report, tf)
-            if recording:
-                for key, out in tf:
-                    self._record(c.topics[key][0], out, stamp_ns)
+            self._record(c.topics['joint_states'][0], raw, stamp_ns)
+            self._warn_about(c, report, tf)
+            for key, out in tf:
+                self._record(c.topics[key][0], out, stamp_ns)
             for key, out in periodic:
                 if key == 'markers':
                     c.markers.publish(out)
                 else:
                     self.diagnostics.publish(out)
                     c.diag_wall = time.monotonic()
-                if recording:
-                    self._record(c.topics[key][0], out, stamp_ns)
+                self._record(c.topics[key][0], out, stamp_ns)
 
     def _warn_about(self, c, report, tf):
         """Log what an input's report says went wrong (each kind throttled per character)."""
