@@ -354,3 +354,75 @@ def test_a_crowd_steps_each_character_to_the_bits_it_gets_alone(skeleton, rig):
             assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
     assert crowd.calls == 39 and sims[3].ready_bones is not None     # the first: resets
     assert [s.resets for s in sims] == [1, 1, 3, 1]
+
+
+def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
+    # core.crowd: an armed character's steady inputs are checked and loaded in one compiled
+    # call (crowd_kernel.prepare_steady); every input it must not take goes to prepare.
+    # Each case below, on one character, against a lone simulation, bit for bit.
+    from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+    crowd = CrowdSteps(threads=1)
+    sims = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'), SimParams())
+            for _ in range(3)]
+    alone = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'), SimParams())
+             for _ in range(3)]
+    for sim in sims:
+        crowd.add(sim)
+    names = tuple(skeleton.joint_names) + tuple(f'world_joint/{v}' for v in (
+        'trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w'))
+    odd = tuple(reversed(names))
+    x = names.index('world_joint/trans_x')
+    stamp = [10 ** 10] * 3
+    cases = {8: 'nan', 12: 'repeat', 14: 'back', 16: 'teleport', 20: 'gap', 24: 'cap',
+             28: 'no step', 32: 'names', 36: 'viewer', 40: 'no viewer', 44: 'turn'}
+    for k in range(52):
+        inputs = []
+        for i, clip in enumerate(('walk', 'run', 'dodge')):
+            got_names, pos = joint_state_content(skeleton.joint_names, clip, k / 120)
+            pos = np.array([dict(zip(got_names, pos))[n] for n in names])
+            step, use = 8_333_333, names
+            case = cases.get(k) if i == 1 else None
+            if case == 'nan':
+                pos[3] = np.nan
+            elif case == 'repeat':
+                step = 0
+            elif case == 'back':
+                step = -2_000_000
+            elif case == 'teleport':
+                pos[x] += 5.0
+            elif case == 'gap':
+                step = 1_500_000_000                        # past reset_gap: a reset
+            elif case == 'cap':
+                step = 200_000_000                          # 24 steps: 12 skipped
+            elif case == 'no step':
+                step = 1_000_000
+            elif case == 'names':
+                use, pos = odd, pos[::-1].copy()
+            elif case in ('viewer', 'no viewer'):
+                view = [40.0, 0.0, 0.0] if case == 'viewer' else None
+                sims[i].set_viewer(view)
+                alone[i].set_viewer(view)
+            elif case == 'turn':
+                pos[names.index('world_joint/rot_z')] = 1.0
+                pos[names.index('world_joint/rot_w')] = 0.0
+            stamp[i] += step
+            inputs.append((i, stamp[i], use, pos))
+        reports = stepped(crowd, inputs)
+        for (i, at, use, pos), report in zip(inputs, reports):
+            mine = alone[i].process(at, use, pos)
+            assert (report.accepted, report.reset, report.steps, report.skipped_steps,
+                    report.warnings, report.lod_level, report.sweeps) == (
+                mine.accepted, mine.reset, mine.steps, mine.skipped_steps, mine.warnings,
+                mine.lod_level, mine.sweeps), (k, i)
+            assert sims[i].t_sim == alone[i].t_sim and sims[i].steps_total == alone[i].steps_total
+            assert np.array_equal(sims[i].x, alone[i].x), (k, i)
+            assert np.array_equal(sims[i].hood_p, alone[i].hood_p)
+            assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
+            assert np.array_equal(sims[i].last.q, alone[i].last.q)
+            assert np.array_equal(sims[i].parser.last_root, alone[i].parser.last_root)
+    # Every case fell back (the bits above) and the rest went the compiled way: all but the
+    # first two inputs of each character and, for each case, at most three inputs.
+    assert 3 * 52 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 52 - 3 * 2
+    assert [s.resets for s in sims] == [1, 6, 1]     # a teleport and a turn go and come back

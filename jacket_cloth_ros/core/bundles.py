@@ -13,7 +13,8 @@ longer be swapped by a caller:
 - :class:`Posed`: colliders and M11 references in the simulation frame at one instant;
 - :class:`Motion` and :class:`StepControl`: what drives one input's steps or one cloth step;
 - :class:`StepOutput`: what the steps leave for the bones and the report;
-- :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call.
+- :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call, and
+  :class:`SteadyIntake`, the compiled check of its steady inputs.
 
 Every builder fixes each field's dtype and memory layout, so the compiled code sees the same
 types on every call (see kernel_cache.FixedTypes). This file is a kernel file: the compiled
@@ -227,6 +228,54 @@ class StepOutput(NamedTuple):
     layer_tips: np.ndarray
     below: np.ndarray
     stats: np.ndarray
+
+
+class SteadyIntake(NamedTuple):
+    """A crowd character's input check and sample, compiled (crowd_kernel.prepare_steady).
+
+    Armed (core/crowd.py) after an input that went the whole way in Python without a warning
+    or reset: the plan of its name list (as InputParser's), its last sample and the limits its
+    next input is checked against. An input that passes every check is written into the
+    character's CrowdSlot motion arrays (shared here), as JacketSimulation.prepare and
+    crowd_kernel.load_motion would have written it. Apart from the slot: copying a slot's
+    many arrays out of the crowd's list costs more than this check.
+    """
+
+    joint_from: np.ndarray          # int64: as InputParser's plan of the name list
+    joint_to: np.ndarray
+    world_from: np.ndarray
+    world_to: np.ndarray
+    whole_world: bool
+    width: int                      # names in the list
+    last_q: np.ndarray              # the last sample's joint values, root and quaternion
+    last_root: np.ndarray
+    last_quat: np.ndarray
+    q: np.ndarray                   # the new sample, checked before it replaces the last
+    root: np.ndarray
+    quat: np.ndarray
+    clock: np.ndarray               # int64: the last sample's stamp, dt_ns, max_steps_per_input
+    limits: np.ndarray              # reset_gap (s), teleport_distance (m), teleport_angle_deg
+    motion: tuple                   # the slot's q_a, q_b, quat_a, quat_b, pos_a, pos_b
+    slot_clock: np.ndarray          # the slot's clock, its t_sim included
+    stats: np.ndarray               # the slot's out.stats
+
+
+def steady_intake(slot: 'CrowdSlot', plan: tuple = (), last: 'tuple | None' = None,
+                  clock: tuple = (0, 1, 0), limits: tuple = (0.0, 0.0, 0.0)) -> SteadyIntake:
+    """Return the SteadyIntake of ``slot``; without ``plan`` and ``last``, unarmed.
+
+    ``plan``: (joint_from, joint_to, world_from, world_to, whole_world, names); ``last``:
+    (q, root, quaternion) of the last sample.
+    """
+    q = slot.q_a.shape[0]
+    joint_from, joint_to, world_from, world_to, whole, width = plan or ((), (), (), (), False, 0)
+    last_q, last_root, last_quat = last or (np.zeros(q), np.eye(4), np.zeros(4))
+    return SteadyIntake(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
+                        bool(whole), int(width), floats(last_q).copy(), floats(last_root).copy(),
+                        floats(last_quat).copy(), np.zeros(q), np.eye(4), np.zeros(4),
+                        ints(clock).copy(), floats(limits).copy(),
+                        (slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),
+                        slot.clock, slot.out.stats)
 
 
 class CrowdSlot(NamedTuple):

@@ -4,6 +4,12 @@
 Each simulation prepares its input in Python as it does alone (JacketSimulation.prepare);
 the steps of all of them then run in crowd_kernel.advance_crowd, spread over numba's threads;
 each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
+
+A character whose last input went that way without a warning or reset is armed: its next
+inputs are checked and loaded for all such characters in one compiled call
+(crowd_kernel.prepare_steady), which takes only what prepare would step without a word and
+leaves anything else (a new name list, a stamp gap, a teleport, a NaN, a viewer, ...) to
+prepare. The Python per input was most of a crowd character's cost (docs/crowd.md).
 """
 
 import operator
@@ -17,16 +23,17 @@ import numpy as np
 from numba import typed
 
 from . import crowd_kernel
-from .bundles import CrowdSlot, StepOutput, ints
+from .bundles import CrowdSlot, StepOutput, ints, steady_intake
+from .inputs import Sample
 from .kernel_cache import FixedTypes
-from .simulation import Bones
+from .simulation import Bones, StepJob, StepReport
 
 # GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
 # the executor thread and the machine's other processes; read when the pool first starts.
 os.environ.setdefault('OMP_WAIT_POLICY', 'PASSIVE')
 
 if TYPE_CHECKING:           # for the annotations only
-    from .simulation import JacketSimulation, StepJob
+    from .simulation import JacketSimulation
 
 
 def threads_for(wanted: int) -> int:
@@ -58,10 +65,15 @@ class CrowdSteps:
         self.sims = []
         self._slots = typed.List()
         self._mine = []             # the same slots, read from Python (the typed list boxes)
+        self._intakes = typed.List()        # each slot's SteadyIntake
+        self._my_intakes = []               # the same, read from Python
         self._keys = []
         self._call = None
         self._load = FixedTypes(crowd_kernel.load_motion)
+        self._steady = FixedTypes(crowd_kernel.prepare_steady)
+        self._armed = []            # per simulation: what its intake was armed with, or None
         self.calls = 0              # compiled calls made (one per round of inputs)
+        self.steady_inputs = 0      # inputs the compiled intake took
 
     def add(self, sim: 'JacketSimulation') -> int:
         """Add a simulation; returns its index."""
@@ -70,6 +82,8 @@ class CrowdSteps:
         self._slots.append(slot)
         self._mine.append(slot)
         self._keys.append(key)
+        self._set_intake(None, steady_intake(slot))
+        self._armed.append(None)
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
         return len(self.sims) - 1
@@ -103,19 +117,108 @@ class CrowdSteps:
             slot, key = self._slot(sim)
             self._slots[index] = self._mine[index] = slot
             self._keys[index] = key
+            self._set_intake(index, steady_intake(slot))
+            self._armed[index] = None
         return self._mine[index]
 
-    def run(self, jobs: Sequence[tuple[int, 'StepJob']]) -> list[tuple[StepOutput, int]]:
+    def _set_intake(self, index, intake):
+        """Set simulation ``index``'s intake (None: append one for a new simulation)."""
+        if index is None:
+            self._intakes.append(intake)
+            self._my_intakes.append(intake)
+        else:
+            self._intakes[index] = self._my_intakes[index] = intake
+
+    def prepare_steady(self, inputs: Sequence[tuple]) -> tuple[list, list]:
+        """Check and load the inputs of armed simulations in one compiled call.
+
+        ``inputs``: (k, simulation index, stamp ns, names, positions), at most one per
+        simulation. Returns (taken, rest): taken as (k, index, StepReport, StepJob), what
+        JacketSimulation.prepare would have returned, their motion already in the slot (for
+        :meth:`run`'s ``loaded``); the rest, in the same form as given, for prepare.
+        """
+        armed, sims, mine = self._armed, self.sims, self._mine
+        fast, rest = [], []
+        for item in inputs:
+            index = item[1]
+            sim, arm = sims[index], armed[index]
+            # Armed for this very name list and tuning, no viewer, the slot on the state.
+            if (arm is not None and arm[0] is item[3] and arm[1] is sim.tuning
+                    and arm[2] is sim.parser.world_joint and sim.lod.viewer is None
+                    and mine[index].state.x is sim.x):
+                fast.append(item)
+            else:
+                armed[index] = None         # prepare moves its last sample on
+                rest.append(item)
+        if not fast:
+            return [], rest
+        starts = np.zeros(len(fast) + 1, dtype=np.int64)
+        np.cumsum([len(item[4]) for item in fast], out=starts[1:])
+        taken = np.zeros(len(fast), dtype=np.bool_)
+        self._steady(self._intakes, np.array([item[1] for item in fast], dtype=np.int64),
+                     np.array([item[2] for item in fast], dtype=np.int64),
+                     np.concatenate([item[4] for item in fast], dtype=np.float64), starts, taken)
+        out = []
+        for item, ok in zip(fast, taken.tolist()):
+            if ok:
+                out.append((item[0], item[1], *self._steady_job(item[1], item[2])))
+            else:
+                armed[item[1]] = None
+                rest.append(item)
+        self.steady_inputs += len(out)
+        return out, rest
+
+    def _steady_job(self, index, stamp):
+        """Return the report and job prepare would have made of an input steady_input loaded."""
+        sim, slot = self.sims[index], self._mine[index]
+        sim.ready_bones = None
+        sample = Sample(stamp, slot.q_b.copy(), self._my_intakes[index].last_root.copy(),
+                        slot.quat_b.copy(), [])
+        parser = sim.parser
+        parser.last_q, parser.last_root, parser.last_quat = sample.q, sample.root, sample.root_quat
+        clock = slot.clock
+        return StepReport(stamp), StepJob(sample, int(clock[4]), sim.last, int(clock[2]),
+                                          sim.dt_ns, sim.tuning)
+
+    def settle(self, index: int, names: Sequence[str], report: StepReport) -> None:
+        """After an input's steps: arm simulation ``index`` if its next input may be steady.
+
+        It may if prepare would take it on from here as steady_input does: this input was
+        stepped without a warning, reset or skipped step, at full detail with no viewer, and
+        its name list is a tuple (a list could change under the same object).
+        """
+        sim = self.sims[index]
+        if (not isinstance(names, tuple) or not report.accepted or report.reset
+                or report.steps <= 0 or report.skipped_steps or report.warnings
+                or sim.lod.viewer is not None or sim.lod.level or sim.lod.skin
+                or self._mine[index].tuning is not sim.tuning):
+            self._armed[index] = None
+            return
+        if self._armed[index] is not None:          # steady_input moved it on itself
+            return
+        plan, last, p = sim.parser.plan(names), sim.last, sim.params
+        self._set_intake(index, steady_intake(
+            self._mine[index], plan[:5] + (len(names),), (last.q, last.root, last.root_quat),
+            (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
+            (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
+        self._armed[index] = (names, sim.tuning, sim.parser.world_joint)
+
+    def run(self, jobs: Sequence[tuple[int, 'StepJob']],
+            loaded: frozenset = frozenset()) -> list[tuple[StepOutput, int]]:
         """Run each (simulation index, prepared job) in one call; returns (output, status) each.
 
         The status is crowd_kernel's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
-        one job per simulation. Each output is that simulation's own arrays, written again by
-        its next job: JacketSimulation.complete takes them at once.
+        one job per simulation; ``loaded``: the simulations whose job :meth:`prepare_steady`
+        loaded. Each output is that simulation's own arrays, written again by its next job:
+        JacketSimulation.complete takes them at once.
         """
         if not jobs:
             return []
         active = np.empty(len(jobs), dtype=np.int64)
         for j, (index, job) in enumerate(jobs):
+            if index in loaded:
+                active[j] = index
+                continue
             slot = self._current(index)
             if slot.tuning is not job.tuning:      # the level of detail's tuning, this input
                 slot = slot._replace(tuning=job.tuning)
@@ -165,18 +268,23 @@ def stepped(steps: CrowdSteps,
             (later if inputs[k][0] in seen else this).append(k)
             seen.add(inputs[k][0])
         started = time.perf_counter_ns()
+        taken, rest = steps.prepare_steady([(k, *inputs[k]) for k in this])
         jobs = []
-        for k in this:
-            index, stamp, names, positions = inputs[k]
+        for k, index, report, job in taken:
+            reports[k] = report
+            jobs.append((k, index, job))
+        loaded = frozenset(index for _, index, _ in jobs)
+        for k, index, stamp, names, positions in rest:
             reports[k], job = sims[index].prepare(stamp, names, positions)
             if job is not None:
                 jobs.append((k, index, job))
-        results = steps.run([(index, job) for _, index, job in jobs])
+        results = steps.run([(index, job) for _, index, job in jobs], loaded)
         for (k, index, job), (out, status) in zip(jobs, results):
             sim = sims[index]
             sim.complete(reports[k], job, out, status != crowd_kernel.STEPS_FAILED)
             if not reports[k].reset:        # the bones the call made are the state's
                 sim.ready_bones = steps.bones(index, status == crowd_kernel.BONES_FINITE)
+            steps.settle(index, inputs[k][2], reports[k])
         cost = time.perf_counter_ns() - started
         for k in this:
             reports[k].step_cost_ns = cost

@@ -10,6 +10,7 @@ character: the Python between calls, not the steps, was most of a small characte
 from numba import prange
 
 from .bundles import Motion
+from .inputs import FILLED, fill_sample, root_jump
 from .kernel_cache import njit
 from .pose_kernel import bone_poses
 from .step_kernel import advance
@@ -68,3 +69,51 @@ def advance_crowd(slots, active, ran):
     """advance_slot for ``slots[active[j]]`` into ``ran[j]``, characters spread over threads."""
     for j in prange(active.shape[0]):
         ran[j] = advance_slot(slots[active[j]])
+
+
+@njit(cache=True)
+def prepare_steady(intakes, active, stamps, positions, starts, taken):
+    """steady_input for ``intakes[active[j]]`` with ``positions[starts[j]:starts[j + 1]]``.
+
+    Into ``taken[j]``: whether the input is loaded; one call for every steady input of a batch.
+    """
+    for j in range(active.shape[0]):
+        taken[j] = steady_input(intakes[active[j]], stamps[j],
+                                positions[starts[j]:starts[j + 1]])
+
+
+@njit(cache=True)
+def steady_input(intake, stamp, positions):
+    """Load an armed character's input as JacketSimulation.prepare and load_motion would.
+
+    Only an input they would step without a word: a stamp after the last within reset_gap,
+    finite positions and quaternion, no teleport or fast turn, 1 to max_steps_per_input steps.
+    Anything else returns False having written nothing, and the input goes the Python way.
+    """
+    clock, limits, slot_clock = intake.clock, intake.limits, intake.slot_clock
+    if positions.shape[0] != intake.width:
+        return False
+    gap = (stamp - clock[0]) * 1e-9                     # JacketSimulation._check_stamp
+    if not gap > 0.0 or gap > limits[0]:
+        return False
+    q, root, quat = intake.q, intake.root, intake.quat
+    if fill_sample(positions, intake.joint_from, intake.joint_to, intake.world_from,
+                   intake.world_to, intake.whole_world, intake.last_q, intake.last_root,
+                   intake.last_quat, q, root, quat) != FILLED:
+        return False
+    move, turn = root_jump(intake.last_root, root, intake.last_quat, quat)
+    if move > limits[1] or turn > limits[2]:            # JacketSimulation._jump
+        return False
+    t_sim, dt_ns = slot_clock[2], clock[1]
+    steps = (stamp - t_sim) // dt_ns
+    if steps <= 0 or steps > clock[2]:
+        return False
+    q_a, q_b, quat_a, quat_b, pos_a, pos_b = intake.motion
+    load_motion(q_a, q_b, quat_a, quat_b, pos_a, pos_b, slot_clock, intake.stats,
+                intake.last_q, q, intake.last_quat, quat, intake.last_root, root, clock[0],
+                stamp - clock[0], t_sim, dt_ns, steps)
+    intake.last_q[:] = q
+    intake.last_root[:] = root
+    intake.last_quat[:] = quat
+    clock[0] = stamp
+    return True

@@ -22,7 +22,7 @@ if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
-_OK, _NON_FINITE, _ZERO_QUATERNION = range(3)        # what _fill_sample found
+FILLED, NON_FINITE_POSITION, ZERO_QUATERNION = range(3)    # what fill_sample found
 
 
 class InputRejected(ValueError):
@@ -56,10 +56,11 @@ class InputParser:
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
 
-    def _plan(self, names):
-        """Work out where each name of a message goes, and the warnings its name list earns.
+    def plan(self, names: tuple[str, ...]) -> tuple:
+        """Return where each name of a message goes, and the warnings its name list earns.
 
-        Worked out once per distinct name list (a publisher sends the same list every time).
+        (joint_from, joint_to, world_from, world_to, whole_world, warnings), worked out once
+        per distinct name list (a publisher sends the same list every time).
         """
         plan = self._plans.get(names)
         if plan is not None:
@@ -104,15 +105,15 @@ class InputParser:
         if len(names) != len(positions):
             raise InputRejected('length', f'JointState has {len(names)} names but '
                                 f'{len(positions)} positions: message dropped')
-        joint_from, joint_to, world_from, world_to, whole_world, warnings = self._plan(names)
+        joint_from, joint_to, world_from, world_to, whole_world, warnings = self.plan(names)
         q, root, quat = np.empty_like(self.last_q), np.empty((4, 4)), np.empty(4)
-        found = _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world,
-                             self.last_q, self.last_root, self.last_quat, q, root, quat)
-        if found == _NON_FINITE:
+        found = fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world,
+                            self.last_q, self.last_root, self.last_quat, q, root, quat)
+        if found == NON_FINITE_POSITION:
             bad = [n for n, p in zip(names, positions) if not np.isfinite(p)]
             raise InputRejected('nonfinite', f'non-finite position for {", ".join(bad[:5])}: '
                                 'message dropped')
-        if found == _ZERO_QUATERNION:
+        if found == ZERO_QUATERNION:
             raise InputRejected('world', f'{self.world_joint} rotation is a zero '
                                 'quaternion: message dropped')
         self.last_q, self.last_root, self.last_quat = q, root, quat
@@ -120,8 +121,8 @@ class InputParser:
 
 
 @njit(cache=True)
-def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
-                 last_root, last_quat, q, root, quat):
+def fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
+                last_root, last_quat, q, root, quat):
     """Fill a sample's joint values ``q``, root pose ``root`` and unit quaternion ``quat``.
 
     From one message's positions by its plan; joints and a world pose it leaves out keep their
@@ -129,21 +130,21 @@ def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_wo
     """
     for k in range(positions.shape[0]):
         if not np.isfinite(positions[k]):
-            return _NON_FINITE
+            return NON_FINITE_POSITION
     q[:] = last_q
     for k in range(joint_from.shape[0]):
         q[joint_to[k]] = positions[joint_from[k]]        # a repeated name: the last one counts
     if not whole_world:
         root[:] = last_root
         quat[:] = last_quat
-        return _OK
+        return FILLED
     world = np.empty(7)
     for k in range(world_from.shape[0]):
         world[world_to[k]] = positions[world_from[k]]
     # Scaled by the largest component: squares of 1e200 overflow and those of 1e-200 vanish.
     big = max(abs(world[3]), abs(world[4]), abs(world[5]), abs(world[6]))
     if big < 1e-6:
-        return _ZERO_QUATERNION
+        return ZERO_QUATERNION
     norm = big * np.sqrt((world[3] / big) ** 2 + (world[4] / big) ** 2 + (world[5] / big) ** 2
                          + (world[6] / big) ** 2)
     for k in range(4):
@@ -152,7 +153,7 @@ def _fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_wo
     root[3, 3] = 1.0
     quat_matrix(quat, root)
     root[:3, 3] = world[:3]
-    return _OK
+    return FILLED
 
 
 @njit(cache=True)

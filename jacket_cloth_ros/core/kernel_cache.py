@@ -122,8 +122,8 @@ def kernels_cached(crowd: bool = True) -> bool:
     ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
     """
     from . import crowd_kernel, step_kernel
-    wanted = (step_kernel.advance, crowd_kernel.advance_crowd) if crowd else (
-        step_kernel.advance,)
+    wanted = (step_kernel.advance, crowd_kernel.advance_crowd,
+              crowd_kernel.prepare_steady) if crowd else (step_kernel.advance,)
     try:
         return all(bool(k._cache._cache_file._load_index()) for k in wanted)
     except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
