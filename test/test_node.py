@@ -113,6 +113,37 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0 and mesh.color.a > 0
 
 
+def test_markers_are_built_only_for_a_subscriber_or_a_recording(harness, monkeypatch):
+    # Unread markers were a large share of each input (docs/crowd.md): with no subscriber
+    # and no recording none are built; a subscriber gets them again, the first with the
+    # DELETEALL of the reset none was built for.
+    from jacket_cloth_ros.ros import messages
+    built = []
+
+    def counted(*args, **kwargs):
+        built.append(kwargs.get('reset'))
+        return marker_array(*args, **kwargs)
+    marker_array = messages.marker_array
+    monkeypatch.setattr(messages, 'marker_array', counted)
+    h = harness()
+    built.clear()                   # the pipeline's own, loading the encoder's kernels
+    markers = h.node.publishers_by_key['markers']
+    for sub in list(h.peer.subscriptions):
+        if sub.topic_name == markers.topic_name:
+            h.peer.destroy_subscription(sub)
+    h.spin_until(lambda: markers.get_subscription_count() == 0)
+    sent = h.send_clip('walk', 60, 0.5)
+    h.spin_until(lambda: len(h.tf) >= sent - 2)
+    assert built == [] and h.markers == []
+    h.peer.create_subscription(MarkerArray, markers.topic_name, h.markers.append, 10)
+    h.spin_until(lambda: markers.get_subscription_count() == 1)
+    h.send_clip('walk', 60, 0.5, start_s=100.5)
+    h.spin_until(lambda: len(h.markers) >= 10)
+    assert built[0] is True and not any(built[1:])
+    assert [m.ns for m in h.markers[0].markers if m.action == Marker.DELETEALL] == [
+        'cloth', 'colliders', 'hood', 'jacket_bones']
+
+
 def test_latency_counts_from_the_messages_arrival_in_the_process(harness):
     from rclpy.serialization import serialize_message
     h = harness()

@@ -12,6 +12,7 @@ together once the executor has taken every message that was ready.
 """
 
 import argparse
+import functools
 import sys
 import time
 from typing import TYPE_CHECKING, Callable
@@ -255,6 +256,7 @@ class JacketCrowdNode(JacketNodeBase):
             c.description = c.fallback = None
         c.markers = self.create_publisher(MarkerArray, c.topics['markers'][0], 10,
                                           event_callbacks=NO_PUB_EVENTS)
+        pipeline.markers_wanted = functools.partial(self._markers_wanted, c.markers)
         if self.recorder is not None:
             self._add_character_to_recording(c)
         c.diag_wall = time.monotonic()

@@ -2,6 +2,7 @@
 """jacket_cloth_node: JointState in; jacket and hood bones on /tf, markers, diagnostics out."""
 
 import argparse
+import functools
 import gc
 import os
 import signal
@@ -40,6 +41,7 @@ from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
     import numpy as np
+    from rclpy.publisher import Publisher
 
     from ..core.simulation import JacketSimulation
 
@@ -97,6 +99,14 @@ class JacketNodeBase(Node):
         except (OSError, ValueError) as e:
             self.get_logger().error(f'recording stopped: {e}')
             self.recorder = None
+
+    def _markers_wanted(self, publisher: 'Publisher') -> bool:
+        """Tell whether markers due now have a reader: a subscriber or the recording.
+
+        Unread, building them was a large share of each input (docs/crowd.md); their cadence
+        goes on either way, so a viewer that subscribes gets them on the same ticks.
+        """
+        return self.recorder is not None or publisher.get_subscription_count() > 0
 
     def close(self) -> None:
         """Close the recording, if any."""
@@ -269,6 +279,8 @@ class JacketClothNode(JacketNodeBase):
         if clash:
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: change frame_prefix')
+        pipeline.markers_wanted = functools.partial(self._markers_wanted,
+                                                    self.publishers_by_key['markers'])
         self.pipeline = pipeline
         if self._viewer_position is not None:       # it came before the character
             pipeline.set_viewer(self._viewer_position)

@@ -85,6 +85,9 @@ class SessionPipeline:
         self._last_diag = None
         self._finite = False        # the last accounted input's bones (account_tf)
         self._marker_reset = True
+        # Asked when markers are due; False: not built this time (the live nodes: no
+        # subscriber and no recording). None: always built, as a replay writes them.
+        self.markers_wanted: 'Callable[[], bool] | None' = None
         self._tf = self._tf_template()
         self._world_tf = None
         # Load the encoders' compiled parts now rather than on the first input's outputs.
@@ -187,9 +190,11 @@ class SessionPipeline:
         rate = self.values['markers_rate']
         if self._finite and rate > 0 and _due(self._last_marker, stamp_ns, rate):
             self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
-            out.append(('markers', messages.marker_array(
-                self.sim, stamp_ns, self.sim.skeleton.link_names[0], reset=self._marker_reset)))
-            self._marker_reset = False
+            if self.markers_wanted is None or self.markers_wanted():
+                out.append(('markers', messages.marker_array(
+                    self.sim, stamp_ns, self.sim.skeleton.link_names[0],
+                    reset=self._marker_reset)))
+                self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
             self._last_diag = self._phased(self._last_diag, stamp_ns,
