@@ -376,9 +376,10 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
     x = names.index('world_joint/trans_x')
     stamp = [10 ** 10] * 3
     cases = {8: 'nan', 12: 'repeat', 14: 'back', 16: 'teleport', 20: 'gap', 24: 'cap',
-             28: 'no step', 32: 'names', 36: 'viewer', 40: 'no viewer', 44: 'turn'}
-    for k in range(52):
-        inputs = []
+             28: 'no step', 32: 'names', 36: 'viewer', 40: 'no viewer', 44: 'turn', 48: 'list',
+             50: 'params', 54: 'outside'}
+    for k in range(60):
+        inputs, outside = [], []
         for i, clip in enumerate(('walk', 'run', 'dodge')):
             got_names, pos = joint_state_content(skeleton.joint_names, clip, k / 120)
             pos = np.array([dict(zip(got_names, pos))[n] for n in names])
@@ -407,9 +408,17 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
             elif case == 'turn':
                 pos[names.index('world_joint/rot_z')] = 1.0
                 pos[names.index('world_joint/rot_w')] = 0.0
+            elif case == 'list':
+                use = list(names)
+            elif case == 'params':
+                sims[i].set_params(SimParams(max_steps_per_input=6))
+                alone[i].set_params(SimParams(max_steps_per_input=6))
             stamp[i] += step
-            inputs.append((i, stamp[i], use, pos))
+            (outside if case == 'outside' else inputs).append((i, stamp[i], use, pos))
         reports = stepped(crowd, inputs)
+        for i, at, use, pos in outside:             # stepped by itself, not by the crowd
+            inputs.append((i, at, use, pos))
+            reports.append(sims[i].process(at, use, pos))
         for (i, at, use, pos), report in zip(inputs, reports):
             mine = alone[i].process(at, use, pos)
             assert (report.accepted, report.reset, report.steps, report.skipped_steps,
@@ -424,5 +433,5 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
             assert np.array_equal(sims[i].parser.last_root, alone[i].parser.last_root)
     # Every case fell back (the bits above) and the rest went the compiled way: all but the
     # first two inputs of each character and, for each case, at most three inputs.
-    assert 3 * 52 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 52 - 3 * 2
+    assert 3 * 60 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 60 - 3 * 2
     assert [s.resets for s in sims] == [1, 6, 1]     # a teleport and a turn go and come back

@@ -523,3 +523,30 @@ def test_a_crowd_keeps_its_output_phases_across_a_gap_in_the_inputs(tmp_path):
     assert max(per_input[t][0] for t in later) <= n // 2
     assert max(per_input[t][1] for t in later) <= 2
     assert sum(per_input[t][1] for t in later) >= n
+
+
+def test_a_crowd_builds_only_the_markers_someone_reads(tmp_path, monkeypatch):
+    """Not recording, each character builds its markers only while they have a subscriber."""
+    from visualization_msgs.msg import MarkerArray
+
+    from jacket_cloth_ros.ros import messages
+    built = []
+
+    def counted(sim, *args, **kwargs):
+        built.append(sim)
+        return marker_array(sim, *args, **kwargs)
+    marker_array = messages.marker_array
+    monkeypatch.setattr(messages, 'marker_array', counted)
+    text = ('defaults: {parameters: {markers_rate: 20.0}}\n'
+            'characters: [{name: a, urdf: character.urdf}, {name: c, urdf: character.urdf}]\n')
+    with _crowd(tmp_path, text) as crowd:
+        got = []
+        crowd.peer.create_subscription(MarkerArray, '/a/jacket_cloth_node/markers', got.append, 10)
+        crowd.spin_until(lambda: crowd.chars['a'].markers.get_subscription_count() == 1)
+        built.clear()               # each pipeline's own, loading the encoder's kernels
+        skeleton = Skeleton(shipped_character_urdf())
+        raws = _inputs(skeleton, 'walk', 30)
+        crowd.send({'a': raws, 'c': raws})
+        crowd.spin_until(lambda: len(got) >= 9)
+        sims = {name: c.sim for name, c in crowd.chars.items()}
+        assert built.count(sims['a']) == len(got) == 10 and sims['c'] not in built

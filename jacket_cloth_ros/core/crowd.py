@@ -86,6 +86,14 @@ class CrowdSteps:
         self._armed.append(None)
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
+            # Both loaded now, not on the first inputs: that stalled the first batch by
+            # seconds and the first steady input by more than a step.
+            none = np.zeros(0, dtype=np.int64)
+            self._call(self._slots, none, none)
+            # Typed lists compile their item assignment per item type, uncached: now too.
+            self._slots[0], self._intakes[0] = self._mine[0], self._my_intakes[0]
+            self._steady(self._intakes, none, none, np.zeros(0), np.zeros(1, dtype=np.int64),
+                         np.zeros(0, dtype=np.bool_))
         return len(self.sims) - 1
 
     @staticmethod
@@ -142,9 +150,12 @@ class CrowdSteps:
         for item in inputs:
             index = item[1]
             sim, arm = sims[index], armed[index]
-            # Armed for this very name list and tuning, no viewer, the slot on the state.
+            # Armed for this very name list, tuning and last sample (a simulation stepped
+            # outside the crowd has another), no viewer, an int stamp, the slot on the state
+            # (a reset replaces x with the other state arrays, a new tuning its _lam).
             if (arm is not None and arm[0] is item[3] and arm[1] is sim.tuning
-                    and arm[2] is sim.parser.world_joint and sim.lod.viewer is None
+                    and arm[2] is sim.parser.world_joint and arm[3] is sim.last
+                    and sim.lod.viewer is None and type(item[2]) is int
                     and mine[index].state.x is sim.x):
                 fast.append(item)
             else:
@@ -194,14 +205,16 @@ class CrowdSteps:
                 or self._mine[index].tuning is not sim.tuning):
             self._armed[index] = None
             return
-        if self._armed[index] is not None:          # steady_input moved it on itself
+        arm = self._armed[index]
+        if arm is not None:             # steady_input moved its intake on itself
+            self._armed[index] = arm[:3] + (sim.last,)
             return
         plan, last, p = sim.parser.plan(names), sim.last, sim.params
         self._set_intake(index, steady_intake(
             self._mine[index], plan[:5] + (len(names),), (last.q, last.root, last.root_quat),
             (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
             (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
-        self._armed[index] = (names, sim.tuning, sim.parser.world_joint)
+        self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)
 
     def run(self, jobs: Sequence[tuple[int, 'StepJob']],
             loaded: frozenset = frozenset()) -> list[tuple[StepOutput, int]]:

@@ -88,7 +88,8 @@ def steady_input(intake, stamp, positions):
 
     Only an input they would step without a word: a stamp after the last within reset_gap,
     finite positions and quaternion, no teleport or fast turn, 1 to max_steps_per_input steps.
-    Anything else returns False having written nothing, and the input goes the Python way.
+    Anything else returns False with the slot and the last sample as they were (only the
+    intake's scratch sample written), and the input goes the Python way.
     """
     clock, limits, slot_clock = intake.clock, intake.limits, intake.slot_clock
     if positions.shape[0] != intake.width:
