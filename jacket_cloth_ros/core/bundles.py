@@ -246,7 +246,6 @@ class SteadyIntake(NamedTuple):
     world_from: np.ndarray
     world_to: np.ndarray
     whole_world: bool
-    width: int                      # names in the list
     last_q: np.ndarray              # the last sample's joint values, root and quaternion
     last_root: np.ndarray
     last_quat: np.ndarray
@@ -264,14 +263,14 @@ def steady_intake(slot: 'CrowdSlot', plan: tuple = (), last: 'tuple | None' = No
                   clock: tuple = (0, 1, 0), limits: tuple = (0.0, 0.0, 0.0)) -> SteadyIntake:
     """Return the SteadyIntake of ``slot``; without ``plan`` and ``last``, unarmed.
 
-    ``plan``: (joint_from, joint_to, world_from, world_to, whole_world, names); ``last``:
-    (q, root, quaternion) of the last sample.
+    ``plan``: (joint_from, joint_to, world_from, world_to, whole_world), as
+    InputParser.plan's; ``last``: (q, root, quaternion) of the last sample.
     """
     q = slot.q_a.shape[0]
-    joint_from, joint_to, world_from, world_to, whole, width = plan or ((), (), (), (), False, 0)
+    joint_from, joint_to, world_from, world_to, whole = plan or ((), (), (), (), False)
     last_q, last_root, last_quat = last or (np.zeros(q), np.eye(4), np.zeros(4))
     return SteadyIntake(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
-                        bool(whole), int(width), floats(last_q).copy(), floats(last_root).copy(),
+                        bool(whole), floats(last_q).copy(), floats(last_root).copy(),
                         floats(last_quat).copy(), np.zeros(q), np.eye(4), np.zeros(4),
                         ints(clock).copy(), floats(limits).copy(),
                         (slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),

@@ -82,7 +82,9 @@ class CrowdSteps:
         self._slots.append(slot)
         self._mine.append(slot)
         self._keys.append(key)
-        self._set_intake(None, steady_intake(slot))
+        intake = steady_intake(slot)
+        self._intakes.append(intake)
+        self._my_intakes.append(intake)
         self._armed.append(None)
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
@@ -130,12 +132,8 @@ class CrowdSteps:
         return self._mine[index]
 
     def _set_intake(self, index, intake):
-        """Set simulation ``index``'s intake (None: append one for a new simulation)."""
-        if index is None:
-            self._intakes.append(intake)
-            self._my_intakes.append(intake)
-        else:
-            self._intakes[index] = self._my_intakes[index] = intake
+        """Set simulation ``index``'s intake."""
+        self._intakes[index] = self._my_intakes[index] = intake
 
     def prepare_steady(self, inputs: Sequence[tuple]) -> tuple[list, list]:
         """Check and load the inputs of armed simulations in one compiled call.
@@ -211,7 +209,7 @@ class CrowdSteps:
             return
         plan, last, p = sim.parser.plan(names), sim.last, sim.params
         self._set_intake(index, steady_intake(
-            self._mine[index], plan[:5] + (len(names),), (last.q, last.root, last.root_quat),
+            self._mine[index], plan[:5], (last.q, last.root, last.root_quat),
             (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
             (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
         self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)

@@ -36,7 +36,7 @@ from ..recording.writer import SessionRecorder
 from . import cdr
 from .characters import CharacterSpec, crowd_slice, load_characters
 from .node import (LATCHED, NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, JacketNodeBase, _read,
-                   keep_loaded_out_of_collections, run)
+                   input_problems, keep_loaded_out_of_collections, run)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 
 if TYPE_CHECKING:           # for the annotations only
@@ -363,16 +363,8 @@ class JacketCrowdNode(JacketNodeBase):
 
     def _warn_about(self, c, report, tf):
         """Log what an input's report says went wrong (each kind throttled per character)."""
-        name = c.spec.name
-        for code, text in report.warnings:
-            self._warn(c, code, f'{name}: {text}')
-        if report.reset and report.reset != 'first sample':
-            self._warn(c, 'reset', f'{name}: cloth reset to the skinned pose: {report.reset}')
-        if report.skipped_steps:
-            self._warn(c, 'overrun', f'{name}: {report.skipped_steps} steps skipped (cap '
-                       'max_steps_per_input)')
-        if report.accepted and not tf:
-            self._warn(c, 'nan', f'{name}: non-finite bone pose: nothing published')
+        for code, text in input_problems(report, bool(tf)):
+            self._warn(c, code, f'{c.spec.name}: {text}')
 
     def _process_pending(self):
         batch, self._pending = self._pending, []

@@ -43,7 +43,7 @@ if TYPE_CHECKING:           # for the annotations only
     import numpy as np
     from rclpy.publisher import Publisher
 
-    from ..core.simulation import JacketSimulation
+    from ..core.simulation import JacketSimulation, StepReport
 
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
@@ -448,15 +448,8 @@ class JacketClothNode(JacketNodeBase):
         self.inputs += 1
         self._record(self._topics['joint_states'][0], raw, stamp_ns)
         report, outputs = self.pipeline.on_joint_state(msg, stamp_ns)
-        for code, text in report.warnings:
+        for code, text in input_problems(report, any(key == 'tf' for key, _ in outputs)):
             self._warn(code, text)
-        if report.reset and report.reset != 'first sample':
-            self._warn('reset', f'cloth reset to the skinned pose: {report.reset}')
-        if report.skipped_steps:
-            self._warn('overrun', f'{report.skipped_steps} steps skipped (cap '
-                       f'max_steps_per_input); the cloth lags no further behind')
-        if report.accepted and not any(key == 'tf' for key, _ in outputs):
-            self._warn('nan', 'non-finite bone pose: nothing published')
         tf_sent = None
         for key, out in outputs:
             self.publishers_by_key[key].publish(out)
@@ -469,6 +462,22 @@ class JacketClothNode(JacketNodeBase):
         # (publish_world_tf sends two).
         if tf_sent is not None:
             self.pipeline.note_latency(tf_sent - arrived)
+
+
+def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:
+    """Return (code, text) of what went wrong with an input, for the nodes' throttled warnings.
+
+    ``published``: whether its bones went out on /tf.
+    """
+    out = list(report.warnings)
+    if report.reset and report.reset != 'first sample':
+        out.append(('reset', f'cloth reset to the skinned pose: {report.reset}'))
+    if report.skipped_steps:
+        out.append(('overrun', f'{report.skipped_steps} steps skipped (cap '
+                    'max_steps_per_input); the cloth lags no further behind'))
+    if report.accepted and not published:
+        out.append(('nan', 'non-finite bone pose: nothing published'))
+    return out
 
 
 def _read(path):
