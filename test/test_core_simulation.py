@@ -356,6 +356,48 @@ def test_a_crowd_steps_each_character_to_the_bits_it_gets_alone(skeleton, rig):
     assert [s.resets for s in sims] == [1, 1, 3, 1]
 
 
+_COMPILED_ON_ADD = """
+import sys
+from numba.core import event
+from jacket_cloth_ros.core.crowd import CrowdSteps
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+skeleton = Skeleton(shipped_character_urdf())
+rig = load_rig(skeleton)
+sims = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'), SimParams())
+        for _ in range(3)]
+with event.install_recorder('numba:compile') as compiled:
+    crowd = CrowdSteps(threads=1)
+    for sim in sims:
+        crowd.add(sim)
+depth = 0
+for _, e in compiled.buffer:        # only what was compiled for itself, not inside a kernel
+    if e.is_start and not depth:
+        f = e.data['dispatcher'].py_func
+        print(f.__module__ + '.' + f.__name__)
+    depth += 1 if e.is_start else -1
+"""
+
+
+def test_adding_characters_to_a_crowd_compiles_nothing_numba_would_not_cache():
+    # numba's typed.List, written from Python, compiles its append and item assignment for
+    # each item type and never caches them: seconds at every crowd node's start. A fresh
+    # interpreter, as a node starts: what it compiles (with a cold cache) must all be kernels
+    # of this package, which numba's cache keeps for the next start.
+    import os
+    import subprocess
+    import sys
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, (
+        root, os.environ.get('PYTHONPATH')))))
+    done = subprocess.run([sys.executable, '-c', _COMPILED_ON_ADD], env=env, text=True,
+                          capture_output=True, timeout=900, check=True)
+    compiled = done.stdout.split()
+    assert [f for f in compiled if not f.startswith('jacket_cloth_ros.')] == []
+
+
 def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
     # core.crowd: an armed character's steady inputs are checked and loaded in one compiled
     # call (crowd_kernel.prepare_steady); every input it must not take goes to prepare.

@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
-from numba import typed
 
 from . import crowd_kernel
 from .bundles import CrowdSlot, StepOutput, ints, steady_intake
@@ -63,10 +62,13 @@ class CrowdSteps:
     def __init__(self, threads: int = 0):
         self.threads = threads_for(threads)
         self.sims = []
-        self._slots = typed.List()
+        self._slots = None          # a typed list of each simulation's CrowdSlot, once one
         self._mine = []             # the same slots, read from Python (the typed list boxes)
-        self._intakes = typed.List()        # each slot's SteadyIntake
+        self._intakes = None                # each slot's SteadyIntake (a typed list)
         self._my_intakes = []               # the same, read from Python
+        # Writes into the typed lists, typed once (crowd_kernel.put).
+        self._put_slot = FixedTypes(crowd_kernel.put)
+        self._put_intake = FixedTypes(crowd_kernel.put)
         self._keys = []
         self._call = None
         self._load = FixedTypes(crowd_kernel.load_motion)
@@ -77,26 +79,24 @@ class CrowdSteps:
 
     def add(self, sim: 'JacketSimulation') -> int:
         """Add a simulation; returns its index."""
+        index = len(self.sims)
         self.sims.append(sim)
         slot, key = self._slot(sim)
-        self._slots.append(slot)
-        self._mine.append(slot)
         self._keys.append(key)
-        intake = steady_intake(slot)
-        self._intakes.append(intake)
-        self._my_intakes.append(intake)
         self._armed.append(None)
+        self._set_slot(index, slot)
+        self._set_intake(index, steady_intake(slot))
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_kernel.advance_crowd)
             # Both loaded now, not on the first inputs: that stalled the first batch by
             # seconds and the first steady input by more than a step.
             none = np.zeros(0, dtype=np.int64)
             self._call(self._slots, none, none)
-            # Typed lists compile their item assignment per item type, uncached: now too.
-            self._slots[0], self._intakes[0] = self._mine[0], self._my_intakes[0]
             self._steady(self._intakes, none, none, np.zeros(0), np.zeros(1, dtype=np.int64),
                          np.zeros(0, dtype=np.bool_))
-        return len(self.sims) - 1
+            self._set_slot(index, slot)         # crowd_kernel.put loaded now too
+            self._set_intake(index, self._my_intakes[index])
+        return index
 
     @staticmethod
     def _key(sim):
@@ -125,15 +125,19 @@ class CrowdSteps:
         key = self._key(sim)
         if not all(map(operator.is_, key, self._keys[index])):
             slot, key = self._slot(sim)
-            self._slots[index] = self._mine[index] = slot
+            self._set_slot(index, slot)
             self._keys[index] = key
             self._set_intake(index, steady_intake(slot))
             self._armed[index] = None
         return self._mine[index]
 
+    def _set_slot(self, index, slot):
+        """Set (or append, for a new simulation) simulation ``index``'s slot."""
+        self._slots = _put(self._slots, self._mine, self._put_slot, index, slot)
+
     def _set_intake(self, index, intake):
-        """Set simulation ``index``'s intake."""
-        self._intakes[index] = self._my_intakes[index] = intake
+        """Set (or append, for a new simulation) simulation ``index``'s intake."""
+        self._intakes = _put(self._intakes, self._my_intakes, self._put_intake, index, intake)
 
     def prepare_steady(self, inputs: Sequence[tuple]) -> tuple[list, list]:
         """Check and load the inputs of armed simulations in one compiled call.
@@ -233,7 +237,7 @@ class CrowdSteps:
             slot = self._current(index)
             if slot.tuning is not job.tuning:      # the level of detail's tuning, this input
                 slot = slot._replace(tuning=job.tuning)
-                self._slots[index] = self._mine[index] = slot
+                self._set_slot(index, slot)
             a, b = job.start, job.sample
             self._load(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
                        slot.clock, slot.out.stats, a.q, b.q, a.root_quat, b.root_quat, a.root,
@@ -257,6 +261,22 @@ class CrowdSteps:
         """Return simulation ``index``'s bones as the last call left them (a copy)."""
         sim = self.sims[index]
         return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
+
+
+def _put(items, mine, put, index, item):
+    """Set ``item`` at ``index`` of a typed list and of its Python mirror (or append it).
+
+    Returns the typed list, made by crowd_kernel.listed for the first item (``items`` None).
+    """
+    if items is None:
+        items = crowd_kernel.listed(item)
+    else:
+        put(items, index, item)
+    if index == len(mine):
+        mine.append(item)
+    else:
+        mine[index] = item
+    return items
 
 
 def stepped(steps: CrowdSteps,

@@ -8,6 +8,7 @@ character: the Python between calls, not the steps, was most of a small characte
 """
 
 from numba import prange
+from numba.typed import List
 
 from .bundles import Motion
 from .inputs import FILLED, fill_sample, root_jump
@@ -119,3 +120,23 @@ def steady_input(intake, stamp, positions):
     intake.last_quat[:] = quat
     clock[0] = stamp
     return True
+
+
+# numba's typed.List, used from Python, compiles its append and item assignment for each item
+# type at first use and never caches them: 8.5 s of a crowd node's 9 s start. Built and
+# written here instead, where numba's cache keeps them.
+@njit(cache=True)
+def listed(item):
+    """Return a typed list holding ``item``."""
+    items = List()
+    items.append(item)
+    return items
+
+
+@njit(cache=True)
+def put(items, index, item):
+    """Set ``items[index]`` to ``item``, or append it at ``index == len(items)``."""
+    if index == len(items):
+        items.append(item)
+    else:
+        items[index] = item
