@@ -11,7 +11,9 @@ same work per tick; the driver only publishes and reads ``/diagnostics``:
   for the crowd node (jacket_cloth_crowd) and for single-character node processes;
 - cost: CPU per character per input against N, and memory per character, for both;
 - tf: one TFMessage for the crowd's characters against one per character (encode and
-  publish, in this process), which the node's choice rests on.
+  publish, in this process), which the node's choice rests on;
+- floor: the characters that the least a crowd node can do (floor_node --crowd) holds on
+  one core, the ceiling of this stack for the crowd's one-core figure.
 """
 
 import os
@@ -59,6 +61,11 @@ def crowd_command(n, folder, threads, name='c'):
     return [sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args', '-r',
             f'__node:=jacket_cloth_crowd_{name}', '-p', f'characters:={path}', '-p',
             f'threads:={threads}'] + remaps
+
+
+def floor_command(n):
+    """Return the argv of the crowd's floor for ``n`` characters (floor_node --crowd)."""
+    return [sys.executable, '-m', 'jacket_cloth_lab.floor_node', '--crowd', str(n), '--kernel']
 
 
 def single_commands(n):
@@ -294,6 +301,12 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
                 out[f'crowd_{label}'] = _ladder(lambda n: crowd(n, cores), CROWD_LADDER)
                 say(f'single nodes: characters held on {label.replace("_", " ")}')
                 out[f'single_{label}'] = _ladder(lambda n: singles(n, cores), SINGLE_LADDER)
+            # What this stack allows: the least a node does per character and input, the
+            # crowd's own take of the messages and the bare kernel step included.
+            say('crowd floor: characters held on one core')
+            out['floor_one_core'] = _ladder(
+                lambda n: live(skeleton, [floor_command(n)], n, seconds, domain, one),
+                CROWD_LADDER)
             # Item 4's answer on one machine: K crowd processes, one per core, each its share.
             say('crowd: characters held by one crowd process per core')
             out['crowd_per_core'] = _ladder(lambda n: per_core(n), CROWD_LADDER)
@@ -328,6 +341,11 @@ def summary(c):
                   f'{", ".join(str(r["characters"]) for r in c["crowd_one_core"][1])}; '
                   f'single {", ".join(str(r["characters"]) for r in c["single_one_core"][1])} '
                   '(each stops at the first count not held).']
+    if 'floor_one_core' in c:
+        fo, co = c['floor_one_core'][0], c['crowd_one_core'][0]
+        lines += ['', f'The crowd\'s floor (floor_node --crowd: the same take of the messages, '
+                  f'a bare kernel step and a pre-built /tf per character and input) held {fo} '
+                  f'on one core; the crowd node held {co / max(fo, 1):.2f}x that.']
     if 'crowd_per_core' in c:
         pc = c['crowd_per_core'][0]
         co = c['crowd_one_core'][0]

@@ -9,9 +9,18 @@ With ``--kernel`` it also runs the bare kernel (one ``kernel.cloth_step`` of the
 states captured from a walk) in each callback, so that the kernel's share of the floor is
 measured as the node runs it: once per message, 8 ms apart, in this process. Called back to
 back, the same step took a third to a half of that (``speed.node_vs_floor``, README).
+
+With ``--crowd N`` it is the floor of the crowd node (jacket_cloth_crowd): N subscriptions
+to /joint_states, taken as the crowd takes them (one CrowdInputs waitable, a batch per
+wake-up), and per character and message one pre-built TFMessage and, with ``--kernel``, that
+character's step by the crowd's core (``crowd_stepper``). Each character's latency (arrival to /tf
+handed to DDS) goes out in /diagnostics once a second, as the crowd reports it, so the
+crowd bench measures this floor as it measures the crowd.
 """
 
+import struct
 import sys
+import time
 
 import numpy as np
 import rclpy
@@ -21,6 +30,8 @@ from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 
 from jacket_cloth_ros.ros.cdr import TfTemplate
+from jacket_cloth_ros.ros.crowd import CrowdInputs, TakenElsewhere
+from jacket_cloth_ros.ros.node import TF_QOS
 
 BONES = 68          # the shipped rig's bones on /tf
 
@@ -34,12 +45,7 @@ def kernel_stepper(steps=None):
     from jacket_cloth_ros.core import kernel
     from jacket_cloth_ros.core.kernel_cache import FixedTypes
     if steps is None:
-        from jacket_cloth_ros.core.fabric import load_fabric
-        from jacket_cloth_ros.core.rig import load_rig
-        from jacket_cloth_ros.core.skeleton import load_shipped_character
-        from .speed import captured_steps
-        skeleton = load_shipped_character()
-        steps = captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
+        steps = _walk_steps()
     turn = [0]
     cloth_step = FixedTypes(kernel.cloth_step, check=False)  # typed once, as the simulation
 
@@ -49,9 +55,130 @@ def kernel_stepper(steps=None):
     return step
 
 
+def _p99_us(latencies):
+    ordered = sorted(latencies)
+    return ordered[min(len(ordered) - 1, int(0.99 * len(ordered)))] * 1e-3
+
+
+def crowd_floor(node, n, with_kernel):
+    """Set ``node`` up as the crowd's floor of ``n`` characters (see the module's docstring)."""
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
+    names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
+    data = [TfTemplate(names, ['spine'] * BONES, f'f{k}/').encode(identity, 0)
+            for k in range(n)]
+    step = crowd_stepper(n) if with_kernel else None
+    tf = node.create_publisher(TFMessage, '/tf', TF_QOS)
+    diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+    latencies = [[] for _ in range(n)]
+    inputs = [0] * n
+    pending = []
+    last = [None]                   # the last input's CDR bytes
+
+    def run_batch():
+        batch = pending[:]
+        pending.clear()
+        if step is not None:
+            step([k for k, _ in batch])
+        for k, arrived in batch:
+            tf.publish(data[k])
+            inputs[k] += 1
+            latencies[k].append(time.time_ns() - arrived)
+
+    guard = node.create_guard_condition(run_batch)
+
+    def on_inputs(taken):
+        if not pending:
+            guard.trigger()
+        now = time.time_ns()
+        pending.extend((k, info.get('received_timestamp') or now) for k, _, info in taken)
+        if taken:
+            last[0] = taken[-1][1]
+
+    def report():
+        if last[0] is None:
+            return
+        msg = DiagnosticArray()
+        # Stamped as the crowd stamps its own: the last input's, so inputs that stop do not
+        # read as inputs left unanswered.
+        msg.header.stamp.sec, msg.header.stamp.nanosec = struct.unpack_from(
+            '<iI' if last[0][1] == 1 else '>iI', last[0], 4)
+        for k in range(n):
+            if latencies[k]:
+                msg.status.append(DiagnosticStatus(name=f'floor {k}', values=[
+                    KeyValue(key='latency_us_p99', value=f'{_p99_us(latencies[k]):.1f}'),
+                    KeyValue(key='inputs', value=str(inputs[k]))]))
+                latencies[k] = []
+        diagnostics.publish(msg)
+    waitable = CrowdInputs(node.default_callback_group, on_inputs)
+    elsewhere = TakenElsewhere()
+    for k in range(n):
+        waitable.add(k, node.create_subscription(
+            JointState, 'joint_states', _never_called, qos_profile_sensor_data,
+            callback_group=elsewhere, raw=True))
+    node.add_waitable(waitable)
+    node.create_timer(1.0, report)
+
+
+def crowd_stepper(n):
+    """Return a callable stepping, for a list of character indices, those characters' cloth.
+
+    What the crowd's core does for a batch of steady inputs (``core.crowd.stepped``: the
+    compiled intake, one compiled call, each simulation's completion), for ``n`` shipped
+    characters walking on, each input the next 1/120 s of the walk; nothing of the node.
+    A character twice in the list is stepped twice, in two rounds, as the crowd does. The
+    callable's ``crowd`` is its CrowdSteps.
+    """
+    from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from .crowd import RATE, endless_walk
+    skeleton = load_shipped_character()
+    rig, fabric = load_rig(skeleton), load_fabric('tweed_jacket')
+    walk, (along, xs), loop_x = endless_walk(skeleton)
+    names = tuple(walk[0].name)
+    positions = [np.array(m.position, dtype=np.float64) for m in walk]
+    steps = CrowdSteps(1)
+    for _ in range(n):
+        steps.add(JacketSimulation(skeleton, rig, fabric))
+    inputs = [0] * n
+
+    def step(characters):
+        batch = []
+        for k in characters:
+            loop, frame = divmod(inputs[k], len(walk))
+            position = positions[frame].copy()
+            position[along] = xs[frame] + loop * loop_x
+            batch.append((k, 10 ** 10 + round(inputs[k] * 1e9 / RATE), names, position))
+            inputs[k] += 1
+        stepped(steps, batch)
+    step.crowd = steps
+    return step
+
+
+def _walk_steps():
+    """Return the shipped rig's kernel arguments, captured from a walk."""
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from .speed import captured_steps
+    skeleton = load_shipped_character()
+    return captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
+
+
+def _never_called(raw):
+    """Do nothing: CrowdInputs takes the messages."""
+
+
 def main():
     with_kernel = '--kernel' in sys.argv
     rclpy.init(args=sys.argv)
+    if '--crowd' in sys.argv:
+        node = rclpy.create_node('jacket_cloth_crowd_floor')
+        crowd_floor(node, int(sys.argv[sys.argv.index('--crowd') + 1]), with_kernel)
+        return _spin(node)
     node = rclpy.create_node('jacket_cloth_floor')
     names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
     identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
@@ -65,6 +192,10 @@ def main():
         pub.publish(data)
     node.create_subscription(JointState, 'joint_states', on_joint_state,
                              qos_profile_sensor_data, raw=True)
+    return _spin(node)
+
+
+def _spin(node):
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -8,6 +8,7 @@ noisy for timed tests); what is asserted is what must hold on any machine.
 import json
 
 import numpy as np
+from conftest import DOMAIN_ID
 
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
@@ -84,3 +85,26 @@ def test_a_ladder_rung_whose_characters_never_answer_is_not_held():
     best, rows = _ladder(measure, (1, 4, 8, 16))
     assert best == 4 and [r['characters'] for r in rows] == [1, 4, 8]
     assert rows[-1]['held'] is False and 'answered within' in rows[-1]['not_answering']
+
+
+def test_the_crowds_floor_answers_every_character_as_the_bench_measures_the_crowd(skeleton):
+    # The floor ladder beside the crowd's one-core ladder is only a ceiling if the floor is
+    # driven and read exactly as the crowd is: its characters' diagnostics, over DDS.
+    from jacket_cloth_lab.crowd import floor_command, live
+    got = live(skeleton, [floor_command(3)], 3, 2.5, DOMAIN_ID + 4)
+    assert got['answered'] > 0.9 and 0 < got['latency_us_p99'] < 1e6 and got['cpu_us'] > 0
+
+
+def test_the_crowds_floor_steps_each_characters_own_cloth_as_the_crowd_core_does():
+    # A floor that skipped the steps would be no ceiling: every input is stepped, steady
+    # inputs by the compiled intake, and each character moves its own state.
+    from jacket_cloth_lab.floor_node import crowd_stepper
+    step = crowd_stepper(2)
+    sims = step.crowd.sims
+    for _ in range(4):
+        step([0])
+    x0, x1 = sims[0].x.copy(), sims[1].x.copy()
+    step([0, 1, 0])
+    assert step.crowd.steady_inputs >= 3
+    assert not np.array_equal(sims[0].x, x0) and not np.array_equal(sims[1].x, x1)
+    assert sims[0].t_sim > sims[1].t_sim

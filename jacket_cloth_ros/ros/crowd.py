@@ -98,7 +98,7 @@ class Character:
             del self.sequences[next(iter(self.sequences))]
 
 
-class _TakenElsewhere(CallbackGroup):
+class TakenElsewhere(CallbackGroup):
     """A callback group the executor never runs: CrowdInputs takes its subscriptions' messages."""
 
     def can_execute(self, entity: object) -> bool:
@@ -193,7 +193,7 @@ class JacketCrowdNode(JacketNodeBase):
                                                  event_callbacks=NO_PUB_EVENTS)
         self._batch = self.create_guard_condition(self._process_pending)
         self._inputs = CrowdInputs(self.default_callback_group, self._on_inputs)
-        self._taken_elsewhere = _TakenElsewhere()
+        self._taken_elsewhere = TakenElsewhere()
         self.add_waitable(self._inputs)
         self._open_recorder(self._p('record'))
         for c in self.characters:
