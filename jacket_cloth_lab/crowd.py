@@ -29,7 +29,7 @@ from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 RATE = 120.0
 STEP_US = 1e6 / RATE
 COUNTS = (1, 4, 16, 64, 256)               # cost per character against N
-CROWD_LADDER = (16, 20, 24, 28, 32, 40, 48, 56, 64, 72, 80, 88, 96, 112, 128, 192, 256)
+CROWD_LADDER = (4, 8, 12, 16, 20, 24, 28, 32, 40, 48, 56, 64, 72, 80, 88, 96, 112, 128, 192, 256)
 SINGLE_LADDER = (1, 2, 4, 8, 16, 32)
 
 
@@ -344,8 +344,8 @@ def summary(c):
     if 'floor_one_core' in c:
         fo, co = c['floor_one_core'][0], c['crowd_one_core'][0]
         lines += ['', f'The crowd\'s floor (floor_node --crowd: the same take of the messages, '
-                  f'a bare kernel step and a pre-built /tf per character and input) held {fo} '
-                  f'on one core; the crowd node held {co / max(fo, 1):.2f}x that.']
+                  f'the crowd core\'s steps and a pre-built /tf per character and input, '
+                  f'nothing else of the node) held {fo} on one core, the crowd node {co}.']
     if 'crowd_per_core' in c:
         pc = c['crowd_per_core'][0]
         co = c['crowd_one_core'][0]
