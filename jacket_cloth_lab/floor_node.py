@@ -72,12 +72,9 @@ def crowd_floor(node, n, with_kernel):
     diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
     latencies = [[] for _ in range(n)]
     inputs = [0] * n
-    pending = []
     last = [None]                   # the last input's CDR bytes
 
-    def run_batch():
-        batch = pending[:]
-        pending.clear()
+    def run_batch(batch):
         if step is not None:
             step([k for k, _ in batch])
         for k, arrived in batch:
@@ -85,15 +82,11 @@ def crowd_floor(node, n, with_kernel):
             inputs[k] += 1
             latencies[k].append(time.time_ns() - arrived)
 
-    guard = node.create_guard_condition(run_batch)
-
     def on_inputs(taken):
-        if not pending:
-            guard.trigger()
         now = time.time_ns()
-        pending.extend((k, info.get('received_timestamp') or now) for k, _, info in taken)
         if taken:
             last[0] = taken[-1][1]
+        run_batch([(k, info.get('received_timestamp') or now) for k, _, info in taken])
 
     def report():
         if last[0] is None:

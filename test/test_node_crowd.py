@@ -212,6 +212,39 @@ def test_a_batch_with_two_inputs_of_each_character_gives_each_input_its_own_outp
                 == [m.data for m in recorded if m.topic == topic]), topic
 
 
+def test_a_backlog_is_taken_and_processed_in_one_wake_up(tmp_path):
+    """Every queued input of every character in one batch, in order, as alone.
+
+    One message per subscription a wake-up, and the batch a guard condition's callback after
+    it, cost an executor wake-up more per tick and a wake-up per queued input (docs/crowd.md).
+    """
+    skeleton = Skeleton(shipped_character_urdf())
+    raws = {n: _inputs(skeleton, 'walk', 3, x=x) for n, x in (('a', 0.0), ('b', 2.0))}
+    with _crowd(tmp_path, 'characters:\n  - {name: a, urdf: character.urdf}\n'
+                '  - {name: b, urdf: character.urdf}\n') as crowd:
+        batches = []
+        process = crowd.node.on_joint_states
+        crowd.node.on_joint_states = lambda batch: (batches.append(
+            [(c.spec.name, raw) for c, raw, _, _ in batch]), process(batch))
+        pubs = {n: crowd.peer.create_publisher(JointState, f'/{n}/joint_states', 10)
+                for n in raws}
+        crowd.spin_until(lambda: all(p.get_subscription_count() for p in pubs.values()))
+        for k in range(3):
+            for n, p in pubs.items():
+                p.publish(raws[n][k])
+        time.sleep(0.5)                 # all of them in the subscriptions' queues
+        crowd.spin_until(lambda: batches)
+        assert len(batches) == 1
+        assert sorted(batches[0]) == sorted((n, r) for n in raws for r in raws[n])
+        assert all([r for m, r in batches[0] if m == n] == raws[n] for n in raws)
+        assert {n: c.inputs for n, c in crowd.chars.items()} == {'a': 3, 'b': 3}
+        crowd.spin_until(lambda: all(len(_tf_of(crowd.tf, n)) == 3 for n in raws))
+        with open(shipped('character.urdf'), encoding='utf-8') as f:
+            urdf = f.read()
+        for n, c in crowd.chars.items():
+            assert _tf_of(crowd.tf, n) == _alone(c.spec, urdf, raws[n]), n
+
+
 def test_a_characters_file_is_validated_with_one_line(tmp_path):
     path = tmp_path / 'bad.yaml'
     for text, error in (

@@ -116,10 +116,14 @@ class CrowdInputs(Waitable):
 
     rclpy's executor makes a task, a handler and a wake-up's bookkeeping per ready
     subscription: in a crowd that was a large share of each character's input
-    (docs/crowd.md). Here one wake-up takes one message from each ready subscription and hands
-    them to ``on_inputs`` as [(character, raw bytes, message info)]; the subscriptions are in
-    a callback group the executor never runs, so it does not take them itself.
+    (docs/crowd.md). Here one wake-up takes every message queued on each ready subscription
+    (at most ``DRAIN`` each), in order, and hands them to ``on_inputs`` as [(character, raw
+    bytes, message info)]; the subscriptions are in a callback group the executor never runs,
+    so it does not take them itself. Taking all of them lets ``on_inputs`` process a backlog
+    in the same wake-up instead of a wake-up per queued message.
     """
+
+    DRAIN = 16                      # the sensor-data queue is 5 deep; more only while taking
 
     def __init__(self, callback_group: CallbackGroup,
                  on_inputs: Callable[[list], None]) -> None:
@@ -156,8 +160,10 @@ class CrowdInputs(Waitable):
     def take_data(self) -> list:
         taken = []
         for c, handle in self._ready:
-            got = handle.take_message(JointState, True)
-            if got is not None:
+            for _ in range(self.DRAIN):
+                got = handle.take_message(JointState, True)
+                if got is None:
+                    break
                 taken.append((c, got[0], got[1]))
         self._ready = []
         return taken
@@ -182,7 +188,6 @@ class JacketCrowdNode(JacketNodeBase):
         self.characters = [Character(spec) for spec in mine]
         self.crowd = CrowdPipeline(self._p('threads'))
         self.recorder = None
-        self._pending = []
         self._models = {}
         self._last_stamp = None         # the last input's, for recording the viewer after it
         self._log_times = {}            # the crowd's own warnings (each character has its own)
@@ -191,7 +196,6 @@ class JacketCrowdNode(JacketNodeBase):
         self.tf = self.create_publisher(TFMessage, '/tf', TF_QOS)
         self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
                                                  event_callbacks=NO_PUB_EVENTS)
-        self._batch = self.create_guard_condition(self._process_pending)
         self._inputs = CrowdInputs(self.default_callback_group, self._on_inputs)
         self._taken_elsewhere = TakenElsewhere()
         self.add_waitable(self._inputs)
@@ -312,13 +316,11 @@ class JacketCrowdNode(JacketNodeBase):
         return default if self._last_stamp is None else self._last_stamp
 
     def _on_inputs(self, taken: list) -> None:
-        """Gather inputs; the batch runs once the executor has taken every ready message."""
-        if not self._pending:
-            self._batch.trigger()
+        """Process the inputs of one wake-up, each character's backlog included, as one batch."""
         now = time.time_ns()
         # Latency counts from the message's arrival in this process, as the single node's.
-        self._pending += [(c, raw, info, info.get('received_timestamp') or now)
-                          for c, raw, info in taken]
+        self.on_joint_states([(c, raw, info, info.get('received_timestamp') or now)
+                              for c, raw, info in taken])
 
     def on_joint_states(self, batch: list) -> None:
         """Process (character, raw bytes, message info, arrival ns) inputs together.
@@ -365,11 +367,6 @@ class JacketCrowdNode(JacketNodeBase):
         """Log what an input's report says went wrong (each kind throttled per character)."""
         for code, text in input_problems(report, bool(tf)):
             self._warn(c, code, f'{c.spec.name}: {text}')
-
-    def _process_pending(self):
-        batch, self._pending = self._pending, []
-        if batch:
-            self.on_joint_states(batch)
 
     def _diagnostics_watchdog(self):
         """Diagnostics of each character whose inputs' own have not gone out for a period."""
