@@ -12,8 +12,8 @@ same work per tick; the driver only publishes and reads ``/diagnostics``:
 - cost: CPU per character per input against N, and memory per character, for both;
 - tf: one TFMessage for the crowd's characters against one per character (encode and
   publish, in this process), which the node's choice rests on;
-- floor: the characters that the least a crowd node can do (floor_node --crowd) holds on
-  one core, the ceiling of this stack for the crowd's one-core figure.
+- floor: how many characters the crowd's floor (floor_node --crowd, the least a crowd node
+  of this design does) holds on one core: the ceiling for the crowd's one-core figure.
 """
 
 import os

@@ -31,7 +31,7 @@ from tf2_msgs.msg import TFMessage
 
 from jacket_cloth_ros.ros.cdr import TfTemplate
 from jacket_cloth_ros.ros.crowd import CrowdInputs, TakenElsewhere
-from jacket_cloth_ros.ros.node import TF_QOS
+from jacket_cloth_ros.ros.node import NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS
 
 BONES = 68          # the shipped rig's bones on /tf
 
@@ -69,7 +69,8 @@ def crowd_floor(node, n, with_kernel):
             for k in range(n)]
     step = crowd_stepper(n) if with_kernel else None
     tf = node.create_publisher(TFMessage, '/tf', TF_QOS)
-    diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+    diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10,
+                                        event_callbacks=NO_PUB_EVENTS)
     latencies = [[] for _ in range(n)]
     inputs = [0] * n
     last = [None]                   # the last input's CDR bytes
@@ -108,7 +109,7 @@ def crowd_floor(node, n, with_kernel):
     for k in range(n):
         waitable.add(k, node.create_subscription(
             JointState, 'joint_states', _never_called, qos_profile_sensor_data,
-            callback_group=elsewhere, raw=True))
+            callback_group=elsewhere, raw=True, event_callbacks=NO_SUB_EVENTS))
     node.add_waitable(waitable)
     node.create_timer(1.0, report)
 

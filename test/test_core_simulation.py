@@ -375,8 +375,8 @@ with event.install_recorder('numba:compile') as compiled:
 depth = 0
 for _, e in compiled.buffer:        # only what was compiled for itself, not inside a kernel
     if e.is_start and not depth:
-        f = e.data['dispatcher'].py_func
-        print(f.__module__ + '.' + f.__name__)
+        d = e.data['dispatcher']
+        print(d.py_func.__module__ + '.' + d.py_func.__name__, type(d._cache).__name__)
     depth += 1 if e.is_start else -1
 """
 
@@ -385,7 +385,7 @@ def test_adding_characters_to_a_crowd_compiles_nothing_numba_would_not_cache():
     # numba's typed.List, written from Python, compiles its append and item assignment for
     # each item type and never caches them: seconds at every crowd node's start. A fresh
     # interpreter, as a node starts: what it compiles (with a cold cache) must all be kernels
-    # of this package, which numba's cache keeps for the next start.
+    # of this package, each with numba's cache on, which keeps it for the next start.
     import os
     import subprocess
     import sys
@@ -394,8 +394,9 @@ def test_adding_characters_to_a_crowd_compiles_nothing_numba_would_not_cache():
         root, os.environ.get('PYTHONPATH')))))
     done = subprocess.run([sys.executable, '-c', _COMPILED_ON_ADD], env=env, text=True,
                           capture_output=True, timeout=900, check=True)
-    compiled = done.stdout.split()
-    assert [f for f in compiled if not f.startswith('jacket_cloth_ros.')] == []
+    compiled = [line.split() for line in done.stdout.splitlines()]
+    assert [f for f, _ in compiled if not f.startswith('jacket_cloth_ros.')] == []
+    assert [f for f, cache in compiled if cache == 'NullCache'] == []
 
 
 def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):

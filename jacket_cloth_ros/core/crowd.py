@@ -66,9 +66,10 @@ class CrowdSteps:
         self._mine = []             # the same slots, read from Python (the typed list boxes)
         self._intakes = None                # each slot's SteadyIntake (a typed list)
         self._my_intakes = []               # the same, read from Python
-        # Writes into the typed lists, typed once (crowd_kernel.put).
-        self._put_slot = FixedTypes(crowd_kernel.put)
-        self._put_intake = FixedTypes(crowd_kernel.put)
+        # Writes into the typed lists (crowd_kernel.put), rare: each checks the item's type,
+        # as numba's typed.List did, so that an item of another type is refused, not misread.
+        self._put_slot = FixedTypes(crowd_kernel.put, check=True)
+        self._put_intake = FixedTypes(crowd_kernel.put, check=True)
         self._keys = []
         self._call = None
         self._load = FixedTypes(crowd_kernel.load_motion)

@@ -123,8 +123,8 @@ def steady_input(intake, stamp, positions):
 
 
 # numba's typed.List, used from Python, compiles its append and item assignment for each item
-# type at first use and never caches them: 8.5 s of a crowd node's 9 s start. Built and
-# written here instead, where numba's cache keeps them.
+# type at first use and never caches them: most of a crowd node's start (docs/crowd.md).
+# Built and written here instead, where numba's cache keeps them.
 @njit(cache=True)
 def listed(item):
     """Return a typed list holding ``item``."""

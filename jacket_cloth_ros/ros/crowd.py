@@ -7,8 +7,9 @@ prefix), ``<name>/jacket_cloth_node/markers``, its status on ``/diagnostics``, i
 and bad-input handling. What it shares is the process: one executor, one DDS participant, one
 recording, one ``~/viewer`` (a camera for the whole crowd: each character's level of detail is
 by its own distance to it), and one compiled call for the steps of every character with an input
-(core/crowd.py), spread over the cores. Inputs are gathered as they arrive and processed
-together once the executor has taken every message that was ready.
+(core/crowd.py), spread over the cores. Each executor wake-up, CrowdInputs takes every
+queued message of the characters' subscriptions and the node processes them as one batch in
+the same wake-up.
 """
 
 import argparse
