@@ -302,7 +302,7 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
                 say(f'single nodes: characters held on {label.replace("_", " ")}')
                 out[f'single_{label}'] = _ladder(lambda n: singles(n, cores), SINGLE_LADDER)
             # What this stack allows: the least a node does per character and input, the
-            # crowd's own take of the messages and the bare kernel step included.
+            # crowd's own take of the messages and the crowd core's steps included.
             say('crowd floor: characters held on one core')
             out['floor_one_core'] = _ladder(
                 lambda n: live(skeleton, [floor_command(n)], n, seconds, domain, one),

@@ -18,7 +18,6 @@ handed to DDS) goes out in /diagnostics once a second, as the crowd reports it, 
 crowd bench measures this floor as it measures the crowd.
 """
 
-import struct
 import sys
 import time
 
@@ -29,9 +28,10 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 
-from jacket_cloth_ros.ros.cdr import TfTemplate
-from jacket_cloth_ros.ros.crowd import CrowdInputs, TakenElsewhere
-from jacket_cloth_ros.ros.node import NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS
+from jacket_cloth_ros.ros.cdr import JointStateReader, TfTemplate
+from jacket_cloth_ros.ros.crowd import CrowdInputs
+from jacket_cloth_ros.ros.node import NO_PUB_EVENTS, TF_QOS
+from jacket_cloth_ros.ros.pipeline import quantile
 
 BONES = 68          # the shipped rig's bones on /tf
 
@@ -55,18 +55,17 @@ def kernel_stepper(steps=None):
     return step
 
 
-def _p99_us(latencies):
-    ordered = sorted(latencies)
-    return ordered[min(len(ordered) - 1, int(0.99 * len(ordered)))] * 1e-3
+def _prebuilt_tf(prefix=''):
+    """Return a TFMessage's bytes with as many bones as the shipped rig, all at identity."""
+    identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
+    names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
+    return TfTemplate(names, ['spine'] * BONES, prefix).encode(identity, 0)
 
 
 def crowd_floor(node, n, with_kernel):
     """Set ``node`` up as the crowd's floor of ``n`` characters (see the module's docstring)."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
-    names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
-    data = [TfTemplate(names, ['spine'] * BONES, f'f{k}/').encode(identity, 0)
-            for k in range(n)]
+    data = [_prebuilt_tf(f'f{k}/') for k in range(n)]
     step = crowd_stepper(n) if with_kernel else None
     tf = node.create_publisher(TFMessage, '/tf', TF_QOS)
     diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10,
@@ -74,20 +73,18 @@ def crowd_floor(node, n, with_kernel):
     latencies = [[] for _ in range(n)]
     inputs = [0] * n
     last = [None]                   # the last input's CDR bytes
-
-    def run_batch(batch):
-        if step is not None:
-            step([k for k, _ in batch])
-        for k, arrived in batch:
-            tf.publish(data[k])
-            inputs[k] += 1
-            latencies[k].append(time.time_ns() - arrived)
+    reader = JointStateReader()
 
     def on_inputs(taken):
         now = time.time_ns()
+        if step is not None:
+            step([k for k, _, _ in taken])
+        for k, _, info in taken:
+            tf.publish(data[k])
+            inputs[k] += 1
+            latencies[k].append(time.time_ns() - (info.get('received_timestamp') or now))
         if taken:
             last[0] = taken[-1][1]
-        run_batch([(k, info.get('received_timestamp') or now) for k, _, info in taken])
 
     def report():
         if last[0] is None:
@@ -95,21 +92,19 @@ def crowd_floor(node, n, with_kernel):
         msg = DiagnosticArray()
         # Stamped as the crowd stamps its own: the last input's, so inputs that stop do not
         # read as inputs left unanswered.
-        msg.header.stamp.sec, msg.header.stamp.nanosec = struct.unpack_from(
-            '<iI' if last[0][1] == 1 else '>iI', last[0], 4)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(
+            reader.read(last[0]).stamp_ns, 10 ** 9)
         for k in range(n):
             if latencies[k]:
+                p99 = quantile(sorted(latencies[k]), 0.99) * 1e-3     # as the crowd's
                 msg.status.append(DiagnosticStatus(name=f'floor {k}', values=[
-                    KeyValue(key='latency_us_p99', value=f'{_p99_us(latencies[k]):.1f}'),
+                    KeyValue(key='latency_us_p99', value=f'{p99:.1f}'),
                     KeyValue(key='inputs', value=str(inputs[k]))]))
                 latencies[k] = []
         diagnostics.publish(msg)
     waitable = CrowdInputs(node.default_callback_group, on_inputs)
-    elsewhere = TakenElsewhere()
     for k in range(n):
-        waitable.add(k, node.create_subscription(
-            JointState, 'joint_states', _never_called, qos_profile_sensor_data,
-            callback_group=elsewhere, raw=True, event_callbacks=NO_SUB_EVENTS))
+        waitable.subscribe(node, k, 'joint_states')
     node.add_waitable(waitable)
     node.create_timer(1.0, report)
 
@@ -124,13 +119,9 @@ def crowd_stepper(n):
     callable's ``crowd`` is its CrowdSteps.
     """
     from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
-    from jacket_cloth_ros.core.fabric import load_fabric
-    from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.core.simulation import JacketSimulation
-    from jacket_cloth_ros.core.skeleton import load_shipped_character
     from .crowd import RATE, endless_walk
-    skeleton = load_shipped_character()
-    rig, fabric = load_rig(skeleton), load_fabric('tweed_jacket')
+    skeleton, rig, fabric = _shipped()
     walk, (along, xs), loop_x = endless_walk(skeleton)
     names = tuple(walk[0].name)
     positions = [np.array(m.position, dtype=np.float64) for m in walk]
@@ -152,18 +143,19 @@ def crowd_stepper(n):
     return step
 
 
-def _walk_steps():
-    """Return the shipped rig's kernel arguments, captured from a walk."""
+def _shipped():
+    """Return the shipped character's skeleton, its rig and the tweed jacket."""
     from jacket_cloth_ros.core.fabric import load_fabric
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.core.skeleton import load_shipped_character
-    from .speed import captured_steps
     skeleton = load_shipped_character()
-    return captured_steps(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'))
+    return skeleton, load_rig(skeleton), load_fabric('tweed_jacket')
 
 
-def _never_called(raw):
-    """Do nothing: CrowdInputs takes the messages."""
+def _walk_steps():
+    """Return the shipped rig's kernel arguments, captured from a walk."""
+    from .speed import captured_steps
+    return captured_steps(*_shipped())
 
 
 def main():
@@ -174,9 +166,7 @@ def main():
         crowd_floor(node, int(sys.argv[sys.argv.index('--crowd') + 1]), with_kernel)
         return _spin(node)
     node = rclpy.create_node('jacket_cloth_floor')
-    names = [f'jacket_bone_{i:02d}' for i in range(BONES)]
-    identity = np.tile([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (BONES, 1))
-    data = TfTemplate(names, ['spine'] * BONES).encode(identity, 0)
+    data = _prebuilt_tf()
     pub = node.create_publisher(TFMessage, '/tf', 100)
     step = kernel_stepper() if with_kernel else None
 

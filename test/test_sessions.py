@@ -617,12 +617,12 @@ def test_overrides_read_numbers_as_numbers_and_name_unknown_presets(clip, tmp_pa
     assert session.setup.values['fabric.damping'] == 0.3
 
 
-def test_diagnostics_quantiles_are_numpys_on_lists_of_any_length():
+def test_diagnosticsquantiles_are_numpys_on_lists_of_any_length():
     # Diagnostics sort a list instead of calling numpy (a crowd sends 64 a second): the step
     # cost median and latency p99 they report must stay numpy's linear interpolation.
-    from jacket_cloth_ros.ros.pipeline import _quantile
+    from jacket_cloth_ros.ros.pipeline import quantile
     rng = np.random.default_rng(7)
     for n in (1, 2, 3, 10, 101, 120, 400):
         values = sorted(int(v) for v in rng.integers(0, 10 ** 9, n))
-        assert _quantile(values, 0.5) == pytest.approx(np.median(values), rel=1e-12)
-        assert _quantile(values, 0.99) == pytest.approx(np.percentile(values, 99), rel=1e-12)
+        assert quantile(values, 0.5) == pytest.approx(np.median(values), rel=1e-12)
+        assert quantile(values, 0.99) == pytest.approx(np.percentile(values, 99), rel=1e-12)

@@ -99,7 +99,7 @@ class Character:
             del self.sequences[next(iter(self.sequences))]
 
 
-class TakenElsewhere(CallbackGroup):
+class _TakenElsewhere(CallbackGroup):
     """A callback group the executor never runs: CrowdInputs takes its subscriptions' messages."""
 
     def can_execute(self, entity: object) -> bool:
@@ -132,11 +132,21 @@ class CrowdInputs(Waitable):
         self._on_inputs = on_inputs
         self._subs = []             # (character, subscription handle, its pointer)
         self._ready = []
+        self._taken_elsewhere = _TakenElsewhere()
 
-    def add(self, character: 'Character', subscription: object) -> None:
-        """Wait on ``subscription`` (raw JointState bytes) for ``character``."""
+    def subscribe(self, node: 'rclpy.node.Node', character: object, topic: str) -> object:
+        """Subscribe ``node`` to ``topic`` (raw JointStates, sensor data QoS) for ``character``.
+
+        The subscription is taken here, never by the executor, and has no QoS event handlers
+        (2 per character per wake-up); a publisher with incompatible QoS is still warned on
+        its own side. Returns the subscription.
+        """
+        subscription = node.create_subscription(
+            JointState, topic, _never_called, qos_profile_sensor_data, raw=True,
+            callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
         handle = subscription.handle
         self._subs.append((character, handle, handle.pointer))
+        return subscription
 
     def __enter__(self) -> None:
         pass
@@ -198,7 +208,6 @@ class JacketCrowdNode(JacketNodeBase):
         self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
                                                  event_callbacks=NO_PUB_EVENTS)
         self._inputs = CrowdInputs(self.default_callback_group, self._on_inputs)
-        self._taken_elsewhere = TakenElsewhere()
         self.add_waitable(self._inputs)
         self._open_recorder(self._p('record'))
         for c in self.characters:
@@ -265,12 +274,7 @@ class JacketCrowdNode(JacketNodeBase):
         if self.recorder is not None:
             self._add_character_to_recording(c)
         c.diag_wall = time.monotonic()
-        # Taken by CrowdInputs, without QoS event handlers (2 per character per wake-up);
-        # a publisher with incompatible QoS is still warned on its own side.
-        c.subscription = self.create_subscription(
-            JointState, c.topics['joint_states'][0], _never_called, qos_profile_sensor_data,
-            raw=True, callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
-        self._inputs.add(c, c.subscription)
+        c.subscription = self._inputs.subscribe(self, c, c.topics['joint_states'][0])
         self.get_logger().debug(f'{spec.name}: {skeleton.name!r} from {source}')
         keep_loaded_out_of_collections()
 

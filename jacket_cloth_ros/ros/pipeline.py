@@ -273,12 +273,12 @@ class SessionPipeline:
         slow = False
         if self.timing:
             costs = sorted(self._costs or [0])
-            values['step_cost_us_median'] = f'{_quantile(costs, 0.5) * 1e-3:.1f}'
+            values['step_cost_us_median'] = f'{quantile(costs, 0.5) * 1e-3:.1f}'
             values['step_cost_us_max'] = f'{costs[-1] * 1e-3:.1f}'
             slow = costs[-1] * 1e-3 > 1e6 / sim.params.sim_rate
             if self._latencies:
                 lat = sorted(self._latencies)
-                values['latency_us_p99'] = f'{_quantile(lat, 0.99) * 1e-3:.1f}'
+                values['latency_us_p99'] = f'{quantile(lat, 0.99) * 1e-3:.1f}'
                 values['latency_us_max'] = f'{lat[-1] * 1e-3:.1f}'
         self._costs = []
         self._latencies = []
@@ -306,7 +306,7 @@ class SessionPipeline:
 _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
 
 
-def _quantile(ordered: list, share: float) -> float:
+def quantile(ordered: list, share: float) -> float:
     """Return the ``share`` quantile of sorted numbers, interpolated as numpy's default.
 
     Sorting a list of ints: numpy's percentile was a visible share of a crowd's diagnostics.
