@@ -20,9 +20,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from jacket_cloth_ros.core import kernel  # noqa: E402
 from jacket_cloth_ros.core.bundles import copied  # noqa: E402
-from jacket_cloth_ros.core.kernel_cache import FixedTypes  # noqa: E402
+from jacket_cloth_ros.core.compiled import FixedTypes  # noqa: E402
+from jacket_cloth_ros.core.physics.cloth import cloth_step  # noqa: E402
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.skeleton import load_shipped_character  # noqa: E402
@@ -93,7 +93,7 @@ def run(steps):
     # Every step's kernel inputs as the simulation made them (120 Hz steps, 60 Hz inputs).
     captured = captured_steps(skeleton, rig, load_fabric('tweed_jacket'), 'showcase',
                               steps / 120.0 + 0.1)[:steps]
-    real_step = FixedTypes(kernel.cloth_step, check=False)  # typed once, as the simulation
+    real_step = FixedTypes(cloth_step, check=False)  # typed once, as the simulation
     numba_ns, numpy_ns, diff = [], [], []
     for args in captured:
         a = copied(args)

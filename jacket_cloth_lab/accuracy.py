@@ -28,8 +28,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jacket_cloth_ros.core import kernel
-from jacket_cloth_ros.core.kernel import Solver, StretchLimit
+from jacket_cloth_ros.core.physics import cloth as cloth_physics
+from jacket_cloth_ros.core.physics.cloth import Solver, StretchLimit
 from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.core.bundles import (
     ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning)
@@ -348,7 +348,7 @@ def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.
     control = StepControl(acc, damping, 0.0, dt, method.substeps, x.copy())  # top never moves
     posed = Posed(none3, np.zeros((0, 3, 3)), none3, none3, none3, none3, far)
     for k in range(steps):
-        kernel.cloth_step(cloth, colliders, tuning, state, control, posed, posed)
+        cloth_physics.cloth_step(cloth, colliders, tuning, state, control, posed, posed)
         off = np.linalg.norm(x[-1] - exact_bottom)
         if off > 0.01:
             settled_at = None

@@ -5,7 +5,7 @@ It receives the JointState stream as the real node does (raw bytes, sensor-data 
 republishes one pre-built TFMessage with as many bones as the shipped rig: no simulation, no
 encoding, no recording. Its CPU per message plus the bare kernel's is what the node is held to.
 
-With ``--kernel`` it also runs the bare kernel (one ``kernel.cloth_step`` of the shipped rig,
+With ``--kernel`` it also runs the bare kernel (one ``cloth.cloth_step`` of the shipped rig,
 states captured from a walk) in each callback, so that the kernel's share of the floor is
 measured as the node runs it: once per message, 8 ms apart, in this process. Called back to
 back, the same step took a third to a half of that (``speed.node_vs_floor``, README).
@@ -42,12 +42,12 @@ def kernel_stepper(steps=None):
     ``steps`` are kernel arguments; by default the shipped rig's, captured from a walk. Each
     state moves on.
     """
-    from jacket_cloth_ros.core import kernel
-    from jacket_cloth_ros.core.kernel_cache import FixedTypes
+    from jacket_cloth_ros.core.compiled import FixedTypes
+    from jacket_cloth_ros.core.physics import cloth
     if steps is None:
         steps = _walk_steps()
     turn = [0]
-    cloth_step = FixedTypes(kernel.cloth_step, check=False)  # typed once, as the simulation
+    cloth_step = FixedTypes(cloth.cloth_step, check=False)  # typed once, as the simulation
 
     def step():
         cloth_step(*steps[turn[0] % len(steps)])

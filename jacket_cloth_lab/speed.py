@@ -31,9 +31,9 @@ import time
 
 import numpy as np
 
-from jacket_cloth_ros.core import kernel
 from jacket_cloth_ros.core.bundles import copied
-from jacket_cloth_ros.core.kernel_cache import FixedTypes
+from jacket_cloth_ros.core.compiled import FixedTypes
+from jacket_cloth_ros.core.physics import cloth
 from jacket_cloth_ros.core.fabric import load_fabric, load_fabrics
 from jacket_cloth_ros.core.simulation import JacketSimulation
 from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
@@ -115,7 +115,7 @@ def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
 def kernel_step_ns(steps, repeat=3):
     """Median time of the kernel on each captured state (copies made outside the timing)."""
     times = []
-    step = FixedTypes(kernel.cloth_step, check=False)   # typed once, as the simulation does
+    step = FixedTypes(cloth.cloth_step, check=False)   # typed once, as the simulation does
     for _ in range(repeat):
         for args in steps:
             a = copied(args)

@@ -24,7 +24,7 @@ import numpy as np
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.geometry import grid_triangles
 from jacket_cloth_ros.core.rig import load_rig
-from jacket_cloth_ros.core.kernel import StretchLimit
+from jacket_cloth_ros.core.physics.cloth import StretchLimit
 from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import load_shipped_character

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-# Every call of a kernel typed once (kernel_cache.FixedTypes) is checked against those types.
+# Every call of a kernel typed once (compiled.FixedTypes) is checked against those types.
 os.environ['JACKET_CLOTH_CHECK_TYPES'] = '1'
 # A domain of our own so a demo or another test run on the machine does not cross talk.
 DOMAIN_ID = 60 + os.getpid() % 40
@@ -39,6 +39,18 @@ def make_sim(skeleton, rig):
     def make(fabric='tweed_jacket', **params):
         return JacketSimulation(skeleton, rig, load_fabric(fabric), SimParams(**params))
     return make
+
+
+def body(**given):
+    """Return the bundles.Body of the colliders given as bundles.Colliders' fields, no others."""
+    from jacket_cloth_ros.core.bundles import Colliders, floats
+    from jacket_cloth_ros.core.physics.colliders import body_of
+    none3 = np.zeros((0, 3))
+    colliders = dict(centers=none3, axes=np.zeros((0, 3, 3)), radii=none3, capsule_a=none3,
+                     capsule_b=none3, capsule_radii=np.zeros(0), plane_points=none3,
+                     plane_normals=none3)
+    colliders.update(given)
+    return body_of(Colliders(*(floats(colliders[f]) for f in Colliders._fields)))
 
 
 def clip_inputs(skeleton, clip, seconds, start_s=10.0, rate=60.0):

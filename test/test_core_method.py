@@ -7,10 +7,11 @@ M14's world share, M15 and M16 are in test_core_simulation.py.
 
 import numpy as np
 import pytest
-from conftest import play, stepwise
+from conftest import body, play, stepwise
 
-from jacket_cloth_ros.core import kernel
-from jacket_cloth_ros.core.pose_kernel import twist_angle
+from jacket_cloth_ros.core.physics import cloth as kernel
+from jacket_cloth_ros.core.physics.colliders import collide
+from jacket_cloth_ros.core.physics.pose import twist_angle
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
@@ -187,13 +188,12 @@ def test_m10_no_particle_left_inside_an_ellipsoid_including_a_split_one():
     radii = np.array([r for _, _, r in pieces])
     rng = np.random.default_rng(3)
     x = rng.uniform([-0.08, -0.08, -0.3], [0.08, 0.08, 0.3], size=(400, 3))
-    empty = np.zeros((0, 3))
     contact = np.zeros(len(x), dtype=np.bool_)
     was_inside = np.zeros(len(x), dtype=bool)
     for c, r in zip(centers, radii):
         was_inside |= (((x - c) / r) ** 2).sum(axis=1) < 1.0
-    kernel.collide(x, np.ones(len(x), dtype=np.bool_), centers, axes, radii, empty, empty,
-                   np.zeros(0), empty, empty, contact)
+    collide(x, np.ones(len(x), dtype=np.bool_), body(centers=centers, axes=axes, radii=radii),
+            contact)
     for c, r in zip(centers, radii):
         inside = (((x - c) / r) ** 2).sum(axis=1)
         assert inside.min() >= 1.0 - 1e-9
@@ -203,11 +203,10 @@ def test_m10_no_particle_left_inside_an_ellipsoid_including_a_split_one():
 def test_capsule_and_plane_colliders_push_out_and_mark_contact():
     x = np.array([[0.03, 0.0, 0.1], [0.0, 0.0, -0.5], [0.5, 0.5, -0.02], [0.5, 0.5, 0.2]])
     contact = np.zeros(4, dtype=np.bool_)
-    none3, none33 = np.zeros((0, 3)), np.zeros((0, 3, 3))
-    deepest = kernel.collide(
-        x, np.ones(4, dtype=np.bool_), none3, none33, none3,
-        np.array([[0.0, 0.0, 0.0]]), np.array([[0.0, 0.0, 0.3]]), np.array([0.08]),
-        np.array([[0.0, 0.0, -0.1]]), np.array([[0.0, 0.0, 1.0]]), contact)
+    deepest = collide(
+        x, np.ones(4, dtype=np.bool_),
+        body(capsule_a=[[0.0, 0.0, 0.0]], capsule_b=[[0.0, 0.0, 0.3]], capsule_radii=[0.08],
+             plane_points=[[0.0, 0.0, -0.1]], plane_normals=[[0.0, 0.0, 1.0]]), contact)
     assert x[0] == pytest.approx([0.08, 0.0, 0.1])          # out of the capsule, sideways
     assert x[1][2] == pytest.approx(-0.1)                   # onto the plane
     assert x[2][2] == pytest.approx(-0.02)                  # above the plane: untouched
@@ -238,10 +237,11 @@ def test_m13_edge_vertices_get_their_own_parameters(make_sim, rig):
     f = sim.fabric
     plain = (rig.region_scale['damping_scale'] == 1) & (rig.region_scale['wind_scale'] == 1)
     edge, inner = rig.edge & plain, ~rig.edge & plain     # outside the rig's regions
-    assert (sim.damping[edge] == f.edge_damping).all() and (sim.damping[inner] == f.damping).all()
-    assert (sim.world_share[edge] == f.edge_world_share).all()
-    assert (sim.wind_scale[edge] == f.edge_wind_scale).all()
-    assert (sim.max_distance[edge] > rig.max_distance[edge]).all()
+    t = sim.tuning
+    assert (t.damping[edge] == f.edge_damping).all() and (t.damping[inner] == f.damping).all()
+    assert (sim.tuning.world_share[edge] == f.edge_world_share).all()
+    assert (sim.tuning.wind_scale[edge] == f.edge_wind_scale).all()
+    assert (sim.tuning.max_distance[edge] > rig.max_distance[edge]).all()
     # The hem (an edge) flaps in the wind more than the row above it.
     windy = make_sim(wind=(0.0, 8.0, 0.0), wind_gust=0.8, wind_gust_period=0.7)
     rows = []
@@ -323,25 +323,24 @@ def test_rig_regions_scale_the_fabric_where_they_lie(make_sim, rig):
     vent[8:12, 3:6] = True
     vent = vent.ravel()
     inner = ~rig.edge
-    assert sim.wind_scale[vent & inner] == pytest.approx(1.4 * f.wind_scale)
-    assert sim.damping[vent & inner] == pytest.approx(0.8 * f.damping)
-    assert sim.damping[~vent & inner] == pytest.approx(f.damping)
-    assert sim.wind_scale[vent & rig.edge] == pytest.approx(1.4 * f.edge_wind_scale)
+    assert sim.tuning.wind_scale[vent & inner] == pytest.approx(1.4 * f.wind_scale)
+    assert sim.tuning.damping[vent & inner] == pytest.approx(0.8 * f.damping)
+    assert sim.tuning.damping[~vent & inner] == pytest.approx(f.damping)
+    assert sim.tuning.wind_scale[vent & rig.edge] == pytest.approx(1.4 * f.edge_wind_scale)
 
 
 def test_m12_keeps_each_vertical_at_its_length_and_outside_the_body():
     # A column hanging over a ball: the straight line from the top vertex runs into it. The
     # lower vertex turns about the upper one onto the surface at its rest length, instead of
     # being pulled inside (and a later push-out stretching the edge).
-    from jacket_cloth_ros.core.kernel import hard_vertical_pass_outside
+    from jacket_cloth_ros.core.physics.cloth import hard_vertical_pass_outside
     x = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.3], [0.0, 0.0, -0.6]])
     upper, lower, rest = np.array([0, 1]), np.array([1, 2]), np.array([0.2, 0.2])
     center, radius = np.array([0.05, 0.0, -0.3]), 0.15
     contact = np.zeros(3, dtype=np.bool_)
-    none3 = np.zeros((0, 3))
     deepest = hard_vertical_pass_outside(
-        x, upper, lower, rest, contact, center[None], np.eye(3)[None], np.full((1, 3), radius),
-        none3, none3, np.zeros(0), none3, none3)
+        x, upper, lower, rest, contact,
+        body(centers=center[None], axes=np.eye(3)[None], radii=np.full((1, 3), radius)))
     assert deepest > 0.01 and contact[1]
     lengths = np.linalg.norm(x[upper] - x[lower], axis=1)
     assert np.allclose(lengths, rest, rtol=1e-3)       # alternating projections: to 0.1 %
@@ -352,14 +351,13 @@ def test_m12_leaves_a_vertex_pulled_into_the_crease_of_two_colliders_outside_bot
     # Where two colliders meet (a pelvis and a thigh raised in a cartwheel), pushing the
     # lower vertex out of one puts it into the other; before the pass walked the edge back
     # to its last point outside, it ended 10 cm inside (9 mm on the DeepMimic cartwheel).
-    from jacket_cloth_ros.core.kernel import hard_vertical_pass_outside
+    from jacket_cloth_ros.core.physics.cloth import hard_vertical_pass_outside
     centers, radii = np.array([[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]), np.array([0.6, 0.5])
     x = np.array([[0.05, 3.0, 0.0], [0.05, 0.0, 0.0]])
-    none3 = np.zeros((0, 3))
     hard_vertical_pass_outside(
-        x, np.array([0]), np.array([1]), np.array([3.0]), np.zeros(2, dtype=np.bool_), centers,
-        np.repeat(np.eye(3)[None], 2, axis=0), np.repeat(radii[:, None], 3, axis=1), none3,
-        none3, np.zeros(0), none3, none3)
+        x, np.array([0]), np.array([1]), np.array([3.0]), np.zeros(2, dtype=np.bool_),
+        body(centers=centers, axes=np.repeat(np.eye(3)[None], 2, axis=0),
+             radii=np.repeat(radii[:, None], 3, axis=1)))
     assert (np.linalg.norm(x[1] - centers, axis=1) >= radii - 1e-6).all()
     assert np.linalg.norm(x[1] - x[0]) <= 3.0 + 1e-9         # shorter, as M12 allows
 
@@ -368,7 +366,7 @@ def test_strain_limit_shortens_overlong_horizontals_moving_free_ends_only():
     # The horizontals' strain limit (after M12): an edge over (1 + limit) rest is shortened
     # to that length, a pinned end does not move, and edges under it are left alone (folds
     # and compression are the solve's).
-    from jacket_cloth_ros.core.kernel import limit_stretch
+    from jacket_cloth_ros.core.physics.cloth import limit_stretch
     x = np.array([[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.5, 0.0, 0.0], [0.55, 0.0, 0.0]])
     free = np.array([False, True, True, True])
     ea, eb, rest = np.array([0, 1, 2]), np.array([1, 2, 3]), np.full(3, 0.1)

@@ -3,7 +3,7 @@
 
 import numpy as np
 import pytest
-from conftest import play, stepwise
+from conftest import body, play, stepwise
 
 from jacket_cloth_ros.core.transforms import quat_to_matrix
 from jacket_cloth_ros.motion.clips import joint_state_content
@@ -64,12 +64,10 @@ def test_m6_top_row_follows_its_link_and_m12_vertical_lengths_exact(make_sim, ri
     assert vert[free_of_contact] == pytest.approx(rig.vert_rest[free_of_contact], abs=1e-12)
     assert vert == pytest.approx(rig.vert_rest, rel=1e-3)
     # With no collider, the pass leaves every vertical exactly at its rest length.
-    from jacket_cloth_ros.core import kernel
+    from jacket_cloth_ros.core.physics.cloth import hard_vertical_pass_outside
     x = sim.x + np.random.default_rng(1).normal(0, 0.02, sim.x.shape)
-    none3 = np.zeros((0, 3))
-    kernel.hard_vertical_pass_outside(
-        x, rig.vert_a, rig.vert_b, rig.vert_rest, np.zeros(rig.n, dtype=np.bool_), none3,
-        np.zeros((0, 3, 3)), none3, none3, none3, np.zeros(0), none3, none3)
+    hard_vertical_pass_outside(x, rig.vert_a, rig.vert_b, rig.vert_rest,
+                               np.zeros(rig.n, dtype=np.bool_), body())
     vert = np.linalg.norm(x[rig.vert_a] - x[rig.vert_b], axis=1)
     assert vert == pytest.approx(rig.vert_rest, abs=1e-12)
 
@@ -199,7 +197,7 @@ def test_m14_world_motion_is_felt_by_share_local_motion_fully(make_sim, skeleton
     def response(share):
         sim = make_sim(teleport_distance=5.0)
         sim.set_fabric(sim.fabric.with_values(world_share=share, edge_world_share=share))
-        sim.max_distance[:] = 10.0     # measure M14 alone, not the M11 clamp
+        sim.tuning.max_distance[:] = 10.0     # measure M14 alone, not the M11 clamp
         names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
         pos = np.array(pos)
         sim.process(1_000_000_000, names, pos)
@@ -239,17 +237,17 @@ def test_m11_no_vertex_beyond_its_bound(make_sim, rig):
     for _ in stepwise(sim, 'run', 60, 2.0):
         ref = sim.reference_points(sim.links, sim.layer)
         dist = np.linalg.norm(sim.x - ref, axis=1)
-        assert (dist[rig.free] <= sim.max_distance[rig.free] + 1e-9).all()
+        assert (dist[rig.free] <= sim.tuning.max_distance[rig.free] + 1e-9).all()
     assert sum(r.limited_vertices for r in play(sim, 'dodge', 60, 1.0)) > 0
 
 
 def test_m15_contact_vertices_lose_more_velocity():
-    from jacket_cloth_ros.core import kernel
+    from jacket_cloth_ros.core.physics.cloth import integrate
     x = np.zeros((2, 3))
     xp = np.array([[-0.01, 0.0, 0.0], [-0.01, 0.0, 0.0]])
     free = np.array([True, True])
     contact = np.array([True, False])
-    kernel.integrate(x, xp, free, np.zeros((2, 3)), np.full(2, 0.02), contact, 0.5, 0.01)
+    integrate(x, xp, free, np.zeros((2, 3)), np.full(2, 0.02), contact, 0.5, 0.01)
     speed = np.abs(x - xp)[:, 0]
     assert speed[0] == pytest.approx(0.01 * (1 - 0.52))
     assert speed[1] == pytest.approx(0.01 * (1 - 0.02))
@@ -401,7 +399,7 @@ def test_adding_characters_to_a_crowd_compiles_nothing_numba_would_not_cache():
 
 def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
     # core.crowd: an armed character's steady inputs are checked and loaded in one compiled
-    # call (crowd_kernel.prepare_steady); every input it must not take goes to prepare.
+    # call (physics.crowd.prepare_steady); every input it must not take goes to prepare.
     # Each case below, on one character, against a lone simulation, bit for bit.
     from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
     from jacket_cloth_ros.core.fabric import load_fabric
@@ -473,7 +471,7 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
             assert np.array_equal(sims[i].hood_p, alone[i].hood_p)
             assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
             assert np.array_equal(sims[i].last.q, alone[i].last.q)
-            assert np.array_equal(sims[i].parser.last_root, alone[i].parser.last_root)
+            assert np.array_equal(sims[i].parser.last.root, alone[i].parser.last.root)
     # Every case fell back (the bits above) and the rest went the compiled way: all but the
     # first two inputs of each character and, for each case, at most three inputs.
     assert 3 * 60 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 60 - 3 * 2

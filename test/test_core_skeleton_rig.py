@@ -7,7 +7,7 @@ import yaml
 
 from jacket_cloth_ros.core.config import ConfigError, shipped
 from jacket_cloth_ros.core.rig import Rig, interleaved_order, split_ellipsoid
-from jacket_cloth_ros.core.pose_kernel import quat_from_matrix
+from jacket_cloth_ros.core.physics.pose import quat_from_matrix
 from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.core.transforms import matrix_to_quat
 
@@ -173,7 +173,7 @@ def test_stretched_ellipsoids_are_split(rig):
 
 
 def test_compiled_quaternions_match_transforms(skeleton):
-    # pose_kernel turns the bones' frames into /tf quaternions; transforms.matrix_to_quat is
+    # physics.pose turns the bones' frames into /tf quaternions; transforms.matrix_to_quat is
     # the numpy reference. Random link frames, plus half turns where w is zero.
     rng = np.random.default_rng(3)
     frames = [skeleton.forward(rng.uniform(-3, 3, len(skeleton.joint_names)))[:, :3, :3]

@@ -1,11 +1,11 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The compiled step (step_kernel.advance) does what the step did as numpy and separate parts."""
+"""The compiled step (physics.step.advance) does what the step did as numpy and separate parts."""
 
 import numpy as np
 import pytest
 from conftest import clip_inputs
 
-from jacket_cloth_ros.core import kernel, step_kernel
+from jacket_cloth_ros.core.physics import cloth, pose, step
 from jacket_cloth_ros.core.simulation import DESIGN_RATE, per_step
 from jacket_cloth_ros.core.transforms import (
     apply_transform, invert_transform, make_transform, quat_slerp, quat_to_matrix)
@@ -21,9 +21,9 @@ def test_compiled_slerp_and_rotation_equal_the_numpy_ones():
         b = rng.normal(size=4) if k % 3 else a + 1e-5 * rng.normal(size=4)
         b /= np.linalg.norm(b)
         t = rng.uniform()
-        step_kernel.quat_slerp(a, b, t, out)
+        pose.quat_slerp(a, b, t, out)
         assert np.allclose(out, quat_slerp(a, b, t), atol=1e-12)
-        step_kernel.quat_matrix(3.0 * a, m)          # normalises as quat_to_matrix does
+        pose.quat_matrix(3.0 * a, m)          # normalises as quat_to_matrix does
         assert np.allclose(m[:3, :3], quat_to_matrix(a), atol=1e-12)
 
 
@@ -40,7 +40,7 @@ def _reference_steps(sim, a, b, n):
                               a.root[:3, 3] + w * (b.root[:3, 3] - a.root[:3, 3]))
         links = sim.skeleton.forward(a.q + w * (b.q - a.q))
         delta = invert_transform(root) @ sim.root
-        share_x = sim.world_share[:, None]
+        share_x = sim.tuning.world_share[:, None]
         for points, share in ((sim.x, share_x), (sim.xp, share_x),
                               (sim.hood_p[None], f.world_share),
                               (sim.hood_pp[None], f.world_share)):
@@ -53,9 +53,9 @@ def _reference_steps(sim, a, b, n):
         to_local = root[:3, :3].T
         gravity = to_local @ np.array([0.0, 0.0, -p.gravity])
         wind = to_local @ p.wind_at(sim.t_sim)
-        kernel.cloth_step(*sim.kernel_arguments(
-            links, root, ref, gravity + sim.wind_scale[:, None] * wind,
-            per_step(sim.damping, e), float(per_step(f.contact_damping, e)), dt))
+        cloth.cloth_step(*sim.kernel_arguments(
+            links, root, ref, gravity + sim.tuning.wind_scale[:, None] * wind,
+            per_step(sim.tuning.damping, e), float(per_step(f.contact_damping, e)), dt))
         sim.hood_step(links, gravity + f.wind_scale * wind, dt,
                       float(per_step(f.hood_damping, e)))
 
@@ -86,40 +86,40 @@ def test_one_compiled_call_steps_as_the_separate_parts_did(make_sim, skeleton):
 
 
 def test_the_cached_step_is_marked_with_the_cloth_kernels_source_too():
-    # advance compiles kernel.cloth_step into itself; numba marks a cache with its own file
-    # only, so an edit of kernel.py went on running the old cloth step from the cache.
+    # advance compiles cloth.cloth_step into itself; numba marks a cache with its own file
+    # only, so an edit of cloth.py went on running the old cloth step from the cache.
     import hashlib
-    stamp = step_kernel.advance._cache._impl._locator.get_source_stamp()
-    with open(kernel.__file__, 'rb') as f:
+    stamp = step.advance._cache._impl._locator.get_source_stamp()
+    with open(cloth.__file__, 'rb') as f:
         assert hashlib.sha256(f.read()).digest() in stamp
 
 
 def test_every_module_with_cached_kernels_is_marked_by_all_kernel_files():
-    # A new kernel module left out of kernel_cache.KERNEL_FILES (or taking njit straight from
-    # numba) would be cached against its own file only again.
+    # A kernel module left out of compiled.kernel_files (or taking njit straight from numba)
+    # would be cached against its own file only again.
     import pathlib
     import re
-    from jacket_cloth_ros.core import kernel_cache
-    package = pathlib.Path(kernel_cache.__file__).parent.parent
+    from jacket_cloth_ros.core import compiled
+    package = pathlib.Path(compiled.__file__).parent.parent
     with_kernels = {str(p) for p in package.rglob('*.py')
                     if re.search(r'^@njit', p.read_text(), re.MULTILINE)}
     # bundles.py holds no kernel, but the compiled code depends on its fields' order.
     bundles = str(package / 'core' / 'bundles.py')
-    assert with_kernels | {bundles} == set(kernel_cache.KERNEL_FILES)
+    assert with_kernels | {bundles} <= set(compiled.kernel_files())
     # The marks cover this package's files only: a lab kernel compiling ours in would be
     # cached against its own file and run our old code after an edit.
     lab = package.parent / 'jacket_cloth_lab'
     assert not [p for p in lab.rglob('*.py') if 'njit' in p.read_text()]
     for path in with_kernels:
         text = pathlib.Path(path).read_text()
-        assert 'kernel_cache import njit' in text and 'from numba import njit' not in text, path
+        assert 'compiled import njit' in text and 'from numba import njit' not in text, path
 
 
 def test_fixed_types_refuses_a_call_whose_types_changed():
     # The entry point of a kernel typed once would read a changed argument as the old type.
-    from jacket_cloth_ros.core.kernel_cache import CHECK_TYPES, FixedTypes
+    from jacket_cloth_ros.core.compiled import CHECK_TYPES, FixedTypes
     assert CHECK_TYPES                      # conftest checks every call in the tests
-    call = FixedTypes(step_kernel.lost_per_each)
+    call = FixedTypes(step.lost_per_each)
     out = np.empty(3)
     call(np.full(3, 0.5), 0.5, out)
     assert out == pytest.approx(1 - 0.5 ** 0.5)

@@ -11,12 +11,12 @@ import sys
 _NODE_PATH = '''
 import sys
 from numba.core.registry import CPUDispatcher
-from jacket_cloth_ros.core.kernel_cache import kernels_cached
+from jacket_cloth_ros.ros.warm import kernels_cached
 assert kernels_cached(), 'the cache is empty'
 from jacket_cloth_ros.ros.warm import warm_kernels
 warm_kernels()
-import jacket_cloth_ros.core.kernel, jacket_cloth_ros.core.pose_kernel
-import jacket_cloth_ros.core.step_kernel, jacket_cloth_ros.core.inputs
+import jacket_cloth_ros.core.physics.cloth, jacket_cloth_ros.core.physics.pose
+import jacket_cloth_ros.core.physics.step, jacket_cloth_ros.core.physics.sampling
 import jacket_cloth_ros.ros.cdr, jacket_cloth_ros.ros.marker_kernel
 missed = [f'{m.__name__}.{name}' for m in list(sys.modules.values())
           if m and m.__name__.startswith('jacket_cloth_ros')
@@ -29,7 +29,7 @@ print(sorted(set(missed)))
 def test_after_warm_the_node_path_compiles_nothing(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     empty = subprocess.run(
-        [sys.executable, '-c', 'from jacket_cloth_ros.core.kernel_cache import kernels_cached;'
+        [sys.executable, '-c', 'from jacket_cloth_ros.ros.warm import kernels_cached;'
          'print(kernels_cached())'], env=env, capture_output=True, text=True, timeout=120)
     assert empty.stdout.strip() == 'False', empty.stderr     # a fresh install: not cached
     warm = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros', 'warm'], env=env,

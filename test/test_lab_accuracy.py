@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jacket_cloth_ros.core.fabric import load_fabric
-from jacket_cloth_ros.core import step_kernel
+from jacket_cloth_ros.core.physics import step
 from jacket_cloth_ros.core.simulation import DESIGN_RATE, JacketSimulation, SimParams, per_step
 from jacket_cloth_lab import accuracy
 from jacket_cloth_lab.accuracy import SHIPPED, Method
@@ -111,7 +111,7 @@ def test_fabric_damping_is_per_time_not_per_step(skeleton, rig, fabric):
     # The compiled step applies the same rule: 240 Hz in two substeps is a quarter design step.
     fast = JacketSimulation(skeleton, rig, fabric, SimParams(sim_rate=240.0, substeps=2))
     per_substep = np.empty(len(fast.damping))
-    step_kernel.lost_per_each(fast.damping, DESIGN_RATE / 240.0 / 2, per_substep)
+    step.lost_per_each(fast.damping, DESIGN_RATE / 240.0 / 2, per_substep)
     assert per_substep == pytest.approx(1.0 - (1.0 - fast.damping) ** 0.25)
     assert per_substep[0] < fast.damping[0] / 3.9
 

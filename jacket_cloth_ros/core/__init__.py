@@ -1,2 +1,13 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The simulation core: skeleton, rig, cloth, hood and the fixed-step driver. No ROS here."""
+"""The simulation core: skeleton, rig, cloth, hood and the fixed-step driver. No ROS here.
+
+Layers, each importing only those below it (test/test_core_layers.py holds them to it):
+
+1. types and compiling: ``bundles`` (the named arrays the compiled steps take), ``compiled``
+   (``njit``, the cache stamp, FixedTypes), ``choices``, ``config``, ``transforms``,
+   ``geometry``;
+2. the compiled physics, ``physics/``: pose, colliders, cloth, hood, step, crowd, sampling;
+3. building a character's model: ``skeleton``, ``bone_layer``, ``urdf_colliders``, ``rig``
+   (``model_of``), ``fabric``, ``params``;
+4. drivers: ``inputs``, ``lod``, ``measures``, ``simulation`` (JacketSimulation), ``crowd``.
+"""

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .bundles import layer_model
+from .bundles import LayerModel, floats, ints
 from .config import ConfigError, Section
-from .pose_kernel import solve_layer
+from .physics.pose import solve_layer
 from .transforms import apply_transform
 
 if TYPE_CHECKING:           # for the annotations only
@@ -140,10 +140,29 @@ class BoneLayer:
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
         ``full=False`` solves only what the cloth needs each step: the bones below the pads.
-        Compiled: pose_kernel.solve_layer.
+        Compiled: physics.pose.solve_layer.
         """
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
         solve_layer(links, self.model, full, rot, pos, tips, below)
         return LayerPose(self.names, self.parent_index, rot, pos, tips, below)
+
+
+def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
+    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
+    if layer is None:
+        return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
+                          floats(np.zeros((0, 3, 3))),
+                          0, floats(np.zeros((0, 3))), ints([]), floats(np.zeros((0, 3))),
+                          floats([]), floats([]), floats(DOWN), floats([0.0, 1.0, 0.0]), 0.0)
+    s, p = layer.sleeves, layer.pads
+    return LayerModel(
+        ints([x.link for x in s]), ints([x.end_link for x in s]),
+        floats(np.array([x.axis for x in s]).reshape(-1, 3)), floats([x.length for x in s]),
+        floats([x.twist_share for x in s]),
+        floats(np.array([x.rest for x in s]).reshape(-1, 3, 3)), int(layer.upper_link if p else 0),
+        floats(np.array([x.pivot for x in p]).reshape(-1, 3)), ints([x.aim_link for x in p]),
+        floats(np.array([x.aim for x in p]).reshape(-1, 3)), floats([x.length for x in p]),
+        floats([x.below_length for x in p]), floats(layer.down), floats(layer.side),
+        float(layer.rest_gap))

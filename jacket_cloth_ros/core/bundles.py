@@ -6,30 +6,30 @@ instead of long positional lists, so two neighbouring arrays of one dtype and sh
 longer be swapped by a caller:
 
 - :class:`Model`: what never changes while a character runs (skeleton, M1/M2 layer, cloth
-  topology and pins, colliders in their links' frames), built by :func:`model_of`;
+  topology and pins, colliders in their links' frames), built by ``rig.model_of``;
 - :class:`Tuning`: the fabric's and the parameters' values, rebuilt on a live change
-  (:func:`tuning_of`);
+  (``JacketSimulation``);
 - :class:`ClothState`: cloth, hood and root, moved in place by the steps;
 - :class:`Posed`: colliders and M11 references in the simulation frame at one instant;
+  :class:`Colliders`, every collider there, and :class:`Body`, the same as the push-outs
+  read them;
 - :class:`Motion` and :class:`StepControl`: what drives one input's steps or one cloth step;
+  :class:`NamePlan` and :class:`JointSample`: where a message's names go, and a sample;
 - :class:`StepOutput`: what the steps leave for the bones and the report;
 - :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call, and
   :class:`SteadyIntake`, the compiled check of its steady inputs.
 
-Every builder fixes each field's dtype and memory layout, so the compiled code sees the same
-types on every call (see kernel_cache.FixedTypes). This file is a kernel file: the compiled
-code depends on the fields' order, so an edit here recompiles every kernel.
+This is the bottom layer of core: it imports nothing of the package. Every builder (here,
+and where a skeleton, a rig or a bone layer builds its own) fixes each field's dtype and
+memory layout, so the compiled code sees the same types on every call (see
+compiled.FixedTypes). The compiled code depends on the fields' order, so an edit here
+recompiles every kernel (compiled.kernel_files).
 """
 
-from typing import TYPE_CHECKING, NamedTuple, TypeVar
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 import numpy.typing as npt
-
-if TYPE_CHECKING:           # for the annotations only: these modules build on this one
-    from .bone_layer import BoneLayer
-    from .rig import Rig
-    from .skeleton import Skeleton
 
 _Bundle = TypeVar('_Bundle')
 
@@ -54,7 +54,7 @@ class SkeletonModel(NamedTuple):
 
     origin: np.ndarray      # (L,4,4) joint origin in the parent link's frame
     axis: np.ndarray        # (L,3) joint axis
-    kind: np.ndarray        # (L,) pose_kernel.FIXED, ROTATION or TRANSLATION
+    kind: np.ndarray        # (L,) physics.pose.FIXED, ROTATION or TRANSLATION
     var: np.ndarray         # (L,) index of the joint variable, -1 for none
     mult: np.ndarray        # (L,) mimic multiplier
     offset: np.ndarray      # (L,) mimic offset
@@ -192,6 +192,55 @@ class Posed(NamedTuple):
     ref: np.ndarray
 
 
+class Colliders(NamedTuple):
+    """Every collider in the simulation frame at one instant (Posed's, with their radii)."""
+
+    centers: np.ndarray             # ellipsoids (M10): (E,3) centres, (E,3,3) axes as columns,
+    axes: np.ndarray                # (E,3) radii
+    radii: np.ndarray
+    capsule_a: np.ndarray           # capsules: (K,3) segment ends, (K,) radii
+    capsule_b: np.ndarray
+    capsule_radii: np.ndarray
+    plane_points: np.ndarray        # planes: (P,3) a point and the unit normal
+    plane_normals: np.ndarray
+
+
+class Body(NamedTuple):
+    """Colliders as the push-outs read them (physics.colliders.body_of), once per pass.
+
+    Each ellipsoid as the map into the space where it is a unit sphere, the map back, and the
+    squared radius of its bounding sphere, so the per-vertex test multiplies, never divides.
+    """
+
+    centers: np.ndarray
+    to_unit: np.ndarray
+    from_unit: np.ndarray
+    reach2: np.ndarray
+    cap_a: np.ndarray
+    cap_b: np.ndarray
+    cap_r: np.ndarray
+    plane_p: np.ndarray
+    plane_n: np.ndarray
+
+
+class NamePlan(NamedTuple):
+    """Where each value of a JointState with one name list goes (inputs.InputParser.plan)."""
+
+    joint_from: np.ndarray          # int64: message index -> skeleton joint index
+    joint_to: np.ndarray
+    world_from: np.ndarray          # int64: message index -> world_joint variable
+    world_to: np.ndarray
+    whole_world: bool               # every world variable is there
+
+
+class JointSample(NamedTuple):
+    """A skeleton sample's arrays: joint values, the root's world pose and its quaternion."""
+
+    q: np.ndarray
+    root: np.ndarray                # (4,4)
+    quat: np.ndarray                # (4,) x, y, z, w
+
+
 class Motion(NamedTuple):
     """One input's steps: the skeleton samples a and b, and the step clock."""
 
@@ -209,7 +258,7 @@ class Motion(NamedTuple):
 
 
 class StepControl(NamedTuple):
-    """What drives one cloth step (kernel.cloth_step)."""
+    """What drives one cloth step (physics.cloth.cloth_step)."""
 
     acc: np.ndarray                 # (N,3) gravity and wind, simulation frame
     damping: np.ndarray             # (N,) per substep
@@ -231,27 +280,19 @@ class StepOutput(NamedTuple):
 
 
 class SteadyIntake(NamedTuple):
-    """A crowd character's input check and sample, compiled (crowd_kernel.prepare_steady).
+    """A crowd character's input check and sample, compiled (physics.crowd.prepare_steady).
 
     Armed (core/crowd.py) after an input that went the whole way in Python without a warning
     or reset: the plan of its name list (as InputParser's), its last sample and the limits its
     next input is checked against. An input that passes every check is written into the
     character's CrowdSlot motion arrays (shared here), as JacketSimulation.prepare and
-    crowd_kernel.load_motion would have written it. Apart from the slot: copying a slot's
+    physics.crowd.load_motion would have written it. Apart from the slot: copying a slot's
     many arrays out of the crowd's list costs more than this check.
     """
 
-    joint_from: np.ndarray          # int64: as InputParser's plan of the name list
-    joint_to: np.ndarray
-    world_from: np.ndarray
-    world_to: np.ndarray
-    whole_world: bool
-    last_q: np.ndarray              # the last sample's joint values, root and quaternion
-    last_root: np.ndarray
-    last_quat: np.ndarray
-    q: np.ndarray                   # the new sample, checked before it replaces the last
-    root: np.ndarray
-    quat: np.ndarray
+    plan: NamePlan
+    last: JointSample               # the last sample
+    new: JointSample                # the new sample, checked before it replaces the last
     clock: np.ndarray               # int64: the last sample's stamp, dt_ns, max_steps_per_input
     limits: np.ndarray              # reset_gap (s), teleport_distance (m), teleport_angle_deg
     motion: tuple                   # the slot's q_a, q_b, quat_a, quat_b, pos_a, pos_b
@@ -259,26 +300,36 @@ class SteadyIntake(NamedTuple):
     stats: np.ndarray               # the slot's out.stats
 
 
-def steady_intake(slot: 'CrowdSlot', plan: tuple = (), last: 'tuple | None' = None,
-                  clock: tuple = (0, 1, 0), limits: tuple = (0.0, 0.0, 0.0)) -> SteadyIntake:
+def name_plan(joint_from: tuple = (), joint_to: tuple = (), world_from: tuple = (),
+              world_to: tuple = (), whole_world: bool = False) -> NamePlan:
+    """Return a NamePlan with its index arrays as int64."""
+    return NamePlan(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
+                    bool(whole_world))
+
+
+def joint_sample(q: npt.ArrayLike, root: npt.ArrayLike, quat: npt.ArrayLike) -> JointSample:
+    """Return a JointSample of new C float64 arrays with the values given."""
+    return JointSample(floats(q).copy(), floats(root).copy(), floats(quat).copy())
+
+
+def steady_intake(slot: 'CrowdSlot', plan: NamePlan | None = None,
+                  last: 'tuple | None' = None, clock: tuple = (0, 1, 0),
+                  limits: tuple = (0.0, 0.0, 0.0)) -> SteadyIntake:
     """Return the SteadyIntake of ``slot``; without ``plan`` and ``last``, unarmed.
 
-    ``plan``: (joint_from, joint_to, world_from, world_to, whole_world), as
-    InputParser.plan's; ``last``: (q, root, quaternion) of the last sample.
+    ``last``: (q, root, quaternion) of the last sample.
     """
     q = slot.q_a.shape[0]
-    joint_from, joint_to, world_from, world_to, whole = plan or ((), (), (), (), False)
-    last_q, last_root, last_quat = last or (np.zeros(q), np.eye(4), np.zeros(4))
-    return SteadyIntake(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
-                        bool(whole), floats(last_q).copy(), floats(last_root).copy(),
-                        floats(last_quat).copy(), np.zeros(q), np.eye(4), np.zeros(4),
+    last = last or (np.zeros(q), np.eye(4), np.zeros(4))
+    return SteadyIntake(plan or name_plan(), joint_sample(*last),
+                        joint_sample(np.zeros(q), np.eye(4), np.zeros(4)),
                         ints(clock).copy(), floats(limits).copy(),
                         (slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),
                         slot.clock, slot.out.stats)
 
 
 class CrowdSlot(NamedTuple):
-    """One character of a crowd as crowd_kernel.advance_crowd takes it, kept between inputs.
+    """One character of a crowd as physics.crowd.advance_crowd takes it, kept between inputs.
 
     Its state arrays are the simulation's own, moved in place; each input writes its two
     samples into the ``q_a`` .. ``pos_b`` arrays and its clock in place, so the slot is typed
@@ -311,65 +362,6 @@ class Scene(NamedTuple):
     hood_p: np.ndarray
     layer_pos: np.ndarray
     layer_tips: np.ndarray
-
-
-def skeleton_model(skeleton: 'Skeleton') -> SkeletonModel:
-    """Return the kinematic arrays of a core.skeleton.Skeleton."""
-    return SkeletonModel(floats(skeleton.origin), floats(skeleton.axis), ints(skeleton.kind),
-                         ints(skeleton.var), floats(skeleton.mult), floats(skeleton.offset),
-                         ints(skeleton.parent))
-
-
-def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
-    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
-    from .bone_layer import DOWN
-    if layer is None:
-        return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
-                          floats(np.zeros((0, 3, 3))),
-                          0, floats(np.zeros((0, 3))), ints([]), floats(np.zeros((0, 3))),
-                          floats([]), floats([]), floats(DOWN), floats([0.0, 1.0, 0.0]), 0.0)
-    s, p = layer.sleeves, layer.pads
-    return LayerModel(
-        ints([x.link for x in s]), ints([x.end_link for x in s]),
-        floats(np.array([x.axis for x in s]).reshape(-1, 3)), floats([x.length for x in s]),
-        floats([x.twist_share for x in s]),
-        floats(np.array([x.rest for x in s]).reshape(-1, 3, 3)), int(layer.upper_link if p else 0),
-        floats(np.array([x.pivot for x in p]).reshape(-1, 3)), ints([x.aim_link for x in p]),
-        floats(np.array([x.aim for x in p]).reshape(-1, 3)), floats([x.length for x in p]),
-        floats([x.below_length for x in p]), floats(layer.down), floats(layer.side),
-        float(layer.rest_gap))
-
-
-def cloth_model(rig: 'Rig') -> ClothModel:
-    """Return a core.rig.Rig's cloth, pins, references and hood."""
-    pinned_a, pinned_b = ~rig.free[rig.con_a], ~rig.free[rig.con_b]
-    held, top_row = rig.horiz & ~(pinned_a & pinned_b), rig.horiz & pinned_a & pinned_b
-    # Row by row, as the hard pass walks them (kernel.hard_pass_with_strain_limit).
-    held = np.flatnonzero(held)[np.argsort(rig.con_a[held] // rig.cols, kind='stable')]
-    return ClothModel(
-        int(rig.pin_link), floats(rig.pin_local), ints(rig.reference_link),
-        floats(rig.reference_local), ints(rig.pin_below), floats(rig.pin_below_local),
-        floats(rig.pin_weight), flags(rig.free), ints(rig.con_a), ints(rig.con_b),
-        floats(rig.con_rest), ints(rig.vert_a), ints(rig.vert_b), floats(rig.vert_rest),
-        ints(rig.con_a[held]), ints(rig.con_b[held]), floats(rig.con_rest[held]),
-        ints(rig.con_a[top_row]), floats(rig.con_rest[top_row]), ints(rig.tether_anchor),
-        floats(rig.tether_length), int(rig.hood.link),
-        floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side), floats(rig.up))
-
-
-def collider_model(rig: 'Rig') -> ColliderModel:
-    """Return a core.rig.Rig's colliders in their links' frames."""
-    return ColliderModel(
-        ints(rig.collider_links), floats(rig.collider_centers), floats(rig.collider_rotations),
-        floats(rig.collider_radii), ints(rig.capsule_links), floats(rig.capsule_ends),
-        floats(rig.capsule_radii), ints(rig.plane_links), floats(rig.plane_points),
-        floats(rig.plane_normals))
-
-
-def model_of(skeleton: 'Skeleton', rig: 'Rig') -> Model:
-    """Return the fixed bundle of a skeleton and the rig fitted to it."""
-    return Model(skeleton.model, rig.layer.model if rig.layer else layer_model(), cloth_model(rig),
-                 collider_model(rig))
 
 
 def posed_like(colliders: ColliderModel, n: int) -> Posed:

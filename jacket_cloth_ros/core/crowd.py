@@ -2,12 +2,12 @@
 """Many simulations stepped together: one compiled call per round of inputs, in parallel.
 
 Each simulation prepares its input in Python as it does alone (JacketSimulation.prepare);
-the steps of all of them then run in crowd_kernel.advance_crowd, spread over numba's threads;
+the steps of all of them then run in crowd_steps.advance_crowd, spread over numba's threads;
 each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
 
 A character whose last input went that way without a warning or reset is armed: its next
 inputs are checked and loaded for all such characters in one compiled call
-(crowd_kernel.prepare_steady), which takes only what prepare would step without a word and
+(crowd_steps.prepare_steady), which takes only what prepare would step without a word and
 leaves anything else (a new name list, a stamp gap, a teleport, a NaN, a viewer, ...) to
 prepare. The Python per input was most of a crowd character's cost (docs/crowd.md).
 """
@@ -21,10 +21,10 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from . import crowd_kernel
-from .bundles import CrowdSlot, StepOutput, ints, steady_intake
+from .bundles import CrowdSlot, JointSample, StepOutput, ints, steady_intake
+from .compiled import FixedTypes
 from .inputs import Sample
-from .kernel_cache import FixedTypes
+from .physics import crowd as crowd_steps
 from .simulation import Bones, StepJob, StepReport
 
 # GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
@@ -66,14 +66,14 @@ class CrowdSteps:
         self._mine = []             # the same slots, read from Python (the typed list boxes)
         self._intakes = None                # each slot's SteadyIntake (a typed list)
         self._my_intakes = []               # the same, read from Python
-        # Writes into the typed lists (crowd_kernel.put), rare: each checks the item's type,
+        # Writes into the typed lists (crowd_steps.put), rare: each checks the item's type,
         # as numba's typed.List did, so that an item of another type is refused, not misread.
-        self._put_slot = FixedTypes(crowd_kernel.put, check=True)
-        self._put_intake = FixedTypes(crowd_kernel.put, check=True)
+        self._put_slot = FixedTypes(crowd_steps.put, check=True)
+        self._put_intake = FixedTypes(crowd_steps.put, check=True)
         self._keys = []
         self._call = None
-        self._load = FixedTypes(crowd_kernel.load_motion)
-        self._steady = FixedTypes(crowd_kernel.prepare_steady)
+        self._load = FixedTypes(crowd_steps.load_motion)
+        self._steady = FixedTypes(crowd_steps.prepare_steady)
         self._armed = []            # per simulation: what its intake was armed with, or None
         self.calls = 0              # compiled calls made (one per round of inputs)
         self.steady_inputs = 0      # inputs the compiled intake took
@@ -88,14 +88,14 @@ class CrowdSteps:
         self._set_slot(index, slot)
         self._set_intake(index, steady_intake(slot))
         if self._call is None:      # typed once: every slot has the same types
-            self._call = FixedTypes(crowd_kernel.advance_crowd)
+            self._call = FixedTypes(crowd_steps.advance_crowd)
             # Both loaded now, not on the first inputs: that stalled the first batch by
             # seconds and the first steady input by more than a step.
             none = np.zeros(0, dtype=np.int64)
             self._call(self._slots, none, none)
             self._steady(self._intakes, none, none, np.zeros(0), np.zeros(1, dtype=np.int64),
                          np.zeros(0, dtype=np.bool_))
-            self._set_slot(index, slot)         # crowd_kernel.put loaded now too
+            self._set_slot(index, slot)         # crowd_steps.put loaded now too
             self._set_intake(index, self._my_intakes[index])
         return index
 
@@ -186,10 +186,9 @@ class CrowdSteps:
         """Return the report and job prepare would have made of an input steady_input loaded."""
         sim, slot = self.sims[index], self._mine[index]
         sim.ready_bones = None
-        sample = Sample(stamp, slot.q_b.copy(), self._my_intakes[index].last_root.copy(),
+        sample = Sample(stamp, slot.q_b.copy(), self._my_intakes[index].last.root.copy(),
                         slot.quat_b.copy(), [])
-        parser = sim.parser
-        parser.last_q, parser.last_root, parser.last_quat = sample.q, sample.root, sample.root_quat
+        sim.parser.last = JointSample(sample.q, sample.root, sample.root_quat)
         clock = slot.clock
         return StepReport(stamp), StepJob(sample, int(clock[4]), sim.last, int(clock[2]),
                                           sim.dt_ns, sim.tuning)
@@ -212,9 +211,9 @@ class CrowdSteps:
         if arm is not None:             # steady_input moved its intake on itself
             self._armed[index] = arm[:3] + (sim.last,)
             return
-        plan, last, p = sim.parser.plan(names), sim.last, sim.params
+        (plan, _), last, p = sim.parser.plan(names), sim.last, sim.params
         self._set_intake(index, steady_intake(
-            self._mine[index], plan[:5], (last.q, last.root, last.root_quat),
+            self._mine[index], plan, (last.q, last.root, last.root_quat),
             (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
             (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
         self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)
@@ -223,7 +222,7 @@ class CrowdSteps:
             loaded: frozenset = frozenset()) -> list[tuple[StepOutput, int]]:
         """Run each (simulation index, prepared job) in one call; returns (output, status) each.
 
-        The status is crowd_kernel's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
+        The status is crowd_steps's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
         one job per simulation; ``loaded``: the simulations whose job :meth:`prepare_steady`
         loaded. Each output is that simulation's own arrays, written again by its next job:
         JacketSimulation.complete takes them at once.
@@ -240,10 +239,10 @@ class CrowdSteps:
                 slot = slot._replace(tuning=job.tuning)
                 self._set_slot(index, slot)
             a, b = job.start, job.sample
-            self._load(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
-                       slot.clock, slot.out.stats, a.q, b.q, a.root_quat, b.root_quat, a.root,
-                       b.root, a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns,
-                       job.steps)
+            self._load((slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),
+                       slot.clock, slot.out.stats, JointSample(a.q, a.root, a.root_quat),
+                       JointSample(b.q, b.root, b.root_quat),
+                       (a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns, job.steps))
             active[j] = index
         ran = np.zeros(len(jobs), dtype=np.int64)
         numba.set_num_threads(self.threads)
@@ -267,10 +266,10 @@ class CrowdSteps:
 def _put(items, mine, put, index, item):
     """Set ``item`` at ``index`` of a typed list and of its Python mirror (or append it).
 
-    Returns the typed list, made by crowd_kernel.listed for the first item (``items`` None).
+    Returns the typed list, made by crowd_steps.listed for the first item (``items`` None).
     """
     if items is None:
-        items = crowd_kernel.listed(item)
+        items = crowd_steps.listed(item)
     else:
         put(items, index, item)
     if index == len(mine):
@@ -313,9 +312,9 @@ def stepped(steps: CrowdSteps,
         results = steps.run([(index, job) for _, index, job in jobs], loaded)
         for (k, index, job), (out, status) in zip(jobs, results):
             sim = sims[index]
-            sim.complete(reports[k], job, out, status != crowd_kernel.STEPS_FAILED)
+            sim.complete(reports[k], job, out, status != crowd_steps.STEPS_FAILED)
             if not reports[k].reset:        # the bones the call made are the state's
-                sim.ready_bones = steps.bones(index, status == crowd_kernel.BONES_FINITE)
+                sim.ready_bones = steps.bones(index, status == crowd_steps.BONES_FINITE)
             steps.settle(index, inputs[k][2], reports[k])
         cost = time.perf_counter_ns() - started
         for k in this:

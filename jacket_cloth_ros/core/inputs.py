@@ -15,14 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from .kernel_cache import njit
-from .step_kernel import quat_matrix
+from .bundles import JointSample, NamePlan, name_plan
+from .physics.sampling import NON_FINITE_POSITION, ZERO_QUATERNION, fill_sample
 
 if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
-FILLED, NON_FINITE_POSITION, ZERO_QUATERNION = range(3)    # what fill_sample found
 
 
 class InputRejected(ValueError):
@@ -48,19 +47,19 @@ class InputParser:
     def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
-        self.last_q = np.zeros(len(skeleton.joint_names))
-        self.last_root, self.last_quat = np.eye(4), np.array([0.0, 0.0, 0.0, 1.0])
+        # The last sample: joints and a world pose that a message leaves out keep these.
+        self.last = JointSample(np.zeros(len(skeleton.joint_names)), np.eye(4),
+                                np.array([0.0, 0.0, 0.0, 1.0]))
 
     def set_world_joint(self, name: str) -> None:
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
 
-    def plan(self, names: tuple[str, ...]) -> tuple:
+    def plan(self, names: tuple[str, ...]) -> tuple[NamePlan, list]:
         """Return where each name of a message goes, and the warnings its name list earns.
 
-        (joint_from, joint_to, world_from, world_to, whole_world, warnings), worked out once
-        per distinct name list (a publisher sends the same list every time).
+        Worked out once per distinct name list (a publisher sends the same list every time).
         """
         plan = self._plans.get(names)
         if plan is not None:
@@ -89,9 +88,8 @@ class InputParser:
         if 0 < world < len(WORLD_VARIABLES):
             warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
                              'keeping the last world pose'))
-        plan = (np.array(joint_from, dtype=np.int64), np.array(joint_to, dtype=np.int64),
-                np.array(world_from, dtype=np.int64), np.array(world_to, dtype=np.int64),
-                world == len(WORLD_VARIABLES), warnings)
+        plan = (name_plan(joint_from, joint_to, world_from, world_to,
+                          world == len(WORLD_VARIABLES)), warnings)
         if len(self._plans) > 16:           # a publisher that changes its list every time
             self._plans.clear()
         self._plans[names] = plan
@@ -105,10 +103,9 @@ class InputParser:
         if len(names) != len(positions):
             raise InputRejected('length', f'JointState has {len(names)} names but '
                                 f'{len(positions)} positions: message dropped')
-        joint_from, joint_to, world_from, world_to, whole_world, warnings = self.plan(names)
-        q, root, quat = np.empty_like(self.last_q), np.empty((4, 4)), np.empty(4)
-        found = fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world,
-                            self.last_q, self.last_root, self.last_quat, q, root, quat)
+        plan, warnings = self.plan(names)
+        new = JointSample(np.empty_like(self.last.q), np.empty((4, 4)), np.empty(4))
+        found = fill_sample(positions, plan, self.last, new)
         if found == NON_FINITE_POSITION:
             bad = [n for n, p in zip(names, positions) if not np.isfinite(p)]
             raise InputRejected('nonfinite', f'non-finite position for {", ".join(bad[:5])}: '
@@ -116,57 +113,5 @@ class InputParser:
         if found == ZERO_QUATERNION:
             raise InputRejected('world', f'{self.world_joint} rotation is a zero '
                                 'quaternion: message dropped')
-        self.last_q, self.last_root, self.last_quat = q, root, quat
-        return Sample(stamp_ns, q, root, quat, list(warnings))
-
-
-@njit(cache=True)
-def fill_sample(positions, joint_from, joint_to, world_from, world_to, whole_world, last_q,
-                last_root, last_quat, q, root, quat):
-    """Fill a sample's joint values ``q``, root pose ``root`` and unit quaternion ``quat``.
-
-    From one message's positions by its plan; joints and a world pose it leaves out keep their
-    last values. Compiled: in numpy it was a visible share of every input.
-    """
-    for k in range(positions.shape[0]):
-        if not np.isfinite(positions[k]):
-            return NON_FINITE_POSITION
-    q[:] = last_q
-    for k in range(joint_from.shape[0]):
-        q[joint_to[k]] = positions[joint_from[k]]        # a repeated name: the last one counts
-    if not whole_world:
-        root[:] = last_root
-        quat[:] = last_quat
-        return FILLED
-    world = np.empty(7)
-    for k in range(world_from.shape[0]):
-        world[world_to[k]] = positions[world_from[k]]
-    # Scaled by the largest component: squares of 1e200 overflow and those of 1e-200 vanish.
-    big = max(abs(world[3]), abs(world[4]), abs(world[5]), abs(world[6]))
-    if big < 1e-6:
-        return ZERO_QUATERNION
-    norm = big * np.sqrt((world[3] / big) ** 2 + (world[4] / big) ** 2 + (world[5] / big) ** 2
-                         + (world[6] / big) ** 2)
-    for k in range(4):
-        quat[k] = world[3 + k] / norm
-    root[:] = 0.0
-    root[3, 3] = 1.0
-    quat_matrix(quat, root)
-    root[:3, 3] = world[:3]
-    return FILLED
-
-
-@njit(cache=True)
-def root_jump(root_a, root_b, quat_a, quat_b):
-    """How far (m) and through what angle (degrees) the root moved from sample a to b.
-
-    The turn between unit quaternions is 2 acos |q_a . q_b| (q and -q: the same rotation).
-    Compiled: in numpy it cost a visible share of every input, more so in a node that
-    sleeps between inputs.
-    """
-    d0 = root_b[0, 3] - root_a[0, 3]
-    d1 = root_b[1, 3] - root_a[1, 3]
-    d2 = root_b[2, 3] - root_a[2, 3]
-    dot = abs(quat_a[0] * quat_b[0] + quat_a[1] * quat_b[1] + quat_a[2] * quat_b[2]
-              + quat_a[3] * quat_b[3])
-    return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2), np.degrees(2.0 * np.arccos(min(1.0, dot)))
+        self.last = new
+        return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings))

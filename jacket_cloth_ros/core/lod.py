@@ -12,7 +12,7 @@ Three levels by the viewer's distance to the character's root (``lod_distances``
 
 A change to or from level 2 blends over ``lod_blend_s``: each step's cloth is the simulated one
 moved a share of the way to the riding one, the share going from ``Tuning.skin_from`` to
-``skin_to`` over one input's steps (``step_kernel.advance``), so nothing pops. A level
+``skin_to`` over one input's steps (``physics.step.advance``), so nothing pops. A level
 boundary is left only past it by ``HYSTERESIS``, so a viewer standing on one does not flicker.
 The viewer is an input of the simulation (``JacketSimulation.set_viewer``), given in the world
 frame, so a replay that feeds the same viewer positions reproduces the same steps.

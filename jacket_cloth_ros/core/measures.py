@@ -10,9 +10,10 @@ from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
 
+from .bundles import Colliders
+
 if TYPE_CHECKING:           # for the annotations only
     from .rig import Rig
-    from .simulation import Colliders
 
 
 SURFACE = 1e-6         # m: depths below this are rounding, the vertex is on the surface
@@ -44,7 +45,7 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
                  labels: Sequence[str]) -> Worst:
     """Find the deepest free vertex inside any collider (m), with the collider's label.
 
-    ``colliders``: simulation.Colliders in the frame of ``x``; ``labels``: one name per
+    ``colliders``: bundles.Colliders in the frame of ``x``; ``labels``: one name per
     ellipsoid, capsule and plane, in that order. Depth is the distance to the surface point
     the push-out would move the vertex to.
     """
@@ -83,5 +84,5 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
 
 
 def collider_labels(rig: 'Rig') -> list:
-    """Return the rig's name of each collider, in the order of simulation.Colliders."""
+    """Return the rig's name of each collider, in the order of bundles.Colliders."""
     return [c.name for c in (*rig.colliders, *rig.capsules, *rig.planes)]

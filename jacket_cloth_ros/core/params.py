@@ -12,8 +12,8 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from .kernel import Solver, StretchLimit
-from .step_kernel import gust_scale
+from .physics.cloth import Solver, StretchLimit
+from .physics.step import gust_scale
 
 
 def _param(default, doc, lo=None, hi=None, choices=None):

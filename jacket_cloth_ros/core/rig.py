@@ -17,7 +17,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from .bone_layer import BoneLayer
+from .bone_layer import BoneLayer, layer_model
+from .bundles import ClothModel, ColliderModel, Model, flags, floats, ints
 from .config import ConfigError, Section, load_yaml, shipped, shown
 from .transforms import apply_transform, invert_transform, rpy_matrix
 
@@ -426,3 +427,35 @@ def _collider_entries(top, skeleton, where):
 def load_rig(skeleton: 'Skeleton', path: str | None = None) -> Rig:
     path = path or shipped('jacket_rig.yaml')
     return Rig(load_yaml(path), skeleton, where=path)
+
+
+def cloth_model(rig: Rig) -> ClothModel:
+    """Return a core.rig.Rig's cloth, pins, references and hood."""
+    pinned_a, pinned_b = ~rig.free[rig.con_a], ~rig.free[rig.con_b]
+    held, top_row = rig.horiz & ~(pinned_a & pinned_b), rig.horiz & pinned_a & pinned_b
+    # Row by row, as the hard pass walks them (physics.cloth.hard_pass_with_strain_limit).
+    held = np.flatnonzero(held)[np.argsort(rig.con_a[held] // rig.cols, kind='stable')]
+    return ClothModel(
+        int(rig.pin_link), floats(rig.pin_local), ints(rig.reference_link),
+        floats(rig.reference_local), ints(rig.pin_below), floats(rig.pin_below_local),
+        floats(rig.pin_weight), flags(rig.free), ints(rig.con_a), ints(rig.con_b),
+        floats(rig.con_rest), ints(rig.vert_a), ints(rig.vert_b), floats(rig.vert_rest),
+        ints(rig.con_a[held]), ints(rig.con_b[held]), floats(rig.con_rest[held]),
+        ints(rig.con_a[top_row]), floats(rig.con_rest[top_row]), ints(rig.tether_anchor),
+        floats(rig.tether_length), int(rig.hood.link),
+        floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side), floats(rig.up))
+
+
+def collider_model(rig: Rig) -> ColliderModel:
+    """Return a core.rig.Rig's colliders in their links' frames."""
+    return ColliderModel(
+        ints(rig.collider_links), floats(rig.collider_centers), floats(rig.collider_rotations),
+        floats(rig.collider_radii), ints(rig.capsule_links), floats(rig.capsule_ends),
+        floats(rig.capsule_radii), ints(rig.plane_links), floats(rig.plane_points),
+        floats(rig.plane_normals))
+
+
+def model_of(skeleton: 'Skeleton', rig: Rig) -> Model:
+    """Return the fixed bundle of a skeleton and the rig fitted to it."""
+    return Model(skeleton.model, rig.layer.model if rig.layer else layer_model(), cloth_model(rig),
+                 collider_model(rig))

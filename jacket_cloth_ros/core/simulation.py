@@ -19,15 +19,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from . import kernel, pose_kernel, step_kernel
 from .bone_layer import LayerPose
 from .bundles import (
-    ClothState, Motion, StepControl, StepOutput, Tuning, flags, floats, model_of, posed_like)
-from .inputs import InputParser, InputRejected, Sample, root_jump
-from .kernel_cache import FixedTypes
+    ClothState, Colliders, Motion, StepControl, StepOutput, Tuning, copied, floats, posed_like)
+from .compiled import FixedTypes
+from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
 from .measures import edge_strain
 from .params import SimParams
+from .physics import cloth, colliders, hood, pose, step
+from .physics.sampling import root_jump
+from .rig import model_of
 
 if TYPE_CHECKING:           # for the annotations only
     from .fabric import Fabric
@@ -50,12 +52,12 @@ AUTO_SWEEP_SHARE = 0.03
 def per_step(share: npt.ArrayLike, exponent: float) -> float | np.ndarray:
     """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
 
-    The compiled step's formula: step_kernel.lost_per.
+    The compiled step's formula: physics.step.lost_per.
     """
     if np.ndim(share) == 0:
-        return step_kernel.lost_per(float(share), float(exponent))
+        return step.lost_per(float(share), float(exponent))
     out = np.empty(np.shape(share))
-    step_kernel.lost_per_each(floats(share), float(exponent), out)
+    step.lost_per_each(floats(share), float(exponent), out)
     return out
 
 
@@ -91,18 +93,13 @@ class Bones:
         return self.poses[:, 3:]
 
 
-@dataclass
-class Colliders:
-    """All colliders in the simulation frame at one step."""
+@dataclass(frozen=True, slots=True)
+class BoneSet:
+    """Every bone of a rig as published: names, parent links, and the M9 grid bones' places."""
 
-    centers: np.ndarray          # ellipsoids (M10): (E,3) centres, (E,3,3) axes, (E,3) radii
-    axes: np.ndarray
-    radii: np.ndarray
-    capsule_a: np.ndarray        # capsules: (K,3) segment ends, (K,) radii
-    capsule_b: np.ndarray
-    capsule_radii: np.ndarray
-    plane_points: np.ndarray     # planes: (P,3) a point and the unit normal
-    plane_normals: np.ndarray
+    names: list                # M9 cloth bones, M8 hood bone, M1/M2 layer bones
+    parents: list              # each one's parent link
+    grid: np.ndarray           # (G,2) int64: the M9 bones' (row, column) on the cloth grid
 
 
 @dataclass(slots=True)
@@ -118,7 +115,7 @@ class StepJob:
 
     @property
     def motion(self) -> Motion:
-        """The steps as step_kernel.advance takes them (a crowd loads them in place instead)."""
+        """The steps as physics.step.advance takes them (a crowd loads them in place instead)."""
         return motion_between(self.start, self.sample, self.t_sim, self.dt_ns, self.steps)
 
 
@@ -148,7 +145,13 @@ class StepReport:
 
 
 class JacketSimulation:
-    """Jacket cloth + hood pendulum for one skeleton and rig."""
+    """Jacket cloth + hood pendulum for one skeleton and rig.
+
+    As Warp's sim and MuJoCo keep a model apart from its data, the simulation holds its
+    skeleton, rig and their compiled ``model`` (fixed), the fabric's and parameters' values
+    as ``tuning`` (rebuilt on a live change) and the moving ``state`` (cloth, hood, root),
+    each once: ``x``, ``hood_p`` and the rest are views of ``state``.
+    """
 
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabric: 'Fabric',
                  params: SimParams = SimParams(), world_joint: str = 'world_joint'):
@@ -157,65 +160,86 @@ class JacketSimulation:
         self.parser = InputParser(skeleton, world_joint)
         self.fabric = fabric
         self.params = params
-        self._apply_fabric()
-        n = rig.n
-        self.x = rig.rest.copy()
-        self.xp = rig.rest.copy()
-        self.contact = np.zeros(n, dtype=np.bool_)
-        self.hood_p = np.zeros(3)
-        self.hood_pp = np.zeros(3)
+        self.model = model_of(skeleton, rig)
+        self.state = ClothState(floats(rig.rest).copy(), floats(rig.rest).copy(),
+                                np.zeros(rig.n, dtype=np.bool_), np.zeros(3), np.zeros(3),
+                                np.eye(4), np.zeros(len(rig.con_a)), np.zeros(1, dtype=np.bool_))
+        # Colliders and M11 references where the last step ended: substeps start from them.
+        self._before = posed_like(self.model.colliders, rig.n)
+        self.tuning = self._tuning()
         self.links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+        self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
         self.last = None          # last accepted Sample
         self.t_sim = None         # ns of the last step
-        self.root = np.eye(4)     # world pose of the root at the last step
         self.resets = 0
         self.steps_total = 0
         self.overruns = 0
         # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
         # new input or reset drops them.
         self.ready_bones = None
-        self._bone_rc = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
-        self._layer = None        # the full M1/M2 pose of self.links, solved when asked for
-        self.model = model_of(skeleton, rig)
-        # The horizontals edge_strains measures, picked once: every crowd character's
-        # diagnostics ask for them each second.
-        h = rig.horiz & (rig.free[rig.con_a] | rig.free[rig.con_b])
-        self._horizontal_edges = (rig.con_a[h], rig.con_b[h], rig.con_rest[h])
         self.lod = LevelOfDetail()
-        # Colliders and M11 references where the last step ended: substeps start from them.
-        self._started = np.zeros(1, dtype=np.bool_)
-        self._before = posed_like(self.model.colliders, n)
-        self._advance_kernel = FixedTypes(step_kernel.advance)
-        self._cloth_kernel = FixedTypes(kernel.cloth_step)
-        layer_names = rig.layer.names if rig.layer else []
-        layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
-        root = skeleton.link_names[0]
-        # M9 cloth bones, M8 hood bone, M1/M2 layer bones: every bone of the rig.
-        self.bone_names = ([f'jacket_r{r:02d}_c{c:02d}' for r, c in self._bone_rc] + ['hood']
-                           + layer_names)
-        self.bone_parents = ([root] * len(self._bone_rc) + [skeleton.link_names[rig.hood.link]]
-                             + layer_parents)
+        self.bone_set = _bone_set(skeleton, rig)
+        self._advance_kernel = FixedTypes(step.advance)
         self._warm_up()
+
+    # -- the state, held once in ``state`` --------------------------------------------------
+    x = property(lambda self: self.state.x, lambda self, v: _put(self.state.x, v),
+                 doc='(N,3) the cloth, simulation frame')
+    xp = property(lambda self: self.state.xp, lambda self, v: _put(self.state.xp, v),
+                  doc='(N,3) its previous positions (Verlet)')
+    contact = property(lambda self: self.state.contact,
+                       lambda self, v: _put(self.state.contact, v),
+                       doc='(N,) bool: touched the body in the last step (M15)')
+    hood_p = property(lambda self: self.state.hood_p, lambda self, v: _put(self.state.hood_p, v),
+                      doc='(3,) the hood particle (M8)')
+    hood_pp = property(lambda self: self.state.hood_pp,
+                       lambda self, v: _put(self.state.hood_pp, v),
+                       doc='(3,) its previous position')
+    root = property(lambda self: self.state.root, lambda self, v: _put(self.state.root, v),
+                    doc='(4,4) the root\'s world pose at the last step')
+
+    @property
+    def dt_ns(self) -> int:
+        """The fixed step (ns)."""
+        return int(round(1e9 / self.params.sim_rate))
+
+    @property
+    def bone_names(self) -> list:
+        """Every bone's name, as published (BoneSet.names)."""
+        return self.bone_set.names
+
+    @property
+    def bone_parents(self) -> list:
+        """Every bone's parent link (BoneSet.parents)."""
+        return self.bone_set.parents
 
     def _tuning(self):
         """Return the fabric's and parameters' values as the compiled step takes them."""
-        p, f = self.params, self.fabric
+        p, f, rig = self.params, self.fabric, self.rig
+        edge, region = rig.edge, rig.region_scale          # M13 edges, then the rig's regions
+        damping = np.minimum(1.0, np.where(edge, f.edge_damping, f.damping)
+                             * region['damping_scale'])                          # M4, M13
+        world_share = np.minimum(1.0, np.where(edge, f.edge_world_share, f.world_share)
+                                 * region['world_share_scale'])                  # M14, M13
+        wind_scale = np.where(edge, f.edge_wind_scale, f.wind_scale) * region['wind_scale']
+        max_distance = (rig.max_distance * np.where(edge, f.edge_max_distance_scale, 1.0)
+                        * region['max_distance_scale'])                          # M11, M13
+        stiffness = np.where(rig.con_group == 0, f.stretch_stiffness,
+                             f.shear_bend_stiffness)                             # M5
         return Tuning(
-            floats(self.stiffness), int(f.iterations), floats(self.compliance),
-            floats(self.max_distance), int(p.stretch_limit_mode),
+            floats(stiffness), int(f.iterations), floats(xpbd_compliance(stiffness, f.iterations)),
+            floats(max_distance), int(p.stretch_limit_mode),
             float(f.max_horizontal_stretch), int(p.solver_mode),
             int(p.substeps), float(p.quality_tolerance),
-            float(AUTO_SWEEP_SHARE * p.quality_tolerance), floats(self.damping),
+            float(AUTO_SWEEP_SHARE * p.quality_tolerance), floats(damping),
             float(f.contact_damping), float(f.hood_damping), float(DESIGN_RATE / p.sim_rate),
-            floats(self.world_share), float(f.world_share), floats(self.wind_scale),
+            floats(world_share), float(f.world_share), floats(wind_scale),
             float(f.wind_scale), float(p.gravity), floats(p.wind), float(p.wind_gust),
             float(p.wind_gust_period))
 
     def _warm_up(self):
         """Load (or compile) the kernels now, not on the first input, which would stall it."""
-        saved = (self.x.copy(), self.xp.copy(), self.contact.copy(), self.hood_p.copy(),
-                 self.hood_pp.copy(), self.root.copy(), self._lam.copy(), self.links,
-                 self._layer, self._started.copy(), [a.copy() for a in self._before])
+        saved = copied(self.state), copied(self._before), self.links, self._layer
         still = Sample(0, np.zeros(len(self.skeleton.joint_names)), np.eye(4),
                        np.array([0.0, 0.0, 0.0, 1.0]))
         # The first inputs also load the parser's, the reset's, the jump test's and the
@@ -228,39 +252,20 @@ class JacketSimulation:
         self.bones()
         self.t_sim = 0
         self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
-        (self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root, lam,
-         self.links, self._layer, started, frames) = saved
-        self._lam[:], self._started[:] = lam, started
-        for kept, was in zip(self._before, frames):
-            kept[:] = was
+        state, before, self.links, self._layer = saved
+        for kept, was in zip((*self.state, *self._before), (*state, *before)):
+            kept[...] = was
         self.t_sim = None
 
     # -- parameters -------------------------------------------------------------------------
     def set_fabric(self, fabric: 'Fabric') -> None:
         """Live change: new parameters act from the next step; the cloth is not reset."""
         self.fabric = fabric
-        self._apply_fabric()
+        self.tuning = self._tuning()
 
     def set_params(self, params: SimParams) -> None:
+        """Live change of the simulation's parameters, as set_fabric."""
         self.params = params
-        self._apply_fabric()
-
-    def _apply_fabric(self):
-        f, rig = self.fabric, self.rig
-        edge, region = rig.edge, rig.region_scale          # M13 edges, then the rig's regions
-        self.damping = np.minimum(1.0, np.where(edge, f.edge_damping, f.damping)
-                                  * region['damping_scale'])                     # M4, M13
-        self.world_share = np.minimum(1.0, np.where(edge, f.edge_world_share, f.world_share)
-                                      * region['world_share_scale'])             # M14, M13
-        self.wind_scale = (np.where(edge, f.edge_wind_scale, f.wind_scale)
-                           * region['wind_scale'])                               # M13
-        self.max_distance = (rig.max_distance * np.where(edge, f.edge_max_distance_scale, 1.0)
-                             * region['max_distance_scale'])                     # M11, M13
-        self.stiffness = np.where(rig.con_group == 0, f.stretch_stiffness,
-                                  f.shear_bend_stiffness)                        # M5
-        self.compliance = xpbd_compliance(self.stiffness, f.iterations)
-        self._lam = np.zeros(len(self.stiffness))
-        self.dt_ns = int(round(1e9 / self.params.sim_rate))
         self.tuning = self._tuning()
 
     # -- the skinned pose ---------------------------------------------------------------------
@@ -286,12 +291,11 @@ class JacketSimulation:
         rig = self.rig
         below = layer.below if layer is not None else _NO_BELOW
         top, ref = np.empty((rig.cols, 3)), np.empty((rig.n, 3))
-        pose_kernel.skinned_pose(links, self.model.cloth, below, top, ref)
-        kernel.hold_pinned_row(top, self.model.cloth, below.shape[0] > 0,
-                               self.fabric.max_horizontal_stretch)
+        pose.skinned_pose(links, self.model.cloth, below, top, ref)
+        cloth.hold_pinned_row(top, self.model.cloth, below.shape[0] > 0,
+                              self.fabric.max_horizontal_stretch)
         c = self._posed(links, self.root)       # M10: the pinned row outside the body
-        kernel.push_out_points(top, c.centers, c.axes, self.model.colliders.radii, c.cap_a,
-                               c.cap_b, self.model.colliders.capsule_radii, c.plane_p, c.plane_n)
+        colliders.push_out_points(top, colliders.posed_body(self.model.colliders, c))
         return top, ref
 
     @property
@@ -354,8 +358,8 @@ class JacketSimulation:
         """Do an input's work before its compiled steps; return the report and the steps to run.
 
         No steps (a refused input, a reset, no step due): the input is done and the job None.
-        Else run the job's motion through step_kernel.advance (alone ``job.motion``; a crowd
-        loads it into its slot, crowd_kernel.load_motion) and hand the outcome to
+        Else run the job's motion through physics.step.advance (alone ``job.motion``; a crowd
+        loads it into its slot, physics.crowd.load_motion) and hand the outcome to
         :meth:`complete`.
         """
         report = StepReport(stamp_ns)
@@ -406,14 +410,14 @@ class JacketSimulation:
         if ran:
             self._take_output(out)
             stats = out.stats
-            report.max_penetration = max(report.max_penetration, stats[step_kernel.DEEPEST])
-            report.limited_vertices += int(stats[step_kernel.LIMITED])
-            report.sweeps += int(stats[step_kernel.SWEEPS])
-            report.substeps += int(stats[step_kernel.SUBSTEPS])
+            report.max_penetration = max(report.max_penetration, stats[step.DEEPEST])
+            report.limited_vertices += int(stats[step.LIMITED])
+            report.sweeps += int(stats[step.SWEEPS])
+            report.substeps += int(stats[step.SUBSTEPS])
             report.steps = job.steps
             self.steps_total += job.steps
             self.last = job.sample
-            finite = not stats[step_kernel.NON_FINITE]
+            finite = not stats[step.NON_FINITE]
         if not finite:
             report.reset = 'non-finite cloth state'
             self._reset(job.sample)
@@ -442,12 +446,12 @@ class JacketSimulation:
         return ''
 
     def step_output(self) -> StepOutput:
-        """Return new arrays for what step_kernel.advance leaves (the last step's pose, stats)."""
+        """Return new arrays for what step.advance leaves (the last step's pose, stats)."""
         layer = self.rig.layer
         k = len(layer.names) if layer else 0
         return StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
                           np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
-                          np.zeros(step_kernel.STAT_SLOTS))
+                          np.zeros(step.STAT_SLOTS))
 
     def _take_output(self, out):
         """Take the last step's pose and layer bones as the steps left them in ``out``."""
@@ -468,26 +472,13 @@ class JacketSimulation:
         """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
 
         The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
-        and M8 (see step_kernel.advance). Returns its stats.
+        and M8 (see step.advance). Returns its stats.
         """
         out = self.step_output()
         self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
                                           motion_between(a, b, self.t_sim, self.dt_ns, n), out)
         self._take_output(out)
         return out.stats
-
-    @property
-    def state(self) -> ClothState:
-        """The cloth, hood and root as the compiled steps move them (the very arrays).
-
-        Each is made a C-ordered float64 (bool) array first, if a caller assigned another: the
-        compiled step reads them as the types it was first called with (FixedTypes).
-        """
-        self.x, self.xp, self.hood_p, self.hood_pp, self.root = (
-            floats(a) for a in (self.x, self.xp, self.hood_p, self.hood_pp, self.root))
-        self.contact = flags(self.contact)
-        return ClothState(self.x, self.xp, self.contact, self.hood_p, self.hood_pp, self.root,
-                          self._lam, self._started)
 
     def _cloth_step(self, links, root, ref, acc, damping, contact_damping, dt):
         """Run one kernel step of the current state at this skeleton pose, no substeps.
@@ -496,17 +487,17 @@ class JacketSimulation:
         substeps start from.
         """
         args = self.kernel_arguments(links, root, ref, acc, damping, contact_damping, dt)
-        out = self._cloth_kernel(*args)
+        out = cloth.cloth_step(*args)
         for kept, now in zip(self._before, args[-1]):
             kept[:] = now
-        self._started[0] = True
+        self.state.started[0] = True
         return out
 
     def kernel_arguments(self, links: np.ndarray | None = None, root: np.ndarray | None = None,
                          ref: np.ndarray | None = None, acc: np.ndarray | None = None,
                          damping: npt.ArrayLike | None = None,
                          contact_damping: float | None = None, dt: float | None = None) -> tuple:
-        """Return kernel.cloth_step's bundles for one step of the current state without substeps.
+        """Return cloth.cloth_step's bundles for one step of the current state, no substeps.
 
         By default at the current pose with the fabric's forces; the lab times the kernel on them.
         """
@@ -518,9 +509,10 @@ class JacketSimulation:
         if acc is None:
             world_to_local = root[:3, :3].T
             acc = (world_to_local @ (-p.gravity * self.rig.up)
-                   + self.wind_scale[:, None] * (world_to_local @ p.wind_at(self.t_sim or 0)))
+                   + self.tuning.wind_scale[:, None]
+                   * (world_to_local @ p.wind_at(self.t_sim or 0)))
         e = DESIGN_RATE / p.sim_rate
-        damping = per_step(self.damping, e) if damping is None else damping
+        damping = per_step(self.tuning.damping, e) if damping is None else damping
         if contact_damping is None:
             contact_damping = per_step(f.contact_damping, e)
         dt = self.dt_ns * 1e-9 if dt is None else dt
@@ -532,14 +524,14 @@ class JacketSimulation:
 
     def hood_step(self, links: np.ndarray, acc: np.ndarray, dt: float, damping: float) -> None:
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
-        step_kernel.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
-                              float(dt), float(damping))
+        hood.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
+                       float(dt), float(damping))
 
     def _posed(self, links, root, ref=None):
         """Colliders (and M11 references, zero if not given) in the simulation frame."""
         now = posed_like(self.model.colliders, self.rig.n)
-        pose_kernel.collider_poses(links, self.model.colliders, now)
-        step_kernel.plane_poses(links, root, self.model.colliders, now)
+        colliders.collider_poses(links, self.model.colliders, now)
+        colliders.plane_poses(links, root, self.model.colliders, now)
         if ref is not None:
             now.ref[:] = ref
         return now
@@ -550,8 +542,8 @@ class JacketSimulation:
         Planes fixed in the world (the floor) need the root's world pose ``root``.
         """
         c = self._posed(links, self.root if root is None else root)
-        return Colliders(c.centers, c.axes, self.rig.collider_radii, c.cap_a, c.cap_b,
-                         self.rig.capsule_radii, c.plane_p, c.plane_n)
+        return Colliders(c.centers, c.axes, floats(self.rig.collider_radii), c.cap_a, c.cap_b,
+                         floats(self.rig.capsule_radii), c.plane_p, c.plane_n)
 
     # -- outputs ------------------------------------------------------------------------------
     def bones(self) -> Bones:
@@ -564,14 +556,11 @@ class JacketSimulation:
         layer = self.layer
         n = len(self.bone_names)
         poses = np.empty((n, 7))
-        hood = self.rig.hood
         layer = _NO_LAYER_POSE if layer is None else layer
         try:
-            finite = pose_kernel.bone_poses(self.x, self.rig.cols, self._bone_rc, self.links,
-                                            hood.link, hood.pivot, hood.side, self.hood_p,
-                                            layer.parents,
-                                            layer.rotations, layer.positions, poses[:, :3],
-                                            poses[:, 3:])
+            finite = pose.bone_poses(self.x, self.hood_p, self.links, self.model.cloth,
+                                     self.bone_set.grid, layer.parents, layer.rotations,
+                                     layer.positions, poses)
         except ZeroDivisionError:           # a degenerate frame (numba raises, numpy gives NaN)
             finite = False
         return Bones(self.bone_names, self.bone_parents, poses, finite)
@@ -586,6 +575,22 @@ class JacketSimulation:
 
         The pinned top row (M6) is skinned, not simulated, so its own lengths are left out.
         """
-        rig, (a, b, rest) = self.rig, self._horizontal_edges
+        rig, c = self.rig, self.model.cloth      # its horizontals: those with a free end
         return (*edge_strain(self.x, rig.vert_a, rig.vert_b, rig.vert_rest),
-                *edge_strain(self.x, a, b, rest))
+                *edge_strain(self.x, c.horiz_a, c.horiz_b, c.horiz_rest))
+
+
+def _put(kept: np.ndarray, value: npt.ArrayLike) -> None:
+    """Write ``value`` into a state array in place: the state is held once, never replaced."""
+    kept[...] = value
+
+
+def _bone_set(skeleton: 'Skeleton', rig: 'Rig') -> BoneSet:
+    """Return every bone of ``rig``: M9 cloth bones, M8 hood bone, M1/M2 layer bones."""
+    grid = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
+    layer_names = rig.layer.names if rig.layer else []
+    layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
+    root = skeleton.link_names[0]
+    return BoneSet([f'jacket_r{r:02d}_c{c:02d}' for r, c in grid] + ['hood'] + layer_names,
+                   [root] * len(grid) + [skeleton.link_names[rig.hood.link]] + layer_parents,
+                   grid)

@@ -14,9 +14,9 @@ from xml.etree import ElementTree
 import numpy as np
 from urdf_parser_py import urdf
 
-from .bundles import floats, skeleton_model
+from .bundles import SkeletonModel, floats, ints
 from .config import MAX_COORDINATE, ConfigError, read_text, shipped
-from .pose_kernel import forward_kinematics
+from .physics.pose import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
 _MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
@@ -210,3 +210,10 @@ def skeleton_from(text: str, where: str) -> Skeleton:
 def load_skeleton(path: str) -> Skeleton:
     """Load the skeleton of a URDF file; errors name the file."""
     return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')
+
+
+def skeleton_model(skeleton: Skeleton) -> SkeletonModel:
+    """Return the kinematic arrays of a core.skeleton.Skeleton."""
+    return SkeletonModel(floats(skeleton.origin), floats(skeleton.axis), ints(skeleton.kind),
+                         ints(skeleton.var), floats(skeleton.mult), floats(skeleton.offset),
+                         ints(skeleton.parent))

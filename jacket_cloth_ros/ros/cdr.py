@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.kernel_cache import njit
+from ..core.compiled import njit
 
 if TYPE_CHECKING:           # for the annotations only: messages builds on this module
     from .messages import MarkerSpec

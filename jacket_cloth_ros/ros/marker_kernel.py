@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.bundles import Posed
-from ..core.kernel_cache import njit
-from ..core.pose_kernel import _transform_point, collider_poses, quat_from_matrix
-from ..core.step_kernel import plane_poses
+from ..core.compiled import njit
+from ..core.physics.colliders import collider_poses, plane_poses
+from ..core.physics.pose import _transform_point, quat_from_matrix
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig

@@ -10,7 +10,7 @@ import numpy as np
 from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import Scene, floats
-from ..core.kernel_cache import FixedTypes
+from ..core.compiled import FixedTypes
 
 if TYPE_CHECKING:           # for the annotations only
     from builtin_interfaces.msg import Time

@@ -29,7 +29,7 @@ from visualization_msgs.msg import MarkerArray
 
 from ..core.config import ConfigError, shipped
 from ..core.fabric import load_fabrics
-from ..core.kernel_cache import kernels_cached
+from .warm import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder

@@ -9,13 +9,28 @@ first start after an install (or an edit of a kernel file) spends that time befo
 import time
 
 from ..core.fabric import load_fabrics
-from ..core.kernel_cache import kernels_cached
+from ..core.physics import crowd as crowd_physics, step
 from ..core.rig import load_rig
 from ..core.skeleton import load_shipped_character
 from ..motion.clips import joint_state_content
 from . import cdr
 from .parameters import default_values
 from .pipeline import CrowdPipeline, SessionPipeline
+
+
+def kernels_cached(crowd_too: bool = True) -> bool:
+    """Tell whether numba's cache holds the compiled step for the kernel files as they are.
+
+    If not, the next simulation made compiles every kernel, which takes a while. With
+    ``crowd_too``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
+    """
+    wanted = (step.advance,)
+    if crowd_too:
+        wanted += (crowd_physics.advance_crowd, crowd_physics.prepare_steady)
+    try:
+        return all(bool(k._cache._cache_file._load_index()) for k in wanted)
+    except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
+        return False
 
 
 def warm_kernels(crowd: bool = True) -> tuple:

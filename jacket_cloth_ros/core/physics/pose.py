@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Compiled per-step pose work around the cloth step (numba): kinematics and bone frames.
+"""The skeleton's pose and the bones' frames (numba): kinematics, M1/M2 layer, skinning, M9.
 
 Why compiled: at the shipped rig's size each of these is a few dozen small numpy calls, and
 numpy's per-call overhead, not arithmetic, made them cost several times the cloth step itself
@@ -8,7 +8,7 @@ numpy's per-call overhead, not arithmetic, made them cost several times the clot
 
 import numpy as np
 
-from .kernel_cache import njit
+from ..compiled import njit
 
 FIXED, ROTATION, TRANSLATION = -1, 0, 1      # Skeleton.kind
 
@@ -122,20 +122,20 @@ def grid_bones(x, cols, bone_rc, positions, quaternions):
 
 
 @njit(cache=True)
-def bone_poses(x, cols, bone_rc, links, hood_link, hood_pivot, hood_side, hood_p, layer_parents,
-               layer_rot, layer_pos, positions, quaternions):
-    """Pose every bone relative to its parent link (see JacketSimulation.bones).
+def bone_poses(x, hood_p, links, cloth, bone_rc, layer_parents, layer_rot, layer_pos, poses):
+    """Pose every bone relative to its parent link into ``poses`` (B,7), as bones() gives them.
 
-    M9 grid bones in the root frame, then the M8 hood bone (y towards the body's left,
-    ``hood_side`` in its link's frame) and the M1/M2 layer bones on their links. Returns
-    whether every number is finite.
+    M9 grid bones of the bundles.ClothModel's grid in the root frame, then the M8 hood bone
+    (y towards the body's left, the hood's side in its link's frame) and the M1/M2 layer bones
+    on their links. Returns whether every number is finite.
     """
+    positions, quaternions = poses[:, :3], poses[:, 3:]
     n_grid = bone_rc.shape[0]
-    grid_bones(x, cols, bone_rc, positions[:n_grid], quaternions[:n_grid])
-    t = links[hood_link]
+    grid_bones(x, cloth.pin_local.shape[0], bone_rc, positions[:n_grid], quaternions[:n_grid])
+    t = links[cloth.hood_link]
     anchor, frame, local, side = np.empty(3), np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
-    _transform_point(t, hood_pivot, anchor)
-    _rotate(t, hood_side, side)
+    _transform_point(t, cloth.hood_pivot, anchor)
+    _rotate(t, cloth.hood_side, side)
     orthonormal_frame(hood_p - anchor, side, frame)
     _to_link(t, anchor, frame, positions[n_grid], local)
     quat_from_matrix(local, quaternions[n_grid])
@@ -287,26 +287,6 @@ def skinned_pose(links, cloth, below, top, ref):
 
 
 @njit(cache=True)
-def collider_poses(links, colliders, posed):
-    """Pose the M10 ellipsoids and capsule ends of a bundles.ColliderModel into a bundles.Posed.
-
-    Each on its link; an ellipsoid as its centre and its axes as columns.
-    """
-    links_of, centers_local, rotations_local = (colliders.links, colliders.centers,
-                                                colliders.rotations)
-    capsule_links, capsule_ends = colliders.capsule_links, colliders.capsule_ends
-    centers, axes, cap_a, cap_b = posed.centers, posed.axes, posed.cap_a, posed.cap_b
-    for e in range(centers.shape[0]):
-        t = links[links_of[e]]
-        _transform_point(t, centers_local[e], centers[e])
-        _matmul3(t[:3, :3], rotations_local[e], axes[e])
-    for k in range(cap_a.shape[0]):
-        t = links[capsule_links[k]]
-        _transform_point(t, capsule_ends[k, 0], cap_a[k])
-        _transform_point(t, capsule_ends[k, 1], cap_b[k])
-
-
-@njit(cache=True)
 def share_world_motion(delta, points, share):
     """M14: move each point by its share of the rigid move ``delta`` (4x4) of the frame."""
     moved = np.empty(3)
@@ -315,3 +295,52 @@ def share_world_motion(delta, points, share):
         s = share[i]
         for k in range(3):
             points[i, k] += s * (moved[k] - points[i, k])
+
+
+@njit(cache=True)
+def quat_slerp(q0, q1, t, out):
+    """As transforms.quat_slerp, into ``out``."""
+    d = q0[0] * q1[0] + q0[1] * q1[1] + q0[2] * q1[2] + q0[3] * q1[3]
+    sign = 1.0
+    if d < 0.0:
+        sign, d = -1.0, -d
+    if d > 0.9995:
+        for k in range(4):
+            out[k] = q0[k] + t * (sign * q1[k] - q0[k])
+        n = np.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
+        for k in range(4):
+            out[k] /= n
+        return
+    theta = np.arccos(d)
+    s = np.sin(theta)
+    a, b = np.sin((1 - t) * theta), np.sin(t * theta)
+    for k in range(4):
+        out[k] = (a * q0[k] + b * sign * q1[k]) / s
+
+
+@njit(cache=True)
+def quat_matrix(q, out):
+    """As transforms.quat_to_matrix (normalising), into the top-left 3x3 of ``out``."""
+    n = np.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    x, y, z, w = q[0] / n, q[1] / n, q[2] / n, q[3] / n
+    out[0, 0] = 1 - 2 * (y * y + z * z)
+    out[0, 1] = 2 * (x * y - z * w)
+    out[0, 2] = 2 * (x * z + y * w)
+    out[1, 0] = 2 * (x * y + z * w)
+    out[1, 1] = 1 - 2 * (x * x + z * z)
+    out[1, 2] = 2 * (y * z - x * w)
+    out[2, 0] = 2 * (x * z - y * w)
+    out[2, 1] = 2 * (y * z + x * w)
+    out[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def relative_move(new, old, delta):
+    """``delta`` = inverse(new) @ old for rigid 4x4 transforms: old local -> new local."""
+    delta[:] = 0.0
+    delta[3, 3] = 1.0
+    for r in range(3):
+        for c in range(3):
+            delta[r, c] = new[0, r] * old[0, c] + new[1, r] * old[1, c] + new[2, r] * old[2, c]
+        delta[r, 3] = (new[0, r] * (old[0, 3] - new[0, 3]) + new[1, r] * (old[1, 3] - new[1, 3])
+                       + new[2, r] * (old[2, 3] - new[2, 3]))

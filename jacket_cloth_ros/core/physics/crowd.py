@@ -1,7 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The steps of every character of a crowd with an input, in one compiled call, in parallel.
 
-Each character runs step_kernel.advance on its own bundles (core.bundles.CrowdSlot), as a
+Each character runs step.advance on its own bundles (core.bundles.CrowdSlot), as a
 character alone does, so its results are the same to the bit; numba's prange spreads the
 characters over the threads numba.set_num_threads allows. One call instead of one per
 character: the Python between calls, not the steps, was most of a small character's cost.
@@ -10,31 +10,34 @@ character: the Python between calls, not the steps, was most of a small characte
 from numba import prange
 from numba.typed import List
 
-from .bundles import Motion
-from .inputs import FILLED, fill_sample, root_jump
-from .kernel_cache import njit
-from .pose_kernel import bone_poses
-from .step_kernel import advance
+from ..bundles import Motion
+from ..compiled import njit
+from .pose import bone_poses
+from .sampling import FILLED, fill_sample, root_jump
+from .step import advance
 
 STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE = range(3)      # what advance_slot returns
 
 
 @njit(cache=True)
-def load_motion(q_a, q_b, quat_a, quat_b, pos_a, pos_b, clock, stats, a_q, b_q, a_quat, b_quat,
-                a_root, b_root, stamp_a, span, t_sim, dt_ns, steps):
+def load_motion(motion, clock, stats, a, b, timing):
     """Write one input's two samples and step clock into a slot's motion arrays, zero its stats.
 
+    ``motion``: the slot's (q_a, q_b, quat_a, quat_b, pos_a, pos_b); ``a``, ``b``: the two
+    bundles.JointSample; ``timing``: (stamp_a, span, t_sim, dt_ns, steps), into ``clock``.
     What simulation.motion_between gives a character alone, in one call: as numpy copies,
     one per array, they were the largest Python share of a crowd's character (docs/crowd.md).
     """
-    q_a[:] = a_q
-    q_b[:] = b_q
-    quat_a[:] = a_quat
-    quat_b[:] = b_quat
+    q_a, q_b, quat_a, quat_b, pos_a, pos_b = motion
+    q_a[:] = a.q
+    q_b[:] = b.q
+    quat_a[:] = a.quat
+    quat_b[:] = b.quat
     for k in range(3):
-        pos_a[k] = a_root[k, 3]
-        pos_b[k] = b_root[k, 3]
-    clock[0], clock[1], clock[2], clock[3], clock[4] = stamp_a, span, t_sim, dt_ns, steps
+        pos_a[k] = a.root[k, 3]
+        pos_b[k] = b.root[k, 3]
+    for k in range(5):
+        clock[k] = timing[k]
     stats[:] = 0.0
 
 
@@ -56,10 +59,8 @@ def advance_slot(slot):
         return STEPS_FAILED
     cloth, out, state, poses = slot.model.cloth, slot.out, slot.state, slot.bones
     try:
-        finite = bone_poses(state.x, cloth.pin_local.shape[0], slot.bone_rc, out.links,
-                            cloth.hood_link, cloth.hood_pivot, cloth.hood_side, state.hood_p,
-                            slot.layer_parents,
-                            out.layer_rot, out.layer_pos, poses[:, :3], poses[:, 3:])
+        finite = bone_poses(state.x, state.hood_p, out.links, cloth, slot.bone_rc,
+                            slot.layer_parents, out.layer_rot, out.layer_pos, poses)
     except Exception:  # noqa: BLE001 - a degenerate frame, as in JacketSimulation.bones
         finite = False
     return BONES_FINITE if finite else BONES_NOT_FINITE
@@ -94,30 +95,26 @@ def steady_input(intake, stamp, positions):
     """
     clock, limits, slot_clock = intake.clock, intake.limits, intake.slot_clock
     # Armed only on a plan without warnings: every name of the list is in it.
-    if positions.shape[0] != intake.joint_from.shape[0] + intake.world_from.shape[0]:
+    plan, last, new = intake.plan, intake.last, intake.new
+    if positions.shape[0] != plan.joint_from.shape[0] + plan.world_from.shape[0]:
         return False
     gap = (stamp - clock[0]) * 1e-9                     # JacketSimulation._check_stamp
     if not gap > 0.0 or gap > limits[0]:
         return False
-    q, root, quat = intake.q, intake.root, intake.quat
-    if fill_sample(positions, intake.joint_from, intake.joint_to, intake.world_from,
-                   intake.world_to, intake.whole_world, intake.last_q, intake.last_root,
-                   intake.last_quat, q, root, quat) != FILLED:
+    if fill_sample(positions, plan, last, new) != FILLED:
         return False
-    move, turn = root_jump(intake.last_root, root, intake.last_quat, quat)
+    move, turn = root_jump(last.root, new.root, last.quat, new.quat)
     if move > limits[1] or turn > limits[2]:            # JacketSimulation._jump
         return False
     t_sim, dt_ns = slot_clock[2], clock[1]
     steps = (stamp - t_sim) // dt_ns
     if steps <= 0 or steps > clock[2]:
         return False
-    q_a, q_b, quat_a, quat_b, pos_a, pos_b = intake.motion
-    load_motion(q_a, q_b, quat_a, quat_b, pos_a, pos_b, slot_clock, intake.stats,
-                intake.last_q, q, intake.last_quat, quat, intake.last_root, root, clock[0],
-                stamp - clock[0], t_sim, dt_ns, steps)
-    intake.last_q[:] = q
-    intake.last_root[:] = root
-    intake.last_quat[:] = quat
+    load_motion(intake.motion, slot_clock, intake.stats, last, new,
+                (clock[0], stamp - clock[0], t_sim, dt_ns, steps))
+    last.q[:] = new.q
+    last.root[:] = new.root
+    last.quat[:] = new.quat
     clock[0] = stamp
     return True
 

@@ -1,13 +1,14 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""numba's on-disk cache of this package's kernels, kept in step with every kernel's source.
+"""How the package's kernels are compiled: ``njit`` with one cache stamp for all, and FixedTypes.
 
 numba marks a cached function with the hash of its own file only. Our kernels call each other
-across files (step_kernel.advance compiles kernel.cloth_step into itself), so after an edit of
-kernel.py the cached ``advance`` went on running the old cloth step: seen here, a replay's
-/tf differed in the last bits from a fresh build of the same source. Here each of the
-package's kernels is marked with the hashes of all the files that hold kernels, so an edit to
-any of them recompiles them all. The kernel modules take ``njit`` from here, so the marks
-are in place before their first ``@njit(cache=True)``.
+across files (physics.step.advance compiles physics.cloth.cloth_step into itself), so after an
+edit of cloth.py the cached ``advance`` went on running the old cloth step: seen here, a
+replay's /tf differed in the last bits from a fresh build of the same source. Here each of the
+package's kernels is marked with the hashes of every file that holds kernels (any file of the
+package that compiles with ``@njit``) and of ``bundles.py``, whose field order they read, so an
+edit to any of them recompiles them all. The kernel modules take ``njit`` from here, so the
+marks are in place before their first ``@njit(cache=True)``.
 """
 
 import functools
@@ -22,15 +23,29 @@ from numba.core.typing.typeof import Purpose
 if TYPE_CHECKING:           # for the annotations only
     from numba.core.dispatcher import Dispatcher
 
-__all__ = ['njit', 'kernels_stamp', 'kernels_cached', 'FixedTypes']
+__all__ = ['njit', 'kernel_files', 'kernels_stamp', 'FixedTypes']
 
 # Set (the tests set it) to type every call again and fail on a type that changed.
 CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-KERNEL_FILES = tuple(os.path.join(_PACKAGE, *p.split('/')) for p in (
-    'core/kernel.py', 'core/bundles.py', 'core/pose_kernel.py', 'core/step_kernel.py',
-    'core/inputs.py', 'core/crowd_kernel.py', 'ros/cdr.py', 'ros/marker_kernel.py'))
+# Read, not listed: a kernel file is any of the package's files that compiles with this njit.
+_KERNEL_MARK = b'@njit'
+_BUNDLES = os.path.join(_PACKAGE, 'core', 'bundles.py')
+
+
+@functools.lru_cache(maxsize=None)
+def kernel_files() -> tuple[str, ...]:
+    """Return every file of the package holding a kernel, and bundles.py, sorted."""
+    found = {_BUNDLES}
+    for folder, _, names in os.walk(_PACKAGE):
+        for name in names:
+            path = os.path.join(folder, name)
+            if name.endswith('.py'):
+                with open(path, 'rb') as f:
+                    if _KERNEL_MARK in f.read():
+                        found.add(path)
+    return tuple(sorted(found))
 
 
 @functools.lru_cache(maxsize=None)
@@ -42,7 +57,7 @@ def _content_hash(path, mtime, size):        # read again only when the file cha
 def kernels_stamp() -> tuple[bytes, ...]:
     """Return the content hashes of every file holding one of the package's kernels."""
     stamps = []
-    for path in KERNEL_FILES:
+    for path in kernel_files():
         st = os.stat(path)
         stamps.append(_content_hash(path, st.st_mtime, st.st_size))
     return tuple(stamps)
@@ -53,7 +68,7 @@ class _PackageStamp:
 
     @classmethod
     def from_function(cls, py_func, py_file):
-        if os.path.abspath(py_file) not in KERNEL_FILES:
+        if os.path.abspath(py_file) not in kernel_files():
             return None
         return super().from_function(py_func, py_file)
 
@@ -86,8 +101,8 @@ class FixedTypes:
     costs more than the call itself. Here the first call goes through numba's dispatcher
     (compiling or loading, and checking the types), and later calls go straight to the
     entry point compiled for those types, which reads any argument as the type it had then:
-    every caller builds its arguments with core.bundles' builders, which fix each dtype and
-    layout (crowd_kernel.load_motion also takes InputParser's Samples, C float64 arrays it
+    every caller builds its arguments with the bundles' builders, which fix each dtype and
+    layout (physics.crowd.load_motion also takes InputParser's Samples, C float64 arrays it
     makes itself; another layout would be misread, which the tests' type check catches).
     ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check`` False never
     does (for timing).
@@ -113,18 +128,3 @@ class FixedTypes:
         if overload is not None:           # else numba converted an argument: keep typing
             self._entry, self._types = overload.entry_point, types
         return result
-
-
-def kernels_cached(crowd: bool = True) -> bool:
-    """Tell whether numba's cache holds the compiled step for the kernel files as they are.
-
-    If not, the next simulation made compiles every kernel, which takes a while. With
-    ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
-    """
-    from . import crowd_kernel, step_kernel
-    wanted = (step_kernel.advance, crowd_kernel.advance_crowd,
-              crowd_kernel.prepare_steady) if crowd else (step_kernel.advance,)
-    try:
-        return all(bool(k._cache._cache_file._load_index()) for k in wanted)
-    except Exception:  # noqa: BLE001 - numba's cache internals: unknown means not cached
-        return False

@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The compiled cloth step (numba), the hot loop of the simulation.
+"""The cloth (numba): Verlet, constraints, M11, M12 against the body, strain limit; one step.
 
 Compiled because at these sizes per-call overhead, not arithmetic, decides: a numpy port that
 relaxes colour by colour is many times slower (`make bench-kernel`, docs/performance.md).
@@ -13,8 +13,9 @@ then a strain limit on the horizontals and M12 once more.
 
 import numpy as np
 
-from .choices import Choice
-from .kernel_cache import njit
+from ..choices import Choice
+from ..compiled import njit
+from .colliders import collide, posed_body, push_out, push_out_passes
 
 # Fused multiply-add, reciprocals and signless zeros only: no 'nnan'/'ninf', which would let
 # LLVM drop the checks that keep a NaN from reaching /tf.
@@ -135,122 +136,6 @@ def relax_xpbd(x, free, ca, cb, rest, compliance, lam, dt, iterations, tolerance
     return iterations
 
 
-@njit(cache=True)
-def _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2):
-    """Compute per ellipsoid, once per collision pass, the maps to and from its unit sphere.
-
-    The matrix into the space where it is a unit sphere (its axes as rows over its radii), the
-    matrix back, and the squared radius of its bounding sphere. The per-vertex test then
-    multiplies instead of dividing.
-    """
-    for e in range(radii.shape[0]):
-        for k in range(3):
-            for r in range(3):
-                to_unit[e, k, r] = axes[e, r, k] / radii[e, k]
-                from_unit[e, r, k] = axes[e, r, k] * radii[e, k]
-        reach = max(radii[e, 0], max(radii[e, 1], radii[e, 2]))
-        reach2[e] = reach * reach
-
-
-@njit(cache=True)
-def _push_capsule(x, i, cap_a, cap_b, cap_r, k):
-    """Push vertex i out of capsule k (segment a-b swept by a sphere). Returns depth."""
-    ab0, ab1, ab2 = cap_b[k, 0] - cap_a[k, 0], cap_b[k, 1] - cap_a[k, 1], cap_b[k, 2] - cap_a[k, 2]
-    ap0, ap1, ap2 = x[i, 0] - cap_a[k, 0], x[i, 1] - cap_a[k, 1], x[i, 2] - cap_a[k, 2]
-    len2 = ab0 * ab0 + ab1 * ab1 + ab2 * ab2
-    t = 0.0
-    if len2 > 1e-12:
-        t = (ap0 * ab0 + ap1 * ab1 + ap2 * ab2) / len2
-        t = min(1.0, max(0.0, t))
-    d0, d1, d2 = ap0 - t * ab0, ap1 - t * ab1, ap2 - t * ab2
-    dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    radius = cap_r[k]
-    if dist >= radius or dist < 1e-12:
-        return -1.0
-    g = radius / dist
-    x[i, 0] = cap_a[k, 0] + t * ab0 + d0 * g
-    x[i, 1] = cap_a[k, 1] + t * ab1 + d1 * g
-    x[i, 2] = cap_a[k, 2] + t * ab2 + d2 * g
-    return radius - dist
-
-
-@njit(cache=True)
-def _push_plane(x, i, plane_p, plane_n, k):
-    """Keep vertex i on the positive side of plane k (unit normal). Returns depth."""
-    h = ((x[i, 0] - plane_p[k, 0]) * plane_n[k, 0] + (x[i, 1] - plane_p[k, 1]) * plane_n[k, 1]
-         + (x[i, 2] - plane_p[k, 2]) * plane_n[k, 2])
-    if h >= 0.0:
-        return -1.0
-    x[i, 0] -= h * plane_n[k, 0]
-    x[i, 1] -= h * plane_n[k, 1]
-    x[i, 2] -= h * plane_n[k, 2]
-    return -h
-
-
-MAX_COLLISION_PASSES = 4
-
-
-# Inlined: as a call per vertex inside the collision loop it made that loop several times slower.
-@njit(cache=True, inline='always')
-def _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-              plane_n):
-    """Push vertex i onto the surface of every collider it is inside, in one pass.
-
-    Returns the deepest push-out, or -1 if it was inside none.
-    """
-    deepest = -1.0
-    for e in range(centers.shape[0]):
-        p0 = x[i, 0] - centers[e, 0]
-        p1 = x[i, 1] - centers[e, 1]
-        p2 = x[i, 2] - centers[e, 2]
-        if p0 * p0 + p1 * p1 + p2 * p2 >= reach2[e]:     # outside the bounding sphere
-            continue
-        q0 = to_unit[e, 0, 0] * p0 + to_unit[e, 0, 1] * p1 + to_unit[e, 0, 2] * p2
-        q1 = to_unit[e, 1, 0] * p0 + to_unit[e, 1, 1] * p1 + to_unit[e, 1, 2] * p2
-        q2 = to_unit[e, 2, 0] * p0 + to_unit[e, 2, 1] * p1 + to_unit[e, 2, 2] * p2
-        r2 = q0 * q0 + q1 * q1 + q2 * q2
-        if r2 >= 1.0 or r2 < 1e-12:
-            continue
-        g = 1.0 / np.sqrt(r2)          # onto the unit sphere, then back
-        s0, s1, s2 = q0 * g, q1 * g, q2 * g
-        n0 = (from_unit[e, 0, 0] * s0 + from_unit[e, 0, 1] * s1
-              + from_unit[e, 0, 2] * s2 + centers[e, 0])
-        n1 = (from_unit[e, 1, 0] * s0 + from_unit[e, 1, 1] * s1
-              + from_unit[e, 1, 2] * s2 + centers[e, 1])
-        n2 = (from_unit[e, 2, 0] * s0 + from_unit[e, 2, 1] * s1
-              + from_unit[e, 2, 2] * s2 + centers[e, 2])
-        m0, m1, m2 = n0 - x[i, 0], n1 - x[i, 1], n2 - x[i, 2]
-        x[i, 0] = n0
-        x[i, 1] = n1
-        x[i, 2] = n2
-        deepest = max(deepest, np.sqrt(m0 * m0 + m1 * m1 + m2 * m2))
-    for k in range(cap_a.shape[0]):
-        deepest = max(deepest, _push_capsule(x, i, cap_a, cap_b, cap_r, k))
-    for k in range(plane_p.shape[0]):
-        deepest = max(deepest, _push_plane(x, i, plane_p, plane_n, k))
-    return deepest
-
-
-# Pushed out of one collider, a vertex can land in an overlapping one (a split ellipsoid, the
-# crease of pelvis and thigh): passes until one moves it less than ``settled`` (bounded:
-# corners may not settle).
-@njit(cache=True, inline='always')
-def _push_out_passes(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-                     plane_n, settled):
-    """Push vertex i out in up to MAX_COLLISION_PASSES passes.
-
-    Returns (deepest push-out or -1 if it was inside none, the last pass's push-out).
-    """
-    deepest, depth = -1.0, -1.0
-    for _ in range(MAX_COLLISION_PASSES):
-        depth = _push_out(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                          plane_p, plane_n)
-        if depth < settled:
-            break
-        deepest = max(deepest, depth)
-    return deepest, depth
-
-
 # Projections of one vertical edge's lower vertex onto its rest length and out of the body,
 # and the push-out (m) under which they have converged.
 VERTICAL_COLLISION_ITERATIONS = 8
@@ -258,26 +143,21 @@ CONVERGED = 1e-7
 
 
 @njit(cache=True)
-def hard_vertical_pass_outside(x, upper, lower, rest, contact, centers, axes, radii, cap_a,
-                               cap_b, cap_r, plane_p, plane_n):
+def hard_vertical_pass_outside(x, upper, lower, rest, contact, body):
     """M12 that agrees with the colliders: each vertical at its length, outside the body.
 
     Top-down, each lower vertex at its rest length from the upper one and outside the body.
     Where the straight line runs into a collider, the edge turns about its upper vertex onto
     the collider's surface (projected alternately onto the length and out of the body), so the
     column wraps around a lifted thigh at its length instead of being pushed out stretched
-    afterwards. Outside wins where both cannot hold. Returns the deepest push-out.
+    afterwards. Outside wins where both cannot hold. ``body``: the colliders as a bundles.Body.
+    Returns the deepest push-out.
     """
-    ne = centers.shape[0]
-    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
-    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
-    return _verticals_outside(x, upper, lower, rest, contact, 0, upper.shape[0], centers,
-                              to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+    return _verticals_outside(x, upper, lower, rest, contact, 0, upper.shape[0], body)
 
 
 @njit(cache=True)
-def _verticals_outside(x, upper, lower, rest, contact, first, end, centers, to_unit, from_unit,
-                       reach2, cap_a, cap_b, cap_r, plane_p, plane_n):
+def _verticals_outside(x, upper, lower, rest, contact, first, end, body):
     """hard_vertical_pass_outside over the vertical edges ``first`` to ``end`` - 1."""
     deepest = 0.0
     for j in range(first, end):
@@ -292,18 +172,15 @@ def _verticals_outside(x, upper, lower, rest, contact, first, end, centers, to_u
                 x[b, 0] += d0 * f
                 x[b, 1] += d1 * f
                 x[b, 2] += d2 * f
-            depth = _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                              plane_p, plane_n)
+            depth = push_out(x, b, body)
             if depth < CONVERGED:       # outside (-1), or on the surface at its length
                 break
             contact[b] = True           # M15: it touched the body during this step
             deepest = max(deepest, depth)
         else:       # not converged, as in the crease of two colliders: outside wins
-            _, depth = _push_out_passes(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
-                                        cap_r, plane_p, plane_n, CONVERGED)
+            _, depth = push_out_passes(x, b, body, CONVERGED)
             if depth >= CONVERGED:
-                _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b,
-                                 cap_r, plane_p, plane_n)
+                _outside_towards(x, a, b, body)
     return deepest
 
 
@@ -312,62 +189,54 @@ OUTSIDE_BISECTIONS = 20
 
 
 @njit(cache=True)
-def _outside_towards(x, a, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                     plane_p, plane_n):
+def _outside_towards(x, a, b, body):
     """Put b at the point of the edge a-b farthest from a that is outside, if a is outside.
 
     The last resort where the push-out alternates between two colliders (the middle of a
     crease): the edge gets shorter, which M12 allows, and the vertex ends outside.
     """
     b0, b1, b2 = x[b, 0], x[b, 1], x[b, 2]
-    d0, d1, d2 = b0 - x[a, 0], b1 - x[a, 1], b2 - x[a, 2]
-    if not _outside_at(x, a, b, 0.0, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a,
-                       cap_b, cap_r, plane_p, plane_n):
+    d = np.array((b0 - x[a, 0], b1 - x[a, 1], b2 - x[a, 2]))
+    if not _outside_at(x, a, b, 0.0, d, body):
         x[b, 0], x[b, 1], x[b, 2] = b0, b1, b2      # a is inside too: nothing to walk to
         return
     out, inside = 0.0, 1.0
     for _ in range(OUTSIDE_BISECTIONS):
         t = 0.5 * (out + inside)
-        if _outside_at(x, a, b, t, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a,
-                       cap_b, cap_r, plane_p, plane_n):
+        if _outside_at(x, a, b, t, d, body):
             out = t
         else:
             inside = t
-    _place_on_edge(x, a, b, out, d0, d1, d2)
+    _place_on_edge(x, a, b, out, d)
 
 
 @njit(cache=True, inline='always')
-def _place_on_edge(x, a, b, t, d0, d1, d2):
-    """Put vertex b at x[a] + t (d0, d1, d2)."""
-    x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + t * d0, x[a, 1] + t * d1, x[a, 2] + t * d2
+def _place_on_edge(x, a, b, t, d):
+    """Put vertex b at x[a] + t d."""
+    x[b, 0], x[b, 1], x[b, 2] = x[a, 0] + t * d[0], x[a, 1] + t * d[1], x[a, 2] + t * d[2]
 
 
 @njit(cache=True, inline='always')
-def _outside_at(x, a, b, t, d0, d1, d2, centers, to_unit, from_unit, reach2, cap_a, cap_b,
-                cap_r, plane_p, plane_n):
+def _outside_at(x, a, b, t, d, body):
     """Put b at x[a] + t d; True if it is outside there (a push-out under CONVERGED)."""
-    _place_on_edge(x, a, b, t, d0, d1, d2)
-    return _push_out(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-                     plane_n) < CONVERGED
+    _place_on_edge(x, a, b, t, d)
+    return push_out(x, b, body) < CONVERGED
 
 
 @njit(cache=True)
-def hard_pass_with_strain_limit(x, free, cloth, limit, contact, centers, axes, radii, cap_a,
-                                cap_b, cap_r, plane_p, plane_n):
+def hard_pass_with_strain_limit(x, free, cloth, limit, contact, body):
     """M12 outside the body, row by row, each row's horizontals held to (1 + ``limit``) rest.
 
     Top-down: a row's verticals at their length from the row above and outside the body
     (hard_vertical_pass_outside), then its horizontals shortened (limit_stretch) and its
     verticals put back, a few rounds, before the next row hangs from it. Nothing else limits
     the horizontals once the push-out and M12 have moved their ends (docs/accuracy.md), and a
-    row settled before the next keeps the work to the rows that need it.
+    row settled before the next keeps the work to the rows that need it. ``body``: the
+    colliders as a bundles.Body.
     """
     upper, lower, rest = cloth.vert_a, cloth.vert_b, cloth.vert_rest
     ha, hb, hrest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     cols = cloth.pin_local.shape[0]
-    ne = centers.shape[0]
-    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
-    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
     nv, nh = upper.shape[0], ha.shape[0]
     j, h = 0, 0
     while j < nv:
@@ -375,8 +244,7 @@ def hard_pass_with_strain_limit(x, free, cloth, limit, contact, centers, axes, r
         end = j
         while end < nv and lower[end] // cols == row:
             end += 1
-        _verticals_outside(x, upper, lower, rest, contact, j, end, centers, to_unit, from_unit,
-                           reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+        _verticals_outside(x, upper, lower, rest, contact, j, end, body)
         while h < nh and ha[h] // cols < row:
             h += 1
         h_end = h
@@ -386,8 +254,7 @@ def hard_pass_with_strain_limit(x, free, cloth, limit, contact, centers, axes, r
             if not limit_stretch(x, free, ha[h:h_end], hb[h:h_end], hrest[h:h_end], limit,
                                  STRAIN_LIMIT_SWEEPS):
                 break
-            _verticals_outside(x, upper, lower, rest, contact, j, end, centers, to_unit,
-                               from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n)
+            _verticals_outside(x, upper, lower, rest, contact, j, end, body)
         j, h = end, h_end
 
 
@@ -444,48 +311,6 @@ def limit_stretch(x, free, ea, eb, rest, limit, sweeps):
                 x[b, 1] -= d1 * fb
                 x[b, 2] -= d2 * fb
     return shortened
-
-
-@njit(cache=True)
-def collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, contact):
-    """M10 and beyond: push particles out of ellipsoids, capsules and planes.
-
-    Ellipsoids are tested in the space where each is a unit sphere (``axes[e]`` holds its axes
-    as columns, in the simulation frame). Capsules and planes are the primitives the best
-    secondary-motion systems add (limbs, the floor). Marks contact for M15. Returns the deepest
-    penetration found (metres, in the simulation frame).
-    """
-    ne = centers.shape[0]
-    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
-    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
-    deepest = 0.0
-    for i in range(x.shape[0]):
-        if not free[i]:
-            continue
-        depth, _ = _push_out_passes(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b,
-                                    cap_r, plane_p, plane_n, 0.0)
-        deepest = max(deepest, depth)
-        contact[i] = depth >= 0.0
-    return deepest
-
-
-@njit(cache=True)
-def push_out_points(points, centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n):
-    """M6 with M10: put each skinned (pinned) point on the surface of any collider it is in.
-
-    A pinned vertex cannot move in the solve, so one left inside the body (a thigh raised
-    against the jacket's front, a collider fitted a little wide) makes its column either
-    stretched or inside; the body lifts the pinned row instead. Returns the deepest move.
-    """
-    ne = centers.shape[0]
-    to_unit, from_unit, reach2 = np.empty((ne, 3, 3)), np.empty((ne, 3, 3)), np.empty(ne)
-    _ellipsoid_maps(axes, radii, to_unit, from_unit, reach2)
-    deepest = 0.0
-    for i in range(points.shape[0]):
-        depth, _ = _push_out_passes(points, i, centers, to_unit, from_unit, reach2, cap_a,
-                                    cap_b, cap_r, plane_p, plane_n, 0.0)
-        deepest = max(deepest, depth)
-    return deepest
 
 
 @njit(cache=True)
@@ -602,7 +427,6 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
     anchor, tether = cloth.tether_anchor, cloth.tether_length
     ha, hb, hrest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     limit_horizontal = tuning.horizontal_limit >= 0.0
-    radii, cap_r = colliders.radii, colliders.capsule_radii
     stiffness, iterations, compliance = tuning.stiffness, tuning.iterations, tuning.compliance
     max_distance, limit_mode, solver = tuning.max_distance, tuning.limit_mode, tuning.solver
     tolerance = tuning.sweep_tolerance
@@ -637,6 +461,7 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
             _lerp(plane_n, plane_n0, pn_to, w)
             _normalise_rows(plane_n)
             _lerp(ref, ref0, ref_to, w)
+        body = posed_body(colliders, now)       # once the substep has moved them
         integrate(x, xp, free, acc, damping, contact, contact_damping, h)
         if solver == SOLVER_XPBD:
             sweeps += relax_xpbd(x, free, ca, cb, rest, compliance, lam, h, iterations,
@@ -645,8 +470,7 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
             sweeps += relax(x, free, ca, cb, rest, stiffness, iterations, tolerance)
         if limit_mode == LIMIT_TETHERS:
             tethers(x, free, anchor, tether)
-        deepest = max(deepest, collide(x, free, centers, axes, radii, cap_a, cap_b, cap_r,
-                                       plane_p, plane_n, contact))
+        deepest = max(deepest, collide(x, free, body, contact))
         if limit_horizontal and limit_mode != LIMIT_HARD_PASS:
             # Without M12 the horizontals' limit runs before M11, which then has the last word.
             limit_stretch(x, free, ha, hb, hrest, tuning.horizontal_limit, STRAIN_LIMIT_SWEEPS)
@@ -659,11 +483,9 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
             # they stay out of the deepest push-out reported.
             if limit_horizontal:
                 hard_pass_with_strain_limit(x, free, cloth, tuning.horizontal_limit, contact,
-                                            centers, axes, radii, cap_a, cap_b, cap_r, plane_p,
-                                            plane_n)
+                                            body)
             else:
-                hard_vertical_pass_outside(x, upper, lower, vrest, contact, centers, axes,
-                                           radii, cap_a, cap_b, cap_r, plane_p, plane_n)
+                hard_vertical_pass_outside(x, upper, lower, vrest, contact, body)
     if substeps > 1:        # leave the frames exactly where the step ends (lerp rounds)
         centers[:], axes[:], cap_a[:], cap_b[:] = c_to, a_to, ka_to, kb_to
         plane_p[:], plane_n[:], ref[:] = pp_to, pn_to, ref_to

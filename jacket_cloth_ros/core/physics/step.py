@@ -1,0 +1,272 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""All fixed steps of one input in one compiled call (numba): JacketSimulation.process.
+
+Why one call: with each part compiled on its own, the Python between them still cost several
+times the cloth step, and a live node that sleeps between inputs pays it again with cold
+caches (docs/performance.md). Each step runs these stages:
+
+  ``_pose_skeleton`` (M7 interpolation, forward kinematics) -> ``_follow_world`` (M14 world
+  share) -> ``_forces`` (gravity, wind) -> ``_pin_top_row`` (M1/M2 layer, M6 pinned row and
+  M11 references, colliders posed (M10) with the pinned row outside them) -> the cloth
+  (``cloth.cloth_step`` in ``_substeps_for`` substeps, or riding its top row far from the
+  viewer) -> M8 hood.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..bundles import Posed, StepControl
+from ..compiled import njit
+from .cloth import cloth_step, hold_pinned_row
+from .colliders import collider_poses, plane_poses, posed_body, push_out_points
+from .hood import hood_step
+from .pose import (
+    _transform_point, forward_kinematics, quat_matrix, quat_slerp, relative_move,
+    share_world_motion, skinned_pose, solve_layer)
+
+DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE = range(5)       # the ``stats`` slots
+STAT_SLOTS = NON_FINITE + 1
+
+
+class _Scratch(NamedTuple):
+    """One input's working arrays, made once for all its steps."""
+
+    q: np.ndarray                   # the skeleton at this step (M7)
+    quat: np.ndarray
+    new_root: np.ndarray            # the root's world pose at this step
+    delta: np.ndarray               # the root's move since the last step (M14)
+    moved: np.ndarray
+    gravity: np.ndarray             # gravity and wind in the local frame
+    wind: np.ndarray
+    acc: np.ndarray                 # (N,3) per vertex
+    hood_acc: np.ndarray
+    top: np.ndarray                 # (C,3) the pinned row (M6)
+    now: Posed                      # colliders and M11 references at this step
+    damp: np.ndarray                # (N,) damping per substep
+    ride: np.ndarray                # (N,3) the cloth riding its top row (level of detail)
+
+
+@njit(cache=True)
+def lost_per(share, exponent):
+    """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
+
+    Fabrics are tuned at simulation.DESIGN_RATE.
+    """
+    return share if exponent == 1.0 else 1.0 - (1.0 - share) ** exponent
+
+
+@njit(cache=True)
+def lost_per_each(share, exponent, out):
+    """lost_per of each share into ``out``."""
+    for i in range(share.shape[0]):
+        out[i] = lost_per(share[i], exponent)
+
+
+@njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
+def advance(model, tuning, state, before, motion, out):
+    """Run ``motion.steps`` fixed steps from sample a towards sample b.
+
+    Takes core.bundles: Model, Tuning, ClothState, Posed, Motion, StepOutput.
+    ``state`` is moved in place; ``before`` holds the colliders and references where the
+    last step ended and is moved on to this one's end; ``out.links`` and the layer arrays
+    end with the last step's pose (the layer solved in full at that step only).
+    ``out.stats`` accumulates the report's figures. Returns the time of the last step (ns).
+    """
+    cloth = model.cloth
+    x, xp, hood_p = state.x, state.xp, state.hood_p
+    cols = cloth.pin_local.shape[0]
+    nv = x.shape[0]
+    work = _scratch(model, motion, nv, cols)
+    damp_for = 0
+    contact_damp = 0.0
+    hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
+    dt_ns = motion.dt_ns
+    dt = dt_ns * 1e-9
+    t_sim = motion.t_sim
+    for step in range(motion.steps):
+        t_sim += dt_ns
+        _pose_skeleton(model, motion, t_sim, work, out.links)
+        # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
+        # vertex's offset from its column's top before the world share moves it.
+        skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
+            / motion.steps
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    work.ride[i, k] = x[i, k] - x[i % cols, k]
+        _follow_world(tuning, state, work)
+        _forces(cloth.up, tuning, state.root, t_sim, work)
+        _pin_top_row(model, tuning, state.root, step == motion.steps - 1, work, out)
+        substeps = _substeps_for(tuning, work.top, x, cols)
+        pin_from = x.copy() if substeps > 1 else x
+        x[:cols] = work.top
+        xp[:cols] = work.top
+        if substeps != damp_for:
+            e = tuning.design_exponent / substeps
+            lost_per_each(tuning.damping, e, work.damp)
+            contact_damp = lost_per(tuning.contact_damping, e)
+            damp_for = substeps
+        # Beyond the far distance the cloth rides on its pinned top row with its last shape
+        # and no cloth step runs; a change blends the simulated and the riding cloth over the
+        # steps instead of popping.
+        if skin > 0.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    work.ride[i, k] += work.top[i % cols, k]
+        if skin >= 1.0:
+            for i in range(cols, nv):
+                for k in range(3):
+                    xp[i, k] = x[i, k]
+                    x[i, k] = work.ride[i, k]
+            _copy_posed(work.now, before)
+            state.started[0] = True
+        else:
+            control = StepControl(work.acc, work.damp, contact_damp, dt, substeps, pin_from)
+            _simulate(model, tuning, state, before, work.now, control, out.stats)
+            if skin > 0.0:
+                for i in range(cols, nv):
+                    for k in range(3):
+                        x[i, k] += skin * (work.ride[i, k] - x[i, k])
+        hood_step(out.links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp)
+    if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
+        out.stats[NON_FINITE] = 1.0
+    return t_sim
+
+
+@njit(cache=True)
+def _scratch(model, motion, nv, cols):
+    """Return new working arrays for one input's steps."""
+    colliders = model.colliders
+    k_caps = colliders.capsule_links.shape[0]
+    now = Posed(np.empty(colliders.centers.shape), np.empty(colliders.rotations.shape),
+                np.empty((k_caps, 3)), np.empty((k_caps, 3)),
+                np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
+                np.empty((nv, 3)))
+    return _Scratch(np.empty(motion.q_a.shape[0]), np.empty(4), np.eye(4), np.empty((4, 4)),
+                    np.empty(3), np.empty(3), np.empty(3), np.empty((nv, 3)), np.empty(3),
+                    np.empty((cols, 3)), now, np.empty(nv), np.empty((nv, 3)))
+
+
+@njit(cache=True)
+def _pose_skeleton(model, motion, t_sim, work, links):
+    """M7: the skeleton between the two samples at the step's time, and its links' poses."""
+    q, quat, new_root = work.q, work.quat, work.new_root
+    w = min(1.0, max(0.0, (t_sim - motion.stamp_a) / motion.span))
+    for k in range(q.shape[0]):
+        q[k] = motion.q_a[k] + w * (motion.q_b[k] - motion.q_a[k])
+    quat_slerp(motion.quat_a, motion.quat_b, w, quat)
+    quat_matrix(quat, new_root)
+    for k in range(3):
+        new_root[k, 3] = motion.pos_a[k] + w * (motion.pos_b[k] - motion.pos_a[k])
+    forward_kinematics(model.skeleton, q, links)
+
+
+@njit(cache=True)
+def _follow_world(tuning, state, work):
+    """M14: the cloth and hood feel only their share of the root's move through the world.
+
+    The character moved by ``delta`` (old local -> new local); a world-space cloth would stay
+    behind by that much.
+    """
+    delta, moved, root = work.delta, work.moved, state.root
+    relative_move(work.new_root, root, delta)
+    share_world_motion(delta, state.x, tuning.world_share)
+    share_world_motion(delta, state.xp, tuning.world_share)
+    for point in (state.hood_p, state.hood_pp):
+        _transform_point(delta, point, moved)
+        for k in range(3):
+            point[k] += tuning.hood_world_share * (moved[k] - point[k])
+    root[:] = work.new_root
+
+
+@njit(cache=True)
+def _forces(up, tuning, root, t_sim, work):
+    """M4: gravity along the rig's -``up`` and wind (gusts by the step's time), local frame."""
+    gravity, wind_l, acc, wind = work.gravity, work.wind, work.acc, tuning.wind
+    scale = gust_scale(t_sim, tuning.gust, tuning.gust_period)
+    for k in range(3):
+        gravity[k] = -tuning.gravity * (root[0, k] * up[0] + root[1, k] * up[1]
+                                        + root[2, k] * up[2])
+        wind_l[k] = scale * (root[0, k] * wind[0] + root[1, k] * wind[1]
+                             + root[2, k] * wind[2])
+    for i in range(acc.shape[0]):
+        for k in range(3):
+            acc[i, k] = gravity[k] + tuning.wind_scale[i] * wind_l[k]
+    for k in range(3):
+        work.hood_acc[k] = gravity[k] + tuning.hood_wind_scale * wind_l[k]
+
+
+@njit(cache=True)
+def _pin_top_row(model, tuning, root, last, work, out):
+    """M2 then M6, M11 and M10: where the pinned row, the references and the colliders are.
+
+    The upper jacket is solved (in full at the ``last`` step), the pinned top row follows
+    it, then the colliders are posed where this step ends and the pinned row is put outside
+    them.
+    """
+    links, cloth, colliders, now = out.links, model.cloth, model.colliders, work.now
+    solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
+                out.below)
+    skinned_pose(links, cloth, out.below, work.top, now.ref)
+    hold_pinned_row(work.top, cloth, out.below.shape[0] > 0, tuning.horizontal_limit)
+    collider_poses(links, colliders, now)
+    plane_poses(links, root, colliders, now)
+    push_out_points(work.top, posed_body(colliders, now))
+
+
+@njit(cache=True)
+def _substeps_for(tuning, top, x, cols):
+    """Return the step's substeps: as set, or fewer in the automatic quality mode.
+
+    There, as few as keep the pinned row's move per substep under the tolerance.
+    """
+    substeps = tuning.max_substeps
+    if tuning.quality_tolerance > 0.0 and substeps > 1:
+        move = 0.0
+        for c in range(cols):
+            for k in range(3):
+                move = max(move, abs(top[c, k] - x[c, k]))
+        substeps = int(min(substeps, max(1, np.ceil(move / tuning.quality_tolerance))))
+    return substeps
+
+
+@njit(cache=True)
+def _simulate(model, tuning, state, before, now, control, stats):
+    """One cloth step (cloth.cloth_step, the colliders already posed in ``now``), its stats."""
+    if not state.started[0]:        # no step before: substeps start where this one ends
+        _copy_posed(now, before)
+    deepest, limited, sweeps = cloth_step(model.cloth, model.colliders, tuning, state, control,
+                                          now, before)
+    # Where the next step's substeps start from: this step's end.
+    _copy_posed(now, before)
+    state.started[0] = True
+    stats[DEEPEST] = max(stats[DEEPEST], deepest)
+    stats[LIMITED] += limited
+    stats[SWEEPS] += sweeps
+    stats[SUBSTEPS] += control.substeps
+
+
+@njit(cache=True)
+def _copy_posed(src, dst):
+    """Every array of one bundles.Posed into another's."""
+    dst.centers[:] = src.centers
+    dst.axes[:] = src.axes
+    dst.cap_a[:] = src.cap_a
+    dst.cap_b[:] = src.cap_b
+    dst.plane_p[:] = src.plane_p
+    dst.plane_n[:] = src.plane_n
+    dst.ref[:] = src.ref
+
+
+@njit(cache=True)
+def gust_scale(t_ns, gust, period):
+    """Return the wind's factor at a step's time.
+
+    Two slow incommensurate gusts of relative size ``gust`` (1 without). A function of the
+    stamp only, so a replay sees the live wind.
+    """
+    if gust == 0.0:
+        return 1.0
+    phase = 2 * np.pi * (t_ns * 1e-9) / period
+    return 1.0 + gust * (0.6 * np.sin(phase) + 0.4 * np.sin(2.7 * phase + 1.3))
