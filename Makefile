@@ -68,7 +68,11 @@ MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
 JVRC := $(MOCAP)/jvrc1.urdf
 HUMANOID := $(MOCAP)/humanoid.urdf
 DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a spinkick,$(MOCAP)/humanoid3d_$(c).txt)
-mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS)
+ROBOT_URDFS := g1_description/urdf/g1_29dof_rev_1_0.urdf \
+    g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf talos_data/robots/talos_full_v2.urdf \
+    romeo_description/urdf/romeo.urdf
+ROBOTS := $(addprefix $(MOCAP)/,$(notdir $(ROBOT_URDFS)))
+mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
 
 $(MOCAP)/bvhtoolbox-0.1.3.tar.gz: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: bvhtoolbox==0.1.3 -d $(MOCAP)
@@ -98,7 +102,20 @@ $(HUMANOID) $(DEEPMIMIC_CLIPS) &: | $(READY)
 	rm -f $(MOCAP)/pybullet-3.2.7.tar.gz
 	touch $(HUMANOID) $(DEEPMIMIC_CLIPS)
 
-test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS)
+# Robot URDFs with sensor frames (IMU, cameras, lidar) and arms split into short links, for
+# the rig proposal tests (never committed): Unitree G1 (BSD-3-Clause), PAL TALOS (Apache-2.0)
+# and Aldebaran Romeo (BSD) as example-robot-data 6.0.0 (BSD-3-Clause) ships them, its URDFs
+# only, out of its 131 MB wheel, which is removed once they are out (one download for all).
+ERD_WHEEL := $(MOCAP)/example_robot_data-6.0.0-0-py3-none-any.whl
+$(ROBOTS) &: | $(READY)
+	$(PIP) download --no-deps example-robot-data==6.0.0 -d $(MOCAP)
+	$(PY) -c "import sys, zipfile; z = zipfile.ZipFile(sys.argv[1]); \
+	    [open('$(MOCAP)/' + p.split('/')[-1], 'wb').write(z.read( \
+	    'cmeel.prefix/share/example-robot-data/robots/' + p)) for p in sys.argv[2:]]" \
+	    $(ERD_WHEEL) $(ROBOT_URDFS)
+	rm -f $(ERD_WHEEL)
+
+test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

@@ -1,0 +1,182 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth rig`` on robot URDFs: sensor frames and split arms (issue 35 item 2).
+
+The robots are example-robot-data 6.0.0's (BSD-3-Clause), fetched by ``make mocap`` into
+share/mocap, never committed: Unitree G1 (BSD-3-Clause; an IMU, a depth camera and a lidar on
+its torso, a head fixed to the torso whose frame sits at the waist, upper arm and forearm each
+cut in two by a twist joint), PAL TALOS (Apache-2.0; an IMU, an RGB-D camera and its optical
+frames, force-torque frames at the wrists, numbered arm links) and Aldebaran Romeo (BSD; IMU,
+camera, touch and foot-pressure frames). JVRC-1 and the other skeletons keep their choices.
+"""
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+import yaml
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.core.skeleton import load_skeleton
+from jacket_cloth_ros.rigging.propose import propose, to_yaml
+from jacket_cloth_ros.tools.cli import main
+from fetched import fetched
+
+PARTS = ('pelvis', 'chest', 'neck', 'left upper arm', 'left forearm', 'left hand',
+         'right upper arm', 'right forearm', 'right hand', 'left thigh', 'right thigh')
+
+
+def _chosen(lines):
+    """The links the proposal printed, by part."""
+    out = {}
+    for line in lines:
+        part, rest = line.split(':', 1)
+        if part.strip() in PARTS:
+            out[part.strip()] = rest.split()[0]
+    return out
+
+
+def _sides(left, right):
+    out = {}
+    for side, names in (('left', left), ('right', right)):
+        for part, link in zip(('upper arm', 'forearm', 'hand', 'thigh'), names):
+            out[f'{side} {part}'] = link
+    return out
+
+
+G1_ARMS = _sides(
+    ['left_shoulder_roll_link', 'left_elbow_link', 'left_wrist_pitch_link', 'left_hip_roll_link'],
+    ['right_shoulder_roll_link', 'right_elbow_link', 'right_wrist_pitch_link',
+     'right_hip_roll_link'])
+ROBOTS = {
+    # The head is fixed to the torso (no neck joint); the shoulder's yaw and the forearm's roll
+    # turn about their bone halfway along it, so neither is an elbow or a wrist.
+    'g1_29dof_rev_1_0.urdf': {'pelvis': 'pelvis', 'chest': 'torso_link', 'neck': 'head_link',
+                              **G1_ARMS},
+    'g1_29dof_with_hand_rev_1_0.urdf': {'pelvis': 'pelvis', 'chest': 'torso_link',
+                                        'neck': 'head_link', **G1_ARMS},
+    'talos_full_v2.urdf': {'pelvis': 'base_link', 'chest': 'torso_2_link', 'neck': 'head_2_link',
+                           **_sides(['arm_left_3_link', 'arm_left_4_link', 'arm_left_7_link',
+                                     'leg_left_3_link'],
+                                    ['arm_right_3_link', 'arm_right_4_link', 'arm_right_7_link',
+                                     'leg_right_3_link'])},
+    'romeo.urdf': {'pelvis': 'body', 'chest': 'torso', 'neck': 'NeckPitchLink',
+                   **_sides(['LShoulderYawLink', 'LElbowYawLink', 'l_wrist', 'LHipPitchLink'],
+                            ['RShoulderYawLink', 'RElbowYawLink', 'r_wrist', 'RHipPitchLink'])},
+}
+
+
+def _virtual_frames(urdf_text):
+    """Links that carry nothing: no mass, no visual, no collision (sensor and virtual frames)."""
+    out = set()
+    for link in ET.fromstring(urdf_text.rstrip('\0 \r\n\t')).findall('link'):
+        mass = link.find('inertial/mass')
+        if ((mass is None or float(mass.get('value', 0)) == 0) and link.find('visual') is None
+                and link.find('collision') is None):
+            out.add(link.get('name'))
+    return out
+
+
+def _rig_links(rig):
+    """Every link the rig names."""
+    bones = rig['jacket_bones']
+    links = {rig['cloth']['shape']['link'], rig['cloth']['pin_link'], rig['hood']['link'],
+             bones['upper']['link'], *rig['cloth']['reference_bones']}
+    for s in bones['sleeves']:
+        links |= {s['link'], s['end_link']}
+    for pad in bones['upper']['shoulder_pads'].values():
+        links.add(pad['aim_link'])
+    return links
+
+
+@pytest.mark.parametrize('name', sorted(ROBOTS))
+def test_a_robot_gets_its_body_parts_and_never_a_sensor_frame(name):
+    path = fetched(name)
+    with open(path, encoding='utf-8') as f:
+        text = f.read()
+    sk = load_skeleton(path)
+    rig, lines, body = propose(sk)
+    chosen = _chosen(lines)
+    assert {p: chosen[p] for p in ROBOTS[name]} == ROBOTS[name], '\n'.join(lines)
+    virtual = _virtual_frames(text)
+    assert virtual and not _rig_links(rig) & virtual
+    assert not any(w in link.lower() for link in _rig_links(rig)
+                   for w in ('imu', 'camera', 'rgbd', 'optical', 'gyro', 'frame', 'sensor'))
+    Rig(yaml.safe_load(to_yaml(rig, lines, name, body)), sk)
+
+
+@pytest.mark.parametrize('name', sorted(ROBOTS))
+def test_a_robots_sleeves_run_shoulder_to_elbow_to_wrist_and_its_hood_hangs_at_the_neck(name):
+    sk = load_skeleton(fetched(name))
+    rig, lines, body = propose(sk)
+    rest = sk.forward(np.zeros(len(sk.joint_names)))
+
+    def at(link):
+        return rest[sk.link(link)][:3, 3]
+
+    want = ROBOTS[name]
+    for side in ('left', 'right'):
+        upper, fore, hand = (want[f'{side} {p}'] for p in ('upper arm', 'forearm', 'hand'))
+        sleeves = {s['link']: s['end_link'] for s in rig['jacket_bones']['sleeves']}
+        assert sleeves[upper] == fore and sleeves[fore] == hand
+        # Upper arm and forearm are both real bones: neither sleeve is a stub.
+        upper_len, fore_len = (np.linalg.norm(at(b) - at(a)) for a, b in ((upper, fore),
+                                                                         (fore, hand)))
+        assert 0.5 < fore_len / upper_len < 1.5, (upper_len, fore_len)
+    # The hood's pivot, in the root frame, is at the top of the back: above the shoulders, not
+    # down the back where an IMU or the torso's frame is.
+    hood = rig['hood']
+    T = rest[sk.link(hood['link'])]
+    pivot = T[:3, :3] @ hood['pivot'] + T[:3, 3]
+    shoulders = np.mean([at(want[f'{s} upper arm'])[2] for s in ('left', 'right')])
+    assert pivot[2] > shoulders - 0.02 * body.height, (pivot, shoulders)
+    assert pivot[0] < at(want['chest'])[0]                 # behind the neck, +x forward
+
+
+def test_g1s_rig_says_which_frames_it_left_out(tmp_path, capsys):
+    rig = tmp_path / 'g1.yaml'
+    assert main(['rig', '--urdf', fetched('g1_29dof_rev_1_0.urdf'), '-o', str(rig)]) == 0
+    out = capsys.readouterr().out
+    assert 'neck: head_link' in out and 'imu_in_torso' in out
+    ignored = next(line for line in out.splitlines() if 'imu_in_torso' in line)
+    assert 'sensor' in ignored and 'd435_link' in ignored and 'mid360_link' in ignored
+
+
+# Today's choices on the skeletons of the other tests: the robots' rules change none of them.
+KEPT = {
+    'jvrc1.urdf': {'pelvis': 'PELVIS_S', 'chest': 'WAIST_R_S', 'neck': 'NECK_P_S',
+                   **_sides(['L_SHOULDER_Y_S', 'L_ELBOW_P_S', 'L_WRIST_Y_S', 'L_HIP_Y_S'],
+                            ['R_SHOULDER_Y_S', 'R_ELBOW_P_S', 'R_WRIST_Y_S', 'R_HIP_Y_S'])},
+    'humanoid.urdf': {'pelvis': 'root', 'chest': 'chest', 'neck': 'neck',
+                      **_sides(['left_shoulder', 'left_elbow', 'left_wrist', 'left_hip'],
+                               ['right_shoulder', 'right_elbow', 'right_wrist', 'right_hip'])},
+    'character.urdf': {'pelvis': 'base_link', 'chest': 'chest', 'neck': 'neck',
+                       **_sides(['l_upper_arm', 'l_forearm', 'l_hand', 'l_thigh'],
+                                ['r_upper_arm', 'r_forearm', 'r_hand', 'r_thigh'])},
+    'examples/mannequin.urdf': {'pelvis': 'Hips', 'chest': 'Spine2', 'neck': 'Neck',
+                                **_sides(['LeftArm', 'LeftForeArm', 'LeftHand', 'LeftUpLeg'],
+                                         ['RightArm', 'RightForeArm', 'RightHand',
+                                          'RightUpLeg'])},
+    'test_mocapbank.bvh': {'pelvis': 'Hips', 'chest': 'Chest2', 'neck': 'Neck',
+                           **_sides(['LeftShoulder', 'LeftElbow', 'LeftWrist', 'LeftHip'],
+                                    ['RightShoulder', 'RightElbow', 'RightWrist', 'RightHip'])},
+    'test_freebvh.bvh': {'pelvis': 'mixamorig:Hips', 'chest': 'mixamorig:Spine2',
+                         'neck': 'mixamorig:Neck',
+                         **_sides([f'mixamorig:Left{p}' for p in ('Arm', 'ForeArm', 'Hand',
+                                                                  'UpLeg')],
+                                  [f'mixamorig:Right{p}' for p in ('Arm', 'ForeArm', 'Hand',
+                                                                   'UpLeg')])},
+}
+
+
+@pytest.mark.parametrize('name', sorted(KEPT))
+def test_the_other_skeletons_keep_their_choices(name, tmp_path):
+    if name.endswith('.bvh'):
+        path = str(tmp_path / 'skeleton.urdf')
+        assert main(['import', fetched(name), '-o', str(tmp_path / 's.mcap'),
+                     '--urdf-out', path]) == 0
+    elif name.startswith(('character', 'examples')):
+        path = shipped(name)
+    else:
+        path = fetched(name)
+    assert _chosen(propose(load_skeleton(path))[1]) == KEPT[name]
