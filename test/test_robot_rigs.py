@@ -45,9 +45,9 @@ def _sides(left, right):
 
 
 G1_ARMS = _sides(
-    ['left_shoulder_roll_link', 'left_elbow_link', 'left_wrist_pitch_link', 'left_hip_roll_link'],
+    ['left_shoulder_roll_link', 'left_elbow_link', 'left_wrist_pitch_link', 'left_hip_yaw_link'],
     ['right_shoulder_roll_link', 'right_elbow_link', 'right_wrist_pitch_link',
-     'right_hip_roll_link'])
+     'right_hip_yaw_link'])
 ROBOTS = {
     # The head is fixed to the torso (no neck joint); the shoulder's yaw and the forearm's roll
     # turn about their bone halfway along it, so neither is an elbow or a wrist.
@@ -120,8 +120,8 @@ def test_a_robots_sleeves_run_shoulder_to_elbow_to_wrist_and_its_hood_hangs_at_t
         sleeves = {s['link']: s['end_link'] for s in rig['jacket_bones']['sleeves']}
         assert sleeves[upper] == fore and sleeves[fore] == hand
         # Upper arm and forearm are both real bones: neither sleeve is a stub.
-        upper_len, fore_len = (np.linalg.norm(at(b) - at(a)) for a, b in ((upper, fore),
-                                                                         (fore, hand)))
+        upper_len, fore_len = (np.linalg.norm(at(b) - at(a))
+                               for a, b in ((upper, fore), (fore, hand)))
         assert 0.5 < fore_len / upper_len < 1.5, (upper_len, fore_len)
     # The hood's pivot, in the root frame, is at the top of the back: above the shoulders, not
     # down the back where an IMU or the torso's frame is.

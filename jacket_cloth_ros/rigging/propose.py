@@ -14,6 +14,7 @@ link's frame, so the rig fits whatever the link axes are.
 
 import re
 from dataclasses import dataclass, field
+from xml.etree import ElementTree
 
 import numpy as np
 import yaml
@@ -24,6 +25,12 @@ from ..core.skeleton import Skeleton
 
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
 FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
+ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bone is along it
+
+#  Words of sensor and virtual frames (an IMU, a camera, a lidar): never a part of the body.
+SENSOR_WORDS = {'imu', 'camera', 'cam', 'lidar', 'laser', 'sensor', 'gyro', 'gyrometer',
+                'accelerometer', 'rgbd', 'optical', 'depth', 'sonar', 'ranger', 'kinect',
+                'realsense', 'velodyne', 'hokuyo', 'livox', 'gaze', 'fsr', 'touch'}
 
 #  Name tables: token sets that name a part, strongest first (tokens: the name cut at _ : . -,
 #  digits and camel case, lower case, side tokens removed).
@@ -95,6 +102,8 @@ class Body:
     forward: np.ndarray
     left: np.ndarray
     height: float
+    tips: np.ndarray | None = None      # (L,3) where each link's body ends (_tips)
+    virtual: list = field(default_factory=list)   # sensor and virtual frames, left out
     choices: list = field(default_factory=list)
 
     def pos(self, link: int) -> np.ndarray:
@@ -108,17 +117,92 @@ class Refusal(ConfigError):
     """The skeleton lacks a torso or two arms: no rig can be proposed."""
 
 
-def _children(sk):
+@dataclass
+class Frames:
+    """What the URDF says of each link beyond the kinematics: mass, centre of mass, shapes."""
+
+    mass: np.ndarray                    # (L,) kg; 0 when none is given
+    com: np.ndarray                     # (L,3) centre of mass in the link's frame
+    shaped: np.ndarray                  # (L,) bool: a <visual> or <collision>
+
+
+def _frames(sk):
+    n = len(sk.link_names)
+    out = Frames(np.zeros(n), np.zeros((n, 3)), np.zeros(n, bool))
+    try:
+        robot = ElementTree.fromstring(sk.urdf_xml.rstrip('\0 \r\n\t'))
+    except ElementTree.ParseError:
+        return out
+    for link in robot.findall('link'):
+        k = sk.link_index.get(link.get('name', ''))
+        if k is None:
+            continue
+        out.shaped[k] = link.find('visual') is not None or link.find('collision') is not None
+        try:
+            mass = link.find('inertial/mass')
+            out.mass[k] = float(mass.get('value', 0)) if mass is not None else 0.0
+            origin = link.find('inertial/origin')
+            if origin is not None:
+                out.com[k] = [float(v) for v in origin.get('xyz', '0 0 0').split()]
+        except ValueError:
+            continue                      # no use for a bad inertial: the link is as if without
+    bad = ~np.isfinite(out.mass) | ~np.isfinite(out.com).all(axis=1)
+    out.mass[bad], out.com[bad] = 0.0, 0.0
+    return out
+
+
+def is_sensor_name(name: str) -> bool:
+    """Tell whether a link name says a sensor frame (``imu_in_torso``, ``rgbd_optical_frame``)."""
+    return any(t in SENSOR_WORDS or t.endswith(('sensor', 'camera')) for t in tokens(name))
+
+
+def virtual_links(sk: Skeleton, frames: Frames | None = None) -> list[int]:
+    """Return the sensor and virtual frames: links that are no part of the body.
+
+    A link whose name says a sensor (IMU, camera, lidar, laser, ``*_sensor``) or, in a URDF that
+    gives masses, a link with no mass and no visual or collision shape, when every link below it
+    is such a frame too (a sensor frame that carries a gripper is part of the arm). A skeleton
+    without masses (BVH import, an animation rig) keeps its shapeless end links: they are its
+    bones' ends.
+    """
+    frames = frames or _frames(sk)
+    masses = bool((frames.mass > 0).any())
+    n = len(sk.link_names)
+    has_body_below = np.zeros(n, bool)
+    virtual = np.zeros(n, bool)
+    for k in range(n - 1, 0, -1):              # breadth-first order: children later
+        empty = masses and frames.mass[k] <= 0 and not frames.shaped[k]
+        virtual[k] = not has_body_below[k] and (is_sensor_name(sk.link_names[k]) or empty)
+        if not virtual[k]:
+            has_body_below[sk.parent[k]] = True
+    return [k for k in range(n) if virtual[k]]
+
+
+def _children(sk, skip=()):
     kids = [[] for _ in sk.link_names]
+    skip = set(skip)
     for k, p in enumerate(sk.parent):
-        if p >= 0:
+        if p >= 0 and k not in skip:
             kids[p].append(k)
     return kids
 
 
-def _reach(sk, rest, kids):
+def _tips(sk, rest, kids, frames):
+    """Return where each link's body ends: an end link's centre of mass, else its origin.
+
+    A head fixed to the torso with its frame at the torso's, or a forearm that ends the arm,
+    reaches as far as its mass does, not to its frame.
+    """
+    tips = rest[:, :3, 3].copy()
+    for k in range(len(sk.link_names)):
+        if not kids[k] and frames.mass[k] > 0:
+            tips[k] = rest[k][:3, :3] @ frames.com[k] + rest[k][:3, 3]
+    return tips
+
+
+def _reach(sk, rest, kids, tips):
     """Longest distance from each link's origin down to a leaf of its subtree, along bones."""
-    reach = np.zeros(len(sk.link_names))
+    reach = np.linalg.norm(tips - rest[:, :3, 3], axis=1)
     for k in range(len(sk.link_names) - 1, -1, -1):      # breadth-first order: children later
         for c in kids[k]:
             bone = np.linalg.norm(rest[c][:3, 3] - rest[k][:3, 3])
@@ -158,6 +242,29 @@ def _groups(path, rest):
     return groups
 
 
+def _bends(groups, rest, sk):
+    """Return the groups where a chain can bend, and the links left out as twist joints.
+
+    A joint that turns only about the bone it sits on, halfway along a straight run (a robot's
+    upper-arm yaw or forearm roll), twists that bone: it is neither a shoulder, an elbow nor a
+    wrist, and the bones on either side of it are one.
+    """
+    pts = [rest[g[0]][:3, 3] for g in groups]
+    keep, twists = [groups[0]], []
+    for i in range(1, len(groups) - 1):
+        d_in, d_out = pts[i] - pts[i - 1], pts[i + 1] - pts[i]
+        d_in, d_out = (d / max(np.linalg.norm(d), 1e-12) for d in (d_in, d_out))
+        turning = [k for k in groups[i] if sk.kind[k] >= 0]
+        twist = (d_in @ d_out >= ALONG and bool(turning)
+                 and all(sk.kind[k] == 0 and abs((rest[k][:3, :3] @ sk.axis[k]) @ d_in) >= ALONG
+                         for k in turning))
+        if twist:
+            twists += groups[i]
+        else:
+            keep.append(groups[i])
+    return keep + groups[-1:] if len(groups) > 1 else keep, twists
+
+
 def _pick(group, part, sk):
     """Return the link of a group that names ``part`` best, else the last (it carries the bone)."""
     ranked = [(name_rank(sk.link_names[k], part), -i, k) for i, k in enumerate(group)]
@@ -185,8 +292,11 @@ def _snap(v, degrees=15.0):
 def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     """Find pelvis, spine, chest, neck, arms and thighs of a skeleton; refuse in one line."""
     rest = sk.forward(np.zeros(len(sk.joint_names)))
-    kids = _children(sk)
-    reach = _reach(sk, rest, kids)
+    frames = _frames(sk)
+    virtual = virtual_links(sk, frames)
+    kids = _children(sk, virtual)
+    tips = _tips(sk, rest, kids, frames)
+    reach = _reach(sk, rest, kids, tips)
     pts = rest[:, :3, 3]
     size = float(np.ptp(pts, axis=0).max()) if len(pts) > 1 else 0.0
     if size <= 0:
@@ -229,7 +339,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
         raise Refusal(f'cannot find two arms at {sk.link_names[chest]!r}')
     arms_roots = sorted(arms_roots, key=lambda c: -reach[c])[:2]
     neck_path = _groups(_main_path(neck_root, kids, reach), rest)
-    up = _snap(pts[neck_path[-1][-1]] - pts[pelvis])
+    up = _snap(tips[neck_path[-1][-1]] - pts[pelvis])
     if forward is None:
         fwd, why_fwd = _infer_forward(sk, rest, kids, reach, pelvis, legs[:2], arms_roots, up,
                                       size)
@@ -241,7 +351,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     fwd = _snap(fwd)
     left = np.cross(up, fwd)
     body = Body(sk, rest, pelvis, chest, spine, neck_root, {}, {}, {}, up, fwd, left,
-                float(np.ptp(pts @ up)))
+                float(np.ptp(pts @ up)), tips=tips, virtual=virtual)
     nk, why = _pick(neck_path[0] if len(neck_path[0]) > 1 else [neck_root], 'neck', sk)
     body.neck = nk
     body.choices += [
@@ -251,6 +361,11 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
                'neck part'),
         Choice('neck', sk.link_names[nk], f'the short chain at the chest, {why}'),
         Choice('forward', '[' + ', '.join(f'{v:g}' for v in _r(fwd)) + ']', why_fwd)]
+    if virtual:
+        names = [sk.link_names[k] for k in virtual]
+        shown = ', '.join(names[:8]) + (f' and {len(names) - 8} more' if len(names) > 8 else '')
+        body.choices.append(Choice('not body parts', shown, 'sensor or virtual frames: a '
+                                   'sensor\'s name, or no mass and no shape'))
     for root in arms_roots:
         _arm(body, root, kids, reach)
     for root in legs[:2]:
@@ -273,7 +388,7 @@ def _infer_forward(sk, rest, kids, reach, pelvis, legs, arms, up, size):
     pts = rest[:, :3, 3]
     feet = []
     for root in legs:
-        groups = _groups([pelvis] + _main_path(root, kids, reach), rest)
+        groups = _bends(_groups([pelvis] + _main_path(root, kids, reach), rest), rest, sk)[0]
         seg = [np.linalg.norm(pts[groups[i + 1][0]] - pts[groups[i][0]])
                for i in range(len(groups) - 1)]
         if not seg:
@@ -317,7 +432,8 @@ def _side(body, root, link):
 
 def _arm(body, root, kids, reach):
     sk, rest = body.skeleton, body.rest
-    groups = _groups([body.chest] + _main_path(root, kids, reach), rest)
+    groups, twists = _bends(_groups([body.chest] + _main_path(root, kids, reach), rest), rest,
+                            sk)
     if len(groups) < 4:
         raise Refusal(f'cannot find two arms: the chain from {body.name(root)!r} has fewer '
                       'than three bones')
@@ -333,6 +449,10 @@ def _arm(body, root, kids, reach):
         side = 'right' if side == 'left' else 'left'
         why_s = 'the other arm'
     body.arms[side] = (upper, fore, hand)
+    twisted = [sk.link_names[k] for k in twists
+               if groups[i][0] < k < groups[min(i + 2, len(groups) - 1)][0]]
+    if twisted:
+        why_s += f'; {", ".join(twisted)} only twist{"s" if len(twisted) == 1 else ""} a bone'
     body.choices += [
         Choice(f'{side} upper arm', sk.link_names[upper],
                f'shoulder of the two longest bones of the arm chain, {why_u}; {side} {why_s}'),
@@ -342,7 +462,7 @@ def _arm(body, root, kids, reach):
 
 def _leg(body, root, kids, reach):
     sk, rest = body.skeleton, body.rest
-    groups = _groups([body.pelvis] + _main_path(root, kids, reach), rest)
+    groups = _bends(_groups([body.pelvis] + _main_path(root, kids, reach), rest), rest, sk)[0]
     seg = [np.linalg.norm(rest[groups[i + 1][0]][:3, 3] - rest[groups[i][0]][:3, 3])
            for i in range(len(groups) - 1)]
     if not seg:
@@ -502,8 +622,14 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
     if rpy is not None:
         upper['rpy_deg'] = rpy
     neck = body.neck
+    neck_at = P(neck)
+    if (neck_at - P(body.chest)) @ up < SAME_PLACE:
+        # A head fixed to the torso with its frame at or below the torso's (a robot's): the
+        # neck is at the shoulders' height under the head's centre of mass.
+        top = body.tips[neck]
+        neck_at = top - ((top - pelvis) @ up - sh_height) * up
     hood = {'link': names[neck],
-            'pivot': _r(_in_link(body, neck, P(neck) - 0.09 * s * fwd + 0.05 * s * up)),
+            'pivot': _r(_in_link(body, neck, neck_at - 0.09 * s * fwd + 0.05 * s * up)),
             'length': round(0.2 * s, 3),
             'rest_direction': _r(_dir_in_link(body, neck, -0.45 * fwd - 0.9 * up))}
     rig = {}
