@@ -1,5 +1,9 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Files ``make mocap`` fetches from the package registries into the venv (never committed)."""
+"""Files ``make mocap`` fetches from the package registries into the venv (never committed).
+
+Motion captures, the DeepMimic humanoid and its clips, and robot URDFs (JVRC-1; Unitree G1,
+TALOS and Romeo out of example-robot-data), each by its file name.
+"""
 
 import os
 import sys

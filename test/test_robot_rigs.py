@@ -20,7 +20,9 @@ from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.rigging.propose import propose, to_yaml
 from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.session import load_session
 from fetched import fetched
+from per_input import measure_every_input
 
 PARTS = ('pelvis', 'chest', 'neck', 'left upper arm', 'left forearm', 'left hand',
          'right upper arm', 'right forearm', 'right hand', 'left thigh', 'right thigh')
@@ -140,6 +142,45 @@ def test_g1s_rig_says_which_frames_it_left_out(tmp_path, capsys):
     assert 'neck: head_link' in out and 'imu_in_torso' in out
     ignored = next(line for line in out.splitlines() if 'imu_in_torso' in line)
     assert 'sensor' in ignored and 'd435_link' in ignored and 'mid360_link' in ignored
+
+
+def _g1_swing(t):
+    """G1's joint values: arms swinging, elbows bending, forearms rolling, legs stepping."""
+    w = 2 * np.pi * t / 1.2
+    q = {'waist_yaw_joint': 0.2 * np.sin(w)}
+    for side, sign in (('left', 1), ('right', -1)):
+        q[f'{side}_shoulder_pitch_joint'] = 0.5 * sign * np.sin(w)
+        q[f'{side}_elbow_joint'] = 0.6 + 0.4 * np.sin(w)
+        q[f'{side}_wrist_roll_joint'] = 0.8 * np.sin(w)
+        q[f'{side}_hip_pitch_joint'] = -0.35 * sign * np.sin(w)
+        q[f'{side}_knee_joint'] = 0.3 + 0.3 * np.sin(w + sign)
+    return q
+
+
+def test_g1_walks_in_its_proposed_jacket(tmp_path):
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    urdf, rig, session = fetched('g1_29dof_rev_1_0.urdf'), tmp_path / 'rig.yaml', tmp_path / 's'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
+    sk = load_skeleton(urdf)
+    names = list(sk.joint_names) + [f'world_joint/{v}' for v in WORLD_VARIABLES]
+    rec = SessionRecorder(str(session) + '.mcap')
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    for k in range(121):                                   # 4 s at 30 Hz, walking ahead
+        pose = _g1_swing(k / 30)
+        q = [pose.get(j, 0.0) for j in sk.joint_names]
+        stamp = int(k / 30 * 1e9)
+        root = [0.8 * k / 30, 0.0, 0.78, 0.0, 0.0, 0.0, 1.0]
+        rec.write('/joint_states', joint_state(stamp, names, q + root), stamp)
+    rec.close()
+    s = measure_every_input(load_session(str(session) + '.mcap', urdf=urdf, rig=str(rig)))
+    assert s['inputs'] == 121
+    vertical, horizontal, inside = s['vertical_stretch'], s['horizontal_stretch'], s['inside_m']
+    # Issue 19's targets, as test_mocap_targets.py asserts them.
+    assert vertical.max() <= 0.10 and np.percentile(vertical, 99) <= 0.03
+    assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003
+    assert horizontal.max() <= 0.10 and np.percentile(horizontal, 99) <= 0.10
 
 
 # Today's choices on the skeletons of the other tests: the robots' rules change none of them.

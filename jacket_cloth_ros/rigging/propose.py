@@ -3,8 +3,10 @@
 
 Everything is found at the URDF's zero pose in the root frame, whatever the links' own axes:
 the pelvis is the first link where two legs and the spine part, the chest the first link above
-it where two arms and the neck part (chains from the root); each arm's shoulder, elbow and wrist
-are where its two longest consecutive bones meet; left and right come from the names
+it where two arms and the neck part (chains from the root); sensor and virtual frames (an IMU,
+a camera, massless shapeless links of a robot) are no part of any chain; each arm's shoulder,
+elbow and wrist are where its two longest consecutive bones meet, a joint that only twists a
+straight bone halfway along it joining the two; left and right come from the names
 (REP-120 ``l_``, Mixamo ``mixamorig:Left``, Unreal ``_l``, SMPL ``L_``) or else from the side
 they are on. Names also choose between links that sit at one place (a clavicle and an upper
 arm, three links of one ball joint). Sizes come from the links' URDF ``<collision>`` shapes
