@@ -14,6 +14,8 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .propose import virtual_links  # noqa: E402
+
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
 
@@ -39,6 +41,7 @@ def draw_rig(rig: 'Rig', up: np.ndarray, forward: np.ndarray, png_path: str,
     """Draw the rig's front and side views at rest into a PNG."""
     sk = rig.skeleton
     links = sk.forward(np.zeros(len(sk.joint_names)))
+    virtual = set(virtual_links(sk))
     up = np.asarray(up, float) / np.linalg.norm(up)
     fwd = np.asarray(forward, float) - (np.asarray(forward, float) @ up) * up
     fwd /= np.linalg.norm(fwd)
@@ -53,6 +56,9 @@ def draw_rig(rig: 'Rig', up: np.ndarray, forward: np.ndarray, png_path: str,
             return np.asarray(q) @ view.T
         for i in range(1, len(links)):
             seg = p2(links[[sk.parent[i], i], :3, 3])
+            if i in virtual:                # a sensor frame: shown, but not as a bone
+                ax.plot(seg[:, 0], seg[:, 1], color='0.6', lw=0.8, ls=':')
+                continue
             ax.plot(seg[:, 0], seg[:, 1], color='0.25', lw=2.2, solid_capstyle='round')
         for link, center, rot, radii in zip(rig.collider_links, rig.collider_centers,
                                             rig.collider_rotations, rig.collider_radii):
