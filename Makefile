@@ -104,8 +104,9 @@ $(HUMANOID) $(DEEPMIMIC_CLIPS) &: | $(READY)
 
 # Robot URDFs with sensor frames (IMU, cameras, lidar) and arms split into short links, for
 # the rig proposal tests (never committed): Unitree G1 (BSD-3-Clause), PAL TALOS (Apache-2.0)
-# and Aldebaran Romeo (BSD) as example-robot-data 6.0.0 (BSD-3-Clause) ships them, its URDFs
-# only, out of its 131 MB wheel, which is removed once they are out (one download for all).
+# and Aldebaran Romeo (BSD) as example-robot-data 6.0.0 ships them (BSD-3-Clause by its metadata,
+# BSD-2-Clause by its LICENSE file's text), its URDFs only, out of its 131 MB wheel, which is
+# removed once they are out (one download for all).
 ERD_WHEEL := $(MOCAP)/example_robot_data-6.0.0-0-py3-none-any.whl
 $(ROBOTS) &: | $(READY)
 	$(PIP) download --no-deps example-robot-data==6.0.0 -d $(MOCAP)
