@@ -5,7 +5,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -76,8 +75,7 @@ def _run_node_and_motion(tmp_path, stop):
             [sys.executable, '-m', 'jacket_cloth_ros', 'motion', '--clip', 'walk', '--rate',
              '60', '--duration', '3', '--wait', '30'], env=env, capture_output=True, timeout=60)
         assert motion.returncode == 0, motion.stderr
-        time.sleep(0.5)
-        node.send_signal(stop)
+        node.send_signal(stop)          # inputs still queued in the node may go unrecorded
         node.wait(timeout=20)
     finally:
         if node.poll() is None:
@@ -94,7 +92,8 @@ def test_recording_is_complete_after_a_normal_shutdown(tmp_path, stop):
     topics = {m.topic for m in msgs}
     assert {'/joint_states', '/tf', '/jacket_cloth_node/markers', '/diagnostics'} <= topics
     inputs = sum(m.topic == '/joint_states' for m in msgs)
-    assert inputs > 150 and sum(m.topic == '/tf' for m in msgs) == inputs
+    # Every recorded input has its /tf, but the one a signal may stop halfway through.
+    assert inputs > 150 and 0 <= inputs - sum(m.topic == '/tf' for m in msgs) <= 1
 
 
 def test_recording_is_readable_after_a_kill(tmp_path):
@@ -113,7 +112,8 @@ def test_live_motion_stops_on_a_signal_with_one_line(stop):
          '60', '--wait', '0'], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         text=True)
     try:
-        time.sleep(4.0)                 # imports, then the clip is playing
+        playing = motion.stderr.readline()          # signalled once the clip is playing
+        assert "playing 'walk'" in playing, playing
         motion.send_signal(stop)
         out, err = motion.communicate(timeout=20)
     finally:

@@ -32,6 +32,7 @@ _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Read, not listed: a kernel file is any of the package's files that compiles with this njit.
 _KERNEL_MARK = b'@njit'
 _BUNDLES = os.path.join(_PACKAGE, 'core', 'bundles.py')
+_THIS = os.path.abspath(__file__)
 
 
 @functools.lru_cache(maxsize=None)
@@ -41,7 +42,7 @@ def kernel_files() -> tuple[str, ...]:
     for folder, _, names in os.walk(_PACKAGE):
         for name in names:
             path = os.path.join(folder, name)
-            if name.endswith('.py'):
+            if name.endswith('.py') and path != _THIS:     # this file names njit, holds none
                 with open(path, 'rb') as f:
                     if _KERNEL_MARK in f.read():
                         found.add(path)
@@ -76,15 +77,20 @@ class _PackageStamp:
         return kernels_stamp()
 
 
-class PackageUserDirLocator(_PackageStamp, caching.UserProvidedCacheLocator):
+def _numba_locator(name):
+    """Return numba's cache locator class ``name``: public from numba 0.62, ``_name`` before."""
+    return getattr(caching, name, None) or getattr(caching, '_' + name)
+
+
+class PackageUserDirLocator(_PackageStamp, _numba_locator('UserProvidedCacheLocator')):
     """NUMBA_CACHE_DIR set: there, as numba would."""
 
 
-class PackageInTreeLocator(_PackageStamp, caching.InTreeCacheLocator):
+class PackageInTreeLocator(_PackageStamp, _numba_locator('InTreeCacheLocator')):
     """Else in the package's __pycache__, as numba would."""
 
 
-class PackageUserWideLocator(_PackageStamp, caching.UserWideCacheLocator):
+class PackageUserWideLocator(_PackageStamp, _numba_locator('UserWideCacheLocator')):
     """Else (an install that cannot be written) in the user's cache folder, as numba would."""
 
 

@@ -101,26 +101,25 @@ class CrowdSteps:
 
     @staticmethod
     def _key(sim):
-        return (sim.tuning, sim.x, sim.xp, sim.contact, sim.hood_p, sim.hood_pp, sim.root,
-                sim._lam, sim._started)
+        return (sim.tuning, sim.state)
 
     def _slot(self, sim):
         """Make a slot on the simulation's own arrays, with motion and output arrays of its own."""
-        state = sim.state           # coerces the arrays first: the key holds the coerced ones
+        state = sim.state
         q = len(sim.skeleton.joint_names)
         out = sim.step_output()
         layer = sim.rig.layer
         parents = ints(layer.parent_index if layer else [])
         slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
                          np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
-                         np.zeros(5, dtype=np.int64), out, ints(sim._bone_rc), parents,
+                         np.zeros(5, dtype=np.int64), out, ints(sim.bone_set.grid), parents,
                          np.zeros((len(sim.bone_names), 7)))
         return slot, self._key(sim)
 
     def _current(self, index):
-        """Return the slot of simulation ``index``, made again if one of its arrays changed.
+        """Return the slot of simulation ``index``, made again if its tuning changed.
 
-        A reset makes new state arrays, a live parameter change a new Tuning.
+        A live parameter change makes a new Tuning; the state is held once, never replaced.
         """
         sim = self.sims[index]
         key = self._key(sim)
@@ -154,12 +153,12 @@ class CrowdSteps:
             index = item[1]
             sim, arm = sims[index], armed[index]
             # Armed for this very name list, tuning and last sample (a simulation stepped
-            # outside the crowd has another), no viewer, an int stamp, the slot on the state
-            # (a reset replaces x with the other state arrays, a new tuning its _lam).
+            # outside the crowd, or reset, has another), no viewer, an int stamp, the slot on
+            # this tuning.
             if (arm is not None and arm[0] is item[3] and arm[1] is sim.tuning
                     and arm[2] is sim.parser.world_joint and arm[3] is sim.last
                     and sim.lod.viewer is None and type(item[2]) is int
-                    and mine[index].state.x is sim.x):
+                    and mine[index].tuning is sim.tuning):
                 fast.append(item)
             else:
                 armed[index] = None         # prepare moves its last sample on

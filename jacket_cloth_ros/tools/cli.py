@@ -67,6 +67,7 @@ def cmd_motion(args: argparse.Namespace) -> int:
         while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         time.sleep(min(0.3, args.wait))
+        node.get_logger().info(f'playing {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
         start = node.get_clock().now().nanoseconds
         wall0 = time.monotonic()
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration, start,
