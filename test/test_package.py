@@ -121,8 +121,8 @@ def test_the_environment_has_the_node_and_the_tools_as_commands():
 
 
 def test_the_node_runs_without_mcap_and_recording_says_what_it_needs():
-    # mcap has no rosdep key on every distro: `rosdep install` then `ros2 run` must start the
-    # node; only recording needs `pip install mcap`, and says so.
+    # mcap comes through a pip rosdep key, which a packaged install may leave out: the node
+    # must start without it; only recording needs it, and says how to get it.
     script = '''
 import sys
 class NoMcap:
@@ -142,4 +142,4 @@ except OSError as e:
         done = subprocess.run([sys.executable, '-c', script, os.path.join(folder, 'x.mcap')],
                               capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert 'recording needs the mcap package (pip install mcap)' in done.stdout
+    assert 'recording needs the mcap package (rosdep key mcap-ros2-support)' in done.stdout

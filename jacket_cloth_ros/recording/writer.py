@@ -85,7 +85,8 @@ class SessionRecorder:
         try:            # only recording needs mcap: a node without it runs, unrecorded
             from .mcap_file import McapWriter
         except ImportError as e:
-            raise OSError(f'recording needs the mcap package (pip install mcap): {e}') from None
+            raise OSError('recording needs the mcap package (rosdep key mcap-ros2-support): '
+                          f'{e}') from None
         directory = os.path.dirname(os.path.abspath(path))
         if not os.path.isdir(directory):
             raise OSError(f'folder {directory} does not exist')
