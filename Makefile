@@ -11,11 +11,14 @@ PIP       := $(PY) -m pip --disable-pip-version-check -q
 READY     := $(VENV)/.jacket_cloth_ready
 MOCAP     := $(VENV)/share/mocap
 TF2_BUILD := $(VENV)/build/tf2_msgs
+PKG       := jacket_cloth_ros
+AMENT     := $(VENV)/share/ament_index/resource_index/packages/$(PKG)
 export PYTHONPATH := $(CURDIR)$(if $(PYTHONPATH),:$(PYTHONPATH))
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
+# .venv is an ament prefix holding this package (below), with or without a system ROS 2.
+export AMENT_PREFIX_PATH := $(abspath $(VENV))$(if $(AMENT_PREFIX_PATH),:$(AMENT_PREFIX_PATH))
 ifeq ($(strip $(ROS_DISTRO)),)
-  export AMENT_PREFIX_PATH := $(abspath $(VENV))$(if $(AMENT_PREFIX_PATH),:$(AMENT_PREFIX_PATH))
   SETUP := wheels
 else
   SETUP := system
@@ -24,7 +27,7 @@ endif
 .PHONY: all setup mocap demo analysis test bench-kernel clean-venv
 all: test
 
-setup: $(READY)
+setup: $(READY) $(AMENT)
 
 $(READY): requirements.txt requirements-ros-wheels.txt interfaces/tf2_msgs/CMakeLists.txt setup.py
 	@echo "setup ($(SETUP) ROS 2) into $(VENV) ..."
@@ -51,7 +54,28 @@ endif
 	$(PY) -m jacket_cloth_ros warm
 	touch $@
 
-demo: $(READY)
+# The package in .venv as colcon installs it (setup.py's data_files and scripts), so that
+# `ros2 pkg/run/launch` find it there: the package's share folder, its executables in
+# lib/$(PKG) and, last, its ament index entry. Links to this checkout, as the editable install;
+# ros2 launch does not look into a linked folder, so the folders are made and the files linked.
+$(AMENT): $(READY) package.xml setup.py $(wildcard launch_scripts/*.launch.py config/*.* \
+          config/examples/* config/view/*)
+	rm -rf $(VENV)/share/$(PKG) && mkdir -p $(VENV)/share/$(PKG)/launch \
+	    $(VENV)/share/$(PKG)/config/examples $(VENV)/share/$(PKG)/config/view \
+	    $(VENV)/lib/$(PKG) $(dir $@)
+	ln -s $(CURDIR)/package.xml $(VENV)/share/$(PKG)/
+	ln -s $(CURDIR)/launch_scripts/*.launch.py $(VENV)/share/$(PKG)/launch/
+	ln -s $(CURDIR)/config/*.* $(VENV)/share/$(PKG)/config/
+	ln -s $(CURDIR)/config/examples/* $(VENV)/share/$(PKG)/config/examples/
+	ln -s $(CURDIR)/config/view/* $(VENV)/share/$(PKG)/config/view/
+	# The console scripts pip made in bin/ (the editable install does not read setup.cfg).
+	for exe in $$($(PY) -c "from importlib.metadata import distribution as d; \
+	        print(*sorted({e.name for e in d('$(PKG)').entry_points \
+	                       if e.group == 'console_scripts'}))"); do \
+	    ln -sfn ../../bin/$$exe $(VENV)/lib/$(PKG)/$$exe || exit 1; done
+	cp resource/$(PKG) $@
+
+demo: $(READY) $(AMENT)
 	$(PY) -m jacket_cloth_ros demo --out out/demo
 
 # The demo session replayed as a down jacket, both analysed side by side (README picture).
@@ -116,7 +140,7 @@ $(ROBOTS) &: | $(READY)
 	    $(ERD_WHEEL) $(ROBOT_URDFS)
 	rm -f $(ERD_WHEEL)
 
-test: $(READY) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
+test: $(READY) $(AMENT) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
 	$(PY) -m pytest -q test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).

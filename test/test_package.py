@@ -63,6 +63,31 @@ def test_ros2_run_finds_the_node_through_the_ament_index(installed):
     assert out.returncode == 0 and 'characters:=' in out.stdout
 
 
+def _prefix_files(prefix, package):
+    """The package's files in an ament prefix, as paths relative to it (links followed)."""
+    found = set()
+    index = os.path.join('share', 'ament_index', 'resource_index', 'packages', package)
+    if os.path.isfile(os.path.join(prefix, index)):
+        found.add(index)
+    for top in (os.path.join('share', package), os.path.join('lib', package)):
+        for folder, _, files in os.walk(os.path.join(prefix, top)):
+            found.update(os.path.relpath(os.path.join(folder, f), prefix) for f in files
+                         if os.path.isfile(os.path.join(folder, f)))
+    return found
+
+
+def test_the_ament_prefix_in_use_holds_what_colcon_installs(installed):
+    # make's .venv (links to the checkout) or a colcon install, as AMENT_PREFIX_PATH finds the
+    # package: what ros2 run and ros2 launch read there is what setup.py installs.
+    from ament_index_python.packages import get_package_prefix
+    in_use = get_package_prefix('jacket_cloth_ros')
+    assert _prefix_files(in_use, 'jacket_cloth_ros') == _prefix_files(installed,
+                                                                      'jacket_cloth_ros')
+    lib = os.path.join(in_use, 'lib', 'jacket_cloth_ros')
+    assert _executables(in_use, 'jacket_cloth_ros') == _executables(installed, 'jacket_cloth_ros')
+    assert all(os.access(os.path.join(lib, f), os.X_OK) for f in os.listdir(lib))
+
+
 def test_package_xml_is_format_3_ament_python():
     from catkin_pkg.package import parse_package
     pkg = parse_package(ROOT)
