@@ -24,14 +24,14 @@ import time
 
 # (module, class, its methods timed)
 PARTS = (
-    ('ros.crowd', 'JacketCrowdNode', ('on_joint_states',)),
+    ('ros.node', 'JacketClothNode', ('on_joint_states',)),
     ('ros.pipeline', 'CrowdPipeline', ('step_and_tf',)),
     ('core.crowd', 'CrowdSteps', ('run',)),
     ('core.simulation', 'JacketSimulation', ('prepare', 'complete')),
     ('ros.cdr', 'JointStateReader', ('read',)),
     ('ros.pipeline', 'SessionPipeline', ('account_tf', 'periodic_outputs')),
-    ('ros.crowd', 'CrowdInputs', ('take_data', 'add_to_wait_set', 'is_ready')),
-    ('ros.crowd', 'Character', ('count_lost',)),
+    ('ros.character', 'CrowdInputs', ('take_data', 'add_to_wait_set', 'is_ready')),
+    ('ros.character', 'Character', ('count_lost',)),
 )
 
 
@@ -69,7 +69,7 @@ def main() -> int:
     from rclpy.executors import SingleThreadedExecutor
 
     from jacket_cloth_lab.crowd import crowd_command
-    from jacket_cloth_ros.ros.crowd import JacketCrowdNode
+    from jacket_cloth_ros.ros.node import JacketClothNode
     spent = collections.Counter()
     for module, cls, methods in PARTS:
         owner = getattr(importlib.import_module(f'jacket_cloth_ros.{module}'), cls)
@@ -80,7 +80,7 @@ def main() -> int:
         ctx = rclpy.Context()
         rclpy.init(args=['crowd'] + argv[argv.index('--ros-args'):], context=ctx,
                    domain_id=domain)
-        node = JacketCrowdNode(context=ctx)     # every character loaded: its call is typed
+        node = JacketClothNode(crowd=True, context=ctx)     # every character loaded: typed
         steps = node.crowd.steps
         steps._call = _timed(spent, 'compiled steps (advance_crowd)', steps._call)
         executor = SingleThreadedExecutor(context=ctx)

@@ -105,7 +105,7 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
 
-    from jacket_cloth_ros.ros.node import LATCHED
+    from jacket_cloth_ros.ros.character import LATCHED
     if cores_each:
         cores = set().union(*cores_each)
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
@@ -211,7 +211,7 @@ def tf_batching(n=64, repeat=200):
     from tf2_msgs.msg import TFMessage
 
     from jacket_cloth_ros.ros.cdr import TfTemplate
-    from jacket_cloth_ros.ros.node import TF_QOS
+    from jacket_cloth_ros.ros.character import TF_QOS
     bones = 68
     names = [f'jacket_bone_{i:02d}' for i in range(bones)]
     poses = np.tile([0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], (bones, 1))

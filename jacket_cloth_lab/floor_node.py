@@ -1,21 +1,23 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The floor of `jacket_cloth_lab bench speed`: the least an rclpy node can do per JointState.
 
-It receives the JointState stream as the real node does (raw bytes, sensor-data QoS) and
-republishes one pre-built TFMessage with as many bones as the shipped rig: no simulation, no
-encoding, no recording. Its CPU per message plus the bare kernel's is what the node is held to.
+It takes the JointState stream as the real node does (the node's CrowdInputs: raw bytes,
+sensor-data QoS, a batch per wake-up) and publishes, per character and message, one pre-built
+TFMessage with as many bones as the shipped rig on the node's own /tf publisher: no
+simulation, no encoding, no recording. Each character's latency (arrival to /tf handed to
+DDS) goes out on the node's /diagnostics publisher once a second, as the node reports it, so
+the benches measure this floor as they measure the node. Its CPU per message plus the bare
+kernel's is what the node is held to.
 
-With ``--kernel`` it also runs the bare kernel (one ``cloth.cloth_step`` of the shipped rig,
-states captured from a walk) in each callback, so that the kernel's share of the floor is
-measured as the node runs it: once per message, 8 ms apart, in this process. Called back to
-back, the same step took a third to a half of that (``speed.node_vs_floor``, README).
+With ``--kernel`` it also steps the cloth in each batch, as the node does, so that the
+kernel's share of the floor is measured as the node runs it: once per message, 8 ms apart, in
+this process. Alone, one bare kernel step (``cloth.cloth_step`` of the shipped rig, states
+captured from a walk), as a node of one character steps it alone; called back to back, the
+same step took a third to a half of that (``speed.node_vs_floor``, README).
 
-With ``--crowd N`` it is the floor of the crowd node (jacket_cloth_crowd): N subscriptions
-to /joint_states, taken as the crowd takes them (one CrowdInputs waitable, a batch per
-wake-up), and per character and message one pre-built TFMessage and, with ``--kernel``, that
-character's step by the crowd's core (``crowd_stepper``). Each character's latency (arrival to /tf
-handed to DDS) goes out in /diagnostics once a second, as the crowd reports it, so the
-crowd bench measures this floor as it measures the crowd.
+With ``--crowd N`` it is the floor of a crowd node of N characters (jacket_cloth_crowd): N
+subscriptions to /joint_states, and with ``--kernel`` their steps by the crowd's core
+(``crowd_stepper``).
 """
 
 import sys
@@ -24,13 +26,10 @@ import time
 import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from rclpy.qos import qos_profile_sensor_data
-from sensor_msgs.msg import JointState
-from tf2_msgs.msg import TFMessage
 
 from jacket_cloth_ros.ros.cdr import JointStateReader, TfTemplate
-from jacket_cloth_ros.ros.crowd import CrowdInputs
-from jacket_cloth_ros.ros.node import NO_PUB_EVENTS, TF_QOS
+from jacket_cloth_ros.ros.character import CrowdInputs
+from jacket_cloth_ros.ros.node import diagnostics_publisher, tf_publisher
 from jacket_cloth_ros.ros.pipeline import quantile
 
 BONES = 68          # the shipped rig's bones on /tf
@@ -62,14 +61,13 @@ def _prebuilt_tf(prefix=''):
     return TfTemplate(names, ['spine'] * BONES, prefix).encode(identity, 0)
 
 
-def crowd_floor(node, n, with_kernel):
-    """Set ``node`` up as the crowd's floor of ``n`` characters (see the module's docstring)."""
+def floor(node, n, with_kernel):
+    """Set ``node`` up as the floor of a node of ``n`` characters (see the module's docstring)."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    data = [_prebuilt_tf(f'f{k}/') for k in range(n)]
-    step = crowd_stepper(n) if with_kernel else None
-    tf = node.create_publisher(TFMessage, '/tf', TF_QOS)
-    diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics', 10,
-                                        event_callbacks=NO_PUB_EVENTS)
+    data = [_prebuilt_tf(f'f{k}/' if n > 1 else '') for k in range(n)]
+    step = (_alone_stepper() if n == 1 else crowd_stepper(n)) if with_kernel else None
+    tf = tf_publisher(node)
+    diagnostics = diagnostics_publisher(node)
     latencies = [[] for _ in range(n)]
     inputs = [0] * n
     last = [None]                   # the last input's CDR bytes
@@ -90,13 +88,13 @@ def crowd_floor(node, n, with_kernel):
         if last[0] is None:
             return
         msg = DiagnosticArray()
-        # Stamped as the crowd stamps its own: the last input's, so inputs that stop do not
+        # Stamped as the node stamps its own: the last input's, so inputs that stop do not
         # read as inputs left unanswered.
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(
             reader.read(last[0]).stamp_ns, 10 ** 9)
         for k in range(n):
             if latencies[k]:
-                p99 = quantile(sorted(latencies[k]), 0.99) * 1e-3     # as the crowd's
+                p99 = quantile(sorted(latencies[k]), 0.99) * 1e-3     # as the node's
                 msg.status.append(DiagnosticStatus(name=f'floor {k}', values=[
                     KeyValue(key='latency_us_p99', value=f'{p99:.1f}'),
                     KeyValue(key='inputs', value=str(inputs[k]))]))
@@ -107,6 +105,16 @@ def crowd_floor(node, n, with_kernel):
         waitable.subscribe(node, k, 'joint_states')
     node.add_waitable(waitable)
     node.create_timer(1.0, report)
+
+
+def _alone_stepper():
+    """Return ``crowd_stepper``'s callable for one character, stepped alone by the bare kernel."""
+    one = kernel_stepper()
+
+    def step(characters):
+        for _ in characters:
+            one()
+    return step
 
 
 def crowd_stepper(n):
@@ -159,23 +167,11 @@ def _walk_steps():
 
 
 def main():
-    with_kernel = '--kernel' in sys.argv
+    crowd = '--crowd' in sys.argv
     rclpy.init(args=sys.argv)
-    if '--crowd' in sys.argv:
-        node = rclpy.create_node('jacket_cloth_crowd_floor')
-        crowd_floor(node, int(sys.argv[sys.argv.index('--crowd') + 1]), with_kernel)
-        return _spin(node)
-    node = rclpy.create_node('jacket_cloth_floor')
-    data = _prebuilt_tf()
-    pub = node.create_publisher(TFMessage, '/tf', 100)
-    step = kernel_stepper() if with_kernel else None
-
-    def on_joint_state(raw):
-        if step is not None:
-            step()
-        pub.publish(data)
-    node.create_subscription(JointState, 'joint_states', on_joint_state,
-                             qos_profile_sensor_data, raw=True)
+    node = rclpy.create_node('jacket_cloth_crowd_floor' if crowd else 'jacket_cloth_floor')
+    floor(node, int(sys.argv[sys.argv.index('--crowd') + 1]) if crowd else 1,
+          '--kernel' in sys.argv)
     return _spin(node)
 
 

@@ -203,7 +203,7 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
     from std_msgs.msg import String
     from tf2_msgs.msg import TFMessage
 
-    from jacket_cloth_ros.ros.node import LATCHED
+    from jacket_cloth_ros.ros.character import LATCHED
     from jacket_cloth_ros.motion.messages import clip_messages
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     ctx = rclpy.Context()
@@ -393,6 +393,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
     urdf = shipped_character_urdf()
     node = JacketClothNode(context=ctx, parameter_overrides=[
         Parameter('record', value=path), Parameter('robot_description', value=urdf)])
+    character = node.characters[0]
     windows = []
     n = int(simulated_s * RATE)
     per_window = int(window_s * RATE)
@@ -404,7 +405,7 @@ def endurance(skeleton, simulated_s, folder, window_s=60.0):
             raw = serialize_message(
                 joint_state_message(names, pos, 10 ** 10 + int(round(t * 1e9))))
             t0 = time.thread_time_ns()
-            node.on_joint_state(raw, {})
+            node.on_joint_states([(character, raw, {})])
             costs.append(time.thread_time_ns() - t0)
             if (k + 1) % per_window == 0:
                 windows.append({'simulated_s': (k + 1) / RATE, 'rss_mb': _rss_mb(),

@@ -121,7 +121,7 @@ def test_fuzz_every_subscribed_topic(urdf_text):
         cdr_seeds = [serialize_message(String(data=t)) for t in text_seeds]
         sent = 0
         for _ in _until(SECONDS):
-            if h.node.pipeline is not None:
+            if h.c.pipeline is not None:
                 break
             if rng.random() < 0.5:
                 data = fuzzed(rng, cdr_seeds)
@@ -132,11 +132,11 @@ def test_fuzz_every_subscribed_topic(urdf_text):
             sent += 1
             h.spin_until(lambda: h.node.received['robot_description'] == sent,
                          timeout=30)
-            loaded = h.node.pipeline is not None
+            loaded = h.c.pipeline is not None
             assert h.node.refused['robot_description'] == sent - loaded, (SEED, data[:200])
-        if h.node.pipeline is None:
+        if h.c.pipeline is None:
             description.publish(String(data=urdf_text))
-        h.spin_until(lambda: h.node.sim is not None and h.pub.get_subscription_count() > 0)
+        h.spin_until(lambda: h.c.sim is not None and h.pub.get_subscription_count() > 0)
 
         # ~/wind: each message applies its vector or is refused.
         wind = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', 10)
@@ -159,7 +159,7 @@ def test_fuzz_every_subscribed_topic(urdf_text):
                 assert h.node.refused['wind'] == before + 1, (SEED, data)
             else:
                 assert h.node.refused['wind'] == before, (SEED, data)
-                assert h.node.sim.params.wind == expected, (SEED, data)
+                assert h.c.sim.params.wind == expected, (SEED, data)
 
         # ~/viewer: each message sets the viewer or is refused (the last good one kept).
         viewer = h.peer.create_publisher(PointStamped, '/jacket_cloth_node/viewer', VIEWER_QOS)
@@ -173,20 +173,20 @@ def test_fuzz_every_subscribed_topic(urdf_text):
         sent = 0
         for _ in _until(SECONDS):
             data = fuzzed(rng, seeds)
-            before = (h.node.refused['viewer'], h.node.sim.lod.viewer)
+            before = (h.node.refused['viewer'], h.c.sim.lod.viewer)
             viewer.publish(data)
             sent += 1
             h.spin_until(lambda: h.node.received['viewer'] == sent)
             expected = _viewer_applies(data)
             if expected is None:
                 assert h.node.refused['viewer'] == before[0] + 1, (SEED, data)
-                assert h.node.sim.lod.viewer is before[1], (SEED, data)
+                assert h.c.sim.lod.viewer is before[1], (SEED, data)
             else:
                 assert h.node.refused['viewer'] == before[0], (SEED, data)
-                assert tuple(h.node.sim.lod.viewer) == expected, (SEED, data)
+                assert tuple(h.c.sim.lod.viewer) == expected, (SEED, data)
 
         # joint_states: each message is used, or counted as dropped or undecodable.
-        sk = h.node.sim.skeleton
+        sk = h.c.sim.skeleton
         seeds = []
         for k in range(8):
             names, pos = joint_state_content(sk.joint_names, 'walk', k / 60)
@@ -195,7 +195,7 @@ def test_fuzz_every_subscribed_topic(urdf_text):
             msg.header.stamp.sec, msg.header.stamp.nanosec = 500 + k, 1000 * k
             msg.header.frame_id = 'base_link'
             seeds.append(serialize_message(msg))
-        pipeline = h.node.pipeline
+        pipeline = h.c.pipeline
         seen = lambda: pipeline.inputs + pipeline.undecodable + pipeline.lost  # noqa: E731
         start, accepted, tf_start = seen(), 0, len(h.tf)
         sent = 0
@@ -211,7 +211,7 @@ def test_fuzz_every_subscribed_topic(urdf_text):
             assert decoded + pipeline.undecodable - before[2] == 1, (SEED, data)
             accepted += decoded - (pipeline.dropped - before[1])
         # Every input used is on /tf, unless its pose was not finite (then warned about).
-        if 'nan' not in h.node._log_times:
+        if 'nan' not in h.c.log_times:
             h.spin_until(lambda: len(h.tf) - tf_start == accepted)
         # Still alive: a valid clip comes out on /tf, finite.
         tf_before = len(h.tf)

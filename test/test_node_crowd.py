@@ -27,8 +27,8 @@ from jacket_cloth_ros.motion.clips import joint_state_content
 from jacket_cloth_ros.recording.reader import read_recording
 from jacket_cloth_ros.ros import cdr
 from jacket_cloth_ros.ros.characters import crowd_slice, load_characters
-from jacket_cloth_ros.ros.crowd import JacketCrowdNode
-from jacket_cloth_ros.ros.node import LATCHED
+from jacket_cloth_ros.ros.character import LATCHED
+from jacket_cloth_ros.ros.node import JacketClothNode
 from jacket_cloth_ros.ros.pipeline import SessionPipeline
 from jacket_cloth_ros.ros.viewer import VIEWER_QOS
 from jacket_cloth_ros.tools.crowd_replay import replay_crowd
@@ -116,7 +116,7 @@ def test_each_character_of_a_crowd_gets_the_tf_it_gets_alone_and_replays_bit_for
     ex = SingleThreadedExecutor(context=ctx)
     node = None
     try:
-        node = JacketCrowdNode(context=ctx, parameter_overrides=[
+        node = JacketClothNode(crowd=True, context=ctx, parameter_overrides=[
             Parameter('characters', value=str(path)), Parameter('record', value=record)])
         peer = rclpy.create_node('crowd_peer', context=ctx)
         peer.create_publisher(String, '/b/robot_description', LATCHED).publish(
@@ -225,7 +225,7 @@ def test_a_backlog_is_taken_and_processed_in_one_wake_up(tmp_path):
         batches = []
         process = crowd.node.on_joint_states
         crowd.node.on_joint_states = lambda batch: (batches.append(
-            [(c.spec.name, raw) for c, raw, _, _ in batch]), process(batch))
+            [(c.spec.name, raw) for c, raw, _ in batch]), process(batch))
         pubs = {n: crowd.peer.create_publisher(JointState, f'/{n}/joint_states', 10)
                 for n in raws}
         crowd.spin_until(lambda: all(p.get_subscription_count() for p in pubs.values()))
@@ -318,7 +318,7 @@ class _Crowd:
         self.ex = SingleThreadedExecutor(context=self.ctx)
         self.node = None
         try:
-            self.node = JacketCrowdNode(context=self.ctx, parameter_overrides=[
+            self.node = JacketClothNode(crowd=True, context=self.ctx, parameter_overrides=[
                 Parameter('characters', value=str(path))] + [
                 Parameter(k, value=v) for k, v in params.items()])
         except Exception:
@@ -495,11 +495,10 @@ def _recorded_crowd(tmp_path, characters, batches):
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)
     try:
-        node = JacketCrowdNode(context=ctx, parameter_overrides=[
+        node = JacketClothNode(crowd=True, context=ctx, parameter_overrides=[
             Parameter('characters', value=str(path)), Parameter('record', value=record)])
         for batch in batches:
-            node.on_joint_states([(c, raw, {}, time.time_ns()) for raw in batch
-                                  for c in node.characters])
+            node.on_joint_states([(c, raw, {}) for raw in batch for c in node.characters])
         node.close()
         node.destroy_node()
     finally:

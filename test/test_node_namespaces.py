@@ -15,7 +15,8 @@ from visualization_msgs.msg import MarkerArray
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 from jacket_cloth_ros.motion.clips import joint_state_content
-from jacket_cloth_ros.ros.node import LATCHED, JacketClothNode
+from jacket_cloth_ros.ros.character import LATCHED
+from jacket_cloth_ros.ros.node import JacketClothNode
 
 
 def _spin_until(ex, predicate, timeout=20.0):
@@ -55,26 +56,27 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
                                      markers[ns].append, 10)
         for node in (*nodes.values(), peer):
             ex.add_node(node)
-        _spin_until(ex, lambda: all(n.sim is not None for n in nodes.values()))
-        assert nodes['npc1'].sim.skeleton.link_names[0] == 'base_link'
-        assert 'Hips' in nodes['npc2'].sim.skeleton.link_names        # the mannequin's own
+        chars = {ns: node.characters[0] for ns, node in nodes.items()}     # one each
+        _spin_until(ex, lambda: all(c.sim is not None for c in chars.values()))
+        assert chars['npc1'].sim.skeleton.link_names[0] == 'base_link'
+        assert 'Hips' in chars['npc2'].sim.skeleton.link_names        # the mannequin's own
         pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in nodes}
         _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
         for k in range(6):
-            for ns, node in nodes.items():
-                names, pos = joint_state_content(node.sim.skeleton.joint_names, 'walk', k / 30)
+            for ns, c in chars.items():
+                names, pos = joint_state_content(c.sim.skeleton.joint_names, 'walk', k / 30)
                 msg = JointState(name=list(names), position=[float(p) for p in pos])
                 msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
-                before = node.inputs
+                before = c.inputs
                 pubs[ns].publish(msg)
-                _spin_until(ex, lambda: node.inputs > before)
+                _spin_until(ex, lambda: c.inputs > before)
         _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 12)
         frames = {t.child_frame_id.split('/')[0] for m in tf for t in m.transforms}
         assert frames == {'npc1', 'npc2'}
-        for ns, node in nodes.items():
-            assert node.inputs == 6 and node.sim.resets == 1
+        for ns, c in chars.items():
+            assert c.inputs == 6 and c.sim.resets == 1
             assert {t.header.frame_id for m in tf for t in m.transforms
-                    if t.child_frame_id.startswith(ns)} <= set(node.sim.skeleton.link_names)
+                    if t.child_frame_id.startswith(ns)} <= set(c.sim.skeleton.link_names)
     finally:
         ex.shutdown()
         for node in nodes.values():

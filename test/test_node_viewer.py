@@ -30,9 +30,9 @@ def _viewer(point, frame='world'):
 def _walk(h, first, count):
     """Send inputs ``first`` .. ``first + count - 1`` of a 60 Hz walk, each processed."""
     for k in range(first, first + count):
-        names, pos = joint_state_content(h.node.sim.skeleton.joint_names, 'walk', k / 60)
+        names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'walk', k / 60)
         h.send(names, pos, 100 * 10 ** 9 + k * 10 ** 9 // 60)
-        h.spin_until(lambda: h.node.inputs == k + 1)
+        h.spin_until(lambda: h.c.inputs == k + 1)
 
 
 def _status(diagnostics):
@@ -65,10 +65,10 @@ def test_a_viewer_latched_before_the_node_starts_sets_its_level_of_detail(harnes
         diagnostics = []
         h.peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 10)
         h.spin_until(lambda: h.node.received['viewer'] == 1)
-        assert h.node.sim.last is None           # before the first input
+        assert h.c.sim.last is None           # before the first input
         h.send_clip('walk', 60, 1.0)
         h.spin_until(lambda: len(diagnostics) >= 1)
-        assert h.node.sim.lod.level == 2 and h.node.refused['viewer'] == 0
+        assert h.c.sim.lod.level == 2 and h.node.refused['viewer'] == 0
         values = _status(diagnostics)
         assert values['lod_level'] == '2'
         assert 95.0 < float(values['viewer_distance_m']) < 105.0
@@ -84,7 +84,7 @@ def test_a_bad_viewer_is_ignored_with_a_warning_and_the_node_keeps_publishing(ha
     pub.publish(_viewer(FAR))
     h.spin_until(lambda: h.node.received['viewer'] == 1)
     h.send_clip('walk', 60, 0.5)
-    assert h.node.sim.lod.level == 2
+    assert h.c.sim.lod.level == 2
     # Each would bring the viewer near (or break the distance) if it were taken.
     bad = [serialize_message(_viewer(NEAR, 'map')),
            serialize_message(_viewer((math.nan, 1.0, 0.0))),
@@ -94,11 +94,11 @@ def test_a_bad_viewer_is_ignored_with_a_warning_and_the_node_keeps_publishing(ha
         pub.publish(raw)
         h.spin_until(lambda: h.node.received['viewer'] == k + 2)
     assert h.node.refused['viewer'] == len(bad) and 'viewer' in h.node._log_times
-    assert list(h.node.sim.lod.viewer) == list(FAR)
+    assert list(h.c.sim.lod.viewer) == list(FAR)
     before = len(h.tf)
     sent = h.send_clip('walk', 60, 0.5, start_s=100.5)
     h.spin_until(lambda: len(h.tf) >= before + sent - 2)
-    assert h.node.sim.lod.level == 2 and all(_all_finite(tf) for tf in h.tf)
+    assert h.c.sim.lod.level == 2 and all(_all_finite(tf) for tf in h.tf)
 
 
 def test_a_live_session_near_far_near_replays_byte_for_byte(harness, tmp_path):
@@ -114,8 +114,8 @@ def test_a_live_session_near_far_near_replays_byte_for_byte(harness, tmp_path):
         pub.publish(_viewer(point))
         h.spin_until(lambda: h.node.received['viewer'] == k + 1)
         _walk(h, 48 * k, 48)
-        levels.append(h.node.sim.lod.level)
-    assert levels == [0, 2, 0] and h.node.sim.resets == 1       # the first input's only
+        levels.append(h.c.sim.lod.level)
+    assert levels == [0, 2, 0] and h.c.sim.resets == 1       # the first input's only
     h.node.close()
     session = load_session(str(path))
     assert [e[2] for e in session.events].count('viewer') == 3

@@ -141,7 +141,7 @@ def _foreign_joint_states(path, skeleton_names, topic='/robot/joint_states', sec
 
 
 def _node_recording(path, stamps, clip='walk', rate=60.0):
-    """A session recorded by the node's rules, without DDS (ros/node.py _on_joint_state): each
+    """A session recorded by the node's rules, without DDS (ros/node.py on_joint_states): each
     JointState is written as it arrives, at its header stamp, then the pipeline's outputs.
     ``stamps``: the header stamps in arrival order; the k-th carries the clip at k / rate."""
     from rclpy.serialization import serialize_message

@@ -1,8 +1,16 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""jacket_cloth_node: JointState in; jacket and hood bones on /tf, markers, diagnostics out."""
+"""The jacket node: JointState in; jacket and hood bones on /tf, markers, diagnostics out.
+
+One class for ``jacket_cloth_node`` (one character, its parameters the node's own) and
+``jacket_cloth_crowd`` (ros/crowd.py: the characters of a characters file). Each character
+(ros/character.py) has its own input, outputs, resets, warnings and recording channels; the
+node has what is one per process: parameters, ``~/viewer``, /tf and /diagnostics, the
+recording, the diagnostics watchdog, and one CrowdInputs taking every character's JointStates
+each executor wake-up, processed as one batch (ros/pipeline.py's CrowdPipeline: the steps of
+every character with an input in one compiled call over the cores; a lone character's alone).
+"""
 
 import argparse
-import functools
 import gc
 import os
 import signal
@@ -12,49 +20,34 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import rclpy
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import (
-    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
 from rcl_interfaces.msg import SetParametersResult
-from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
-from visualization_msgs.msg import MarkerArray
 
-from ..core.config import ConfigError, shipped
+from ..core.config import ConfigError
 from ..core.fabric import load_fabrics
 from .warm import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr
-from .parameters import NODE_PARAMETERS, check_value, descriptor, fabric_parameters
-from .pipeline import SessionPipeline, session_topics
+from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
+                        input_problems, read_file, throttled)
+from .characters import CharacterSpec, crowd_slice, load_characters
+from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, check_value, descriptor,
+                         fabric_parameters)
+from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_QOS, read_viewer
 from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
-    import numpy as np
     from rclpy.publisher import Publisher
-
-    from ..core.simulation import JacketSimulation, StepReport
-
-TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
-                    durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
-LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
-# rclpy gives each publisher and subscription two QoS event handlers (incompatible QoS, type),
-# and its executor visits every one on every wake-up. joint_states and /tf keep theirs, as a
-# mismatch there must be heard; markers, diagnostics and wind go without (the peer's side
-# warns too), which lowers the node's CPU per message (docs/performance.md).
-NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
-NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
 
 def keep_loaded_out_of_collections() -> None:
@@ -66,15 +59,81 @@ def keep_loaded_out_of_collections() -> None:
     gc.freeze()
 
 
-class JacketNodeBase(Node):
-    """What both jacket nodes share: parameters checked as declared, an optional recording.
+def tf_publisher(node: Node) -> 'Publisher':
+    """Return ``node``'s /tf publisher (the jacket node's, and its floor's in the lab)."""
+    return node.create_publisher(TFMessage, '/tf', TF_QOS)
 
-    And the ``~/viewer`` input (ros/viewer.py). A write error stops the recording, not the node.
+
+def diagnostics_publisher(node: Node) -> 'Publisher':
+    """Return ``node``'s /diagnostics publisher, without QoS event handlers."""
+    return node.create_publisher(DiagnosticArray, '/diagnostics', 10,
+                                 event_callbacks=NO_PUB_EVENTS)
+
+
+class JacketClothNode(Node):
+    """Runs the fixed-step jacket and hood simulation of each character on its JointStates.
+
+    ``crowd`` False: ``jacket_cloth_node``, one character whose parameters are the node's
+    (NODE_PARAMETERS and ``fabric.*``, changed live, the wind also by ``~/wind``), its topics
+    relative to the node's namespace. True: ``jacket_cloth_crowd``, the characters of the file
+    in its ``characters`` parameter (CROWD_PARAMETERS), each under its own namespace. Either
+    way every character runs the same code (ros/character.py and :meth:`on_joint_states`).
+    A recording write error stops the recording, not the node.
     """
 
-    recorder: 'SessionRecorder | None' = None
-    _viewer: 'tuple[bytes, int] | None' = None   # the last accepted ~/viewer: (raw, stamp)
+    def __init__(self, crowd: bool = False, **kwargs: object):
+        super().__init__('jacket_cloth_crowd' if crowd else 'jacket_cloth_node', **kwargs)
+        self.recorder: 'SessionRecorder | None' = None
+        self._viewer = None             # the last accepted ~/viewer: (raw, stamp)
+        self._last_stamp = None         # the last accepted input's, for recording after it
+        self._log_times = {}            # the node's own warnings (each character has its own)
+        self._models = {}               # (URDF, rig file) -> (skeleton, rig), shared read-only
+        self._fabrics = {}              # fabrics file -> its presets
+        self._told_compiling = False
+        self._every = 1                 # the characters of the file (a crowd slices them)
+        # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
+        self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        self.tf = tf_publisher(self)
+        self.diagnostics = diagnostics_publisher(self)
+        # Recorded under the names the topics have in the graph (resolved once).
+        self._topics = session_topics(viewer=self._subscribe_viewer())
+        node_wide = ['tf', 'diagnostics', 'viewer']
+        if crowd:
+            characters, urdfs = self._crowd_characters()
+        else:
+            characters, urdfs = self._own_character()
+            node_wide += ['wind', 'parameter_events']
+            self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True,
+                                     event_callbacks=NO_SUB_EVENTS)
+            self._topics['wind'] = (self.resolve_topic_name('~/wind'),
+                                    *self._topics['wind'][1:])
+        self._topics = {k: self._topics[k] for k in node_wide}
+        self.characters = characters
+        self.crowd = CrowdPipeline(self._p('threads') if crowd else 1)
+        # Looked up at each call: a harness may wrap the node's on_joint_states.
+        self._inputs = CrowdInputs(self.default_callback_group,
+                                   lambda taken: self.on_joint_states(taken))
+        self.add_waitable(self._inputs)
+        self._open_recorder(self._p('record'))
+        for c, (urdf, source) in zip(characters, urdfs):
+            if urdf:
+                try:
+                    self._load(c, urdf, source)
+                except ConfigError as e:
+                    raise ConfigError(f'{c.label}{e}') from None
+            else:
+                c.wait_for_description(self, self._on_description, self._use_shipped)
+        # Diagnostics keep their own rate when inputs stop or nothing else is published.
+        self._diag_timer = self.create_timer(1.0 / self._diagnostics_rate(),
+                                             self._diagnostics_watchdog)
+        if crowd:
+            self.get_logger().info(
+                f'{len(characters)} of {self._every} characters (slice '
+                f'{self._p("slice_index")} of {self._p("slice_count")}), steps on '
+                f'{self.crowd.steps.threads} thread(s)')
 
+    # -- set-up -------------------------------------------------------------------------------
     def _declare(self, name, spec):
         """Declare a parameter; a start value that the live check would refuse is a ConfigError."""
         kind, default, rng, ro, text = spec
@@ -90,6 +149,202 @@ class JacketNodeBase(Node):
 
     def _p(self, name):
         return self.get_parameter(name).value
+
+    def _own_character(self):
+        """jacket_cloth_node's one character: the node's parameters, its topics relative."""
+        for name, spec in NODE_PARAMETERS.items():
+            self._declare(name, spec)
+        fabric_file = self._p('fabric_file') or None
+        fabrics = self._fabrics_of(fabric_file)
+        preset = self._p('fabric')
+        if preset not in fabrics:
+            raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
+                              f'(presets: {", ".join(fabrics)})')
+        for name, spec in fabric_parameters(fabrics[preset]).items():
+            self._declare(name, spec)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        spec = CharacterSpec(self.get_name(), None, self._p('rig_file') or None, fabric_file,
+                             self._values())
+        # Relative, as robot_state_publisher publishes it: under a namespace the node hears
+        # its own character's description, not another's.
+        names = {'joint_states': 'joint_states', 'robot_description': 'robot_description',
+                 'markers': '~/markers'}
+        recorded = {k: self.resolve_topic_name(names[k]) for k in ('joint_states', 'markers')}
+        urdf = self._p('robot_description')
+        return [Character(spec, names, recorded)], [(urdf, 'the robot_description parameter')]
+
+    def _crowd_characters(self):
+        """jacket_cloth_crowd's characters: its slice of the characters file."""
+        for name, spec in CROWD_PARAMETERS.items():
+            self._declare(name, spec)
+        path = self._p('characters')
+        if not path:
+            raise ConfigError('parameter characters: give the characters file '
+                              '(-p characters:=crowd.yaml)')
+        every = load_characters(path)
+        self._every = len(every)
+        characters, urdfs = [], []
+        for spec in crowd_slice(every, self._p('slice_index'), self._p('slice_count')):
+            ns = spec.namespace
+            names = {'joint_states': f'{ns}/joint_states',
+                     'robot_description': f'{ns}/robot_description',
+                     'markers': f'{ns}/jacket_cloth_node/markers'}
+            # Recorded under its own names, whatever the remapping: a crowd's replay finds
+            # each character's inputs by its name.
+            characters.append(Character(spec, names, names, f'{spec.name}: ', spec.name))
+            urdfs.append((read_file(spec.urdf), spec.urdf) if spec.urdf else (None, None))
+        return characters, urdfs
+
+    def _fabrics_of(self, path):
+        if path not in self._fabrics:
+            self._fabrics[path] = load_fabrics(path)
+        return self._fabrics[path]
+
+    def _values(self):
+        """Every parameter's current value, by name (arrays as lists)."""
+        out = {}
+        for name in self.list_parameters([], 0).names:
+            if name in NODE_PARAMETERS or name.startswith('fabric.'):
+                p = self.get_parameter(name)
+                out[name] = list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
+        return out
+
+    def _diagnostics_rate(self):
+        return max((c.spec.values['diagnostics_rate'] for c in self.characters), default=1.0)
+
+    # -- characters ---------------------------------------------------------------------------
+    def _on_description(self, c, raw):
+        self.received['robot_description'] += 1
+        if c.pipeline is not None:
+            return
+        topic = c.description.topic_name
+        try:
+            msg = cdr.deserialize(raw, String)
+        except cdr.DECODE_ERRORS as e:
+            self.refused['robot_description'] += 1
+            c.warn(self.get_logger(), 'description_decode', f'a {topic} that does not decode '
+                   f'({e}): message dropped')
+            return
+        try:
+            self._load(c, msg.data, f'the {topic} topic')
+        except ConfigError as e:
+            self.refused['robot_description'] += 1
+            self.get_logger().error(f'{c.label}{topic} rejected: {e}')
+
+    def _use_shipped(self, c):
+        c.fallback.cancel()             # once, even if the shipped one fails to load
+        if c.pipeline is None:
+            self._load(c, shipped_character_urdf(),
+                       'the shipped character (config/character.urdf)')
+
+    def _load(self, c, urdf, source):
+        if not self._told_compiling and not kernels_cached(crowd=len(self.characters) > 1):
+            self._told_compiling = True
+            self.get_logger().info(
+                'compiling the simulation kernels into numba\'s cache: a first start after an '
+                'install or an edit of a kernel takes about half a minute (`jacket_cloth warm` '
+                'does it ahead)')
+        spec = c.spec
+        # Characters of one URDF and rig share them (read-only): loaded once, not per copy.
+        key = (urdf, spec.rig)
+        if key not in self._models:
+            skeleton = Skeleton(urdf)
+            self._models[key] = (skeleton, load_rig(skeleton, spec.rig))
+        skeleton, rig = self._models[key]
+        pipeline = SessionPipeline(skeleton, rig, self._fabrics_of(spec.fabric_file),
+                                   spec.values, spec.name, timing=True,
+                                   output_phase=spread_phase(len(self.crowd.pipelines)))
+        clash = set(spec.values['frame_prefix'] + b for b in pipeline.sim.bone_names) & set(
+            skeleton.link_names)
+        if clash:
+            raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
+                              'links: change frame_prefix')
+        c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
+        if self.recorder is not None:
+            c.add_to_recording(self.recorder)
+        keep_loaded_out_of_collections()
+        # Subscribed only now: a publisher that waits for us knows we can simulate.
+        c.subscription = self._inputs.subscribe(self, c, c.names['joint_states'])
+        self.get_logger().info(
+            f'{c.label}character {skeleton.name!r} from {source}: '
+            f'{len(skeleton.joint_names)} joints, cloth {rig.cols}x{rig.rows}, '
+            f'{len(pipeline.sim.bone_names)} bones under {skeleton.link_names[0]!r}')
+
+    # -- parameters (jacket_cloth_node: its character's) --------------------------------------
+    def _validate_parameters(self, params):
+        for p in params:
+            if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
+                return SetParametersResult(successful=False,
+                                           reason='wind must be 3 finite numbers [x, y, z]')
+            reason = check_value(p.name, p.value)
+            if reason:
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, params):
+        """Apply valid changes from the next step; they never reset the cloth."""
+        names = {p.name for p in params}
+        if 'record' in names:
+            self._open_recorder(self._p('record'))
+        values = self._values()
+        changes = {n: values[n] for n in names if n in values}
+        c = self.characters[0]
+        c.spec.values.update(changes)
+        if 'diagnostics_rate' in names:
+            self._diag_timer.timer_period_ns = int(1e9 / self._diagnostics_rate())
+        if c.pipeline is None:
+            return
+        c.pipeline.apply(changes)
+        # Recorded at the last input's stamp: a replay applies them after the same input.
+        stamp = self._last_input_stamp(0)
+        self._record(self._topics['parameter_events'][0], cdr.parameter_event(
+            stamp, self.get_fully_qualified_name(), [p.to_parameter_msg() for p in params]),
+            stamp)
+
+    def _on_wind(self, raw):
+        """~/wind sets the wind live, through the ``wind`` parameter (one path, validated).
+
+        The change is recorded as a parameter event; the message itself is recorded too.
+        """
+        self.received['wind'] += 1
+        try:
+            msg = cdr.deserialize(raw, Vector3Stamped)
+        except cdr.DECODE_ERRORS as e:
+            self.refused['wind'] += 1
+            self._warn('wind_decode', f'a ~/wind that does not decode ({e}): message dropped')
+            return
+        v = [msg.vector.x, msg.vector.y, msg.vector.z]
+        result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
+        if not result.successful:
+            self.refused['wind'] += 1
+            self._warn('wind', f'~/wind rejected: {result.reason}')
+            return
+        header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        self._record(self._topics['wind'][0], raw, self._last_input_stamp(header))
+
+    # -- recording ----------------------------------------------------------------------------
+    def _open_recorder(self, path):
+        if self.recorder is not None:
+            self.recorder.close()
+            self.get_logger().info(f'recording closed: {self.recorder.path}')
+            self.recorder = None
+        if not path:
+            return
+        try:
+            self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
+            for topic, kind, qos in self._topics.values():
+                self.recorder.add_topic(topic, kind, qos)
+            self.get_logger().info(f'recording the session to {path}')
+        except OSError as e:
+            self.recorder = None
+            self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
+                                    'recording')
+            return
+        for c in self.characters:
+            if c.pipeline is not None:
+                c.add_to_recording(self.recorder)
+        self._record_viewer()
 
     def _record(self, topic, data, stamp_ns):
         if self.recorder is None:
@@ -114,14 +369,11 @@ class JacketNodeBase(Node):
             self.recorder.close()
             self.recorder = None
 
-    def _throttled(self, log_times, code, text, period=5.0):
-        """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``."""
-        now = time.monotonic()
-        if now - log_times.get(code, -1e9) >= period:
-            log_times[code] = now
-            self.get_logger().warning(text)
-
     # -- the viewer (one for the node, whatever the characters) ------------------------------
+    def _warn(self, code, text, period=5.0):
+        """One line per kind of bad input to the node itself per ``period`` seconds."""
+        throttled(self.get_logger(), self._log_times, code, text, period)
+
     def _subscribe_viewer(self) -> str:
         """Subscribe ``~/viewer``; returns its name in the graph, the one it is recorded under."""
         # Latched: a viewer published once, before a character is loaded, waits for it.
@@ -129,35 +381,30 @@ class JacketNodeBase(Node):
                                  raw=True, event_callbacks=NO_SUB_EVENTS)
         return self.resolve_topic_name('~/viewer')
 
-    def _world_frames(self) -> 'list[str]':
-        """Return the world frames a viewer may be given in (its characters')."""
-        raise NotImplementedError
-
-    def _apply_viewer(self, frame: str, position: 'np.ndarray') -> None:
-        """Set the viewer for the characters in ``frame``, from their next input."""
-        raise NotImplementedError
-
-    def _last_input_stamp(self, default: int) -> int:
-        """Return the last input's stamp (ns), or ``default`` before the first one."""
-        raise NotImplementedError
-
     def _on_viewer(self, raw):
         """~/viewer: the viewer's world position for the level of detail, from the next input.
 
-        Recorded as an input at the last input's stamp: a replay applies it at the same point.
+        Each character's level goes by its own distance to it, if the viewer is in its world
+        frame. Recorded as an input at the last input's stamp: a replay applies it at the same
+        point.
         """
         self.received['viewer'] += 1
-        frames = self._world_frames()
+        frames = sorted({c.spec.values['world_frame'] for c in self.characters})
         readings = [read_viewer(raw, frame) for frame in frames]
         if all(r.position is None for r in readings):
             self.refused['viewer'] += 1
-            self._throttled(self._log_times, 'viewer', f'~/viewer rejected: '
-                            f'{readings[0].reason}; the last viewer is kept')
+            self._warn('viewer', f'~/viewer rejected: {readings[0].reason}; the last viewer '
+                       'is kept')
             return
         self._viewer = (bytes(raw), readings[0].stamp_ns)
         for frame, reading in zip(frames, readings):
-            if reading.position is not None:
-                self._apply_viewer(frame, reading.position)
+            if reading.position is None:
+                continue
+            for c in self.characters:
+                if c.spec.values['world_frame'] == frame:
+                    c.viewer = reading.position
+                    if c.pipeline is not None:
+                        c.pipeline.set_viewer(reading.position)
         self._record_viewer()
 
     def _record_viewer(self):
@@ -166,323 +413,74 @@ class JacketNodeBase(Node):
             raw, stamp = self._viewer
             self._record(self._topics['viewer'][0], raw, self._last_input_stamp(stamp))
 
+    def _last_input_stamp(self, default):
+        return default if self._last_stamp is None else self._last_stamp
 
-class JacketClothNode(JacketNodeBase):
-    """Runs the fixed-step jacket and hood simulation on a character's JointState stream."""
+    # -- the inputs ---------------------------------------------------------------------------
+    def on_joint_states(self, batch: list) -> None:
+        """Process (character, raw bytes, message info) JointStates together, as one batch.
 
-    def __init__(self, **kwargs: object):
-        super().__init__('jacket_cloth_node', **kwargs)
-        for name, spec in NODE_PARAMETERS.items():
-            self._declare(name, spec)
-        fabric_file = self._p('fabric_file') or None
-        self._fabric_file = fabric_file or shipped('fabrics.yaml')
-        self.fabrics = load_fabrics(fabric_file)
-        preset = self._p('fabric')
-        if preset not in self.fabrics:
-            raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
-                              f'(presets: {", ".join(self.fabrics)})')
-        for name, spec in fabric_parameters(self.fabrics[preset]).items():
-            self._declare(name, spec)
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
-
-        self.pipeline = None
-        self._joint_states = cdr.JointStateReader()
-        self.recorder = None
-        self._urdf = None
-        self._log_times = {}
-        self.inputs = 0
-        self._sequences = {}        # publisher gid -> the last sequence number it sent us
-        # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
-        self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
-        self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
-        self._viewer_position = None        # the last accepted ~/viewer's
-        self._diag_timer = None
-        self._diag_wall = 0.0
-
-        self.publishers_by_key = {
-            'tf': self.create_publisher(TFMessage, '/tf', TF_QOS),
-            'markers': self.create_publisher(MarkerArray, '~/markers', 10,
-                                             event_callbacks=NO_PUB_EVENTS),
-            'diagnostics': self.create_publisher(DiagnosticArray, '/diagnostics', 10,
-                                                 event_callbacks=NO_PUB_EVENTS),
-        }
-        self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True,
-                                 event_callbacks=NO_SUB_EVENTS)
-        viewer = self._subscribe_viewer()
-        # Recorded under the names the topics have in the graph (resolved once).
-        self._topics = session_topics(
-            self.resolve_topic_name('joint_states'), self.resolve_topic_name('~/wind'),
-            self.publishers_by_key['markers'].topic_name, viewer)
-        self._open_recorder(self._p('record'))
-        self._description = self._fallback = None
-        urdf = self._p('robot_description')
-        if urdf:
-            self._load_model(urdf, 'the robot_description parameter')
-        else:
-            # Relative, as robot_state_publisher publishes it: under a namespace the node hears
-            # its own character's description, not another's. Raw: bytes that are no String
-            # reach the callback, which says so, not the executor.
-            self._description = self.create_subscription(
-                String, 'robot_description', self._on_description, LATCHED, raw=True)
-            self._fallback = self.create_timer(self._p('robot_description_timeout'),
-                                               self._use_shipped_character)
-
-    @property
-    def sim(self) -> 'JacketSimulation | None':
-        return self.pipeline.sim if self.pipeline else None
-
-    # -- model --------------------------------------------------------------------------------
-    def _values(self):
-        """Every parameter's current value, by name (arrays as lists)."""
-        out = {}
-        for name in self.list_parameters([], 0).names:
-            if name in NODE_PARAMETERS or name.startswith('fabric.'):
-                p = self.get_parameter(name)
-                out[name] = list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
-        return out
-
-    def _on_description(self, raw):
-        self.received['robot_description'] += 1
-        if self.pipeline is None:
+        CrowdInputs hands it every input of an executor wake-up, each character's backlog
+        included. Public so a harness can feed the node without DDS, as the lab does. An
+        input's latency counts from its info's ``received_timestamp`` (ns, system clock: the
+        rmw's receive time, so time queued behind other callbacks is in it), else from now.
+        """
+        now = time.time_ns()
+        logger = self.get_logger()
+        entries = []
+        for c, raw, info in batch:
+            c.count_lost(info)
             try:
-                msg = cdr.deserialize(raw, String)
+                msg = c.reader.read(raw)
             except cdr.DECODE_ERRORS as e:
-                self.refused['robot_description'] += 1
-                self._warn('description_decode', f'a {self._description.topic_name} that does '
-                           f'not decode ({e}): message dropped')
-                return
-            try:
-                self._load_model(msg.data, f'the {self._description.topic_name} topic')
-            except ConfigError as e:
-                self.refused['robot_description'] += 1
-                self.get_logger().error(f'{self._description.topic_name} rejected: {e}')
-
-    def _use_shipped_character(self):
-        self._fallback.cancel()                 # once, even if the shipped one fails to load
-        if self.pipeline is None:
-            self._load_model(shipped_character_urdf(),
-                             'the shipped character (config/character.urdf)')
-
-    def _load_model(self, urdf, source):
-        if not kernels_cached(crowd=False):
-            self.get_logger().info(
-                'compiling the simulation kernels into numba\'s cache: a first start after an '
-                'install or an edit of a kernel takes about half a minute (`jacket_cloth warm` '
-                'does it ahead)')
-        skeleton = Skeleton(urdf)
-        rig = load_rig(skeleton, self._p('rig_file') or None)
-        pipeline = SessionPipeline(skeleton, rig, self.fabrics, self._values(),
-                                   self.get_name(), timing=True)
-        clash = set(self._p('frame_prefix') + b for b in pipeline.sim.bone_names) & set(
-            skeleton.link_names)
-        if clash:
-            raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
-                              'links: change frame_prefix')
-        pipeline.markers_wanted = functools.partial(self._markers_wanted,
-                                                    self.publishers_by_key['markers'])
-        self.pipeline = pipeline
-        if self._viewer_position is not None:       # it came before the character
-            pipeline.set_viewer(self._viewer_position)
-        self._urdf = urdf
-        # Done waiting: every entity left in the node is work for each executor wake-up.
-        if self._description is not None:
-            self.destroy_subscription(self._description)
-            self.destroy_timer(self._fallback)
-            self._description = self._fallback = None
-        self._write_session_config()
-        # Diagnostics keep their own rate when inputs stop or nothing else is published.
-        self._diag_wall = time.monotonic()
-        self._diag_timer = self.create_timer(1.0 / self._p('diagnostics_rate'),
-                                             self._diagnostics_watchdog)
-        keep_loaded_out_of_collections()
-        # Subscribed only now: a publisher that waits for us knows we can simulate.
-        self.create_subscription(JointState, 'joint_states', self.on_joint_state,
-                                 qos_profile_sensor_data, raw=True)
-        self.get_logger().info(
-            f'character {skeleton.name!r} from {source}: {len(skeleton.joint_names)} joints, '
-            f'cloth {rig.cols}x{rig.rows}, {len(pipeline.sim.bone_names)} bones under '
-            f'{skeleton.link_names[0]!r}')
-
-    # -- parameters ---------------------------------------------------------------------------
-    def _validate_parameters(self, params):
-        for p in params:
-            if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
-                return SetParametersResult(successful=False,
-                                           reason='wind must be 3 finite numbers [x, y, z]')
-            reason = check_value(p.name, p.value)
-            if reason:
-                return SetParametersResult(successful=False, reason=reason)
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, params):
-        """Apply valid changes from the next step; they never reset the cloth."""
-        names = {p.name for p in params}
-        if 'record' in names:
-            self._open_recorder(self._p('record'))
-        if self.pipeline is None:
+                c.pipeline.note_undecodable()
+                c.warn(logger, 'decode', f'a JointState that does not decode ({e}): '
+                       'message dropped')
+                continue
+            c.inputs += 1
+            entries.append((c, raw, msg, info.get('received_timestamp') or now))
+        if not entries:
             return
-        if 'diagnostics_rate' in names:
-            self._diag_timer.timer_period_ns = int(1e9 / self._p('diagnostics_rate'))
-        values = self._values()
-        self.pipeline.apply({n: values[n] for n in names})
-        # Recorded at the last input's stamp: a replay applies them after the same input.
-        stamp = self._last_input_stamp(0)
-        self._record(self._topics['parameter_events'][0], cdr.parameter_event(
-            stamp, self.get_fully_qualified_name(), [p.to_parameter_msg() for p in params]),
-            stamp)
-
-    # -- recording ----------------------------------------------------------------------------
-    def _open_recorder(self, path):
-        if self.recorder is not None:
-            self.recorder.close()
-            self.get_logger().info(f'recording closed: {self.recorder.path}')
-            self.recorder = None
-        if not path:
-            return
-        try:
-            self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
-            for topic, kind, qos in self._topics.values():
-                self.recorder.add_topic(topic, kind, qos)
-            self.get_logger().info(f'recording the session to {path}')
-        except OSError as e:
-            self.recorder = None
-            self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
-                                    'recording')
-            return
-        self._write_session_config()
-        self._record_viewer()
-
-    def _write_session_config(self):
-        """Record the character, rig, fabrics and parameters, so a replay needs only the file."""
-        if self.recorder is None or self.pipeline is None:
-            return
-        rig_file = self._p('rig_file') or shipped('jacket_rig.yaml')
-        self.recorder.add_session_config(self._urdf, _read(rig_file), _read(self._fabric_file),
-                                         self._values())
-
-    # -- the input ----------------------------------------------------------------------------
-    def _warn(self, code, text, period=5.0):
-        """One line per kind of bad input per ``period`` seconds."""
-        self._throttled(self._log_times, code, text, period)
+        results = self.crowd.step_and_tf([(c.index, msg) for c, _, msg, _ in entries])
+        # Every character's /tf first: a listener waits for it, not for markers or diagnostics.
+        # Latency, once per input: arrival to its last /tf handed to DDS (publish_world_tf
+        # sends two).
+        for (c, _, _, arrived), (_, tf, _) in zip(entries, results):
+            if tf:
+                for _, out in tf:
+                    self.tf.publish(out)
+                c.pipeline.note_latency(time.time_ns() - arrived)
+        for (c, raw, msg, _), (report, tf, later) in zip(entries, results):
+            stamp_ns = msg.stamp_ns
+            if report.accepted:
+                self._last_stamp = stamp_ns
+            periodic = later()
+            self._record(c.topics['joint_states'][0], raw, stamp_ns)
+            for code, text in input_problems(report, bool(tf)):
+                c.warn(logger, code, text)
+            for _, out in tf:
+                self._record(self._topics['tf'][0], out, stamp_ns)
+            for key, out in periodic:
+                if key == 'markers':
+                    c.markers.publish(out)
+                    self._record(c.topics['markers'][0], out, stamp_ns)
+                else:
+                    self.diagnostics.publish(out)
+                    c.diag_wall = time.monotonic()
+                    self._record(self._topics['diagnostics'][0], out, stamp_ns)
 
     def _diagnostics_watchdog(self):
-        """Diagnostics, when the inputs' own have not gone out for a period of wall time."""
-        if time.monotonic() - self._diag_wall < 1.2 / self._p('diagnostics_rate'):
-            return
-        last = self.sim.last
-        stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
-        out = self.pipeline.diagnostics_now(stamp_ns)
-        self.publishers_by_key['diagnostics'].publish(out)
-        self._diag_wall = time.monotonic()
-        self._record(self._topics['diagnostics'][0], out, stamp_ns)
-
-    def _count_lost(self, info):
-        """Count a gap in a publisher's numbering as messages lost before this callback."""
-        seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
-        if not seq or not gid:
-            return
-        key = gid['data'] if isinstance(gid, dict) else gid
-        last = self._sequences.pop(key, None)       # re-inserted: the dict stays in use order
-        if last is not None and seq > last + 1:
-            self.pipeline.note_lost(seq - last - 1)
-        self._sequences[key] = seq if last is None else max(seq, last)
-        if len(self._sequences) > 64:
-            del self._sequences[next(iter(self._sequences))]
-
-    def _on_wind(self, raw):
-        """~/wind sets the wind live, through the ``wind`` parameter (one path, validated).
-
-        The change is recorded as a parameter event; the message itself is recorded too.
-        """
-        self.received['wind'] += 1
-        try:
-            msg = cdr.deserialize(raw, Vector3Stamped)
-        except cdr.DECODE_ERRORS as e:
-            self.refused['wind'] += 1
-            self._warn('wind_decode', f'a ~/wind that does not decode ({e}): message dropped')
-            return
-        v = [msg.vector.x, msg.vector.y, msg.vector.z]
-        result = self.set_parameters([Parameter('wind', Parameter.Type.DOUBLE_ARRAY, v)])[0]
-        if not result.successful:
-            self.refused['wind'] += 1
-            self._warn('wind', f'~/wind rejected: {result.reason}')
-            return
-        header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        self._record(self._topics['wind'][0], raw, self._last_input_stamp(header))
-
-    def _world_frames(self):
-        return [self._p('world_frame')]
-
-    def _apply_viewer(self, frame, position):
-        self._viewer_position = position
-        if self.pipeline is not None:
-            self.pipeline.set_viewer(position)
-
-    def _last_input_stamp(self, default):
-        last = self.sim.last if self.sim else None
-        return last.stamp_ns if last else default
-
-    def on_joint_state(self, raw: bytes, info: dict) -> None:
-        """One serialized JointState in (the joint_states callback): simulate, publish, record.
-
-        Public so a harness can feed the node without DDS, as the lab's endurance run does.
-
-        Args:
-            raw (bytes): the CDR-serialized message.
-            info (dict): rclpy's message info; its ``received_timestamp`` (ns, system clock)
-                starts the latency, else (``{}``) now does. It has no default because rclpy
-                passes the info only to a callback that needs a second argument.
-        """
-        # Latency counts from the message's arrival in this process (the rmw's receive time,
-        # system clock), so time queued behind other callbacks is in it; without one, from now.
-        arrived = info.get('received_timestamp') or time.time_ns()
-        self._count_lost(info)
-        try:
-            msg = self._joint_states.read(raw)
-        except cdr.DECODE_ERRORS as e:
-            self.pipeline.note_undecodable()
-            self._warn('decode', f'a JointState that does not decode ({e}): message dropped')
-            return
-        stamp_ns = msg.stamp_ns
-        self.inputs += 1
-        self._record(self._topics['joint_states'][0], raw, stamp_ns)
-        report, outputs = self.pipeline.on_joint_state(msg, stamp_ns)
-        for code, text in input_problems(report, any(key == 'tf' for key, _ in outputs)):
-            self._warn(code, text)
-        tf_sent = None
-        for key, out in outputs:
-            self.publishers_by_key[key].publish(out)
-            if key == 'tf':
-                tf_sent = time.time_ns()
-            elif key == 'diagnostics':
-                self._diag_wall = time.monotonic()
-            self._record(self._topics[key][0], out, stamp_ns)
-        # Latency, once per input as in the crowd: arrival to its last /tf handed to DDS
-        # (publish_world_tf sends two).
-        if tf_sent is not None:
-            self.pipeline.note_latency(tf_sent - arrived)
-
-
-def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:
-    """Return (code, text) of what went wrong with an input, for the nodes' throttled warnings.
-
-    ``published``: whether its bones went out on /tf.
-    """
-    out = list(report.warnings)
-    if report.reset and report.reset != 'first sample':
-        out.append(('reset', f'cloth reset to the skinned pose: {report.reset}'))
-    if report.skipped_steps:
-        out.append(('overrun', f'{report.skipped_steps} steps skipped (cap '
-                    'max_steps_per_input); the cloth lags no further behind'))
-    if report.accepted and not published:
-        out.append(('nan', 'non-finite bone pose: nothing published'))
-    return out
-
-
-def _read(path):
-    with open(path, encoding='utf-8') as f:
-        return f.read()
+        """Diagnostics of each character whose inputs' own have not gone out for a period."""
+        now = time.monotonic()
+        for c in self.characters:
+            if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
+                continue
+            last = c.sim.last
+            stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
+            out = c.pipeline.diagnostics_now(stamp_ns)
+            self.diagnostics.publish(out)
+            c.diag_wall = now
+            self._record(self._topics['diagnostics'][0], out, stamp_ns)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -67,6 +67,23 @@ NODE_PARAMETERS = {
 }
 
 
+# jacket_cloth_crowd's own; its characters' parameters come from its characters file.
+CROWD_PARAMETERS = {
+    'characters': (T.PARAMETER_STRING, '', None, True,
+                   'the characters file (YAML, see config/crowd.yaml)'),
+    'slice_index': (T.PARAMETER_INTEGER, 0, (0, 4095), True,
+                    'which slice of the characters this process runs (0 .. slice_count-1)'),
+    'slice_count': (T.PARAMETER_INTEGER, 1, (1, 4096), True,
+                    'into how many processes the characters are split'),
+    'threads': (T.PARAMETER_INTEGER, 0, (0, 256), True,
+                'threads for the characters\' steps; 0: one per core (NUMBA_NUM_THREADS)'),
+    'record': (T.PARAMETER_STRING, '', None, True,
+               'record the whole crowd to this MCAP file (.mcap) or bag folder; empty: off'),
+    'record_compression': (T.PARAMETER_STRING, 'lz4', None, True,
+                           'MCAP chunk compression: lz4, zstd or none'),
+}
+
+
 def descriptor(name: str, kind: int, rng: tuple | None, read_only: bool,
                text: str) -> ParameterDescriptor:
     d = ParameterDescriptor(name=name, type=kind, description=text, read_only=read_only)

@@ -334,17 +334,26 @@ def _due(last, stamp_ns, rate):
 class CrowdPipeline:
     """The pipelines of many characters, their inputs' steps run together (core.crowd).
 
-    Each character's outputs are those its pipeline gives alone, byte for byte.
+    Each character's outputs are those its pipeline gives alone, byte for byte. A crowd of one
+    (jacket_cloth_node) steps its character alone, by its simulation's ``process``: for one
+    input the crowd's compiled intake and call cost more than they save, and its kernels
+    need not be loaded (they are once a second character comes).
     """
 
     def __init__(self, threads: int = 0):
         self.pipelines = []
         self.steps = CrowdSteps(threads)
+        self._names = []            # each character's last name list, as stepped
 
     def add(self, pipeline: SessionPipeline) -> int:
         """Add a character's pipeline; returns its index."""
         self.pipelines.append(pipeline)
-        return self.steps.add(pipeline.sim)
+        self._names.append(None)
+        if len(self.pipelines) == 2:
+            self.steps.add(self.pipelines[0].sim)
+        if len(self.pipelines) >= 2:
+            self.steps.add(pipeline.sim)
+        return len(self.pipelines) - 1
 
     def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
             tuple[StepReport, list[tuple[str, bytes]]]]:
@@ -360,6 +369,8 @@ class CrowdPipeline:
         character's markers or diagnostics. An input whose character has another input later
         in the batch has them made after its own round, before its state moves on.
         """
+        if len(self.pipelines) == 1:
+            return [self._alone(m) for _, m in inputs]
         out = [None] * len(inputs)
 
         def after_round(ks, reports, last):
@@ -372,6 +383,29 @@ class CrowdPipeline:
                 else:
                     later = functools.partial(list, pipeline.periodic_outputs(report, m.stamp_ns))
                 out[k] = (report, tf, later)
-        stepped(self.steps, [(i, m.stamp_ns, m.name, m.position) for i, m in inputs],
-                after_round)
+        stepped(self.steps, [(i, m.stamp_ns, self._steady_names(i, m.name), m.position)
+                             for i, m in inputs], after_round)
         return out
+
+    def _alone(self, msg):
+        """Step the only character by its simulation's ``process``, as its pipeline alone."""
+        pipeline = self.pipelines[0]
+        report = pipeline.sim.process(msg.stamp_ns, msg.name, msg.position)
+        return (report, pipeline.account_tf(report, msg.stamp_ns),
+                functools.partial(pipeline.periodic_outputs, report, msg.stamp_ns))
+
+    def _steady_names(self, index, names):
+        """Return a character's name list as the crowd's steady intake can take it on.
+
+        That intake is armed for one name list object. An equal list in a new object (rclpy's
+        own deserialisation makes one per message) is replaced by the one it was armed for,
+        and a list that differs from the last goes as a list, which is never armed on
+        (CrowdSteps.settle): arming on every input cost more than the input's steps.
+        """
+        last = self._names[index]
+        if names is last:
+            return names
+        if names == last:
+            return last
+        self._names[index] = names
+        return list(names)

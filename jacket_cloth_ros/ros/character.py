@@ -1,0 +1,259 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""One character of a jacket node, and how the node takes every character's JointStates.
+
+A ``Character`` is what one jacketed character has of its own in the node (ros/node.py), alone
+(jacket_cloth_node) or in a crowd (jacket_cloth_crowd): its set-up, its pipeline once its URDF
+is known, its ``joint_states`` subscription, its ``robot_description`` wait and the shipped
+character's fallback, its markers publisher, its counts of lost inputs, its throttled warnings
+and its channels in the recording. ``CrowdInputs`` takes the JointStates of all of them.
+"""
+
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from rclpy.callback_groups import CallbackGroup
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.qos import (
+    DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data)
+from rclpy.waitable import NumberOfEntities, Waitable
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from visualization_msgs.msg import MarkerArray
+
+from ..core.config import shipped
+from . import cdr
+from .characters import CharacterSpec
+from .pipeline import session_topics
+
+if TYPE_CHECKING:           # for the annotations only
+    from rclpy.impl.rcutils_logger import RcutilsLogger
+    from rclpy.node import Node
+    from rclpy.subscription import Subscription
+
+    from ..core.simulation import JacketSimulation, StepReport
+    from ..recording.writer import SessionRecorder
+    from .pipeline import SessionPipeline
+
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# rclpy gives each publisher and subscription two QoS event handlers (incompatible QoS, type),
+# and its executor visits every one on every wake-up. /tf keeps its own, as a mismatch there
+# must be heard; the rest go without (the peer's side warns too), which lowers the node's CPU
+# per message (docs/performance.md). joint_states is best effort and volatile: it matches
+# every publisher's QoS.
+NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
+NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
+
+
+def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
+              period: float = 5.0) -> None:
+    """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``."""
+    now = time.monotonic()
+    if now - log_times.get(code, -1e9) >= period:
+        log_times[code] = now
+        logger.warning(text)
+
+
+def read_file(path: str) -> str:
+    """Return a text file's content (a character's URDF, rig or fabrics file)."""
+    with open(path, encoding='utf-8') as f:
+        return f.read()
+
+
+class Character:
+    """One character of a jacket node: its set-up, and its pipeline once its URDF is known.
+
+    ``names``: its topics in the graph (``joint_states``, ``robot_description``, ``markers``);
+    ``recorded``: the names its JointStates and markers are recorded under; ``label``: what
+    its log lines start with (its name in a crowd); ``config_name``: the name of its set-up in
+    the recording ('' alone: the single session a replay reads).
+    """
+
+    def __init__(self, spec: CharacterSpec, names: dict[str, str], recorded: dict[str, str],
+                 label: str = '', config_name: str = ''):
+        self.spec = spec
+        self.names = names
+        self.topics = session_topics(recorded['joint_states'], markers=recorded['markers'])
+        self.label = label
+        self.config_name = config_name
+        self.index = -1                 # in the node's CrowdPipeline, once loaded
+        self.pipeline: 'SessionPipeline | None' = None
+        self.viewer = None              # the last ~/viewer in its world frame, for a late load
+        self.urdf = None
+        self.subscription = None        # joint_states, once loaded
+        self.markers = None             # its markers publisher, once loaded
+        self.description = self.fallback = None     # while it waits for its URDF
+        self.reader = cdr.JointStateReader()
+        self.inputs = 0
+        self.log_times = {}             # its throttled warnings: code -> when last logged
+        self.diag_wall = 0.0            # when its diagnostics last went out (monotonic)
+        self._sequences = {}            # publisher gid -> the last sequence number it sent
+
+    @property
+    def sim(self) -> 'JacketSimulation | None':
+        return self.pipeline.sim if self.pipeline else None
+
+    def warn(self, logger: 'RcutilsLogger', code: str, text: str, period: float = 5.0) -> None:
+        """One line per kind of bad input of this character per ``period`` seconds."""
+        throttled(logger, self.log_times, code, self.label + text, period)
+
+    def count_lost(self, info: dict) -> None:
+        """Count a gap in a publisher's numbering as JointStates lost before they came."""
+        seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
+        if not seq or not gid:
+            return
+        key = gid['data'] if isinstance(gid, dict) else gid
+        last = self._sequences.pop(key, None)       # re-inserted: the dict stays in use order
+        if last is not None and seq > last + 1:
+            self.pipeline.note_lost(seq - last - 1)
+        self._sequences[key] = seq if last is None else max(seq, last)
+        if len(self._sequences) > 64:
+            del self._sequences[next(iter(self._sequences))]
+
+    def wait_for_description(self, node: 'Node', on_description: Callable,
+                             on_timeout: Callable) -> None:
+        """Subscribe its robot_description, and fall back on the shipped one after its timeout.
+
+        Raw: bytes that are no String reach ``on_description``, which says so, not the executor.
+        """
+        self.description = node.create_subscription(
+            String, self.names['robot_description'], lambda raw: on_description(self, raw),
+            LATCHED, raw=True)
+        self.fallback = node.create_timer(self.spec.values['robot_description_timeout'],
+                                          lambda: on_timeout(self))
+
+    def attach(self, node: 'Node', pipeline: 'SessionPipeline', index: int, urdf: str,
+               markers_wanted: Callable[['Node'], bool]) -> None:
+        """Take its loaded pipeline (``index`` in the node's crowd); stop waiting for a URDF."""
+        self.pipeline, self.index, self.urdf = pipeline, index, urdf
+        if self.viewer is not None:     # it came before the character
+            pipeline.set_viewer(self.viewer)
+        # Done waiting: every entity left in the node is work for each executor wake-up.
+        if self.description is not None:
+            node.destroy_subscription(self.description)
+            node.destroy_timer(self.fallback)
+            self.description = self.fallback = None
+        self.markers = node.create_publisher(MarkerArray, self.names['markers'], 10,
+                                             event_callbacks=NO_PUB_EVENTS)
+        pipeline.markers_wanted = lambda: markers_wanted(self.markers)
+        self.diag_wall = time.monotonic()
+
+    def add_to_recording(self, recorder: 'SessionRecorder') -> None:
+        """Add its channels and its set-up (character, rig, fabrics, parameters) to a recording.
+
+        So a replay needs only the file.
+        """
+        for key in ('joint_states', 'markers'):
+            recorder.add_topic(*self.topics[key])
+        spec = self.spec
+        recorder.add_session_config(
+            self.urdf, read_file(spec.rig or shipped('jacket_rig.yaml')),
+            read_file(spec.fabric_file or shipped('fabrics.yaml')), self.pipeline.values,
+            self.config_name, self.pipeline.output_phase)
+
+
+def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:
+    """Return (code, text) of what went wrong with an input, for its throttled warnings.
+
+    ``published``: whether its bones went out on /tf.
+    """
+    out = list(report.warnings)
+    if report.reset and report.reset != 'first sample':
+        out.append(('reset', f'cloth reset to the skinned pose: {report.reset}'))
+    if report.skipped_steps:
+        out.append(('overrun', f'{report.skipped_steps} steps skipped (cap '
+                    'max_steps_per_input); the cloth lags no further behind'))
+    if report.accepted and not published:
+        out.append(('nan', 'non-finite bone pose: nothing published'))
+    return out
+
+
+class _TakenElsewhere(CallbackGroup):
+    """A callback group the executor never runs: CrowdInputs takes its subscriptions' messages."""
+
+    def can_execute(self, entity: object) -> bool:
+        return False
+
+    def beginning_execution(self, entity: object) -> bool:
+        return False
+
+    def ending_execution(self, entity: object) -> None:
+        pass
+
+
+class CrowdInputs(Waitable):
+    """Every character's joint_states subscription, waited on and taken as one entity.
+
+    rclpy's executor makes a task, a handler and a wake-up's bookkeeping per ready
+    subscription: in a crowd that was a large share of each character's input
+    (docs/crowd.md). Here one wake-up takes every message queued on each ready subscription
+    (at most ``DRAIN`` each), in order, and hands them to ``on_inputs`` as [(character, raw
+    bytes, message info)]; the subscriptions are in a callback group the executor never runs,
+    so it does not take them itself. Taking all of them lets ``on_inputs`` process a backlog
+    in the same wake-up instead of a wake-up per queued message.
+    """
+
+    DRAIN = 16                      # the sensor-data queue is 5 deep; more only while taking
+
+    def __init__(self, callback_group: CallbackGroup,
+                 on_inputs: Callable[[list], None]) -> None:
+        super().__init__(callback_group)
+        self._on_inputs = on_inputs
+        self._subs = []             # (character, subscription handle, its pointer)
+        self._ready = []
+        self._taken_elsewhere = _TakenElsewhere()
+
+    def subscribe(self, node: 'Node', character: object, topic: str) -> 'Subscription':
+        """Subscribe ``node`` to ``topic`` (raw JointStates, sensor data QoS) for ``character``.
+
+        The subscription is taken here, never by the executor, and has no QoS event handlers
+        (2 per character per wake-up); a publisher with incompatible QoS is still warned on
+        its own side. Returns the subscription.
+        """
+        subscription = node.create_subscription(
+            JointState, topic, _never_called, qos_profile_sensor_data, raw=True,
+            callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
+        handle = subscription.handle
+        self._subs.append((character, handle, handle.pointer))
+        return subscription
+
+    def __enter__(self) -> None:
+        pass
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+    def get_num_entities(self) -> NumberOfEntities:
+        return NumberOfEntities(len(self._subs))
+
+    def add_to_wait_set(self, wait_set: object) -> None:
+        for _, handle, _ in self._subs:
+            wait_set.add_subscription(handle)
+
+    def is_ready(self, wait_set: object) -> bool:
+        ready = wait_set.get_ready_entities('subscription')
+        if ready:
+            ready = set(ready)
+            self._ready = [(c, h) for c, h, pointer in self._subs if pointer in ready]
+        return bool(self._ready)
+
+    def take_data(self) -> list:
+        taken = []
+        for c, handle in self._ready:
+            for _ in range(self.DRAIN):
+                got = handle.take_message(JointState, True)
+                if got is None:
+                    break
+                taken.append((c, got[0], got[1]))
+        self._ready = []
+        return taken
+
+    async def execute(self, taken: list) -> None:
+        self._on_inputs(taken)
+
+
+def _never_called(raw: bytes) -> None:
+    """Do nothing: CrowdInputs takes the characters' messages, the executor never calls this."""
