@@ -582,3 +582,76 @@ def test_a_crowd_builds_only_the_markers_someone_reads(tmp_path, monkeypatch):
         crowd.spin_until(lambda: len(got) >= 9)
         sims = {name: c.sim for name, c in crowd.chars.items()}
         assert built.count(sims['a']) == len(got) == 10 and sims['c'] not in built
+
+
+def test_the_single_node_is_a_crowd_of_one(tmp_path):
+    """jacket_cloth_node and jacket_cloth_crowd are one node class with one per-character
+    path (issue 34): the single node with a character's parameters and a crowd of that one
+    character record the same /tf and markers, byte for byte, for the same inputs, bad ones
+    included; both step it alone (no crowd call)."""
+    urdf = shipped_character_urdf()
+    raws = _inputs(Skeleton(urdf), 'dodge', 30, garbage=True)
+    (tmp_path / 'crowd.yaml').write_text(
+        'characters: [{name: a, urdf: character.urdf, parameters: {markers_rate: 20.0}}]\n')
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    records = {'node': str(tmp_path / 'node.mcap'), 'crowd': str(tmp_path / 'crowd.mcap')}
+    nodes = {}
+    try:
+        nodes['node'] = JacketClothNode(context=ctx, parameter_overrides=[
+            Parameter('robot_description', value=urdf), Parameter('frame_prefix', value='a/'),
+            Parameter('markers_rate', value=20.0), Parameter('record', value=records['node'])])
+        nodes['crowd'] = JacketClothNode(crowd=True, context=ctx, parameter_overrides=[
+            Parameter('characters', value=str(tmp_path / 'crowd.yaml')),
+            Parameter('record', value=records['crowd'])])
+        assert type(nodes['node']) is type(nodes['crowd'])
+        for node in nodes.values():
+            [c] = node.characters
+            assert type(c) is type(nodes['node'].characters[0])
+            for raw in raws:
+                node.on_joint_states([(c, raw, {})])
+            assert (c.inputs, c.pipeline.undecodable, c.pipeline.dropped) == (30, 1, 1)
+            assert node.crowd.steps.calls == 0                  # stepped alone
+    finally:
+        for node in nodes.values():
+            node.close()
+            node.destroy_node()
+        rclpy.shutdown(context=ctx)
+    markers = {'node': '/jacket_cloth_node/markers', 'crowd': '/a/jacket_cloth_node/markers'}
+    got = {}
+    for name, path in records.items():
+        messages = read_recording(path).messages
+        got[name] = {kind: [m.data for m in messages if m.topic == topic]
+                     for kind, topic in (('tf', '/tf'), ('markers', markers[name]))}
+    assert len(got['node']['tf']) == 29 and len(got['node']['markers']) >= 5
+    assert got['node'] == got['crowd']
+
+
+def test_a_crowd_takes_a_new_name_list_object_each_message_the_steady_way():
+    """rclpy's own deserialisation makes a new name list per message: the crowd still takes
+    them the steady way; a list that really changes each message is never armed on (that
+    cost more than the input's steps), and every character's /tf stays what it is alone."""
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import CrowdPipeline
+    skeleton = Skeleton(shipped_character_urdf())
+    fabrics = load_fabrics()
+
+    def pipeline():
+        return SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+                               default_values(fabrics['tweed_jacket']), timing=False)
+    crowd, alone = CrowdPipeline(1), [pipeline(), pipeline()]
+    for _ in alone:
+        crowd.add(pipeline())
+    got, want = [], []
+    for k, raw in enumerate(_inputs(skeleton, 'walk', 24)):
+        msg = deserialize_message(raw, JointState)
+        same = cdr.JointStateContent(_stamp(k), tuple(msg.name), np.array(msg.position))
+        # The second character's list turns round every other message.
+        turned = (cdr.JointStateContent(same.stamp_ns, same.name[::-1], same.position[::-1])
+                  if k % 2 else same)
+        inputs = [(0, same), (1, turned)]
+        got += [out for _, outs in crowd.on_joint_states(inputs) for out in outs]
+        want += [out for (i, m) in inputs for out in alone[i].on_joint_state(m, m.stamp_ns)[1]]
+    assert got == want
+    # The first character's, but for its first two (a reset, then armed); none of the second's.
+    assert crowd.steps.steady_inputs == 22
