@@ -94,29 +94,29 @@ class JacketClothNode(Node):
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        # The characters first: a parameter or a characters file refused stops the node here.
+        if crowd:
+            self.characters, urdfs = self._crowd_characters()
+        else:
+            self.characters, urdfs = self._own_character()
         self.tf = tf_publisher(self)
         self.diagnostics = diagnostics_publisher(self)
         # Recorded under the names the topics have in the graph (resolved once).
-        self._topics = session_topics(viewer=self._subscribe_viewer())
+        topics = session_topics(viewer=self._subscribe_viewer())
         node_wide = ['tf', 'diagnostics', 'viewer']
-        if crowd:
-            characters, urdfs = self._crowd_characters()
-        else:
-            characters, urdfs = self._own_character()
-            node_wide += ['wind', 'parameter_events']
+        if not crowd:               # the wind, and parameter changes, of the one character
             self.create_subscription(Vector3Stamped, '~/wind', self._on_wind, 10, raw=True,
                                      event_callbacks=NO_SUB_EVENTS)
-            self._topics['wind'] = (self.resolve_topic_name('~/wind'),
-                                    *self._topics['wind'][1:])
-        self._topics = {k: self._topics[k] for k in node_wide}
-        self.characters = characters
+            topics['wind'] = (self.resolve_topic_name('~/wind'), *topics['wind'][1:])
+            node_wide += ['wind', 'parameter_events']
+        self._topics = {k: topics[k] for k in node_wide}
         self.crowd = CrowdPipeline(self._p('threads') if crowd else 1)
         # Looked up at each call: a harness may wrap the node's on_joint_states.
         self._inputs = CrowdInputs(self.default_callback_group,
                                    lambda taken: self.on_joint_states(taken))
         self.add_waitable(self._inputs)
         self._open_recorder(self._p('record'))
-        for c, (urdf, source) in zip(characters, urdfs):
+        for c, (urdf, source) in zip(self.characters, urdfs):
             if urdf:
                 try:
                     self._load(c, urdf, source)
@@ -129,7 +129,7 @@ class JacketClothNode(Node):
                                              self._diagnostics_watchdog)
         if crowd:
             self.get_logger().info(
-                f'{len(characters)} of {self._every} characters (slice '
+                f'{len(self.characters)} of {self._every} characters (slice '
                 f'{self._p("slice_index")} of {self._p("slice_count")}), steps on '
                 f'{self.crowd.steps.threads} thread(s)')
 
