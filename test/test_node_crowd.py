@@ -187,15 +187,18 @@ def test_each_character_of_a_crowd_gets_the_tf_it_gets_alone_and_replays_bit_for
                 == [m.data for m in read_recording(record).messages if m.topic == topic])
 
 
-def test_a_batch_with_two_inputs_of_each_character_gives_each_input_its_own_outputs(tmp_path):
+@pytest.mark.parametrize('count', [3, 1])
+def test_a_batch_with_two_inputs_of_each_character_gives_each_input_its_own_outputs(
+        tmp_path, count):
     """A backlog taken at once: each input's /tf and markers are its own, as alone and replayed.
 
     Two inputs of a character in one batch run as two rounds; before, both inputs' outputs
     were made after the second round, so the first input's /tf carried the second's bones.
+    A crowd of one (stepped alone) too.
     """
     raws = _inputs(Skeleton(shipped_character_urdf()), 'walk', 24)
     chars, record = _recorded_crowd(
-        tmp_path, 'characters:\n  - name: c\n    count: 3\n    urdf: character.urdf\n',
+        tmp_path, f'characters:\n  - name: c\n    count: {count}\n    urdf: character.urdf\n',
         [raws[k:k + 2] for k in range(0, len(raws), 2)])
     recorded = read_recording(record).messages
     with open(shipped('character.urdf'), encoding='utf-8') as f:

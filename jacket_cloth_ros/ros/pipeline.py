@@ -370,7 +370,7 @@ class CrowdPipeline:
         in the batch has them made after its own round, before its state moves on.
         """
         if len(self.pipelines) == 1:
-            return [self._alone(m) for _, m in inputs]
+            return [self._alone(m, k == len(inputs) - 1) for k, (_, m) in enumerate(inputs)]
         out = [None] * len(inputs)
 
         def after_round(ks, reports, last):
@@ -387,12 +387,16 @@ class CrowdPipeline:
                              for i, m in inputs], after_round)
         return out
 
-    def _alone(self, msg):
-        """Step the only character by its simulation's ``process``, as its pipeline alone."""
+    def _alone(self, msg, last):
+        """Step the only character by its simulation's ``process``, as its pipeline alone.
+
+        Its markers and diagnostics are made now unless it is the ``last`` input of the batch.
+        """
         pipeline = self.pipelines[0]
         report = pipeline.sim.process(msg.stamp_ns, msg.name, msg.position)
-        return (report, pipeline.account_tf(report, msg.stamp_ns),
-                functools.partial(pipeline.periodic_outputs, report, msg.stamp_ns))
+        tf = pipeline.account_tf(report, msg.stamp_ns)
+        later = functools.partial(pipeline.periodic_outputs, report, msg.stamp_ns)
+        return report, tf, later if last else functools.partial(list, later())
 
     def _steady_names(self, index, names):
         """Return a character's name list as the crowd's steady intake can take it on.
