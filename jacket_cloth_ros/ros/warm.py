@@ -18,14 +18,14 @@ from .parameters import default_values
 from .pipeline import CrowdPipeline, SessionPipeline
 
 
-def kernels_cached(crowd_too: bool = True) -> bool:
+def kernels_cached(crowd: bool = True) -> bool:
     """Tell whether numba's cache holds the compiled step for the kernel files as they are.
 
     If not, the next simulation made compiles every kernel, which takes a while. With
-    ``crowd_too``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
+    ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
     """
     wanted = (step.advance,)
-    if crowd_too:
+    if crowd:
         wanted += (crowd_physics.advance_crowd, crowd_physics.prepare_steady)
     try:
         return all(bool(k._cache._cache_file._load_index()) for k in wanted)
