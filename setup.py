@@ -27,9 +27,10 @@ setup(
     extras_require={'test': ['pytest']},
     entry_points={
         'console_scripts': [
-            'jacket_cloth_node = jacket_cloth_ros.ros.node:main',
-            'jacket_cloth = jacket_cloth_ros.tools.cli:main',
-            'jacket_cloth_crowd = jacket_cloth_ros.ros.crowd:main',
+            # Through signals: a Ctrl-C while Python imports is one line, not a traceback.
+            'jacket_cloth_node = jacket_cloth_ros.signals:node',
+            'jacket_cloth = jacket_cloth_ros.signals:tools',
+            'jacket_cloth_crowd = jacket_cloth_ros.signals:crowd',
         ],
     },
 )

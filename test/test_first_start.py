@@ -3,8 +3,11 @@
 numba's cache holding every kernel the node's per-input path calls."""
 
 import os
+import signal
 import subprocess
 import sys
+
+import pytest
 
 # In a fresh process on the cache `warm` filled: the node's pipeline on the shipped character,
 # every output of a few inputs, then every kernel's compile misses counted.
@@ -45,7 +48,6 @@ def test_ctrl_c_while_the_node_compiles_is_one_line_and_a_prompt_exit(tmp_path):
     # It compiled inside an executor callback: Ctrl-C shut the context down, the compile ran
     # on for half a minute and the node ended in a traceback.
     # Signalled once it says it compiles: an event, not a guess at how long imports take.
-    import signal
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), ROS_DOMAIN_ID='97')
     node = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros.ros.node'], env=env,
                             stderr=subprocess.PIPE, text=True)
@@ -56,3 +58,60 @@ def test_ctrl_c_while_the_node_compiles_is_one_line_and_a_prompt_exit(tmp_path):
     assert node.returncode == 130 and 'Traceback' not in err, err
     assert err.strip().splitlines()[-1] == \
         'jacket_cloth_node: stopped while compiling the kernels'
+
+
+def _executable(name):
+    return os.path.join(os.path.dirname(sys.executable), name)
+
+
+@pytest.mark.parametrize('stop', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_the_node_imports_is_one_line_and_its_exit_code(stop):
+    # Python imports rclpy, numpy and numba for a second or more before main runs: a Ctrl-C
+    # there was a KeyboardInterrupt traceback. Signalled once numpy's library is in the
+    # process (an event: its memory map), so while it imports or starts, never before the
+    # entry point's handler is in.
+    node = subprocess.Popen([_executable('jacket_cloth_node')],
+                            env=dict(os.environ, ROS_DOMAIN_ID='96'), stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        _wait_for_library(node.pid, '_multiarray_umath')
+        node.send_signal(stop)
+        err = node.communicate(timeout=120)[1]
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.wait()
+    assert node.returncode == 128 + stop and 'Traceback' not in err, err
+    assert err.strip().splitlines() == ['jacket_cloth_node: stopped while starting'], err
+
+
+def test_a_second_ctrl_c_while_the_node_stops_is_ignored():
+    # ros2 launch forwards the terminal's Ctrl-C that the node got too: the second one, in the
+    # node's clean-up, was a KeyboardInterrupt traceback and exit -2.
+    node = subprocess.Popen([_executable('jacket_cloth_node')],
+                            env=dict(os.environ, ROS_DOMAIN_ID='95'), stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        for line in node.stderr:
+            if 'from the shipped character' in line:
+                break
+        node.send_signal(signal.SIGINT)
+        node.send_signal(signal.SIGINT)
+        err = node.communicate(timeout=60)[1]
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.wait()
+    assert node.returncode == 0 and 'Traceback' not in err, err
+
+
+def _wait_for_library(pid, name, timeout=120.0):
+    """Return once process ``pid`` has mapped a library whose path holds ``name``."""
+    import time
+    deadline = time.monotonic() + timeout
+    while True:
+        with open(f'/proc/{pid}/maps') as f:
+            if name in f.read():
+                return
+        assert time.monotonic() < deadline, f'{name} never loaded'
+        time.sleep(0.005)

@@ -12,8 +12,6 @@ every character with an input in one compiled call over the cores; a lone charac
 
 import argparse
 import gc
-import os
-import signal
 import sys
 import time
 from collections.abc import Callable
@@ -30,9 +28,9 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
 
+from .. import signals
 from ..core.config import ConfigError
 from ..core.fabric import load_fabrics
-from .warm import kernels_cached
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
@@ -44,6 +42,7 @@ from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, check_value, descrip
                          fabric_parameters)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_QOS, read_viewer
+from .warm import kernels_cached
 from .warm import warm_kernels
 
 if TYPE_CHECKING:           # for the annotations only
@@ -499,30 +498,23 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
 
     Shared by jacket_cloth_node and jacket_cloth_crowd (``crowd``: its one call is compiled too).
     """
-    # Compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut the context
-    # down, the compile ran on for half a minute and ended in a traceback.
+    # A signal before the node runs ends it with one line (jacket_cloth_ros.signals); the
+    # kernels are compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut
+    # the context down and the compile ran on for half a minute.
+    signals.guard(program)
     if not kernels_cached(crowd=crowd):
         print(f'{program}: compiling the simulation kernels into numba\'s cache (a first '
               'start after an install or an edit of a kernel; about a minute; '
               '`jacket_cloth warm` does it ahead)', file=sys.stderr)
-
-        def stop_compiling(signum, frame):
-            print(f'{program}: stopped while compiling the kernels', file=sys.stderr,
-                  flush=True)
-            os._exit(128 + signum)
-        # Ctrl-C or SIGTERM stop it at once: raised as KeyboardInterrupt, numba can swallow it
-        # inside a compiler callback and go on compiling. Nothing is lost: numba writes each
-        # cache file whole or not at all.
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, stop_compiling)
+        # Stopped at once: numba writes each cache file whole or not at all.
+        signals.doing('compiling the kernels')
         warm_kernels(crowd=crowd)
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, signal.SIG_DFL if signum == signal.SIGTERM
-                          else signal.default_int_handler)
+        signals.doing('starting')
     rclpy.init(args=argv)
     node = None
     try:
         node = make_node()
+        signals.running()
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -534,6 +526,7 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
             raise
         # A signal shut the context down while a callback was still working: stopping.
     finally:
+        signals.stopping()
         if node is not None:
             node.close()
             node.destroy_node()

@@ -1,0 +1,86 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Ctrl-C or SIGTERM at any moment of a program's life: one line, never a traceback.
+
+The executables start here (setup.py's entry points), before anything heavy is imported:
+Python takes a second or more to import rclpy, numpy and numba, and a Ctrl-C then raised
+KeyboardInterrupt inside an import. While a program starts, a signal ends it at once with one
+line and 128 + the signal's number; once it runs, SIGINT raises KeyboardInterrupt as Python's
+default does (rclpy's own handler has shut its context down too), SIGTERM is left to rclpy's
+handler, and while it stops a second signal (``ros2 launch`` forwards the terminal's Ctrl-C
+the process also got) is ignored.
+"""
+
+import importlib
+import os
+import signal
+import sys
+
+STARTING, RUNNING, STOPPING = 'starting', 'running', 'stopping'
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_now = {'program': sys.argv[0], 'phase': STARTING, 'doing': 'starting'}
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    if _now['phase'] == STARTING:
+        # The process's own stderr: a signal may come while a URDF parse has sys.stderr taken.
+        print(f'{_now["program"]}: stopped while {_now["doing"]}', file=sys.__stderr__,
+              flush=True)
+        os._exit(128 + signum)
+    if _now['phase'] == RUNNING and signum == signal.SIGINT:
+        _now['phase'] = STOPPING
+        raise KeyboardInterrupt
+
+
+def guard(program: str) -> None:
+    """Take SIGINT and SIGTERM for ``program``, starting: from now on a signal stops it cleanly.
+
+    Installed before rclpy.init, so rclpy's handlers chain to this one.
+    """
+    _now.update(program=program, phase=STARTING, doing='starting')
+    for signum in _SIGNALS:
+        signal.signal(signum, _on_signal)
+
+
+def doing(what: str) -> None:
+    """Name what the program does while it starts (``compiling the kernels``), for the line."""
+    _now['doing'] = what
+
+
+def running() -> None:
+    """The program has started: SIGINT raises KeyboardInterrupt, SIGTERM is rclpy's."""
+    _now['phase'] = RUNNING
+
+
+def stopping() -> None:
+    """The program stops: further signals are ignored until it has."""
+    _now['phase'] = STOPPING
+
+
+def _start(program: str, target: str, ours: bool = True) -> int:
+    """Guard ``program``, import ``target`` (``module:function``) and return what it returns.
+
+    ``ours``: the program goes on with these handlers; else Python's defaults are put back
+    once it is imported (the ``jacket_cloth`` tools set their own).
+    """
+    guard(program)
+    module, function = target.split(':')
+    main = getattr(importlib.import_module(module), function)
+    if not ours:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    return main()
+
+
+def node() -> int:
+    """``jacket_cloth_node``."""
+    return _start('jacket_cloth_node', 'jacket_cloth_ros.ros.node:main')
+
+
+def crowd() -> int:
+    """``jacket_cloth_crowd``."""
+    return _start('jacket_cloth_crowd', 'jacket_cloth_ros.ros.crowd:main')
+
+
+def tools() -> int:
+    """``jacket_cloth``."""
+    return _start('jacket_cloth', 'jacket_cloth_ros.tools.cli:main', ours=False)
