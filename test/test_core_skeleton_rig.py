@@ -126,11 +126,11 @@ def test_a_hostile_yaml_is_a_short_error_naming_the_file(skeleton, tmp_path, tex
     from jacket_cloth_ros.core.rig import load_rig
     path = tmp_path / 'rig.yaml'
     path.write_text(text)
-    start = time.monotonic()
+    start = time.process_time()         # CPU, which a loaded machine does not stretch
     with pytest.raises(ConfigError, match=message) as error:
         load_rig(skeleton, str(path))
     assert str(error.value).startswith(str(path)) and len(str(error.value)) < 400
-    assert '\n' not in str(error.value) and time.monotonic() - start < 5
+    assert '\n' not in str(error.value) and time.process_time() - start < 5
 
 
 def test_shipped_rig_topology(rig):

@@ -280,13 +280,13 @@ def test_fuzz_mcap_files_end_in_a_replay_or_one_line(recordings, tmp_path, capsy
         else:
             data = mutate(rng, seed)
         path.write_bytes(data)
-        start = time.monotonic()
+        start = time.process_time()     # CPU, which a loaded machine does not stretch
         code = main(['replay', str(path), '-o', str(out), '--force'])
         err = capsys.readouterr().err.strip()
         assert code in (0, 1) and 'Traceback' not in err, (SEED, err)
         if code == 1:
             assert len(err.splitlines()) == 1 and len(err) < 2000, (SEED, err)
-        assert time.monotonic() - start < 30, (SEED, 'slow')
+        assert time.process_time() - start < 30, (SEED, 'a replay spun')
 
 
 def _random_value(rng, depth=0):
@@ -343,7 +343,7 @@ def test_fuzz_yaml_set_ups_load_or_name_the_file(skeleton):
             raw = mutate(rng, texts[name].encode())
             at = rng.randrange(len(raw) + 1)
             text = (raw[:at] + extra.encode() + raw[at:]).decode('utf-8', 'replace')
-        start = time.monotonic()
+        start = time.process_time()     # CPU, which a loaded machine does not stretch
         try:
             parsed = parse_yaml(text, 'fuzz.yaml')
             if name == 'fabrics.yaml':
@@ -355,7 +355,7 @@ def test_fuzz_yaml_set_ups_load_or_name_the_file(skeleton):
             message = str(e)
             assert message.startswith('fuzz.yaml') and '\n' not in message, (SEED, message)
             assert len(message) < 2000, (SEED, message[:300])
-        assert time.monotonic() - start < 5, (SEED, 'slow', text[:300])
+        assert time.process_time() - start < 5, (SEED, 'a parse spun', text[:300])
 
 
 def test_found_by_fuzzing_a_short_message_and_a_huge_quaternion(make_sim, rest_input):

@@ -42,6 +42,7 @@ characters:
   - name: b                      # its URDF from /b/robot_description, as from r_s_p
     rig: examples/mannequin_rig.yaml
     fabric: down_jacket
+    parameters: {robot_description_timeout: 60.0}   # a loaded machine's discovery is slow
   - name: c                      # the one that gets garbage
     urdf: character.urdf
     parameters: {wind: [3.0, 0.0, 0.0]}
@@ -231,11 +232,23 @@ def test_a_backlog_is_taken_and_processed_in_one_wake_up(tmp_path):
             [(c.spec.name, raw) for c, raw, _ in batch]), process(batch))
         pubs = {n: crowd.peer.create_publisher(JointState, f'/{n}/joint_states', 10)
                 for n in raws}
-        crowd.spin_until(lambda: all(p.get_subscription_count() for p in pubs.values()))
+        # A listener of the same inputs, spun apart from the crowd: once it has heard them
+        # all, the writer has handed every one to the crowd's readers too (an event, where a
+        # sleep was a guess).
+        listener = rclpy.create_node('backlog_listener', context=crowd.ctx)
+        heard = []
+        for n in raws:
+            listener.create_subscription(JointState, f'/{n}/joint_states', heard.append, 10,
+                                         raw=True)
+        alone = SingleThreadedExecutor(context=crowd.ctx)
+        alone.add_node(listener)
+        crowd.spin_until(lambda: all(p.get_subscription_count() == 2 for p in pubs.values()))
         for k in range(3):
             for n, p in pubs.items():
                 p.publish(raws[n][k])
-        time.sleep(0.5)                 # all of them in the subscriptions' queues
+        _spin_until(alone, lambda: len(heard) == 6)
+        alone.remove_node(listener)
+        listener.destroy_node()
         crowd.spin_until(lambda: batches)
         assert len(batches) == 1
         assert sorted(batches[0]) == sorted((n, r) for n in raws for r in raws[n])
