@@ -261,6 +261,19 @@ def test_a_backlog_is_taken_and_processed_in_one_wake_up(tmp_path):
             assert _tf_of(crowd.tf, n) == _alone(c.spec, urdf, raws[n]), n
 
 
+def test_a_character_the_shipped_one_does_not_fit_waits_and_the_others_run(tmp_path):
+    # With no robot_description yet, a character whose rig does not fit the shipped
+    # character took the whole crowd down at its timeout (issue 38).
+    skeleton = Skeleton(shipped_character_urdf())
+    with _crowd(tmp_path, 'characters:\n  - {name: a, urdf: character.urdf}\n'
+                '  - {name: b, rig: examples/mannequin_rig.yaml,\n'
+                '     parameters: {robot_description_timeout: 0.05}}\n') as crowd:
+        crowd.spin_until(lambda: crowd.chars['b'].fallback.is_canceled())
+        crowd.send({'a': _inputs(skeleton, 'walk', 3)})
+        crowd.spin_until(lambda: len(_tf_of(crowd.tf, 'a')) == 3)
+        assert crowd.chars['b'].pipeline is None
+
+
 def test_a_characters_file_is_validated_with_one_line(tmp_path):
     path = tmp_path / 'bad.yaml'
     for text, error in (

@@ -233,9 +233,18 @@ class JacketClothNode(Node):
 
     def _use_shipped(self, c):
         c.fallback.cancel()             # once, even if the shipped one fails to load
-        if c.pipeline is None:
+        if c.pipeline is not None:
+            return
+        try:
             self._load(c, shipped_character_urdf(),
                        'the shipped character (config/character.urdf)')
+        except ConfigError as e:
+            if len(self.characters) == 1:
+                raise                   # the node has nothing else to run: one line, exit 1
+            # One character's set-up must not stop the others: it waits for its topic.
+            self.get_logger().error(
+                f'{c.label}no URDF on {c.description.topic_name} yet, and the shipped '
+                f'character does not fit its rig ({e}): waiting for the topic')
 
     def _load(self, c, urdf, source):
         if not self._told_compiling and not kernels_cached(crowd=len(self.characters) > 1):
