@@ -81,8 +81,11 @@ def test_k_processes_each_run_their_slice_and_together_every_character_once(tmp_
         rclpy.shutdown(context=ctx)
     # Every character answered, each from exactly one process: 2 and 3 of the 5.
     assert set(frames) == set(NAMES)
-    assert {f'{n}: cloth simulation' for n in NAMES} <= set(statuses)
-    assert all(int(statuses[f'{n}: cloth simulation']['inputs']) > 0 for n in NAMES)
+    # Each status named by its process and its character: /jacket_cloth_crowd_<i>: <name>: ...
+    owners = {s.split(': ')[1]: s.split(': ')[0] for s in statuses}
+    assert set(owners) == set(NAMES)
+    assert list(owners.values()).count('/jacket_cloth_crowd_0') == 2
+    assert all(int(values['inputs']) > 0 for values in statuses.values())
     assert '2 of 5 characters (slice 0 of 2)' in logs[0], logs[0]
     assert '3 of 5 characters (slice 1 of 2)' in logs[1], logs[1]
     assert all(p.returncode == 0 for p in procs)

@@ -99,8 +99,9 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     assert {'cloth/jacket_l_upper_arm_twist', 'cloth/jacket_shoulder_pad_right',
             'cloth/jacket_chest_left'} <= set(expected)
     for t in last.transforms:
-        assert t.header.frame_id in links                 # child of an existing link
-        assert t.child_frame_id.startswith('cloth/') and t.child_frame_id not in links
+        # A child of an existing link, prefixed as robot_state_publisher prefixes it.
+        assert t.header.frame_id.startswith('cloth/') and t.header.frame_id[6:] in links
+        assert t.child_frame_id.startswith('cloth/') and t.child_frame_id[6:] not in links
         q = t.transform.rotation
         assert abs(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 - 1) < 1e-9
     assert all(_all_finite(tf) for tf in h.tf)
@@ -114,6 +115,7 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     assert [m.ns for m in first if m.action == Marker.DELETEALL] == [
         'cloth', 'colliders', 'hood', 'jacket_bones']
     assert not any(m.action == Marker.DELETEALL for m in later)
+    assert {m.header.frame_id for m in later} == {'cloth/base_link'}
     mesh = [m for m in later if m.ns == 'cloth' and m.id == 0][0]
     assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0 and mesh.color.a > 0
 

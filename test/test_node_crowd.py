@@ -164,8 +164,7 @@ def test_each_character_of_a_crowd_gets_the_tf_it_gets_alone_and_replays_bit_for
             assert len(alone) == len(got[n]) > 20
             assert got[n] == alone, n
         statuses = {s.name: s for m in diagnostics for s in m.status}
-        assert {'a: cloth simulation', 'b: cloth simulation', 'c: cloth simulation'} <= set(
-            statuses)
+        assert {f'/jacket_cloth_crowd: {n}: cloth simulation' for n in 'abc'} <= set(statuses)
     finally:
         ex.shutdown()
         if node is not None:
@@ -391,7 +390,7 @@ class _Crowd:
         out = {}
         for m in self.diagnostics:
             for s in m.status:
-                out[s.name.split(':')[0]] = {kv.key: kv.value for kv in s.values}
+                out[s.name.split(': ')[1]] = {kv.key: kv.value for kv in s.values}
         return out
 
     def close(self):

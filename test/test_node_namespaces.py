@@ -10,6 +10,7 @@ from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from diagnostic_msgs.msg import DiagnosticArray
 from visualization_msgs.msg import MarkerArray
 
 from jacket_cloth_ros.core.config import shipped
@@ -75,8 +76,81 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
         assert frames == {'npc1', 'npc2'}
         for ns, c in chars.items():
             assert c.inputs == 6 and c.sim.resets == 1
+            links = {f'{ns}/{link}' for link in c.sim.skeleton.link_names}
             assert {t.header.frame_id for m in tf for t in m.transforms
-                    if t.child_frame_id.startswith(ns)} <= set(c.sim.skeleton.link_names)
+                    if t.child_frame_id.startswith(ns)} <= links
+    finally:
+        ex.shutdown()
+        for node in nodes.values():
+            node.close()
+            node.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees():
+    """Issue 34 item 2: one skeleton under /npc1 and /npc2, frame_prefix npc1/ and npc2/.
+
+    Each node's /tf names only its own prefixed frames, parents included (as
+    robot_state_publisher with the same prefix publishes the links), so the two jackets hang
+    from two skeletons; world_frame, the world both stand in, is the one frame they share. Its
+    markers are in its prefixed root, and its diagnostics are named by its node.
+    """
+    from rclpy.parameter import Parameter
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    ex = SingleThreadedExecutor(context=ctx)
+    nodes = {}
+    try:
+        for ns in ('npc1', 'npc2'):
+            nodes[ns] = JacketClothNode(context=ctx, namespace='/' + ns, parameter_overrides=[
+                Parameter('frame_prefix', value=ns + '/'),
+                Parameter('robot_description', value=shipped_character_urdf()),
+                Parameter('publish_world_tf', value=True),
+                Parameter('diagnostics_rate', value=10.0)])
+        peer = rclpy.create_node('frames_peer', context=ctx)
+        tf, markers, diagnostics = [], {ns: [] for ns in nodes}, []
+        peer.create_subscription(TFMessage, '/tf', tf.append, 100)
+        peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 100)
+        for ns in nodes:
+            peer.create_subscription(MarkerArray, f'/{ns}/jacket_cloth_node/markers',
+                                     markers[ns].append, 10)
+        for node in (*nodes.values(), peer):
+            ex.add_node(node)
+        chars = {ns: node.characters[0] for ns, node in nodes.items()}
+        pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in nodes}
+        _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
+        for k in range(6):
+            for ns, c in chars.items():
+                names, pos = joint_state_content(c.sim.skeleton.joint_names, 'walk', k / 30)
+                msg = JointState(name=list(names), position=[float(p) for p in pos])
+                msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
+                before = c.inputs
+                pubs[ns].publish(msg)
+                _spin_until(ex, lambda: c.inputs > before)
+        # Two /tf per input (bones, world_frame -> root), and each node's diagnostics.
+        owners = {f'/{ns}/jacket_cloth_node: cloth simulation' for ns in nodes}
+        _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 24 and owners <= {
+            s.name for m in diagnostics for s in m.status})
+        links = chars['npc1'].sim.skeleton.link_names
+        trees = {ns: set() for ns in nodes}
+        for t in (t for m in tf for t in m.transforms):
+            ns = t.child_frame_id.split('/')[0]
+            assert ns in nodes, t.child_frame_id
+            if t.header.frame_id == 'world':        # the world both stand in, to their roots
+                assert t.child_frame_id == f'{ns}/{links[0]}'
+            else:
+                assert t.header.frame_id.startswith(ns + '/'), (t.header.frame_id, ns)
+                trees[ns].add(t.header.frame_id)
+            trees[ns].add(t.child_frame_id)
+        assert not trees['npc1'] & trees['npc2']
+        for ns in nodes:
+            # Bones under the prefixed links: the skeleton's root has the cloth bones.
+            assert f'{ns}/{links[0]}' in trees[ns] and f'{ns}/jacket_r00_c00' in trees[ns]
+            assert {m.header.frame_id for a in markers[ns] for m in a.markers} == {
+                f'{ns}/{links[0]}'}
+        # Unique names: each node's status is its own (the same name made them one row).
+        statuses = [s.name for m in diagnostics for s in m.status]
+        assert set(statuses) == owners
     finally:
         ex.shutdown()
         for node in nodes.values():

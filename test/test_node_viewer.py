@@ -170,3 +170,45 @@ def test_a_root_far_off_gives_the_far_level_without_an_overflow():
         warnings.simplefilter('error')
         step = lod.plan(np.array([1e200, 0.0, 0.0]), (10.0, 30.0), 0.5, 2, 1 / 120)
     assert step.level == 2
+
+
+def test_default_and_latched_publishers_reach_viewer_and_wind(harness):
+    """Issue 34 item 5: a publisher with default QoS (reliable, volatile: ``ros2 topic pub``)
+    reaches ~/viewer and ~/wind, and a latched (transient-local) one still does, its message
+    taken once though both of the viewer's subscriptions get it."""
+    from geometry_msgs.msg import Vector3Stamped
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from jacket_cloth_ros.ros.viewer import Deliveries
+    default = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.VOLATILE)
+    h = harness()
+    deliveries = []
+
+    class Counted(Deliveries):
+        def first(self, info):
+            deliveries.append(info)
+            return super().first(info)
+    h.node._viewer_deliveries = Counted()
+    pub = h.peer.create_publisher(PointStamped, TOPIC, default)
+    h.spin_until(lambda: pub.get_subscription_count() > 0)
+    pub.publish(_viewer(FAR))
+    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    _walk(h, 0, 12)
+    assert h.c.sim.lod.level == 2 and list(h.c.sim.lod.viewer) == list(FAR)
+    # A latched publisher: both subscriptions match it, its message counts once.
+    latched = h.peer.create_publisher(PointStamped, TOPIC, VIEWER_QOS)
+    h.spin_until(lambda: latched.get_subscription_count() == 2)
+    latched.publish(_viewer(NEAR))
+    h.spin_until(lambda: len(deliveries) == 3)
+    assert h.node.received['viewer'] == 2 and h.node.refused['viewer'] == 0
+    assert list(h.c.sim.lod.viewer) == list(NEAR)
+    # ~/wind from a default and from a latched publisher.
+    for k, qos in enumerate((default, QoSProfile(depth=1, durability=DurabilityPolicy.
+                                                 TRANSIENT_LOCAL))):
+        wind = h.peer.create_publisher(Vector3Stamped, '/jacket_cloth_node/wind', qos)
+        h.spin_until(lambda: wind.get_subscription_count() > 0)
+        msg = Vector3Stamped()
+        msg.vector.x = float(k + 1)
+        wind.publish(msg)
+        h.spin_until(lambda: h.c.sim.params.wind == (k + 1.0, 0.0, 0.0))
+    assert h.node.received['wind'] == 2 and h.node.refused['wind'] == 0

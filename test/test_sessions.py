@@ -88,7 +88,7 @@ def test_replay_writes_what_the_node_records_and_an_independent_reader_decodes_i
     mesh = decoded['/jacket_cloth_node/markers'][0].markers
     assert {m.ns for m in mesh} == {'cloth', 'colliders', 'hood', 'jacket_bones'}
     status = decoded['/diagnostics'][0].status[0]
-    assert status.name == 'jacket_cloth_node: cloth simulation'
+    assert status.name == '/jacket_cloth_node: cloth simulation'
     assert 'step_cost_us_median' not in {kv.key for kv in status.values}   # no wall clock
 
 

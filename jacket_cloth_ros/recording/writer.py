@@ -171,15 +171,18 @@ class SessionRecorder:
 
     def add_session_config(self, urdf: str, rig_yaml: str, fabrics_yaml: str,
                            parameters: dict, character: str = '',
-                           output_phase: float = 0.0) -> None:
+                           output_phase: float = 0.0, node_name: str = '') -> None:
         """Add what a replay needs besides the inputs: character, rig, fabrics, parameters.
 
         In a crowd's recording, one per ``character`` (its name): ``SESSION_CONFIG/<name>``,
-        with the character's ``output_phase`` (SessionPipeline).
+        with the character's ``output_phase`` (SessionPipeline). ``node_name``, if given:
+        what its diagnostics status name starts with (SessionPipeline's), for the replay's.
         """
         name = f'{SESSION_CONFIG}/{character}' if character else SESSION_CONFIG
         setup = {'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
                  'parameters_json': json.dumps(parameters, sort_keys=True)}
+        if node_name:
+            setup['node_name'] = node_name
         if character:
             setup['output_phase'] = repr(output_phase)
         self._writer.add_metadata(name, setup)

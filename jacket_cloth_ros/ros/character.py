@@ -152,7 +152,7 @@ class Character:
         recorder.add_session_config(
             self.urdf, read_file(spec.rig or shipped('jacket_rig.yaml')),
             read_file(spec.fabric_file or shipped('fabrics.yaml')), self.pipeline.values,
-            self.config_name, self.pipeline.output_phase)
+            self.config_name, self.pipeline.output_phase, self.pipeline.node_name)
 
 
 def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:

@@ -41,7 +41,7 @@ from .characters import CharacterSpec, crowd_slice, load_characters
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, check_value, descriptor,
                          fabric_parameters)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
-from .viewer import VIEWER_QOS, read_viewer
+from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
 from .warm import kernels_cached
 from .warm import warm_kernels
 
@@ -261,13 +261,13 @@ class JacketClothNode(Node):
             self._models[key] = (skeleton, load_rig(skeleton, spec.rig))
         skeleton, rig = self._models[key]
         pipeline = SessionPipeline(skeleton, rig, self._fabrics_of(spec.fabric_file),
-                                   spec.values, spec.name, timing=True,
+                                   spec.values, self._diagnostics_owner(c), timing=True,
                                    output_phase=spread_phase(len(self.crowd.pipelines)))
-        clash = set(spec.values['frame_prefix'] + b for b in pipeline.sim.bone_names) & set(
-            skeleton.link_names)
+        # frame_prefix goes on bones and links alike, so only the rig's names can clash.
+        clash = set(pipeline.sim.bone_names) & set(skeleton.link_names)
         if clash:
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
-                              'links: change frame_prefix')
+                              'links: rename them in the rig (name, below_name)')
         c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
         if self.recorder is not None:
             c.add_to_recording(self.recorder)
@@ -278,6 +278,15 @@ class JacketClothNode(Node):
             f'{c.label}character {skeleton.name!r} from {source}: '
             f'{len(skeleton.joint_names)} joints, cloth {rig.cols}x{rig.rows}, '
             f'{len(pipeline.sim.bone_names)} bones under {skeleton.link_names[0]!r}')
+
+    def _diagnostics_owner(self, c: Character) -> str:
+        """Return what a character's diagnostics status name starts with, unique in the graph.
+
+        The node's fully qualified name (two namespaced nodes are two names), and in a crowd the
+        character's name after it.
+        """
+        owner = self.get_fully_qualified_name()
+        return f'{owner}: {c.spec.name}' if c.config_name else owner
 
     # -- parameters (jacket_cloth_node: its character's) --------------------------------------
     def _validate_parameters(self, params):
@@ -383,11 +392,21 @@ class JacketClothNode(Node):
         throttled(self.get_logger(), self._log_times, code, text, period)
 
     def _subscribe_viewer(self) -> str:
-        """Subscribe ``~/viewer``; returns its name in the graph, the one it is recorded under."""
-        # Latched: a viewer published once, before a character is loaded, waits for it.
-        self.create_subscription(PointStamped, '~/viewer', self._on_viewer, VIEWER_QOS,
-                                 raw=True, event_callbacks=NO_SUB_EVENTS)
+        """Subscribe ``~/viewer``; returns its name in the graph, the one it is recorded under.
+
+        Twice (ros/viewer.py): latched, so a viewer published once before the node started
+        reaches it; volatile, so a default publisher (``ros2 topic pub``) does too.
+        """
+        self._viewer_deliveries = Deliveries()
+        for qos in (VIEWER_QOS, VIEWER_LIVE_QOS):
+            self.create_subscription(PointStamped, '~/viewer', self._on_viewer_delivery, qos,
+                                     raw=True, event_callbacks=NO_SUB_EVENTS)
         return self.resolve_topic_name('~/viewer')
+
+    def _on_viewer_delivery(self, raw: bytes, info: dict) -> None:
+        """Take a ``~/viewer`` message once, whichever of its subscriptions brings it first."""
+        if self._viewer_deliveries.first(info):
+            self._on_viewer(raw)
 
     def _on_viewer(self, raw):
         """~/viewer: the viewer's world position for the level of detail, from the next input.

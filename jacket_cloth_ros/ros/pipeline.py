@@ -51,13 +51,20 @@ def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_clo
     }
 
 
+# The diagnostics' owner when a recording does not name one: the node with its default name.
+DEFAULT_NODE = '/jacket_cloth_node'
+
+
 class SessionPipeline:
     """A simulation plus the cadence and content of its output messages."""
 
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
-                 values: dict, node_name: str = 'jacket_cloth_node', timing: bool = True,
+                 values: dict, node_name: str = DEFAULT_NODE, timing: bool = True,
                  output_phase: float = 0.0):
         """Set up the simulation; ``output_phase`` staggers markers and diagnostics.
+
+        ``node_name`` starts the diagnostics status name (``<node_name>: cloth simulation``):
+        the node's fully qualified name, and in a crowd the character's name after it.
 
         After the first of each, they come ``output_phase`` (0 to 0.9) of their period earlier
         than they would: a crowd gives its characters spread phases, so their markers and
@@ -96,8 +103,15 @@ class SessionPipeline:
 
     def _tf_template(self):
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
-        return messages.tf_template(tuple(self.sim.bone_names), tuple(self.sim.bone_parents),
-                                    self.values['frame_prefix'])
+        # The prefix goes on parents too, as robot_state_publisher's goes on every link: two
+        # characters with their own prefixes are two trees.
+        prefix = self.values['frame_prefix']
+        return messages.tf_template(tuple(self.sim.bone_names),
+                                    tuple(prefix + p for p in self.sim.bone_parents), prefix)
+
+    def root_frame(self) -> str:
+        """Return the frame of the URDF root link as published: ``frame_prefix`` in front."""
+        return self.values['frame_prefix'] + self.sim.skeleton.link_names[0]
 
     def _fabric(self):
         return fabric_from(self.fabrics[self.values['fabric']], self.values)
@@ -192,8 +206,7 @@ class SessionPipeline:
             self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
             if self.markers_wanted is None or self.markers_wanted():
                 out.append(('markers', messages.marker_array(
-                    self.sim, stamp_ns, self.sim.skeleton.link_names[0],
-                    reset=self._marker_reset)))
+                    self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset)))
                 self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
@@ -224,9 +237,10 @@ class SessionPipeline:
         """Encode world_frame -> the URDF root: the input's own world_joint variables.
 
         Not the last step's root: with inputs off the step grid that lags the input, and the
-        skeleton's links (robot_state_publisher) are at the input's pose.
+        skeleton's links (robot_state_publisher) are at the input's pose. The root carries
+        ``frame_prefix``; ``world_frame`` is taken as given, the world the characters share.
         """
-        root = self.sim.skeleton.link_names[0]
+        root = self.root_frame()
         key = (self.values['world_frame'], root)
         if self._world_tf is None or self._world_tf[0] != key:
             self._world_tf = (key, messages.tf_template((root,), (key[0],), ''))

@@ -1,11 +1,15 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The ``~/viewer`` input: where the viewer stands, for the level of detail (core/lod.py).
 
-A ``geometry_msgs/PointStamped`` in the node's ``world_frame``. Latched (transient local,
-depth 1): a viewer published once, before or after the node starts, reaches it.
+A ``geometry_msgs/PointStamped`` in the node's ``world_frame``, from any reliable publisher:
+the node subscribes it twice, latched (transient local: a viewer a latched publisher sent
+before the node started reaches it) and volatile (``ros2 topic pub`` and other default
+publishers, which a transient-local subscription never matches). A latched publisher's message
+comes on both and is taken once (:class:`Deliveries`).
 """
 
 import math
+from collections import deque
 from typing import NamedTuple
 
 import numpy as np
@@ -17,6 +21,10 @@ from . import cdr
 VIEWER_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                         durability=DurabilityPolicy.TRANSIENT_LOCAL,
                         history=HistoryPolicy.KEEP_LAST)
+# The second subscription's: volatile matches volatile and transient-local publishers alike.
+VIEWER_LIVE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.VOLATILE,
+                             history=HistoryPolicy.KEEP_LAST)
 VIEWER_TYPE = 'geometry_msgs/msg/PointStamped'
 MAX_DISTANCE_M = 1e9        # farther is a unit or encoding error, not a viewer
 
@@ -51,3 +59,27 @@ def read_viewer(raw: bytes, world_frame: str) -> ViewerReading:
     if math.hypot(*p) > MAX_DISTANCE_M:
         return ViewerReading(None, stamp, f'farther than {MAX_DISTANCE_M:g} m {list(p)}')
     return ViewerReading(np.array(p, dtype=float), stamp, '')
+
+
+class Deliveries:
+    """Tells a message's first delivery from the same message on another subscription.
+
+    A message is known by its publisher, sequence number and source time (rmw message info).
+    """
+
+    def __init__(self, keep: int = 32):
+        self._seen = deque(maxlen=keep)
+
+    def first(self, info: dict) -> bool:
+        """Tell whether the message ``info`` describes was not delivered before."""
+        gid = info.get('publisher_gid')
+        if isinstance(gid, dict):
+            gid = gid.get('data')
+        key = (None if gid is None else bytes(gid), info.get('publication_sequence_number'),
+               info.get('source_timestamp'))
+        if key[0] is None and key[1] is None and not key[2]:
+            return True             # nothing tells it apart: take it
+        if key in self._seen:
+            return False
+        self._seen.append(key)
+        return True

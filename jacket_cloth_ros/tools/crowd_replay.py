@@ -67,7 +67,9 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
                                 f'{ns}/jacket_cloth_node/markers')
         try:
             phase = float(meta.get('output_phase', 0.0))
-            pipeline = SessionPipeline(skeleton, rig, fabrics, values, name, timing=False,
+            # Older crowd recordings named the diagnostics by the character alone.
+            pipeline = SessionPipeline(skeleton, rig, fabrics, values,
+                                       meta.get('node_name') or name, timing=False,
                                        output_phase=phase)
         except ValueError:
             raise ConfigError(f'{where}: output_phase {meta.get("output_phase")!r} is not a '

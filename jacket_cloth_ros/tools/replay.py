@@ -30,7 +30,7 @@ def replay(session: SessionInput, out_path: str) -> tuple['SessionPipeline', flo
                 recorder.add_topic(name, kind, qos)
             setup = session.setup
             recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
-                                        setup.values)
+                                        setup.values, node_name=setup.node_name)
             started = time.perf_counter()
             pipeline = run_session(
                 session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data,

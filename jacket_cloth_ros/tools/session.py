@@ -26,7 +26,7 @@ from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, parse_override
-from ..ros.pipeline import SessionPipeline, session_topics
+from ..ros.pipeline import DEFAULT_NODE, SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -43,6 +43,7 @@ class SessionSetup:
     skeleton: Skeleton
     rig: Rig
     fabrics: dict
+    node_name: str = DEFAULT_NODE   # what the recorded node's diagnostics names started with
 
 
 @dataclass
@@ -119,7 +120,8 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
         values.update((k, v) for k, v in default_values(fabrics[given['fabric']]).items()
                       if k.startswith('fabric.'))
     values.update(given)
-    setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics)
+    setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics,
+                         recorded.get('node_name') or DEFAULT_NODE)
     session = SessionInput(recording, topic, _events(recording, topic), setup)
     session.warnings = _check_joints(session)
     return session
@@ -212,7 +214,7 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
     """
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
-                               timing=timing)
+                               setup.node_name, timing=timing)
     joint_states = JointStateReader()
     for stamp, _, kind, data in session.events:
         if kind == 'joint_states':
