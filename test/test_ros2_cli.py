@@ -166,3 +166,30 @@ def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
     out = launch.output()
     assert code == 0 and 'Traceback' not in out, out
     assert '[jacket_cloth_node-1]: process has finished cleanly' in out, out
+
+
+def test_ros2_topic_pub_once_with_default_qos_reaches_viewer_and_wind(harness):
+    """Issue 34 item 5: ``ros2 topic pub --once`` without QoS flags (reliable, volatile)
+    reaches the node's ~/viewer and ~/wind; a latched-only ~/viewer never matched it."""
+    h = harness()
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID))       # the harness's domain
+    sent = [
+        ('/jacket_cloth_node/viewer', 'geometry_msgs/msg/PointStamped',
+         '{header: {frame_id: world}, point: {x: 0.0, y: 100.0, z: 0.0}}',
+         lambda: h.c.sim.lod.viewer is not None and list(h.c.sim.lod.viewer) == [0, 100, 0]),
+        ('/jacket_cloth_node/wind', 'geometry_msgs/msg/Vector3Stamped',
+         '{vector: {x: 1.0, y: 2.0, z: 3.0}}',
+         lambda: h.c.sim.params.wind == (1.0, 2.0, 3.0))]
+    for topic, kind, values, taken in sent:
+        proc = subprocess.Popen([ROS2, 'topic', 'pub', '--once', topic, kind, values], env=env,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                start_new_session=True)
+        try:
+            h.spin_until(taken, timeout=120)
+            out = proc.communicate(timeout=60)[0]
+            assert proc.returncode == 0, out
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(timeout=60)
+    assert h.node.received['viewer'] == 1 and h.node.received['wind'] == 1
