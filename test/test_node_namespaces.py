@@ -87,15 +87,19 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
         rclpy.shutdown(context=ctx)
 
 
-def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees():
+def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees(tmp_path):
     """Issue 34 item 2: one skeleton under /npc1 and /npc2, frame_prefix npc1/ and npc2/.
 
     Each node's /tf names only its own prefixed frames, parents included (as
     robot_state_publisher with the same prefix publishes the links), so the two jackets hang
     from two skeletons; world_frame, the world both stand in, is the one frame they share. Its
-    markers are in its prefixed root, and its diagnostics are named by its node.
+    markers are in its prefixed root, and its diagnostics are named by its node. npc1's
+    recording replays to the same frames and the same diagnostics name.
     """
     from rclpy.parameter import Parameter
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.tools.session import load_session, run_session
+    record = str(tmp_path / 'npc1.mcap')
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)
     ex = SingleThreadedExecutor(context=ctx)
@@ -106,7 +110,8 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
                 Parameter('frame_prefix', value=ns + '/'),
                 Parameter('robot_description', value=shipped_character_urdf()),
                 Parameter('publish_world_tf', value=True),
-                Parameter('diagnostics_rate', value=10.0)])
+                Parameter('diagnostics_rate', value=10.0),
+                Parameter('record', value=record if ns == 'npc1' else '')])
         peer = rclpy.create_node('frames_peer', context=ctx)
         tf, markers, diagnostics = [], {ns: [] for ns in nodes}, []
         peer.create_subscription(TFMessage, '/tf', tf.append, 100)
@@ -157,3 +162,11 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
             node.close()
             node.destroy_node()
         rclpy.shutdown(context=ctx)
+    session = load_session(record)
+    recorded = [m.data for m in session.recording.messages if m.topic == '/tf']
+    replayed, diagnostics = [], []
+    run_session(session, sink=lambda key, data, stamp: (
+        replayed if key == 'tf' else diagnostics if key == 'diagnostics' else []).append(data))
+    assert len(recorded) == 12 and replayed == recorded
+    assert {s.name for raw in diagnostics for s in deserialize_message(
+        raw, DiagnosticArray).status} == {'/npc1/jacket_cloth_node: cloth simulation'}
