@@ -47,12 +47,12 @@ def doing(what: str) -> None:
 
 
 def running() -> None:
-    """The program has started: SIGINT raises KeyboardInterrupt, SIGTERM is rclpy's."""
+    """Mark the program started: SIGINT raises KeyboardInterrupt, SIGTERM is rclpy's."""
     _now['phase'] = RUNNING
 
 
 def stopping() -> None:
-    """The program stops: further signals are ignored until it has."""
+    """Mark the program stopping: further signals are ignored until it has."""
     _now['phase'] = STOPPING
 
 
