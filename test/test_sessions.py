@@ -435,8 +435,10 @@ def test_byte_templates_equal_the_field_by_field_encoding(make_sim):
     for seconds, stamp in ((0.3, 10 ** 10 + 7), (0.5, 2 * 10 ** 10 + 999_999_999)):
         play(sim, 'walk', 60, seconds)
         bones = sim.bones()
+        # The prefix on every frame, parents too (as robot_state_publisher's).
         assert messages.tf_message(bones, stamp, 'p/') == cdr.tf_message(
-            bones.names, bones.parents, bones.translations, bones.quaternions, stamp, 'p/')
+            bones.names, ['p/' + p for p in bones.parents], bones.translations,
+            bones.quaternions, stamp, 'p/')
         for reset in (True, False):
             specs = messages.marker_specs(sim, reset)
             assert messages.marker_array(sim, stamp, 'base_link', reset) == \
@@ -464,6 +466,7 @@ def test_a_live_frame_prefix_change_renames_the_bones_on_the_next_tf(make_sim):
         _, outputs = pipe.on_joint_state(JointStateContent(stamp, names, pos), stamp)
         frames.append(deserialize_message(dict(outputs)['tf'], TFMessage).transforms[0])
     assert [f.child_frame_id for f in frames] == ['jacket_r00_c00', 'left/jacket_r00_c00']
+    assert [f.header.frame_id for f in frames] == ['base_link', 'left/base_link']
 
 
 def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_path):

@@ -66,8 +66,12 @@ def tf_message(bones: 'Bones', stamp_ns: int, prefix: str = '') -> bytes:
 @functools.lru_cache(maxsize=8)
 def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
                 prefix: str) -> cdr.TfTemplate:
-    """Return the TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``."""
-    return cdr.TfTemplate(names, parents, prefix)
+    """Return the TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``.
+
+    ``prefix`` goes on bones and parents alike, as robot_state_publisher's ``frame_prefix``
+    goes on every link: two characters with their own prefixes are two trees.
+    """
+    return cdr.TfTemplate(names, tuple(prefix + p for p in parents), prefix)
 
 
 @functools.lru_cache(maxsize=8)

@@ -103,11 +103,8 @@ class SessionPipeline:
 
     def _tf_template(self):
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
-        # The prefix goes on parents too, as robot_state_publisher's goes on every link: two
-        # characters with their own prefixes are two trees.
-        prefix = self.values['frame_prefix']
-        return messages.tf_template(tuple(self.sim.bone_names),
-                                    tuple(prefix + p for p in self.sim.bone_parents), prefix)
+        return messages.tf_template(tuple(self.sim.bone_names), tuple(self.sim.bone_parents),
+                                    self.values['frame_prefix'])
 
     def root_frame(self) -> str:
         """Return the frame of the URDF root link as published: ``frame_prefix`` in front."""
