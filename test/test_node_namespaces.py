@@ -132,10 +132,7 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
                 before = c.inputs
                 pubs[ns].publish(msg)
                 _spin_until(ex, lambda: c.inputs > before)
-        # Two /tf per input (bones, world_frame -> root), and each node's diagnostics.
-        owners = {f'/{ns}/jacket_cloth_node: cloth simulation' for ns in nodes}
-        _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 24 and owners <= {
-            s.name for m in diagnostics for s in m.status})
+        _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 24)   # bones, world
         links = chars['npc1'].sim.skeleton.link_names
         trees = {ns: set() for ns in nodes}
         for t in (t for m in tf for t in m.transforms):
@@ -154,8 +151,9 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
             assert {m.header.frame_id for a in markers[ns] for m in a.markers} == {
                 f'{ns}/{links[0]}'}
         # Unique names: each node's status is its own (the same name made them one row).
-        statuses = [s.name for m in diagnostics for s in m.status]
-        assert set(statuses) == owners
+        owners = {f'/{ns}/jacket_cloth_node: cloth simulation' for ns in nodes}
+        _spin_until(ex, lambda: len({s.name for m in diagnostics for s in m.status}) >= 2)
+        assert {s.name for m in diagnostics for s in m.status} == owners
     finally:
         ex.shutdown()
         for node in nodes.values():
