@@ -110,10 +110,10 @@ def test_fabric_damping_is_per_time_not_per_step(skeleton, rig, fabric):
     assert per_step(0.035, 1.0) == 0.035
     # The compiled step applies the same rule: 240 Hz in two substeps is a quarter design step.
     fast = JacketSimulation(skeleton, rig, fabric, SimParams(sim_rate=240.0, substeps=2))
-    per_substep = np.empty(len(fast.damping))
-    step.lost_per_each(fast.damping, DESIGN_RATE / 240.0 / 2, per_substep)
-    assert per_substep == pytest.approx(1.0 - (1.0 - fast.damping) ** 0.25)
-    assert per_substep[0] < fast.damping[0] / 3.9
+    per_substep = np.empty(len(fast.tuning.damping))
+    step.lost_per_each(fast.tuning.damping, DESIGN_RATE / 240.0 / 2, per_substep)
+    assert per_substep == pytest.approx(1.0 - (1.0 - fast.tuning.damping) ** 0.25)
+    assert per_substep[0] < fast.tuning.damping[0] / 3.9
 
 
 def test_automatic_mode_saves_when_calm_and_stays_within_tolerance(skeleton, rig, fabric,
