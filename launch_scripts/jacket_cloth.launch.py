@@ -45,7 +45,7 @@ def generate_launch_description():
             output='screen',
             parameters=[LaunchConfiguration('params_file'),
                         {'record': LaunchConfiguration('record'),
-                         'fabric': LaunchConfiguration('fabric'),
+                         'fabric_preset': LaunchConfiguration('fabric'),
                          'frame_prefix': LaunchConfiguration('frame_prefix'),
                          'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'),
                                                         value_type=bool)}],

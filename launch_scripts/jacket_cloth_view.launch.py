@@ -33,7 +33,7 @@ def generate_launch_description():
         Node(package='jacket_cloth_ros', executable='jacket_cloth_node',
              name='jacket_cloth_node', output='screen',
              parameters=[os.path.join(share, 'config', 'node_params.yaml'),
-                         {'fabric': LaunchConfiguration('fabric'), 'publish_world_tf': True,
+                         {'fabric_preset': LaunchConfiguration('fabric'), 'publish_world_tf': True,
                           'robot_description': urdf}]),
         Node(package='jacket_cloth_ros', executable='jacket_cloth', name='motion',
              arguments=['motion', '--clip', LaunchConfiguration('clip'), '--duration', '3600']),

@@ -288,6 +288,65 @@ def test_malformed_urdf_parameter_is_a_clear_error_at_start():
         rclpy.shutdown(context=ctx)
 
 
+def _start_error(**params):
+    """The ConfigError of a node started with ``params`` (a params file's flattened keys)."""
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    try:
+        with pytest.raises(ConfigError) as e:
+            JacketClothNode(context=ctx, parameter_overrides=[
+                Parameter(k, value=v) for k, v in params.items()])
+        return str(e.value)
+    finally:
+        rclpy.shutdown(context=ctx)
+
+
+def test_a_params_key_the_node_does_not_take_is_refused_with_its_reason():
+    # rclpy drops an override nobody declares: the old preset name ran tweed_jacket silently.
+    assert _start_error(fabric='down_jacket') == \
+        'parameter fabric: renamed fabric_preset (set fabric_preset instead)'
+    assert _start_error(sim_rat=240.0) == \
+        'parameter sim_rat: not a parameter of jacket_cloth_node (the README lists them)'
+    # wind: {x: 1.0} in a params file: a value parameter holds no group.
+    assert _start_error(**{'wind.x': 1.0}) == \
+        'parameter wind.x: wind is not a group of parameters'
+    assert 'fabric.bogus' in _start_error(**{'fabric.bogus': 1.0})
+
+
+def test_the_preset_and_a_nested_fabric_group_apply_together(harness):
+    # fabric_preset: down_jacket with fabric: {damping: 0.2} beside it in one file.
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    down = load_fabrics()['down_jacket']
+    h = harness(fabric_preset='down_jacket', **{'fabric.damping': 0.2})
+    assert h.c.sim.fabric.damping == 0.2
+    assert h.c.sim.fabric.stretch_stiffness == down.stretch_stiffness
+    assert h.node.get_parameter('fabric.wind_scale').value == down.wind_scale
+
+
+def test_a_params_file_with_a_key_given_twice_is_refused(tmp_path):
+    from jacket_cloth_ros.ros.parameters import params_file_problem
+    path = tmp_path / 'p.yaml'
+    path.write_text('/**:\n  ros__parameters:\n    fabric_preset: down_jacket\n'
+                    '    fabric_preset: veil\n')
+    problem = params_file_problem(['node', '--ros-args', '--params-file', str(path)])
+    assert problem.startswith(f'--params-file {path}, line 4: ') and 'twice' in problem
+    shipped = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                           'config', 'node_params.yaml')
+    assert params_file_problem(['node', '--ros-args', '--params-file', shipped]) == ''
+
+
+def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
+    path = str(tmp_path / 's.mcap')
+    h = harness(record=path)
+    recorder = h.node.recorder
+    assert recorder is not None
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    assert h.node.recorder is recorder           # a params file loaded live: still recording
+    other = str(tmp_path / 't.mcap')
+    assert h.node.set_parameters([Parameter('record', value=other)])[0].successful
+    assert h.node.recorder is not recorder and h.node.recorder.path == other
+
+
 def test_robot_description_from_the_latched_topic(harness, urdf_text):
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)

@@ -610,13 +610,16 @@ def test_overrides_read_numbers_as_numbers_and_name_unknown_presets(clip, tmp_pa
                                    '-p', 'sim_rate:=nan'])
     assert 'sim_rate' in err
     err = _one_line_error(capsys, ['replay', str(clip), '-o', str(out), '--force',
-                                   '-p', 'fabric:=bogus'])
+                                   '-p', 'fabric_preset:=bogus'])
     assert "'bogus' is not a preset" in err and 'tweed_jacket' in err
+    err = _one_line_error(capsys, ['replay', str(clip), '-o', str(out), '--force',
+                                   '-p', 'fabric:=veil'])
+    assert 'renamed fabric_preset' in err
     # A preset named with -p seeds the fabric.* values, as --fabric does.
-    session = load_session(str(clip), overrides=['fabric:=veil'])
+    session = load_session(str(clip), overrides=['fabric_preset:=veil'])
     veil = session.setup.fabrics['veil']
     assert session.setup.values['fabric.damping'] == veil.damping
-    session = load_session(str(clip), overrides=['fabric:=veil', 'fabric.damping:=0.3'])
+    session = load_session(str(clip), overrides=['fabric_preset:=veil', 'fabric.damping:=0.3'])
     assert session.setup.values['fabric.damping'] == 0.3
 
 

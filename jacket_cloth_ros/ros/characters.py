@@ -30,8 +30,8 @@ from .parameters import default_values, typed_value
 
 MAX_CHARACTERS = 4096
 # The character's own keys: set there, not under ``parameters``; ``record`` is the crowd's.
-_NOT_PARAMETERS = ('robot_description', 'rig_file', 'fabric_file', 'fabric', 'frame_prefix',
-                   'record', 'record_compression')
+_NOT_PARAMETERS = ('robot_description', 'rig_file', 'fabric_file', 'fabric', 'fabric_preset',
+                   'frame_prefix', 'record', 'record_compression')
 _NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*')
 _KEYS = ('urdf', 'rig', 'fabric_file', 'fabric', 'frame_prefix', 'parameters')
 
@@ -44,7 +44,7 @@ class CharacterSpec:
     urdf: str | None            # a URDF file, or None: the robot_description topic
     rig: str | None             # a rig file, or None: the shipped rig
     fabric_file: str | None     # a fabrics file, or None: the shipped presets
-    values: dict                # every parameter's value, as a node's (frame_prefix, fabric...)
+    values: dict                # every parameter's value, as a node's (frame_prefix...)
 
     @property
     def namespace(self) -> str:
@@ -110,7 +110,7 @@ def load_characters(path: str) -> list[CharacterSpec]:
         prefix = keys.get('frame_prefix')
         parameters = own.section('parameters', {})
         values = default_values(fabrics[fabric])
-        values['fabric'] = fabric
+        values['fabric_preset'] = fabric
         for key, value in parameters._data.items():
             if key not in values or key in _NOT_PARAMETERS:
                 raise ConfigError(f'{where}.parameters.{shown(key)}: not a character\'s '

@@ -38,8 +38,9 @@ from . import cdr
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, check_value, descriptor,
-                         fabric_parameters)
+from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
+                         check_value, descriptor, fabric_parameters, params_file_problem,
+                         unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
 from .warm import kernels_cached
@@ -89,6 +90,7 @@ class JacketClothNode(Node):
         self._models = {}               # (URDF, rig file) -> (skeleton, rig), shared read-only
         self._fabrics = {}              # fabrics file -> its presets
         self._told_compiling = False
+        self._record_asked = None       # the record value the open (or failed) file is for
         self._every = 1                 # the characters of the file (a crowd slices them)
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
@@ -146,6 +148,14 @@ class JacketClothNode(Node):
             raise ConfigError(f'parameter {reason}' if reason.startswith(name) else
                               f'parameter {name}: {reason}')
 
+    def _refuse_unknown(self):
+        """A parameter given (a params file, -p) but not declared is refused, never dropped."""
+        declared = set(self.list_parameters([], 0).names)
+        for name in sorted(self._parameter_overrides):
+            if name not in declared and name not in ROS_OWN and \
+                    not name.startswith(ROS_OWN_PREFIXES):
+                raise ConfigError(unknown_reason(name, declared, self.get_name()))
+
     def _p(self, name):
         return self.get_parameter(name).value
 
@@ -155,12 +165,13 @@ class JacketClothNode(Node):
             self._declare(name, spec)
         fabric_file = self._p('fabric_file') or None
         fabrics = self._fabrics_of(fabric_file)
-        preset = self._p('fabric')
+        preset = self._p('fabric_preset')
         if preset not in fabrics:
-            raise ConfigError(f'parameter fabric: {preset!r} is not a preset '
+            raise ConfigError(f'parameter fabric_preset: {preset!r} is not a preset '
                               f'(presets: {", ".join(fabrics)})')
         for name, spec in fabric_parameters(fabrics[preset]).items():
             self._declare(name, spec)
+        self._refuse_unknown()
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         spec = CharacterSpec(self.get_name(), None, self._p('rig_file') or None, fabric_file,
@@ -177,6 +188,7 @@ class JacketClothNode(Node):
         """jacket_cloth_crowd's characters: its slice of the characters file."""
         for name, spec in CROWD_PARAMETERS.items():
             self._declare(name, spec)
+        self._refuse_unknown()
         path = self._p('characters')
         if not path:
             raise ConfigError('parameter characters: give the characters file '
@@ -302,7 +314,9 @@ class JacketClothNode(Node):
     def _apply_parameters(self, params):
         """Apply valid changes from the next step; they never reset the cloth."""
         names = {p.name for p in params}
-        if 'record' in names:
+        # The same path again (a params file loaded live) keeps the recording going.
+        if 'record' in names and (self._p('record') != self._record_asked or
+                                  self.recorder is None):
             self._open_recorder(self._p('record'))
         values = self._values()
         changes = {n: values[n] for n in names if n in values}
@@ -342,6 +356,7 @@ class JacketClothNode(Node):
 
     # -- recording ----------------------------------------------------------------------------
     def _open_recorder(self, path):
+        self._record_asked = path
         if self.recorder is not None:
             self.recorder.close()
             self.get_logger().info(f'recording closed: {self.recorder.path}')
@@ -530,6 +545,10 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
     # kernels are compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut
     # the context down and the compile ran on for half a minute.
     signals.guard(program)
+    problem = params_file_problem(argv)
+    if problem:                 # before the compile: a typo is told at once
+        print(f'{program}: {problem}', file=sys.stderr)
+        return 1
     if not kernels_cached(crowd=crowd):
         print(f'{program}: compiling the simulation kernels into numba\'s cache (a first '
               'start after an install or an edit of a kernel; about a minute; '

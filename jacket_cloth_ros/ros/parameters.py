@@ -43,8 +43,8 @@ NODE_PARAMETERS = {
                                   'character'),
     'rig_file': (T.PARAMETER_STRING, '', None, True, 'rig YAML; empty: config/jacket_rig.yaml'),
     'fabric_file': (T.PARAMETER_STRING, '', None, True, 'fabric presets YAML; empty: shipped'),
-    'fabric': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
-               'fabric preset (M16); its values seed the fabric.* parameters'),
+    'fabric_preset': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
+                      'fabric preset (M16); its values seed the fabric.* parameters'),
     **_sim_parameters(),
     'world_joint': (T.PARAMETER_STRING, 'world_joint', None, False,
                     'name of the floating virtual joint whose <name>/trans_x..rot_w variables '
@@ -65,6 +65,14 @@ NODE_PARAMETERS = {
                            'MCAP chunk compression of the next recording: lz4 (fast, the '
                            'default), zstd (smaller files) or none'),
 }
+
+
+# Old names: refused with a hint, never taken for another parameter. ``fabric`` was the preset
+# and also the prefix of ``fabric.*``, which ros2 param dump cannot write.
+RENAMED = {'fabric': 'fabric_preset'}
+# Parameters rclpy declares on every node, or on request (QoS overrides).
+ROS_OWN = ('use_sim_time', 'start_type_description_service', 'start_parameter_services')
+ROS_OWN_PREFIXES = ('qos_overrides.',)
 
 
 # jacket_cloth_crowd's own; its characters' parameters come from its characters file.
@@ -108,7 +116,7 @@ def fabric_parameters(fabric: Fabric) -> dict[str, tuple]:
 
 
 def default_values(fabric: Fabric) -> dict[str, object]:
-    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric``."""
+    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric_preset``."""
     values = {name: spec[1] for name, spec in NODE_PARAMETERS.items()}
     values.update({name: spec[1] for name, spec in fabric_parameters(fabric).items()})
     return values
@@ -138,6 +146,60 @@ def sim_params_from(values: dict) -> SimParams:
     return SimParams(**sim)
 
 
+def unknown_reason(name: str, known: object, node: str) -> str:
+    """Why a parameter given to ``node`` is not taken: a hint for an old name, else unknown."""
+    if name in RENAMED:
+        return f'parameter {name}: renamed {RENAMED[name]} (set {RENAMED[name]} instead)'
+    if '.' in name and name.partition('.')[0] in known:
+        return f'parameter {name}: {name.partition(".")[0]} is not a group of parameters'
+    return f'parameter {name}: not a parameter of {node} (the README lists them)'
+
+
+def from_recording(values: dict) -> dict:
+    """A recording's parameter values under today's names (older files say ``fabric``)."""
+    out = dict(values)
+    for old, new in RENAMED.items():
+        if old in out and not isinstance(out[old], dict):
+            out.setdefault(new, out.pop(old))
+    return out
+
+
+def params_file_problem(argv: list[str]) -> str:
+    """What is wrong with a ``--params-file`` in ``argv`` that rcl would take silently, or ''.
+
+    A key given twice in one mapping (the second wins in rcl's reader: ``fabric: {...}`` after
+    a ``fabric: name``) is refused; a file rcl cannot read is left to rcl's own message.
+    """
+    import yaml
+
+    class Strict(yaml.SafeLoader):
+        pass
+
+    def mapping(loader, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = loader.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f'{key!r} is given twice', key_node.start_mark)
+            seen.add(key)
+        return yaml.SafeLoader.construct_mapping(loader, node, deep)
+    Strict.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
+    for flag, path in zip(ros, ros[1:]):
+        if flag != '--params-file':
+            continue
+        try:
+            with open(path, encoding='utf-8') as f:
+                yaml.load(f, Loader=Strict)
+        except yaml.constructor.ConstructorError as e:
+            return (f'--params-file {path}, line {e.problem_mark.line + 1}: {e.problem} (rcl '
+                    'would keep the last one only)')
+        except (OSError, yaml.YAMLError):
+            continue
+    return ''
+
+
 def fabric_from(preset: Fabric, values: dict) -> Fabric:
     """Return the preset with every ``fabric.<field>`` value applied."""
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
@@ -164,6 +226,8 @@ def parse_override(text: str, known: dict) -> tuple[str, object]:
     name, sep, raw = text.partition(':=')
     if not sep:
         raise ValueError(f'-p {text!r}: expected name:=value')
+    if name in RENAMED:
+        raise ValueError(f'-p {name}: renamed {RENAMED[name]}')
     if name not in known:
         raise ValueError(f'-p {name}: not a parameter (see README)')
     try:

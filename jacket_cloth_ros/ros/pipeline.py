@@ -111,7 +111,7 @@ class SessionPipeline:
         return self.values['frame_prefix'] + self.sim.skeleton.link_names[0]
 
     def _fabric(self):
-        return fabric_from(self.fabrics[self.values['fabric']], self.values)
+        return fabric_from(self.fabrics[self.values['fabric_preset']], self.values)
 
     def apply(self, changes: dict) -> None:
         """Parameter changes (name -> value), acting from the next step; never a reset."""

@@ -33,7 +33,7 @@ if TYPE_CHECKING:           # for the annotations only
 MEASURES = ('vertical_stretch', 'vertical_compression', 'horizontal_stretch', 'inside_m',
             'push_out_m')
 
-REPORTED_PARAMETERS = ('fabric', 'sim_rate', 'stretch_limit', 'fabric.iterations',
+REPORTED_PARAMETERS = ('fabric_preset', 'sim_rate', 'stretch_limit', 'fabric.iterations',
                        'fabric.damping', 'fabric.world_share', 'wind', 'wind_gust')
 
 

@@ -22,7 +22,7 @@ from ..core.skeleton import Skeleton
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG, SessionRecorder
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values
+from ..ros.parameters import default_values, from_recording
 from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
@@ -57,10 +57,11 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         rig = Rig(parse_yaml(meta['rig_yaml'], f'{where} rig'), skeleton, where=f'{where} rig')
         fabrics = fabrics_from_data(parse_yaml(meta['fabrics_yaml'], f'{where} fabrics'),
                                     f'{where} fabrics')
-        recorded = json.loads(meta['parameters_json'])
-        if recorded.get('fabric') not in fabrics:
-            raise ConfigError(f'{where}: fabric {recorded.get("fabric")!r} is not a preset')
-        values = default_values(fabrics[recorded['fabric']])
+        recorded = from_recording(json.loads(meta['parameters_json']))
+        preset = recorded.get('fabric_preset')
+        if preset not in fabrics:
+            raise ConfigError(f'{where}: fabric_preset {preset!r} is not a preset')
+        values = default_values(fabrics[preset])
         values.update({k: v for k, v in recorded.items() if k in values})
         ns = '/' + name
         topics = session_topics(f'{ns}/joint_states', f'{ns}/jacket_cloth_node/wind',

@@ -25,7 +25,7 @@ from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values, parse_override
+from ..ros.parameters import default_values, from_recording, parse_override
 from ..ros.pipeline import DEFAULT_NODE, SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 
@@ -101,8 +101,8 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     rig_obj = Rig(parse_yaml(rig_yaml, rig or 'the rig'), skeleton, where=rig or 'rig')
     fabrics_yaml = recorded.get('fabrics_yaml') or read_text(shipped('fabrics.yaml'), 'fabrics')
     fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, 'fabrics'), 'fabrics')
-    recorded_values = json.loads(recorded.get('parameters_json', '{}'))
-    preset = fabric or recorded_values.get('fabric', 'tweed_jacket')
+    recorded_values = from_recording(json.loads(recorded.get('parameters_json', '{}')))
+    preset = fabric or recorded_values.get('fabric_preset', 'tweed_jacket')
     if preset not in fabrics:
         raise ConfigError(f'fabric {preset!r} is not a preset (presets: {", ".join(fabrics)})')
     values = default_values(fabrics[preset])
@@ -111,13 +111,14 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     else:        # a preset asked for: its fabric.* values, the recording's other parameters
         values.update({k: v for k, v in recorded_values.items()
                        if k in values and not k.startswith('fabric')})
-        values['fabric'] = preset
+        values['fabric_preset'] = preset
     given = dict(parse_override(text, values) for text in overrides)
-    if 'fabric' in given:       # a preset named with -p seeds fabric.*, as --fabric does
-        if given['fabric'] not in fabrics:
-            raise ConfigError(f'-p fabric: {given["fabric"]!r} is not a preset (presets: '
+    chosen = given.get('fabric_preset')
+    if chosen is not None:      # a preset named with -p seeds fabric.*, as --fabric does
+        if chosen not in fabrics:
+            raise ConfigError(f'-p fabric_preset: {chosen!r} is not a preset (presets: '
                               f'{", ".join(fabrics)})')
-        values.update((k, v) for k, v in default_values(fabrics[given['fabric']]).items()
+        values.update((k, v) for k, v in default_values(fabrics[chosen]).items()
                       if k.startswith('fabric.'))
     values.update(given)
     setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics,
