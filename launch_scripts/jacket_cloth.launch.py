@@ -12,7 +12,6 @@ bones go to the shared /tf, kept apart by frame_prefix.
 
 import os
 
-from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
@@ -20,11 +19,15 @@ from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
 
 
+# The package's folder: this file is in its launch/ (a checkout's launch_scripts/), the config it
+# names beside it, so a launch file and its config come from one tree.
+SHARE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
 def generate_launch_description():
-    share = get_package_share_directory('jacket_cloth_ros')
     return LaunchDescription([
         DeclareLaunchArgument('params_file',
-                              default_value=os.path.join(share, 'config', 'node_params.yaml'),
+                              default_value=os.path.join(SHARE, 'config', 'node_params.yaml'),
                               description='node parameters (YAML)'),
         DeclareLaunchArgument('record', default_value='',
                               description='MCAP path to record the session to; empty: off'),

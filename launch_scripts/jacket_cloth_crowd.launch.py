@@ -3,8 +3,11 @@ r"""Launch a crowd split over K jacket_cloth_crowd processes, each taking a slic
 
 Example::
 
-    ros2 launch jacket_cloth_ros jacket_cloth_crowd.launch.py characters:=/path/crowd.yaml \\
+    ros2 launch jacket_cloth_ros jacket_cloth_crowd.launch.py characters:=crowd.yaml \\
         processes:=4 threads:=2
+
+``characters`` is a path, else (a bare name not found from the current folder) a file of the
+shipped config folder, as ``crowd.yaml``.
 
 Every process reads the same characters file and runs its slice (slice_index of
 slice_count, contiguous and near-equal, ros/characters.py crowd_slice); together they run
@@ -13,10 +16,27 @@ and ``processes``, and ``first``/``count`` choosing that machine's processes; RO
 the DDS discovery settings join them (docs/crowd.md says how to size K).
 """
 
+import os
+
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+
+
+# The package's folder: this file is in its launch/ (a checkout's launch_scripts/), the config it
+# names beside it, so a launch file and its config come from one tree.
+SHARE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _characters_file(given: str) -> str:
+    """The characters file: as given, else the shipped config's of that name; else an error."""
+    if os.path.exists(given):
+        return os.path.abspath(given)
+    shipped = os.path.join(SHARE, 'config', given)
+    if not os.path.isabs(given) and os.path.isfile(shipped):
+        return shipped
+    raise RuntimeError(f'characters: no file {given!r} (from {os.getcwd()}, or in {shipped})')
 
 
 def _processes(context):
@@ -24,7 +44,7 @@ def _processes(context):
     first = int(LaunchConfiguration('first').perform(context))
     count = LaunchConfiguration('count').perform(context)
     count = total - first if count == '' else int(count)
-    characters = LaunchConfiguration('characters').perform(context)
+    characters = _characters_file(LaunchConfiguration('characters').perform(context))
     threads = int(LaunchConfiguration('threads').perform(context))
     return [Node(package='jacket_cloth_ros', executable='jacket_cloth_crowd',
                  name=f'jacket_cloth_crowd_{i}', output='screen',
@@ -35,7 +55,8 @@ def _processes(context):
 
 def generate_launch_description():
     return LaunchDescription([
-        DeclareLaunchArgument('characters', description='the characters file (YAML)'),
+        DeclareLaunchArgument('characters', description='the characters file (YAML): a path, '
+                              'or the name of one in the shipped config (crowd.yaml)'),
         DeclareLaunchArgument('processes', default_value='1',
                               description='K: node processes the crowd is split over'),
         DeclareLaunchArgument('threads', default_value='0',

@@ -16,9 +16,11 @@ import threading
 import time
 
 import pytest
+import yaml
 from conftest import DOMAIN_ID
 
 PACKAGE = 'jacket_cloth_ros'
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # The node's line once its character is loaded and joint_states is subscribed.
 LOADED = "character 'jacket_character' from the shipped character"
 # A first start on an empty numba cache compiles the kernels first (`jacket_cloth warm`).
@@ -35,14 +37,36 @@ ROS2 = _ros2()
 pytestmark = pytest.mark.skipif(ROS2 is None, reason='ros2 CLI not installed')
 
 
+def _launch(name):
+    """``ros2 launch`` arguments for this checkout's launch file ``name``.
+
+    By package when the installed one is this checkout's, else by path (a worktree beside the
+    checkout the prefix links to).
+    """
+    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+    mine = os.path.join(ROOT, 'launch_scripts', name)
+    try:
+        installed = os.path.join(get_package_share_directory(PACKAGE), 'launch', name)
+    except PackageNotFoundError:
+        return [mine]
+    return [PACKAGE, name] if os.path.realpath(installed) == os.path.realpath(mine) else [mine]
+
+
+def _ros2_param(domain, *args):
+    """Run ``ros2 param ...`` without the daemon (none left behind); its completed process."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    return subprocess.run([ROS2, 'param', *args, '--no-daemon', '--timeout', '60'], env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
 class Running:
     """A ros2 command in a process group of its own, its output read line by line."""
 
-    def __init__(self, domain, *args):
+    def __init__(self, domain, *args, cwd=None):
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
         self.proc = subprocess.Popen([ROS2, *args], env=env, stdout=subprocess.PIPE,
                                      stderr=subprocess.STDOUT, text=True,
-                                     start_new_session=True)
+                                     start_new_session=True, cwd=cwd)
         self.lines, self.seen = queue.Queue(), []
         threading.Thread(target=self._read, daemon=True).start()
 
@@ -71,6 +95,16 @@ class Running:
             if text in line:
                 return line
 
+    def wait_for_all(self, texts, timeout=START_TIMEOUT):
+        """Wait for a line holding each of ``texts``, in any order."""
+        deadline, missing = time.monotonic() + timeout, set(texts)
+        while missing:
+            line = self._next(deadline)
+            if line is None:
+                state = 'timed out' if self.proc.poll() is None else 'exited'
+                raise AssertionError(f'{state} before {sorted(missing)}:\n{self.output()}')
+            missing = {t for t in missing if t not in line}
+
     def interrupt(self, group=True, timeout=60):
         """SIGINT to the process group (Ctrl-C), else to the command only; its exit code."""
         if group:
@@ -96,8 +130,8 @@ class Running:
 def running():
     started = []
 
-    def start(domain, *args):
-        started.append(Running(domain, *args))
+    def start(domain, *args, cwd=None):
+        started.append(Running(domain, *args, cwd=cwd))
         return started[-1]
     yield start
     for r in started:
@@ -113,6 +147,17 @@ def test_ros2_pkg_executables_lists_the_node_and_the_tools():
 
 
 def test_ros2_run_starts_the_node_which_publishes_bones_and_stops_on_ctrl_c(running):
+    domain = DOMAIN_ID + 4
+    node = running(domain, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args', '-p',
+                   'robot_description_timeout:=0.0')
+    node.wait_for(LOADED)
+    _send_until_bones(domain, node)
+    assert node.interrupt() == 0, node.output()
+    assert 'Traceback' not in node.output(), node.output()
+
+
+def _send_until_bones(domain, node):
+    """Send the node JointStates until its bones come back on /tf."""
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
@@ -122,10 +167,6 @@ def test_ros2_run_starts_the_node_which_publishes_bones_and_stops_on_ctrl_c(runn
     from jacket_cloth_ros.core.skeleton import load_shipped_character
     from jacket_cloth_ros.motion.clips import joint_state_content
 
-    domain = DOMAIN_ID + 4
-    node = running(domain, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args', '-p',
-                   'robot_description_timeout:=0.0')
-    node.wait_for(LOADED)
     ctx = Context()
     rclpy.init(context=ctx, domain_id=domain)
     peer = rclpy.create_node('ros2_run_peer', context=ctx)
@@ -151,12 +192,10 @@ def test_ros2_run_starts_the_node_which_publishes_bones_and_stops_on_ctrl_c(runn
         ex.shutdown()
         peer.destroy_node()
         rclpy.shutdown(context=ctx)
-    assert node.interrupt() == 0, node.output()
-    assert 'Traceback' not in node.output(), node.output()
 
 
 def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
-    launch = running(DOMAIN_ID + 5, 'launch', PACKAGE, 'jacket_cloth.launch.py',
+    launch = running(DOMAIN_ID + 5, 'launch', *_launch('jacket_cloth.launch.py'),
                      'fabric:=down_jacket')
     line = launch.wait_for(LOADED)
     assert line.startswith('[jacket_cloth_node-1]'), line
@@ -193,3 +232,121 @@ def test_ros2_topic_pub_once_with_default_qos_reaches_viewer_and_wind(harness):
                 os.killpg(proc.pid, signal.SIGKILL)
                 proc.wait(timeout=60)
     assert h.node.received['viewer'] == 1 and h.node.received['wind'] == 1
+
+
+def test_ros2_param_dump_starts_a_node_in_the_same_state_with_params_file(running, tmp_path):
+    domain = DOMAIN_ID + 6
+    first = running(domain, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args',
+                    '-p', 'robot_description_timeout:=0.0', '-p', 'fabric_preset:=down_jacket',
+                    '-p', 'fabric.damping:=0.2', '-p', 'wind:=[1.0, 0.0, -0.5]',
+                    '-p', 'lod_distances:=[5.0, 50.0]', '-p', 'substeps:=2')
+    first.wait_for(LOADED)
+    dumped = _ros2_param(domain, 'dump', '/jacket_cloth_node')
+    assert dumped.returncode == 0, dumped.stdout + dumped.stderr
+    dump = tmp_path / 'dump.yaml'
+    dump.write_text(dumped.stdout)
+    values = yaml.safe_load(dumped.stdout)['/jacket_cloth_node']['ros__parameters']
+    assert values['fabric_preset'] == 'down_jacket' and values['fabric']['damping'] == 0.2
+    assert first.interrupt() == 0, first.output()
+    again = running(domain, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args',
+                    '--params-file', str(dump))
+    again.wait_for(LOADED)
+    redumped = _ros2_param(domain, 'dump', '/jacket_cloth_node')
+    assert redumped.returncode == 0, redumped.stdout + redumped.stderr
+    assert yaml.safe_load(redumped.stdout) == yaml.safe_load(dumped.stdout)
+    assert again.interrupt() == 0, again.output()
+
+
+def test_ros2_param_load_of_the_shipped_file_keeps_a_recording_going(running, tmp_path):
+    from jacket_cloth_ros.recording.reader import read_messages
+    domain = DOMAIN_ID + 7
+    session = tmp_path / 'session.mcap'
+    node = running(domain, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args',
+                   '-p', 'robot_description_timeout:=0.0', '-p', f'record:={session}')
+    node.wait_for(LOADED)
+    loaded = _ros2_param(domain, 'load', '/jacket_cloth_node',
+                         os.path.join(ROOT, 'config', 'node_params.yaml'))
+    out = loaded.stdout + loaded.stderr
+    assert loaded.returncode == 0 and 'failed' not in out.lower(), out
+    assert 'Set parameter sim_rate successful' in out, out
+    _send_until_bones(domain, node)        # inputs after the load only
+    assert node.interrupt() == 0, node.output()
+    assert 'recording closed' not in node.output(), node.output()
+    msgs, complete = read_messages(str(session))
+    assert complete and any(m.topic == '/joint_states' for m in msgs)
+
+
+def test_a_params_file_with_the_old_preset_name_is_one_line_and_exit_1(running, tmp_path):
+    old = tmp_path / 'old.yaml'
+    old.write_text('/**:\n  ros__parameters:\n    fabric: down_jacket\n')
+    node = running(DOMAIN_ID + 8, 'run', PACKAGE, 'jacket_cloth_node', '--ros-args',
+                   '--params-file', str(old))
+    line = node.wait_for('jacket_cloth_node: parameter')
+    assert line.strip() == ('jacket_cloth_node: parameter fabric: renamed fabric_preset (set '
+                            'fabric_preset instead)'), node.output()
+    assert node.proc.wait(timeout=120) == 1 and 'Traceback' not in node.output()
+
+
+def test_motion_takes_ros_args_a_namespace_and_a_node_name(running):
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    domain = DOMAIN_ID + 9
+    motion = running(domain, 'run', PACKAGE, 'jacket_cloth', 'motion', '--clip', 'walk',
+                     '--duration', '3600', '--wait', '0', '--ros-args', '-r', '__ns:=/npc1',
+                     '-r', '__node:=motion')
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    peer = rclpy.create_node('motion_peer', context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(peer)
+    got = {'joint_states': 0, 'robot_description': 0}
+
+    def count(key):
+        return lambda msg: got.__setitem__(key, got[key] + 1)
+    peer.create_subscription(JointState, '/npc1/joint_states', count('joint_states'), 10)
+    peer.create_subscription(String, '/npc1/robot_description', count('robot_description'),
+                             QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    try:
+        deadline = time.monotonic() + START_TIMEOUT
+        while not (all(got.values()) and
+                   ('motion', '/npc1') in peer.get_node_names_and_namespaces()):
+            assert motion.proc.poll() is None, motion.output()
+            assert time.monotonic() < deadline, f'{got}:\n{motion.output()}'
+            ex.spin_once(timeout_sec=0.05)
+    finally:
+        ex.shutdown()
+        peer.destroy_node()
+        rclpy.shutdown(context=ctx)
+    motion.interrupt()
+    assert 'Traceback' not in motion.output(), motion.output()
+
+
+def test_the_crowd_launch_finds_a_bare_characters_name_in_the_shipped_config(running,
+                                                                             tmp_path):
+    launch = running(DOMAIN_ID + 10, 'launch', *_launch('jacket_cloth_crowd.launch.py'),
+                     'characters:=crowd.yaml', cwd=str(tmp_path))   # no crowd.yaml here
+    line = launch.wait_for('characters (slice 0 of 1)')
+    assert line.startswith('[jacket_cloth_crowd-1]'), line
+    assert launch.interrupt(group=False) == 0, launch.output()
+
+
+def test_the_view_launch_runs_without_rviz_and_robot_state_publisher(running):
+    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+    launch = running(DOMAIN_ID + 11, 'launch', *_launch('jacket_cloth_view.launch.py'),
+                     'clip:=walk')
+    expected = ["character 'jacket_character' from the robot_description parameter",
+                "[motion]: playing 'walk'"]      # the motion source, named by its ROS args
+    for package in ('robot_state_publisher', 'rviz2'):
+        try:
+            get_package_share_directory(package)
+        except PackageNotFoundError:
+            expected.append(f'jacket_cloth_view: {package} is not installed: running without')
+    launch.wait_for_all(expected)
+    assert 'process has died' not in launch.output(), launch.output()
+    launch.interrupt(group=False)
+    assert 'Traceback' not in launch.output(), launch.output()

@@ -49,7 +49,12 @@ def cmd_motion(args: argparse.Namespace) -> int:
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
     # Our handlers, not rclpy's: its own shut the context down under a publish (a traceback).
-    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    # The ROS arguments name, namespace and remap the node (ros2 launch gives __node).
+    try:
+        rclpy.init(args=['jacket_cloth', *args.ros_args],
+                   signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    except RuntimeError as e:           # rcl's RCLError: the text's first sentence is enough
+        raise ToolError(f'--ros-args: {str(e).split(". Error")[0]}') from None
     previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
     node = rclpy.create_node('jacket_cloth_motion')
     try:
@@ -58,7 +63,8 @@ def cmd_motion(args: argparse.Namespace) -> int:
         pub = node.create_publisher(JointState, 'joint_states',
                                     QoSProfile(depth=10, reliability=reliability))
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        desc = node.create_publisher(String, '/robot_description', latched)
+        # Relative, as robot_state_publisher's: a namespaced node hears its own character.
+        desc = node.create_publisher(String, 'robot_description', latched)
         with open(urdf_path, encoding='utf-8') as f:
             desc.publish(String(data=f.read()))
         # The node subscribes once its character is loaded: wait for it (up to --wait s), so
@@ -250,8 +256,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     # The node (a child) and the motion source (this process) meet in one local domain.
     os.environ.setdefault('ROS_DOMAIN_ID', str(args.domain_id))
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    # The ROS arguments go to both, so a namespace or a remap keeps them talking.
     node = subprocess.Popen(
-        [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+        [sys.executable, '-m', 'jacket_cloth_ros.ros.node', *args.ros_args, '--ros-args',
          '-p', f'record:={session}'])
     try:
         time.sleep(2.0)
@@ -259,7 +266,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             raise ToolError(f'jacket_cloth_node exited early with code {node.returncode}')
         motion = argparse.Namespace(clip='showcase', rate=60.0, duration=None, urdf=None,
                                     output=None, best_effort=False, wait=30.0,
-                                    world_joint='world_joint', force=False)
+                                    world_joint='world_joint', force=False,
+                                    ros_args=args.ros_args)
         print(f'demo: playing the showcase clip ({clip_length("showcase"):.0f} s) live ...')
         cmd_motion(motion)
         time.sleep(0.5)
@@ -421,8 +429,29 @@ def _session_options(parser):
                         help='a node parameter, as with --ros-args -p (repeatable)')
 
 
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """Split ``argv`` into the command's own arguments and the ROS ones (``--ros-args`` ...).
+
+    A ROS block runs to a ``--`` or the end, as rcl reads it; there may be several.
+    """
+    own, ros, inside = [], [], False
+    for a in argv:
+        if a == '--ros-args':
+            inside = True
+            ros.append(a)
+        elif inside and a == '--':
+            inside = False
+        else:
+            (ros if inside else own).append(a)
+    return own, ros
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    # ROS arguments (ros2 launch adds some to every executable) are for the commands that
+    # start a node, motion and demo; the others have no node to give them to.
+    own, ros = split_ros_args(sys.argv[1:] if argv is None else list(argv))
+    args = build_parser().parse_args(own)
+    args.ros_args = ros
     try:
         return args.func(args)
     except (ToolError, ConfigError, ValueError, OSError) as e:
