@@ -30,7 +30,7 @@ SHARE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _characters_file(given: str) -> str:
-    """The characters file: as given, else the shipped config's of that name; else an error."""
+    """Return the characters file: as given, else the shipped config's of that name."""
     if os.path.exists(given):
         return os.path.abspath(given)
     shipped = os.path.join(SHARE, 'config', given)

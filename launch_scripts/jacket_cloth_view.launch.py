@@ -43,6 +43,7 @@ def _if_installed(package: str, node: Node, without: str) -> Node | LogInfo:
 def generate_launch_description():
     with open(os.path.join(SHARE, 'config', 'character.urdf'), encoding='utf-8') as f:
         urdf = f.read()
+    rviz_config = os.path.join(SHARE, 'config', 'view', 'jacket_cloth.rviz')
     return LaunchDescription([
         DeclareLaunchArgument('clip', default_value='showcase',
                               description='built-in clip: idle, walk, run, dodge, jump, '
@@ -63,7 +64,6 @@ def generate_launch_description():
              arguments=['motion', '--clip', LaunchConfiguration('clip'), '--duration', '3600']),
         _if_installed('rviz2',
                       Node(package='rviz2', executable='rviz2',
-                           arguments=['-d', os.path.join(SHARE, 'config', 'view',
-                                                         'jacket_cloth.rviz')]),
+                           arguments=['-d', rviz_config]),
                       'record with -p record:=... and open it in Foxglove'),
     ])

@@ -38,6 +38,18 @@ def test_the_shipped_parameter_file_holds_the_defaults_under_any_namespace():
     assert list(data) == ['/**']          # a node name key is ignored under a namespace
     for name, value in data['/**']['ros__parameters'].items():
         assert value == NODE_PARAMETERS[name][1], name
+        # ros2 param load sets it on a running node: nothing read-only, nothing that stops
+        # a recording.
+        assert not NODE_PARAMETERS[name][3] and name != 'record', name
+
+
+def test_no_parameter_name_is_also_the_group_of_others():
+    # ros2 param dump writes a.b as a: {b: ...}; an a of its own cannot be written beside it.
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.ros.parameters import fabric_parameters
+    names = set(NODE_PARAMETERS) | set(fabric_parameters(load_fabric('tweed_jacket')))
+    groups = {n.rsplit('.', 1)[0] for n in names if '.' in n}
+    assert not names & groups, names & groups
 
 
 def test_the_readme_table_lists_every_parameter_with_its_default_and_range():

@@ -102,3 +102,47 @@ def test_a_session_with_the_world_transform_analyses_as_matching_its_recording(t
     session = report['sessions'][0] if 'sessions' in report else report
     assert session['replay_matches_recording'] is True
     assert session['recorded_tf_compared'] == 2 * session['frames']
+
+
+def _recorded_topics_and_frames(tmp_path, *params):
+    """A session as the node records it (a replay of the walk clip): its topics and frames."""
+    from jacket_cloth_ros.recording.reader import read_messages
+    from jacket_cloth_ros.tools.cli import main
+    clip, out = tmp_path / 'clip.mcap', tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '1', '-o', str(clip)]) == 0
+    extra = [a for p in params for a in ('-p', p)]
+    assert main(['replay', str(clip), '-o', str(out), '--force', *extra]) == 0
+    msgs, complete = read_messages(str(out))
+    assert complete
+    frames = set()
+    for m in msgs:
+        if m.topic == '/tf':
+            for t in deserialize_message(m.data, TFMessage).transforms:
+                frames.update((t.header.frame_id, t.child_frame_id))
+    return {m.topic for m in msgs}, frames
+
+
+def test_every_topic_and_frame_the_foxglove_layout_names_is_in_a_recording(tmp_path):
+    # The layout is for a recording (make demo's): it names only what one holds.
+    with open(os.path.join(VIEW, 'foxglove_layout.json'), encoding='utf-8') as f:
+        panels = json.load(f)['configById']
+    topics, frames = _recorded_topics_and_frames(tmp_path)
+    three_d = panels['3D!jacket']
+    named_topics = set(three_d['topics']) | {
+        p['topicPath'].split('.')[0] for p in panels.values() if 'topicPath' in p}
+    assert named_topics and named_topics <= topics, named_topics - topics
+    named_frames = {three_d['followTf']} | {
+        layer['frameId'] for layer in three_d['layers'].values() if 'frameId' in layer}
+    assert named_frames <= frames, named_frames - frames
+
+
+def test_the_rviz_config_names_what_the_view_launchs_node_records(tmp_path):
+    # The view launch runs the node with publish_world_tf: RViz's fixed frame comes from it;
+    # the skeleton's description is robot_state_publisher's, not the node's.
+    with open(os.path.join(VIEW, 'jacket_cloth.rviz'), encoding='utf-8') as f:
+        config = yaml.safe_load(f)['Visualization Manager']
+    topics, frames = _recorded_topics_and_frames(tmp_path, 'publish_world_tf:=true')
+    markers = [d['Topic']['Value'] for d in config['Displays']
+               if d['Class'] == 'rviz_default_plugins/MarkerArray']
+    assert markers and set(markers) <= topics
+    assert config['Global Options']['Fixed Frame'] in frames

@@ -149,7 +149,7 @@ class JacketClothNode(Node):
                               f'parameter {name}: {reason}')
 
     def _refuse_unknown(self):
-        """A parameter given (a params file, -p) but not declared is refused, never dropped."""
+        """Refuse a parameter given (a params file, -p) but not declared, which rclpy drops."""
         declared = set(self.list_parameters([], 0).names)
         for name in sorted(self._parameter_overrides):
             if name not in declared and name not in ROS_OWN and \

@@ -156,7 +156,7 @@ def unknown_reason(name: str, known: object, node: str) -> str:
 
 
 def from_recording(values: dict) -> dict:
-    """A recording's parameter values under today's names (older files say ``fabric``)."""
+    """Return a recording's parameter values under today's names (older files say ``fabric``)."""
     out = dict(values)
     for old, new in RENAMED.items():
         if old in out and not isinstance(out[old], dict):
@@ -165,7 +165,7 @@ def from_recording(values: dict) -> dict:
 
 
 def params_file_problem(argv: list[str]) -> str:
-    """What is wrong with a ``--params-file`` in ``argv`` that rcl would take silently, or ''.
+    """Say what is wrong with a ``--params-file`` in ``argv`` that rcl takes silently, or ''.
 
     A key given twice in one mapping (the second wins in rcl's reader: ``fabric: {...}`` after
     a ``fabric: name``) is refused; a file rcl cannot read is left to rcl's own message.
