@@ -410,7 +410,7 @@ def crowd_picture(png_path, at_s=1.15):
         else:
             skeleton = Skeleton(shipped_character_urdf())
             rig = load_rig(skeleton)
-        values = dict(default_values(fabrics[fabric]), fabric=fabric)
+        values = dict(default_values(fabrics[fabric]), fabric_preset=fabric)
         crowd.add(SessionPipeline(skeleton, rig, fabrics, values, name, timing=False))
     rate, start = 60.0, 10 ** 10
     for k in range(int(at_s * rate) + 1):

@@ -86,3 +86,10 @@ def test_overrides_take_the_same_ranges():
     assert parse_override('sim_rate:=240', {'sim_rate': 120.0}) == ('sim_rate', 240.0)
     with pytest.raises(ValueError, match='outside'):
         parse_override('sim_rate:=5', {'sim_rate': 120.0})
+
+
+def test_a_recording_made_before_the_rename_reads_its_preset():
+    from jacket_cloth_ros.ros.parameters import from_recording
+    assert from_recording({'fabric': 'veil', 'fabric.damping': 0.1}) == {
+        'fabric_preset': 'veil', 'fabric.damping': 0.1}
+    assert from_recording({'fabric_preset': 'veil'}) == {'fabric_preset': 'veil'}
