@@ -285,12 +285,23 @@ def test_a_characters_file_is_validated_with_one_line(tmp_path):
              'parameters.sim_rate: 5.0 is outside [10.0, 4000.0]'),
             ('characters: [{name: a, parameters: {record: x.mcap}}]',
              "parameters.'record': not a character's parameter"),
+            ('characters: [{name: a, parameters: {wind: {x: 1.0}}}]',
+             "parameters.'wind.x': not a character's parameter"),
             ('characters: [{name: a, colour: red}]', "unknown key(s) 'colour'"),
             ('characters: [{name: a, count: 0}]', 'count: 0 is outside [1, 4096]')):
         path.write_text(text)
         with pytest.raises(ConfigError, match='^' + str(path).replace('.', r'\.')) as e:
             load_characters(str(path))
         assert error in str(e.value) and '\n' not in str(e.value), text
+
+
+def test_a_nested_group_in_a_characters_file_is_applied_as_in_a_params_file(tmp_path):
+    path = tmp_path / 'nested.yaml'
+    path.write_text('characters: [{name: a, fabric: down_jacket, '
+                    'parameters: {fabric: {damping: 0.2}, markers_rate: 5.0}}]')
+    [spec] = load_characters(str(path))
+    assert spec.values['fabric.damping'] == 0.2 and spec.values['markers_rate'] == 5.0
+    assert spec.values['fabric_preset'] == 'down_jacket'
 
 
 def test_slices_of_a_crowd_cover_every_character_once():

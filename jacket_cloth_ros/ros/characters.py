@@ -65,6 +65,18 @@ def _path(value, folder, where):
     return found
 
 
+def _flat(data: dict, prefix: str = '') -> list[tuple[str, object]]:
+    """Return (name, value) of a parameters mapping, a nested group as a params file's.
+
+    ``fabric: {damping: 0.2}`` is ``fabric.damping``, as rcl reads it in a params file.
+    """
+    out = []
+    for key, value in data.items():
+        name = f'{prefix}{key}'
+        out += _flat(value, name + '.') if isinstance(value, dict) else [(name, value)]
+    return out
+
+
 def load_characters(path: str) -> list[CharacterSpec]:
     """Read and validate a characters file; a ConfigError names the file and key."""
     data = load_yaml(path)
@@ -111,7 +123,7 @@ def load_characters(path: str) -> list[CharacterSpec]:
         parameters = own.section('parameters', {})
         values = default_values(fabrics[fabric])
         values['fabric_preset'] = fabric
-        for key, value in parameters._data.items():
+        for key, value in _flat(parameters._data):
             if key not in values or key in _NOT_PARAMETERS:
                 raise ConfigError(f'{where}.parameters.{shown(key)}: not a character\'s '
                                   'parameter' + (' (a key of the character itself)'
