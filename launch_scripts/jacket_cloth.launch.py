@@ -32,7 +32,7 @@ def generate_launch_description():
         DeclareLaunchArgument('record', default_value='',
                               description='MCAP path to record the session to; empty: off'),
         DeclareLaunchArgument('fabric', default_value='tweed_jacket',
-                              description='fabric preset: tweed_jacket, down_jacket, veil'),
+                              description='fabric_preset: tweed_jacket, down_jacket, veil'),
         DeclareLaunchArgument('namespace', default_value='',
                               description='namespace of the node (one per character)'),
         DeclareLaunchArgument('frame_prefix', default_value='',

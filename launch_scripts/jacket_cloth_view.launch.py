@@ -49,7 +49,7 @@ def generate_launch_description():
                               description='built-in clip: idle, walk, run, dodge, jump, '
                                           'arms_up, turn, teleport, showcase'),
         DeclareLaunchArgument('fabric', default_value='tweed_jacket',
-                              description='fabric preset: tweed_jacket, down_jacket, veil'),
+                              description='fabric_preset: tweed_jacket, down_jacket, veil'),
         _if_installed('robot_state_publisher',
                       Node(package='robot_state_publisher', executable='robot_state_publisher',
                            parameters=[{'robot_description': urdf}]),
