@@ -52,8 +52,14 @@ def running() -> None:
 
 
 def stopping() -> None:
-    """Mark the program stopping: further signals are ignored until it has."""
+    """Mark the program stopping: further signals are ignored until it has.
+
+    Ignored by the OS from here on, not only by our handler: Python's finalisation puts a
+    handler of its own back to the default, and a signal then ended the process (exit -2).
+    """
     _now['phase'] = STOPPING
+    for signum in _SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
 
 
 def _start(program: str, target: str, ours: bool = True) -> int:

@@ -347,6 +347,34 @@ def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     assert h.node.recorder is not recorder and h.node.recorder.path == other
 
 
+def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
+    # A recording set live took the rig and fabrics from their files again: one edited since
+    # start was recorded but not run, one removed killed the node (issue 38).
+    from mcap.reader import make_reader
+    from jacket_cloth_ros.core.config import shipped
+    rig = tmp_path / 'rig.yaml'
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        text = f.read()
+    rig.write_text(text)
+    h = harness(rig_file=str(rig))
+    rig.unlink()
+    path = tmp_path / 'session.mcap'
+    assert h.node.set_parameters([Parameter('record', value=str(path))])[0].successful
+    h.node.close()
+    with open(path, 'rb') as f:
+        metadata = {m.name: m.metadata for m in make_reader(f).iter_metadata()}
+    assert metadata['jacket_cloth_session']['rig_yaml'] == text
+
+
+def test_a_recording_whose_writer_failed_is_closed_with_one_line(harness, tmp_path):
+    # Its writer thread's error came back at the close, out of the parameter callback: a
+    # `ros2 param set record` after a full disk ended the node.
+    h = harness(record=str(tmp_path / 'session.mcap'))
+    h.node.recorder._error = OSError('No space left on device')   # as its thread leaves it
+    assert h.node.set_parameters([Parameter('record', value='')])[0].successful
+    assert h.node.recorder is None
+
+
 def test_robot_description_from_the_latched_topic(harness, urdf_text):
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)

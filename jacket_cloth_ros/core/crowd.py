@@ -101,7 +101,7 @@ class CrowdSteps:
 
     @staticmethod
     def _key(sim):
-        return (sim.tuning, sim.state)
+        return (sim.tuning,)            # the state is held once: only a new tuning is new
 
     def _slot(self, sim):
         """Make a slot on the simulation's own arrays, with motion and output arrays of its own."""

@@ -129,6 +129,11 @@ class Character:
                markers_wanted: Callable[['Node'], bool]) -> None:
         """Take its loaded pipeline (``index`` in the node's crowd); stop waiting for a URDF."""
         self.pipeline, self.index, self.urdf = pipeline, index, urdf
+        # The rig and fabrics as loaded, for every recording it joins: the files may change or
+        # go while it runs, and a recording must hold what runs.
+        spec = self.spec
+        self.setup_texts = (read_file(spec.rig or shipped('jacket_rig.yaml')),
+                            read_file(spec.fabric_file or shipped('fabrics.yaml')))
         if self.viewer is not None:     # it came before the character
             pipeline.set_viewer(self.viewer)
         # Done waiting: every entity left in the node is work for each executor wake-up.
@@ -148,11 +153,9 @@ class Character:
         """
         for key in ('joint_states', 'markers'):
             recorder.add_topic(*self.topics[key])
-        spec = self.spec
         recorder.add_session_config(
-            self.urdf, read_file(spec.rig or shipped('jacket_rig.yaml')),
-            read_file(spec.fabric_file or shipped('fabrics.yaml')), self.pipeline.values,
-            self.config_name, self.pipeline.output_phase, self.pipeline.node_name)
+            self.urdf, *self.setup_texts, self.pipeline.values, self.config_name,
+            self.pipeline.output_phase, self.pipeline.node_name)
 
 
 def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:

@@ -357,10 +357,7 @@ class JacketClothNode(Node):
     # -- recording ----------------------------------------------------------------------------
     def _open_recorder(self, path):
         self._record_asked = path
-        if self.recorder is not None:
-            self.recorder.close()
-            self.get_logger().info(f'recording closed: {self.recorder.path}')
-            self.recorder = None
+        self._close_recorder(say=True)
         if not path:
             return
         try:
@@ -385,7 +382,19 @@ class JacketClothNode(Node):
             self.recorder.write(topic, data, stamp_ns)
         except (OSError, ValueError) as e:
             self.get_logger().error(f'recording stopped: {e}')
-            self.recorder = None
+            self._close_recorder()
+
+    def _close_recorder(self, say=False):
+        """Close the recording, if any; an error its writer met is one line, not the node's end."""
+        recorder, self.recorder = self.recorder, None
+        if recorder is None:
+            return
+        try:
+            recorder.close()
+            if say:                     # a live switch; at the node's end it goes unsaid
+                self.get_logger().info(f'recording closed: {recorder.path}')
+        except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
+            self.get_logger().error(f'recording {recorder.path} closed with an error: {e}')
 
     def _markers_wanted(self, publisher: 'Publisher') -> bool:
         """Tell whether markers due now have a reader: a subscriber or the recording.
@@ -397,9 +406,7 @@ class JacketClothNode(Node):
 
     def close(self) -> None:
         """Close the recording, if any."""
-        if self.recorder is not None:
-            self.recorder.close()
-            self.recorder = None
+        self._close_recorder()
 
     # -- the viewer (one for the node, whatever the characters) ------------------------------
     def _warn(self, code, text, period=5.0):
@@ -550,11 +557,12 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
         print(f'{program}: {problem}', file=sys.stderr)
         return 1
     if not kernels_cached(crowd=crowd):
+        # Stopped at once: numba writes each cache file whole or not at all. Named before it
+        # is said, so a signal on the line's heels is told as the compile's.
+        signals.doing('compiling the kernels')
         print(f'{program}: compiling the simulation kernels into numba\'s cache (a first '
               'start after an install or an edit of a kernel; about a minute; '
               '`jacket_cloth warm` does it ahead)', file=sys.stderr)
-        # Stopped at once: numba writes each cache file whole or not at all.
-        signals.doing('compiling the kernels')
         warm_kernels(crowd=crowd)
         signals.doing('starting')
     rclpy.init(args=argv)
