@@ -27,6 +27,20 @@ def _spin_until(ex, predicate, timeout=20.0):
         ex.spin_once(timeout_sec=0.02)
 
 
+def _walk_each(ex, peer, chars, inputs):
+    """Send each namespace's character ``inputs`` walk inputs at 30 Hz, each one taken."""
+    pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in chars}
+    _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
+    for k in range(inputs):
+        for ns, c in chars.items():
+            names, pos = joint_state_content(c.sim.skeleton.joint_names, 'walk', k / 30)
+            msg = JointState(name=list(names), position=[float(p) for p in pos])
+            msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
+            before = c.inputs
+            pubs[ns].publish(msg)
+            _spin_until(ex, lambda: c.inputs > before)
+
+
 def test_two_namespaced_characters_each_hear_their_own_description_and_joint_states():
     # Each namespace has its own robot_state_publisher-style latched description (the shipped
     # character under /npc1, the mannequin example with other link names under /npc2); the
@@ -61,16 +75,7 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
         _spin_until(ex, lambda: all(c.sim is not None for c in chars.values()))
         assert chars['npc1'].sim.skeleton.link_names[0] == 'base_link'
         assert 'Hips' in chars['npc2'].sim.skeleton.link_names        # the mannequin's own
-        pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in nodes}
-        _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
-        for k in range(6):
-            for ns, c in chars.items():
-                names, pos = joint_state_content(c.sim.skeleton.joint_names, 'walk', k / 30)
-                msg = JointState(name=list(names), position=[float(p) for p in pos])
-                msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
-                before = c.inputs
-                pubs[ns].publish(msg)
-                _spin_until(ex, lambda: c.inputs > before)
+        _walk_each(ex, peer, chars, 6)
         _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 12)
         frames = {t.child_frame_id.split('/')[0] for m in tf for t in m.transforms}
         assert frames == {'npc1', 'npc2'}
@@ -122,16 +127,7 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
         for node in (*nodes.values(), peer):
             ex.add_node(node)
         chars = {ns: node.characters[0] for ns, node in nodes.items()}
-        pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in nodes}
-        _spin_until(ex, lambda: all(p.get_subscription_count() > 0 for p in pubs.values()))
-        for k in range(6):
-            for ns, c in chars.items():
-                names, pos = joint_state_content(c.sim.skeleton.joint_names, 'walk', k / 30)
-                msg = JointState(name=list(names), position=[float(p) for p in pos])
-                msg.header.stamp.sec, msg.header.stamp.nanosec = 100, int(k / 30 * 1e9)
-                before = c.inputs
-                pubs[ns].publish(msg)
-                _spin_until(ex, lambda: c.inputs > before)
+        _walk_each(ex, peer, chars, 6)
         _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 24)   # bones, world
         links = chars['npc1'].sim.skeleton.link_names
         trees = {ns: set() for ns in nodes}

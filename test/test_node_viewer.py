@@ -39,6 +39,15 @@ def _status(diagnostics):
     return {kv.key: kv.value for kv in diagnostics[-1].status[0].values}
 
 
+def _far_viewer(h, qos):
+    """Publish a far viewer with ``qos`` once the node matches it; returns once it is taken."""
+    pub = h.peer.create_publisher(PointStamped, TOPIC, qos)
+    h.spin_until(lambda: pub.get_subscription_count() > 0)
+    pub.publish(_viewer(FAR))
+    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    return pub
+
+
 def test_read_viewer_refuses_with_a_reason_and_never_raises():
     good = serialize_message(_viewer((1.0, 2.0, 3.0)))
     assert list(read_viewer(good, 'world').position) == [1.0, 2.0, 3.0]
@@ -79,10 +88,7 @@ def test_a_viewer_latched_before_the_node_starts_sets_its_level_of_detail(harnes
 
 def test_a_bad_viewer_is_ignored_with_a_warning_and_the_node_keeps_publishing(harness):
     h = harness()
-    pub = h.peer.create_publisher(PointStamped, TOPIC, VIEWER_QOS)
-    h.spin_until(lambda: pub.get_subscription_count() > 0)
-    pub.publish(_viewer(FAR))
-    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    pub = _far_viewer(h, VIEWER_QOS)
     h.send_clip('walk', 60, 0.5)
     assert h.c.sim.lod.level == 2
     # Each would bring the viewer near (or break the distance) if it were taken.
@@ -144,10 +150,7 @@ def test_a_recording_started_after_the_viewer_replays_from_it(harness, tmp_path)
     from rclpy.parameter import Parameter
     path = tmp_path / 'late.mcap'
     h = harness()
-    pub = h.peer.create_publisher(PointStamped, TOPIC, VIEWER_QOS)
-    h.spin_until(lambda: pub.get_subscription_count() > 0)
-    pub.publish(_viewer(FAR))
-    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    _far_viewer(h, VIEWER_QOS)
     _walk(h, 0, 30)
     assert h.node.set_parameters([Parameter('record', value=str(path))])[0].successful
     _walk(h, 30, 30)
@@ -181,10 +184,7 @@ def test_default_and_latched_publishers_reach_viewer_and_wind(harness):
     default = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)
     h = harness()
-    pub = h.peer.create_publisher(PointStamped, TOPIC, default)
-    h.spin_until(lambda: pub.get_subscription_count() > 0)
-    pub.publish(_viewer(FAR))
-    h.spin_until(lambda: h.node.received['viewer'] == 1)
+    _far_viewer(h, default)
     _walk(h, 0, 12)
     assert h.c.sim.lod.level == 2 and list(h.c.sim.lod.viewer) == list(FAR)
     # A latched publisher: both subscriptions match it, its message counts once.
