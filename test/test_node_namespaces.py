@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Two characters side by side under two namespaces, over real DDS in one process."""
 
+import contextlib
 import time
 
 import rclpy
@@ -27,6 +28,40 @@ def _spin_until(ex, predicate, timeout=20.0):
         ex.spin_once(timeout_sec=0.02)
 
 
+@contextlib.contextmanager
+def _graph():
+    """Yield a context of our domain, its executor and a dict for its nodes; all shut after."""
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    ex = SingleThreadedExecutor(context=ctx)
+    nodes = {}
+    try:
+        yield ctx, ex, nodes
+    finally:
+        ex.shutdown()
+        for node in nodes.values():
+            node.close()
+            node.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def _listener(ctx, ex, nodes):
+    """A peer hearing /tf, /diagnostics and each node's markers, spun with the nodes.
+
+    Returns (peer, /tf, markers by namespace, /diagnostics).
+    """
+    peer = rclpy.create_node('namespaces_peer', context=ctx)
+    tf, markers, diagnostics = [], {ns: [] for ns in nodes}, []
+    peer.create_subscription(TFMessage, '/tf', tf.append, 100)
+    peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 100)
+    for ns in nodes:
+        peer.create_subscription(MarkerArray, f'/{ns}/jacket_cloth_node/markers',
+                                 markers[ns].append, 10)
+    for node in (*nodes.values(), peer):
+        ex.add_node(node)
+    return peer, tf, markers, diagnostics
+
+
 def _walk_each(ex, peer, chars, inputs):
     """Send each namespace's character ``inputs`` walk inputs at 30 Hz, each one taken."""
     pubs = {ns: peer.create_publisher(JointState, f'/{ns}/joint_states', 10) for ns in chars}
@@ -48,29 +83,19 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
     from rclpy.parameter import Parameter
     with open(shipped('examples/mannequin.urdf'), encoding='utf-8') as f:
         mannequin = f.read()
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
-    ex = SingleThreadedExecutor(context=ctx)
-    try:
-        nodes = {
+    with _graph() as (ctx, ex, nodes):
+        nodes.update({
             'npc1': JacketClothNode(context=ctx, namespace='/npc1', parameter_overrides=[
                 Parameter('frame_prefix', value='npc1/'),
                 Parameter('robot_description_timeout', value=30.0)]),
             'npc2': JacketClothNode(context=ctx, namespace='/npc2', parameter_overrides=[
                 Parameter('frame_prefix', value='npc2/'),
                 Parameter('rig_file', value=shipped('examples/mannequin_rig.yaml')),
-                Parameter('robot_description_timeout', value=30.0)])}
-        peer = rclpy.create_node('namespaces_peer', context=ctx)
+                Parameter('robot_description_timeout', value=30.0)])})
+        peer, tf, markers, _ = _listener(ctx, ex, nodes)
         for ns, urdf in (('npc1', shipped_character_urdf()), ('npc2', mannequin)):
             peer.create_publisher(String, f'/{ns}/robot_description', LATCHED).publish(
                 String(data=urdf))
-        tf, markers = [], {ns: [] for ns in nodes}
-        peer.create_subscription(TFMessage, '/tf', tf.append, 100)
-        for ns in nodes:
-            peer.create_subscription(MarkerArray, f'/{ns}/jacket_cloth_node/markers',
-                                     markers[ns].append, 10)
-        for node in (*nodes.values(), peer):
-            ex.add_node(node)
         chars = {ns: node.characters[0] for ns, node in nodes.items()}     # one each
         _spin_until(ex, lambda: all(c.sim is not None for c in chars.values()))
         assert chars['npc1'].sim.skeleton.link_names[0] == 'base_link'
@@ -84,12 +109,6 @@ def test_two_namespaced_characters_each_hear_their_own_description_and_joint_sta
             links = {f'{ns}/{link}' for link in c.sim.skeleton.link_names}
             assert {t.header.frame_id for m in tf for t in m.transforms
                     if t.child_frame_id.startswith(ns)} <= links
-    finally:
-        ex.shutdown()
-        for node in nodes.values():
-            node.close()
-            node.destroy_node()
-        rclpy.shutdown(context=ctx)
 
 
 def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees(tmp_path):
@@ -105,11 +124,7 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
     from rclpy.serialization import deserialize_message
     from jacket_cloth_ros.tools.session import load_session, run_session
     record = str(tmp_path / 'npc1.mcap')
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
-    ex = SingleThreadedExecutor(context=ctx)
-    nodes = {}
-    try:
+    with _graph() as (ctx, ex, nodes):
         for ns in ('npc1', 'npc2'):
             nodes[ns] = JacketClothNode(context=ctx, namespace='/' + ns, parameter_overrides=[
                 Parameter('frame_prefix', value=ns + '/'),
@@ -117,15 +132,7 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
                 Parameter('publish_world_tf', value=True),
                 Parameter('diagnostics_rate', value=10.0),
                 Parameter('record', value=record if ns == 'npc1' else '')])
-        peer = rclpy.create_node('frames_peer', context=ctx)
-        tf, markers, diagnostics = [], {ns: [] for ns in nodes}, []
-        peer.create_subscription(TFMessage, '/tf', tf.append, 100)
-        peer.create_subscription(DiagnosticArray, '/diagnostics', diagnostics.append, 100)
-        for ns in nodes:
-            peer.create_subscription(MarkerArray, f'/{ns}/jacket_cloth_node/markers',
-                                     markers[ns].append, 10)
-        for node in (*nodes.values(), peer):
-            ex.add_node(node)
+        peer, tf, markers, diagnostics = _listener(ctx, ex, nodes)
         chars = {ns: node.characters[0] for ns, node in nodes.items()}
         _walk_each(ex, peer, chars, 6)
         _spin_until(ex, lambda: all(markers.values()) and len(tf) >= 24)   # bones, world
@@ -150,12 +157,6 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
         owners = {f'/{ns}/jacket_cloth_node: cloth simulation' for ns in nodes}
         _spin_until(ex, lambda: len({s.name for m in diagnostics for s in m.status}) >= 2)
         assert {s.name for m in diagnostics for s in m.status} == owners
-    finally:
-        ex.shutdown()
-        for node in nodes.values():
-            node.close()
-            node.destroy_node()
-        rclpy.shutdown(context=ctx)
     session = load_session(record)
     recorded = [m.data for m in session.recording.messages if m.topic == '/tf']
     replayed, diagnostics = [], []
