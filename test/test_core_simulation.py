@@ -155,6 +155,61 @@ def test_a_non_finite_cloth_or_hood_resets_to_the_skinned_pose(make_sim, rest_in
     assert not sim.bones().finite
 
 
+def flattened_hem_sim(skeleton, make_sim):
+    """Return a simulation of the shipped rig without flare, and a JointState that puts it on the
+    floor: without world_joint the pelvis is at the floor, and the rows of the cloth below it,
+    one above the other when the rows do not flare, are pushed onto the floor to one point.
+    """
+    import yaml
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.rig import Rig
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        data = yaml.safe_load(f)
+    data['cloth']['shape']['flare'] = 0.0
+    sim = JacketSimulation(skeleton, Rig(data, skeleton), load_fabric('tweed_jacket'))
+    names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+    body = [k for k, n in enumerate(names) if not n.startswith('world_joint/')]
+    return sim, [names[k] for k in body], np.asarray(pos)[body]
+
+
+def test_bones_that_are_not_finite_reset_the_cloth_and_are_counted(skeleton, make_sim):
+    # Issue 35 item 5: a vertical edge of zero length gave its M9 bone no direction; nothing
+    # went on /tf and nothing said why. check_bones, the door to publishing, resets the cloth
+    # (M6, M11 skinned pose), lays it before the colliders if that is flat too, and counts it.
+    sim, names, pos = flattened_hem_sim(skeleton, make_sim)
+    report = sim.process(1_000_000_000, names, pos)
+    assert report.reset == 'first sample' and not sim.bones().finite
+    bones = sim.check_bones(report)
+    assert bones.finite and np.isfinite(bones.poses).all()
+    assert report.reset.startswith('non-finite bones: the vertical edge above row')
+    assert sim.nonfinite == 1 and sim.resets == 2
+    for k in range(1, 4):                   # the cloth steps on from there, finite
+        report = sim.process(1_000_000_000 + k * 16_000_000, names, pos)
+        assert sim.check_bones(report).finite and np.isfinite(sim.x).all()
+    assert sim.nonfinite == 1
+
+
+def test_the_pipeline_publishes_and_warns_for_bones_that_were_not_finite(skeleton, make_sim):
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros import messages
+    # Issue 35 item 5: it went out with no /tf and diagnostics ok.
+    sim, names, pos = flattened_hem_sim(skeleton, make_sim)
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(skeleton, sim.rig, fabrics, default_values(fabrics['tweed_jacket']))
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    _, outputs = pipe.on_joint_state(JointStateContent(10 ** 9, names, pos), 10 ** 9)
+    assert [key for key, _ in outputs] == ['tf', 'markers', 'diagnostics']
+    status = deserialize_message(outputs[-1][1], DiagnosticArray).status[0]
+    assert status.level == bytes([messages.WARN]) and 'non-finite bones' in status.message
+    assert {v.key: v.value for v in status.values}['nonfinite_inputs'] == '1'
+
+
 def test_stamps_backwards_or_repeated_are_dropped_a_long_gap_resets(make_sim, rest_input):
     sim = make_sim(reset_gap=1.0)
     n, p = rest_input

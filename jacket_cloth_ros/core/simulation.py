@@ -172,6 +172,7 @@ class JacketSimulation:
         self.last = None          # last accepted Sample
         self.t_sim = None         # ns of the last step
         self.resets = 0
+        self.nonfinite = 0        # inputs whose bones were not finite (check_bones)
         self.steps_total = 0
         self.overruns = 0
         # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
@@ -278,7 +279,7 @@ class JacketSimulation:
         """M6: where the top row is (see _skinned_pose)."""
         return self._skinned_pose(links, layer)[0]
 
-    def _skinned_pose(self, links, layer):
+    def _skinned_pose(self, links, layer, outside=True):
         """(pinned top row, M11 reference points) for a skeleton pose.
 
         M6: the top row is carried by its link and, near the shoulders, by the M2 bones below
@@ -294,6 +295,8 @@ class JacketSimulation:
         pose.skinned_pose(links, self.model.cloth, below, top, ref)
         cloth.hold_pinned_row(top, self.model.cloth, below.shape[0] > 0,
                               self.fabric.max_horizontal_stretch)
+        if not outside:
+            return top, ref
         c = self._posed(links, self.root)       # M10: the pinned row outside the body
         colliders.push_out_points(top, colliders.posed_body(self.model.colliders, c))
         return top, ref
@@ -334,6 +337,44 @@ class JacketSimulation:
                          np.ones(self.rig.n), 0.0, 0.0)
         self.xp = self.x.copy()
         self.contact[:] = False
+
+    def check_bones(self, report: StepReport) -> Bones:
+        """Return the bones of the input ``report`` tells of, after making them finite if need be.
+
+        The door to publishing: bones that are not finite (a vertical edge of zero length gives
+        its M9 bone no direction, as when rows of the hem lie flattened on the floor) reset the
+        cloth to the skinned pose (M6, M11) as a non-finite cloth does; if that pose's bones are
+        not finite either (its settling step flattened it again), the cloth is laid on the
+        skinned pose as it is, before the colliders. Such an input is counted in ``nonfinite``
+        and ``report.reset`` says why. Bones still not finite (a degenerate skeleton pose) are
+        returned as they are: the caller publishes none.
+        """
+        bones = self.bones()
+        if bones.finite or not report.accepted or self.last is None:
+            return bones
+        self.nonfinite += 1
+        report.reset = 'non-finite bones' + self._degenerate_edge()
+        self._reset(self.last)
+        bones = self.bones()
+        if not bones.finite:
+            top, ref = self._skinned_pose(self.links, self.layer, outside=False)
+            self.x = ref
+            self.x[:self.rig.cols] = top
+            self.xp = self.x
+            self.contact[:] = False
+            bones = self.bones()
+        self.ready_bones = bones
+        return bones
+
+    def _degenerate_edge(self) -> str:
+        """Say which vertical edge of the cloth is shortest when it has no length, else ''."""
+        rig = self.rig
+        length = np.linalg.norm(self.x[rig.vert_a] - self.x[rig.vert_b], axis=1)
+        k = int(np.argmin(length)) if len(length) else -1
+        if k < 0 or not length[k] < 1e-9 * rig.vert_rest[k]:
+            return ''
+        row, col = divmod(int(rig.vert_b[k]), rig.cols)
+        return f': the vertical edge above row {row}, column {col} has no length'
 
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns: int, names: Sequence[str],

@@ -170,6 +170,7 @@ class SessionPipeline:
             self._window['dropped'] += 1
             return []
         self._window['accepted'] += 1
+        bones = self.sim.check_bones(report)     # a reset if they were not finite
         if report.reset:
             self.last_reset_reason = report.reset
             self._marker_reset = True
@@ -179,9 +180,8 @@ class SessionPipeline:
         else:
             self._reset_streak = 0
         self._costs.append(report.step_cost_ns)
-        bones = self.sim.bones()
         self._finite = bones.finite
-        if not bones.finite:     # never a NaN on /tf (the simulation resets itself on one)
+        if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
             return []
         out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
         if self.values['publish_world_tf']:
@@ -296,6 +296,7 @@ class SessionPipeline:
         values.update({
             'overruns': sim.overruns,
             'resets': sim.resets,
+            'nonfinite_inputs': sim.nonfinite,
             'last_reset': self.last_reset_reason,
             'worst_vertical_strain': f'{vert:.4f}',
             'worst_horizontal_strain': f'{horiz:.4f}',

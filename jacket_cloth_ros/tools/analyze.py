@@ -68,13 +68,10 @@ class SessionFigures:
             return
         if report.reset:
             self.reset_reasons.append(report.reset)
-            if report.reset == 'non-finite cloth state':
-                self.nonfinite += 1
         tf = [data for key, data in outputs if key == 'tf']
-        if not tf:
-            self.nonfinite += 1
-        else:
-            self.published += 1
+        # A non-finite cloth or bones reset the cloth (then /tf goes out); no /tf at all: both.
+        self.nonfinite += report.reset.startswith('non-finite') or not tf
+        self.published += bool(tf)
         for data in tf:             # with publish_world_tf, two per input: compare each
             if self.tf_sent < len(self.recorded_tf):
                 self.tf_compared += 1
