@@ -25,7 +25,7 @@ from .bundles import (
 from .compiled import FixedTypes
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
-from .measures import edge_strain
+from .measures import collider_labels, depth_inside, edge_strain
 from .params import SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
@@ -43,6 +43,10 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 # Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
 # their stiffness is what one step of this length does (see per_step and xpbd_compliance).
 DESIGN_RATE = 120.0
+# The cloth inside a collider at the zero pose deeper than this (m) is named at load.
+INSIDE_AT_REST = 0.005
+# The cloth stretched more than this share at the first input is named (issue 19's target).
+STRETCHED_AT_START = 0.10
 # Automatic quality mode: relaxation stops once a sweep moves nothing by more than this share of
 # the tolerance. Chosen by the lab (walk and idle, 2 s, against the converged reference): at 0.1
 # the hem drifted past the tolerance (14 mm RMS at 10 mm); at 0.03 it stayed within it.
@@ -127,6 +131,14 @@ def motion_between(a: Sample, b: Sample, t_sim: int, dt_ns: int, steps: int) -> 
 
 
 @dataclass(slots=True)
+class Faults:
+    """What a simulation found wrong beyond one input's warnings (issue 35 item 5)."""
+
+    nonfinite: int = 0              # inputs whose bones were not finite (check_bones)
+    rig: list = field(default_factory=list)     # the rig's, at load and at the first input
+
+
+@dataclass(slots=True)
 class StepReport:
     """What one processed sample did, for logging, diagnostics and output."""
 
@@ -172,7 +184,7 @@ class JacketSimulation:
         self.last = None          # last accepted Sample
         self.t_sim = None         # ns of the last step
         self.resets = 0
-        self.nonfinite = 0        # inputs whose bones were not finite (check_bones)
+        self.faults = Faults()
         self.steps_total = 0
         self.overruns = 0
         # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
@@ -182,6 +194,9 @@ class JacketSimulation:
         self.bone_set = _bone_set(skeleton, rig)
         self._advance_kernel = FixedTypes(step.advance)
         self._warm_up()
+        # What is wrong with the rig before any input, and at the first one: said with the
+        # first input's warnings (issue 35 item 5).
+        self.faults.rig = self._inside_at_rest()
 
     # -- the state, held once in ``state`` --------------------------------------------------
     x = property(lambda self: self.state.x, lambda self, v: _put(self.state.x, v),
@@ -345,14 +360,14 @@ class JacketSimulation:
         its M9 bone no direction, as when rows of the hem lie flattened on the floor) reset the
         cloth to the skinned pose (M6, M11) as a non-finite cloth does; if that pose's bones are
         not finite either (its settling step flattened it again), the cloth is laid on the
-        skinned pose as it is, before the colliders. Such an input is counted in ``nonfinite``
+        skinned pose as it is, before the colliders. Such an input is counted in ``faults``
         and ``report.reset`` says why. Bones still not finite (a degenerate skeleton pose) are
         returned as they are: the caller publishes none.
         """
         bones = self.bones()
         if bones.finite or not report.accepted or self.last is None:
             return bones
-        self.nonfinite += 1
+        self.faults.nonfinite += 1
         report.reset = 'non-finite bones' + self._degenerate_edge()
         self._reset(self.last)
         bones = self.bones()
@@ -375,6 +390,42 @@ class JacketSimulation:
             return ''
         row, col = divmod(int(rig.vert_b[k]), rig.cols)
         return f': the vertical edge above row {row}, column {col} has no length'
+
+    def _inside_at_rest(self) -> list[str]:
+        """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is.
+
+        The floor aside: the root is not where the motion puts it.
+        """
+        rig = self.rig
+        c = self.collider_frames(self.skeleton.forward(np.zeros(len(self.skeleton.joint_names))),
+                                 np.eye(4))
+        body = c._replace(plane_points=np.zeros((0, 3)), plane_normals=np.zeros((0, 3)))
+        worst = depth_inside(rig.rest, np.ones(rig.n, dtype=bool), body, collider_labels(rig))
+        if worst.value <= INSIDE_AT_REST:
+            return []
+        row, col = divmod(worst.vertex, rig.cols)
+        return [f'the cloth starts inside the body: row {row}, column {col} is '
+                f'{worst.value * 1e3:.0f} mm inside collider {worst.collider!r} at the zero '
+                'pose; widen cloth.shape.radii (or move cloth.shape.center) or shrink that '
+                'collider']
+
+    def _stretched_at_start(self) -> list[str]:
+        """Say where the cloth, just put on the first input's skinned pose, is stretched."""
+        rig, out = self.rig, []
+        vs, _, hs, _ = self.edge_strains()
+        for worst, across in ((hs, True), (vs, False)):
+            if not worst.value > STRETCHED_AT_START:
+                continue
+            row, col = divmod(worst.vertex, rig.cols)
+            layer = rig.layer
+            if layer is not None and layer.pads and rig.pin_weight[col] > 0:
+                fix = f'lower jacket_bones.upper.skin_radius ({layer.skin_radius:g})'
+            else:
+                fix = 'fit cloth.shape.radii and center to the body and its colliders'
+            out.append(f'the cloth starts stretched {worst.value:.0%} '
+                       f'{"across" if across else "down"} at row {row}, column {col} on the '
+                       f'first input: {fix}')
+        return out
 
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns: int, names: Sequence[str],
@@ -418,10 +469,14 @@ class JacketSimulation:
         elif not report.reset:
             report.reset = self._jump(self.last, sample)
         if report.reset:
+            first = report.reset == 'first sample'
             self._reset(sample)
             if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
                 report.reset = 'non-finite cloth state'
                 self._reset(sample)
+            if first:
+                self.faults.rig += self._stretched_at_start()
+                report.warnings += [('rig', w) for w in self.faults.rig]
             return report, None
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns

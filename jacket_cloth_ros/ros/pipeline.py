@@ -296,7 +296,7 @@ class SessionPipeline:
         values.update({
             'overruns': sim.overruns,
             'resets': sim.resets,
-            'nonfinite_inputs': sim.nonfinite,
+            'nonfinite_inputs': sim.faults.nonfinite,
             'last_reset': self.last_reset_reason,
             'worst_vertical_strain': f'{vert:.4f}',
             'worst_horizontal_strain': f'{horiz:.4f}',

@@ -121,6 +121,7 @@ class SessionFigures:
             'max_penetration_m': float(a[:, 2].max()) if len(a) else 0.0,
             'max_distance_exceeded': int(a[:, 3].sum()),
             'nonfinite_count': self.nonfinite,
+            'rig_warnings': list(pipeline.sim.faults.rig),
             'resets': len(self.reset_reasons),
             'reset_reasons': self.reset_reasons,
             'step_time_us': {

@@ -192,6 +192,12 @@ def _session(args):
     return session
 
 
+def _warn_rig(args: argparse.Namespace, lines: list[str]) -> None:
+    """Print what the simulation found wrong with the rig at load and at the first input."""
+    for line in lines:
+        print(f'jacket_cloth {args.command}: warning: {args.input}: {line}', file=sys.stderr)
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
@@ -200,6 +206,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     session = _session(args)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
+    _warn_rig(args, sim.faults.rig)
     first, last = session.stamp_range()
     span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
@@ -239,6 +246,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     for path in args.input:
         sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
     report = analyze(sessions, args.out, moments=args.moments)
+    for r in report.get('sessions', [report]):
+        _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}), r['rig_warnings'])
     print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 
