@@ -16,7 +16,7 @@ LAYERS = (
     ('physics.pose', 'physics.colliders', 'physics.cloth', 'physics.hood', 'physics.step',
      'physics.crowd', 'physics.sampling'),
     ('skeleton', 'bone_layer', 'urdf_colliders', 'rig', 'fabric', 'params'),
-    ('inputs', 'lod', 'measures', 'simulation', 'crowd'),
+    ('inputs', 'lod', 'measures', 'body_proxy', 'simulation', 'crowd'),
 )
 LAYER_OF = {name: k for k, names in enumerate(LAYERS) for name in names}
 

@@ -61,3 +61,32 @@ def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
     assert (tmp_path / 'out' / 'worst_instant.png').stat().st_size > 10_000
     summary = (tmp_path / 'out' / 'summary.md').read_text()
     assert 'vertical compression max / p99' in summary and 'inside a collider' in summary
+    assert 'inside the body max / p99' in summary
+    assert report['body_inside_m']['max'] == 0.0       # the shipped rig's colliders hold it
+
+
+def test_the_body_proxy_sees_what_the_rigs_colliders_do_not(tmp_path, capsys):
+    # Issue 35 item 4: inside_m is measured against the rig's own colliders; a rig without
+    # thigh colliders gave 0 mm inside while the hem went through the thighs. body_inside_m
+    # measures against every link's body (here the shipped character's bone capsules).
+    import yaml
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.tools.cli import main
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        rig = yaml.safe_load(f)
+    rig['colliders'] = [c for c in rig['colliders'] if c['name'] not in ('l_thigh', 'r_thigh')]
+    (tmp_path / 'rig.yaml').write_text(yaml.safe_dump(rig))
+    clip = tmp_path / 'clip.mcap'
+    assert main(['motion', '--clip', 'run', '--duration', '2', '-o', str(clip)]) == 0
+    capsys.readouterr()
+    assert main(['analyze', str(clip), '--rig', str(tmp_path / 'rig.yaml'), '--out',
+                 str(tmp_path / 'out')]) == 0
+    report = json.loads((tmp_path / 'out' / 'report.json').read_text())
+    assert report['inside_m']['max'] == 0.0
+    body = report['body_inside_m']
+    assert body['max'] > 0.02 and body['p99'] > 0.02 and body['link'] in ('l_thigh', 'r_thigh')
+    assert body['vertex'][0] >= 8 and 'at_s' in body           # the hem's rows
+    line = capsys.readouterr().out
+    for figure in ('vertical stretch ', 'horizontal stretch p99 ', 'inside 0.0 / 0.0 mm',
+                   'inside the body ', 'non-finite 0', 'resets 1'):
+        assert figure in line, figure

@@ -9,5 +9,6 @@ Layers, each importing only those below it (test/test_core_layers.py holds them 
 2. the compiled physics, ``physics/``: pose, colliders, cloth, hood, step, crowd, sampling;
 3. building a character's model: ``skeleton``, ``bone_layer``, ``urdf_colliders``, ``rig``
    (``model_of``), ``fabric``, ``params``;
-4. drivers: ``inputs``, ``lod``, ``measures``, ``simulation`` (JacketSimulation), ``crowd``.
+4. drivers: ``inputs``, ``lod``, ``measures``, ``body_proxy`` (the body the measures see),
+   ``simulation`` (JacketSimulation), ``crowd``.
 """

@@ -18,6 +18,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..core.body_proxy import body_proxy, sleeved_links  # noqa: E402
 from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
@@ -30,8 +31,9 @@ if TYPE_CHECKING:           # for the annotations only
 
 # What a viewer sees wrong, per input on the published cloth (core.measures), and the push-out
 # depth found during the steps: each reported as max and p99 over inputs, with where.
+# ``body_inside_m``: inside the body proxy (core.body_proxy), not the rig's colliders.
 MEASURES = ('vertical_stretch', 'vertical_compression', 'horizontal_stretch', 'inside_m',
-            'push_out_m')
+            'push_out_m', 'body_inside_m')
 
 REPORTED_PARAMETERS = ('fabric_preset', 'sim_rate', 'stretch_limit', 'fabric.iterations',
                        'fabric.damping', 'fabric.world_share', 'wind', 'wind_gust')
@@ -52,6 +54,9 @@ class SessionFigures:
         self.rows = []
         self.worst = {name: [] for name in MEASURES}        # (time s, Worst) per input
         self.labels = collider_labels(session.setup.rig)
+        setup = session.setup
+        self.body = body_proxy(setup.skeleton, sleeved_links(setup.rig))
+        self.everywhere = np.ones(setup.rig.n, dtype=bool)
         self.frames = []
         self.worst_frames = {}          # measure -> (value, frame) at its worst input so far
         self.reset_reasons = []
@@ -82,8 +87,9 @@ class SessionFigures:
         vs, vc, hs, hc = sim.edge_strains()
         vert, horiz = max(vs.value, vc.value), max(hs.value, hc.value)     # as sim.strain()
         inside = depth_inside(sim.x, rig.free, sim.collider_frames(sim.links), self.labels)
+        body = depth_inside(sim.x, self.everywhere, self.body.posed(sim.links), self.body.labels)
         for name, worst in zip(MEASURES, (vs, vc, hs, inside,
-                                          Worst(report.max_penetration, -1))):
+                                          Worst(report.max_penetration, -1), body)):
             self.worst[name].append((t, worst))
         for name, worst in (('vertical_stretch', vs), ('inside_m', inside)):
             if name not in self.worst_frames or worst.value > self.worst_frames[name][0]:
@@ -140,7 +146,7 @@ class SessionFigures:
         """Say where a measure was worst: vertex (row, column) and collider, if known."""
         m = self._measure(name, self.session.setup.rig.cols)
         parts = ['r{} c{}'.format(*m['vertex'])] if 'vertex' in m else []
-        return ' '.join(parts + ([m['collider']] if 'collider' in m else []))
+        return ' '.join(parts + [m[k] for k in ('collider', 'link') if k in m])
 
     def _measure(self, name, cols):
         """{max, p99} over inputs, and when (s), which vertex (row, column) and collider."""
@@ -154,7 +160,7 @@ class SessionFigures:
         if worst.vertex >= 0:
             out['vertex'] = list(divmod(worst.vertex, cols))
         if worst.collider:
-            out['collider'] = worst.collider
+            out['link' if name == 'body_inside_m' else 'collider'] = worst.collider
         return out
 
     def _matches(self):
@@ -256,6 +262,7 @@ def _summary(names, reports):
                                                               '')),
         ('horizontal stretch max / p99', lambda r: _max_p99(r['horizontal_stretch'], 1, '')),
         ('inside a collider max / p99 (mm)', lambda r: _max_p99(r['inside_m'], 1e3, '')),
+        ('inside the body max / p99 (mm)', lambda r: _max_p99(r['body_inside_m'], 1e3, '')),
         ('push-out during a step max / p99 (mm)', lambda r: _max_p99(r['push_out_m'], 1e3,
                                                                      '')),
         ('M11 vertex-steps moved', lambda r: r['max_distance_exceeded']),
@@ -293,10 +300,19 @@ def summary_line(report: dict) -> str:
         if median is None:
             text += ', nothing simulated'
         else:
-            text += (f', vertical stretch {r["vertical_stretch"]["max"]:.3f}, inside '
-                     f'{r["inside_m"]["max"] * 1e3:.1f} mm, step {median:.0f} us median')
+            text += f', {target_figures(r)}, step {median:.0f} us median'
         parts.append(text)
     return '; '.join(parts)
+
+
+def target_figures(r: dict) -> str:
+    """Return a session's figures that have targets (issue 19, issue 35), max / p99."""
+    def pair(name, scale=1.0, digits=3):
+        return f'{r[name]["max"] * scale:.{digits}f} / {r[name]["p99"] * scale:.{digits}f}'
+    return (f'vertical stretch {pair("vertical_stretch")}, horizontal stretch p99 '
+            f'{r["horizontal_stretch"]["p99"]:.3f}, inside {pair("inside_m", 1e3, 1)} mm, '
+            f'inside the body {pair("body_inside_m", 1e3, 1)} mm, non-finite '
+            f'{r["nonfinite_count"]}, resets {r["resets"]}')
 
 
 def _pair(t):
@@ -310,8 +326,9 @@ def _max_p99(measure, scale, unit):
     where = [f"{measure['at_s']:.2f} s"] if 'at_s' in measure else []
     if 'vertex' in measure:
         where.append('row {}, col {}'.format(*measure['vertex']))
-    if 'collider' in measure:
-        where.append(measure['collider'])
+    for key in ('collider', 'link'):
+        if key in measure:
+            where.append(measure[key])
     text = f"{measure['max'] * scale:.4g} / {measure['p99'] * scale:.4g}{unit}"
     return text + (f" ({', '.join(where)})" if where else '')
 

@@ -1,0 +1,101 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A body the measures see, apart from the rig's colliders (issue 35 item 4).
+
+Every link's primitive ``<collision>`` shapes (urdf_colliders: a sphere or a box an ellipsoid,
+a cylinder or a ``<capsule>`` a capsule) and, for a link without one (meshes only, or none), a
+capsule along each of its bones (from the link to each child that is somewhere else), its
+radius a share of the skeleton's size. Links under the sleeves are left out: the jacket's body
+hangs between them and the torso. Depths are measured with measures.depth_inside, on the
+bundles.Colliders this proxy is posed into, so they do not depend on the rig's own colliders.
+"""
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
+
+from .bundles import Colliders
+from .transforms import rpy_matrix
+from .urdf_colliders import collider_name, urdf_shapes
+
+if TYPE_CHECKING:           # for the annotations only
+    from .rig import Rig
+    from .skeleton import Skeleton
+
+# A bone capsule's radius as a share of the skeleton's size (its zero pose's largest extent):
+# about a knee's for a person, thinner than a thigh or a trunk: a depth is the body's.
+BONE_RADIUS_SHARE = 0.03
+
+
+@dataclass(frozen=True)
+class BodyProxy:
+    """Ellipsoids and capsules on links, in the links' frames, with the link each one is on."""
+
+    ellipsoid_link: np.ndarray      # (E,) link indices
+    center: np.ndarray              # (E,3)
+    rotation: np.ndarray            # (E,3,3) axes as columns
+    radii: np.ndarray               # (E,3)
+    capsule_link: np.ndarray        # (K,)
+    capsule_a: np.ndarray           # (K,3)
+    capsule_b: np.ndarray           # (K,3)
+    capsule_radius: np.ndarray      # (K,)
+    labels: list                    # E + K link names, ellipsoids first
+
+    def posed(self, links: np.ndarray) -> Colliders:
+        """Return the proxy at a skeleton pose (links' 4x4 poses), as measures take it."""
+        t = links[self.ellipsoid_link]
+        centers = np.einsum('kij,kj->ki', t[:, :3, :3], self.center) + t[:, :3, 3]
+        axes = np.einsum('kij,kjl->kil', t[:, :3, :3], self.rotation)
+        c = links[self.capsule_link]
+        a = np.einsum('kij,kj->ki', c[:, :3, :3], self.capsule_a) + c[:, :3, 3]
+        b = np.einsum('kij,kj->ki', c[:, :3, :3], self.capsule_b) + c[:, :3, 3]
+        none = np.zeros((0, 3))
+        return Colliders(centers.reshape(-1, 3), axes.reshape(-1, 3, 3), self.radii, a, b,
+                         self.capsule_radius, none, none)
+
+
+def sleeved_links(rig: 'Rig') -> list[int]:
+    """Return the links a rig's M1 sleeves ride on: the body proxy leaves them out."""
+    return [s.link for s in rig.layer.sleeves] if rig.layer is not None else []
+
+
+def body_proxy(skeleton: 'Skeleton', leave_out: Sequence[int] = ()) -> BodyProxy:
+    """Return the body proxy of ``skeleton``, without the links ``leave_out`` and those below."""
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    names = list(skeleton.link_names)
+    out_of_it = {int(k) for k in leave_out}
+    for k in range(len(names)):         # parents come before their children
+        if skeleton.parent[k] in out_of_it:
+            out_of_it.add(k)
+    origins = rest[:, :3, 3]
+    radius = BONE_RADIUS_SHARE * float((origins.max(axis=0) - origins.min(axis=0)).max())
+    shapes = urdf_shapes(skeleton.urdf_xml)
+    ell, caps = [], []
+    for k, name in enumerate(names):
+        if k in out_of_it:
+            continue
+        mine = shapes.get(name, [])
+        for j, shape in enumerate(mine):
+            entry = shape.as_collider(collider_name(name, j, len(mine)))
+            if entry['type'] == 'ellipsoid':
+                ell.append((k, entry['center'], rpy_matrix(np.radians(entry['rpy_deg'])),
+                            entry['radii'], name))
+            else:
+                caps.append((k, entry['a'], entry['b'], entry['radius'], name))
+        if mine:
+            continue
+        for child in np.flatnonzero(skeleton.parent == k):
+            if child in out_of_it:
+                continue
+            end = np.linalg.solve(rest[k], rest[child][:, 3])[:3]
+            if np.linalg.norm(end) > 1e-6:
+                caps.append((k, np.zeros(3), end, radius, name))
+    return BodyProxy(
+        np.array([e[0] for e in ell], dtype=np.int64), np.array([e[1] for e in ell],
+                                                                dtype=float).reshape(-1, 3),
+        np.array([e[2] for e in ell], dtype=float).reshape(-1, 3, 3),
+        np.array([e[3] for e in ell], dtype=float).reshape(-1, 3),
+        np.array([c[0] for c in caps], dtype=np.int64),
+        np.array([c[1] for c in caps], dtype=float).reshape(-1, 3),
+        np.array([c[2] for c in caps], dtype=float).reshape(-1, 3),
+        np.array([c[3] for c in caps], dtype=float), [e[4] for e in ell] + [c[4] for c in caps])
