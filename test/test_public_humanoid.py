@@ -9,6 +9,8 @@ boxes, and its file ends in a NUL byte. It is read as it is: no edit of the URDF
 """
 
 
+import json
+
 import numpy as np
 import pytest
 import yaml
@@ -110,3 +112,64 @@ def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
     rig = loaded.setup.rig
     left, right = s['x'][105][(rig.rows - 1) * rig.cols], s['x'][105][rig.rows * rig.cols - 1]
     assert left[2] < -0.34 and right[2] > 0.34
+
+
+def write_sit_down_z_up(skeleton, path):
+    """Write the sit-down with the humanoid in a Z-up world (REP 103): its world joint turns the
+    root a quarter turn about x, the URDF's y (its up) onto the world's z.
+    """
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    names = list(skeleton.joint_names) + [f'world_joint/{v}' for v in WORLD_VARIABLES]
+    ankles = [skeleton.link(f'{side}_ankle') for side in ('left', 'right')]
+    rec = SessionRecorder(str(path))
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    half = np.sqrt(0.5)
+    for k in range(int(6.0 * RATE) + 1):
+        pose = _pose(k / RATE)
+        q = np.array([pose.get(j, 0.0) for j in skeleton.joint_names])
+        lowest = skeleton.forward(q)[ankles][:, 1, 3].min()
+        root = [0.0, 0.0, 0.12 - lowest, half, 0.0, 0.0, half]    # the feet on z = 0
+        stamp = int(k / RATE * 1e9)
+        rec.write('/joint_states', joint_state(stamp, names, list(q) + root), stamp)
+    rec.close()
+
+
+def test_a_y_up_urdf_driven_in_a_z_up_world_gets_gravity_from_that_world(tmp_path, capsys):
+    # Issue 35 item 1: the proposal took up from the links' axes ([0, 1, 0]); in a Z-up world
+    # gravity pulled sideways and the floor was a wall through the body (horizontal stretch
+    # 1.03 at p99 on this sit-down). The first input now finds the body's up in the world
+    # 90 degrees from it and takes the world's up from the body, with one line naming the
+    # key; `rig --motion` writes that key.
+    urdf = fetched('humanoid.urdf')
+    session = tmp_path / 'sit_z_up.mcap'
+    write_sit_down_z_up(load_skeleton(urdf), session)
+    figures = []
+    for name, extra in (('plain', []), ('motion', ['--motion', str(session)])):
+        rig_path = tmp_path / f'{name}.yaml'
+        assert main(['rig', '--urdf', urdf, '-o', str(rig_path)] + extra) == 0
+        rig = yaml.safe_load(rig_path.read_text())
+        assert rig['up'] == [0.0, 1.0, 0.0]            # the body's, in the URDF root frame
+        loaded = load_session(str(session), urdf=urdf, rig=str(rig_path))
+        s = measure_every_input(loaded, keep_x=True)
+        vertical, horizontal = s['vertical_stretch'], s['horizontal_stretch']
+        inside = s['inside_m']
+        assert vertical.max() <= 0.10 and np.percentile(vertical, 99) <= 0.03
+        assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003
+        assert np.percentile(horizontal, 99) <= 0.10 and s['resets'] == ['first sample']
+        figures.append(s)
+        if name == 'motion':
+            assert rig['world_up'] == [0.0, 0.0, 1.0]
+            assert rig['colliders']['add'][0]['normal'] == [0.0, 0.0, 1.0]
+        else:
+            assert 'world_up' not in rig
+    assert np.array_equal(figures[0]['x'], figures[1]['x'])     # turned as --motion wrote it
+    capsys.readouterr()
+    assert main(['analyze', str(session), '--urdf', urdf, '--rig', str(tmp_path / 'plain.yaml'),
+                 '--out', str(tmp_path / 'out')]) == 0
+    [line] = [w for w in capsys.readouterr().err.splitlines() if 'world up' in w]
+    assert "the rig's world up [0, 1, 0] is 90 deg from the body's up in the world" in line
+    assert 'write world_up: [0, 0, 1] in the rig' in line
+    report = json.loads((tmp_path / 'out' / 'report.json').read_text())
+    assert report['rig_warnings'] == [line.split(f'{session}: ', 1)[1]]

@@ -5,10 +5,11 @@ Everything is resolved against the skeleton's zero pose once, at load time: rest
 the character's local frame (the URDF root), and for each vertex the link and local offset that
 carry its pinned target (M6) or its reference point (M11).
 
-Axes: no link axis means up or forward. The world frame is the URDF root's frame with the world
-joint at identity; ``up`` (default +z) and ``forward`` (default +x) are world vectors, gravity
-pulls along -up, and the cloth shape and the M2 bones take their front, left and up from them at
-the zero pose, unless an ``rpy_deg`` gives their axes in their link's frame (docs/method.md).
+Axes: no link axis means up or forward. ``up`` (default +z) and ``forward`` (default +x) are
+the body's in the URDF root's frame; the cloth shape and the M2 bones take their front, left
+and up from them at the zero pose, unless an ``rpy_deg`` gives their axes in their link's frame
+(docs/method.md). Gravity pulls along -``world_up`` (default: ``up``), a vector of the world the
+world joint moves the root in.
 """
 
 from dataclasses import dataclass
@@ -150,6 +151,14 @@ class Rig:
         self.world_axes = body_axes(top.vector('up', 3, [0.0, 0.0, 1.0]),
                                     top.vector('forward', 3, [1.0, 0.0, 0.0]), where)
         self.up = self.world_axes[:, 2].copy()
+        # The world's up, where the motion lives (gravity, the floor): the body's up unless a
+        # world joint turns the root (a Y-up URDF in a Z-up world, issue 35 item 1).
+        self.world_up = self.up.copy()
+        if top.has('world_up'):
+            world_up = np.array(top.vector('world_up', 3))
+            if np.linalg.norm(world_up) < 1e-9:
+                raise ConfigError(f'{where}.world_up: {world_up.tolist()} must not be zero')
+            self.world_up = world_up / np.linalg.norm(world_up)
         self._rest = rest
         cloth = top.section('cloth')
         self.cols = cloth.integer('cols', lo=3, hi=64)
@@ -443,7 +452,8 @@ def cloth_model(rig: Rig) -> ClothModel:
         ints(rig.con_a[held]), ints(rig.con_b[held]), floats(rig.con_rest[held]),
         ints(rig.con_a[top_row]), floats(rig.con_rest[top_row]), ints(rig.tether_anchor),
         floats(rig.tether_length), int(rig.hood.link),
-        floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side), floats(rig.up))
+        floats(rig.hood.pivot), float(rig.hood.length), floats(rig.hood.side),
+        floats(rig.world_up))
 
 
 def collider_model(rig: Rig) -> ColliderModel:

@@ -43,6 +43,9 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 # Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
 # their stiffness is what one step of this length does (see per_step and xpbd_compliance).
 DESIGN_RATE = 120.0
+# The body's up (root link to the hood's link) at the first input further than this (deg) from
+# the rig's world up: the world's up is taken from the body (issue 35 item 1).
+UP_TOLERANCE_DEG = 45.0
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
 # The cloth stretched more than this share at the first input is named (issue 19's target).
@@ -172,7 +175,13 @@ class JacketSimulation:
         self.parser = InputParser(skeleton, world_joint)
         self.fabric = fabric
         self.params = params
-        self.model = model_of(skeleton, rig)
+        model = model_of(skeleton, rig)
+        # Its own world up and world planes: the first input may turn them (_turn_up), in
+        # place, where a crowd's slot sees them too.
+        self.model = model._replace(
+            cloth=model.cloth._replace(up=model.cloth.up.copy()),
+            colliders=model.colliders._replace(plane_points=model.colliders.plane_points.copy(),
+                                               plane_normals=model.colliders.plane_normals.copy()))
         self.state = ClothState(floats(rig.rest).copy(), floats(rig.rest).copy(),
                                 np.zeros(rig.n, dtype=np.bool_), np.zeros(3), np.zeros(3),
                                 np.eye(4), np.zeros(len(rig.con_a)), np.zeros(1, dtype=np.bool_))
@@ -391,6 +400,39 @@ class JacketSimulation:
         row, col = divmod(int(rig.vert_b[k]), rig.cols)
         return f': the vertical edge above row {row}, column {col} has no length'
 
+    def _turn_up(self, sample: Sample) -> list[str]:
+        """Check the rig's world up against the body's in the world at the first input.
+
+        The body's up is the root link to the hood's link, as the input poses them. Further
+        than UP_TOLERANCE_DEG from it (a Y-up URDF driven in a Z-up world with a rig whose
+        world up is the URDF's), the world's up becomes the body's (snapped onto a world axis
+        within 15 degrees): gravity and the planes fixed in the world turn with it, and the
+        line says the rig's key that does it.
+        """
+        links = self.skeleton.forward(sample.q)
+        rig, up = self.rig, self.model.cloth.up
+        neck = links[rig.hood.link][:3, 3] - links[0][:3, 3]
+        if not np.linalg.norm(neck) > 1e-9:
+            return []
+        body_up = sample.root[:3, :3] @ neck / np.linalg.norm(neck)
+        angle = np.degrees(np.arccos(np.clip(body_up @ up, -1.0, 1.0)))
+        if not angle > UP_TOLERANCE_DEG:
+            return []
+        new = _snapped(body_up)
+        turn = _turn_between(up, new)
+        colliders = self.model.colliders
+        world = colliders.plane_links < 0
+        colliders.plane_points[world] = colliders.plane_points[world] @ turn.T
+        colliders.plane_normals[world] = colliders.plane_normals[world] @ turn.T
+        was = up.copy()
+        up[:] = new
+        names = self.skeleton.link_names
+        return [f'the rig\'s world up {_shown(was)} is {angle:.0f} deg from the body\'s up in '
+                f'the world at the first input ({names[0]} to {names[rig.hood.link]}: '
+                f'{_shown(body_up)}): gravity and the floor now pull along {_shown(-new)}; '
+                f'write world_up: {_shown(new)} in the rig (jacket_cloth rig --motion FILE '
+                'does)']
+
     def _inside_at_rest(self) -> list[str]:
         """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is.
 
@@ -470,6 +512,8 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             first = report.reset == 'first sample'
+            if first:
+                self.faults.rig += self._turn_up(sample)
             self._reset(sample)
             if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
                 report.reset = 'non-finite cloth state'
@@ -604,7 +648,7 @@ class JacketSimulation:
             ref = self.reference_points(links, self.layer if links is self.links else None)
         if acc is None:
             world_to_local = root[:3, :3].T
-            acc = (world_to_local @ (-p.gravity * self.rig.up)
+            acc = (world_to_local @ (-p.gravity * self.model.cloth.up)
                    + self.tuning.wind_scale[:, None]
                    * (world_to_local @ p.wind_at(self.t_sim or 0)))
         e = DESIGN_RATE / p.sim_rate
@@ -674,6 +718,35 @@ class JacketSimulation:
         rig, c = self.rig, self.model.cloth      # its horizontals: those with a free end
         return (*edge_strain(self.x, rig.vert_a, rig.vert_b, rig.vert_rest),
                 *edge_strain(self.x, c.horiz_a, c.horiz_b, c.horiz_rest))
+
+
+def _snapped(v: np.ndarray) -> np.ndarray:
+    """Return unit ``v`` on the nearest world axis if within 15 degrees of it, else ``v``."""
+    k = int(np.argmax(np.abs(v)))
+    if abs(v[k]) < np.cos(np.radians(15.0)):
+        return v.copy()
+    out = np.zeros(3)
+    out[k] = np.sign(v[k])
+    return out
+
+
+def _turn_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Return the smallest rotation taking unit ``a`` onto unit ``b`` (a half turn if opposite)."""
+    axis = np.cross(a, b)
+    s, c = np.linalg.norm(axis), float(a @ b)
+    if s < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        axis = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+        s = 0.0
+    axis = axis / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
+
+
+def _shown(v: np.ndarray) -> str:
+    """Write a direction as a rig writes it: [x, y, z], rounded."""
+    return '[' + ', '.join(f'{round(float(x), 3) + 0.0:g}' for x in v) + ']'
 
 
 def _put(kept: np.ndarray, value: npt.ArrayLike) -> None:

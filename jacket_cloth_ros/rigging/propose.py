@@ -546,8 +546,16 @@ def _torso_extent(body, links):
     return depth, width, sorted(set(found))
 
 
-def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str], Body]:
-    """Return the rig (a mapping for YAML), the lines saying what was chosen and why, the body."""
+Pose = tuple[np.ndarray, np.ndarray]      # joint values, the root's world rotation
+
+
+def propose(sk: Skeleton, forward: list | None = None,
+            first_pose: Pose | None = None) -> tuple[dict, list[str], Body]:
+    """Return the rig (a mapping for YAML), the lines saying what was chosen and why, the body.
+
+    ``first_pose``: (joint values, the root's world rotation) of a motion's first input; the
+    world's up (gravity, the floor) is then the body's up in that world (issue 35 item 1).
+    """
     body = find_body(sk, None if forward is None else np.asarray(forward, float))
     up, fwd, left = body.up, body.forward, body.left
     P = body.pos
@@ -640,18 +648,39 @@ def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str],
         rig['forward'] = _r(fwd)
     rig.update({'cloth': cloth, 'jacket_bones': {'sleeves': sleeves, 'upper': upper},
                 'hood': hood})
-    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, thigh_len, s)
+    world_up = _world_up(body, first_pose)
+    if world_up is not None and not np.allclose(world_up, up, atol=1e-3):
+        rig['world_up'] = _r(world_up)
+        lines.append(f'{"world up":>15}: {_r(world_up)} (pelvis to neck at the motion\'s '
+                     'first pose, in its world)')
+    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, thigh_len, s,
+                                       up if world_up is None else world_up)
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
 
 
-def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s):
-    """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some."""
+def _world_up(body, first_pose):
+    """Return the body's up (pelvis to neck, snapped) in the world of a first pose, or None."""
+    if first_pose is None:
+        return None
+    q, rotation = first_pose
+    links = body.skeleton.forward(np.asarray(q, float))
+    neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
+    if not np.linalg.norm(neck) > 1e-9:
+        return None
+    return _snap(np.asarray(rotation, float) @ neck)
+
+
+def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s, world_up):
+    """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some.
+
+    The floor is square to ``world_up``.
+    """
     shapes = urdf_shapes(body.skeleton.urdf_xml)
     wanted = [body.pelvis, shape_link, body.chest, body.thighs['left'], body.thighs['right']]
     wanted = list(dict.fromkeys(wanted))
     floor = {'name': 'floor', 'type': 'plane', 'link': 'world', 'point': [0.0, 0.0, 0.0],
-             'normal': _r(body.up)}
+             'normal': _r(world_up)}
     if all(body.name(k) in shapes for k in wanted):
         return ({'from_urdf': [body.name(k) for k in wanted], 'add': [floor]},
                 'from the URDF <collision> shapes of ' + ', '.join(body.name(k) for k in wanted))
@@ -699,6 +728,7 @@ COMMENTS = {
     'cloth': '# M3: a coarse grid around the torso; the top row is pinned (M6)',
     'jacket_bones': '# M1 sleeves on the arms, M2 shoulder pads on the chest',
     'hood': '# M8: a one-particle pendulum behind the neck',
+    'world_up': "# the world's up where the motion lives (gravity, the floor), at its first pose",
     'colliders': '# M10: the body the cloth must stay out of, and the floor',
 }
 

@@ -10,11 +10,15 @@ import signal
 import subprocess
 import sys
 import time
+from typing import TYPE_CHECKING
 
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
 from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
 from ..motion.messages import clip_messages
+
+if TYPE_CHECKING:           # for the annotations only
+    from ..core.skeleton import Skeleton
 
 
 class ToolError(Exception):
@@ -305,12 +309,13 @@ def cmd_rig(args: argparse.Namespace) -> int:
     from ..core.skeleton import load_skeleton
     from ..rigging.propose import propose, to_yaml
     from .outputs import replacing
-    _check_output(args.output, args.force, [args.urdf])
+    _check_output(args.output, args.force, [args.urdf, args.motion])
     if args.picture:
-        _check_output(args.picture, args.force, [args.urdf, args.output])
+        _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
     skeleton = load_skeleton(args.urdf)
     forward = _vector(args.forward, '--forward') if args.forward else None
-    rig, lines, body = propose(skeleton, forward)
+    first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
+    rig, lines, body = propose(skeleton, forward, first)
     text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
     try:
         loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
@@ -330,6 +335,27 @@ def cmd_rig(args: argparse.Namespace) -> int:
                      title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
         print(f'wrote {args.picture}')
     return 0
+
+
+def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
+    """Return (joint values, root's world rotation) of a recording's first JointState."""
+    from ..core.inputs import InputParser, InputRejected
+    from ..recording.reader import read_recording
+    from ..ros.cdr import DECODE_ERRORS, JointStateReader
+    recording = read_recording(path)
+    first = next((m for m in recording.messages if m.type_name == 'sensor_msgs/msg/JointState'),
+                 None)
+    if first is None:
+        raise ToolError(f'--motion {path}: no sensor_msgs/msg/JointState message in it')
+    try:
+        msg = JointStateReader().read(first.data)
+        sample = InputParser(skeleton, world_joint).parse(msg.stamp_ns, msg.name, msg.position)
+    except DECODE_ERRORS as e:
+        raise ToolError(f'--motion {path}: its first {first.topic} does not decode as '
+                        f'JointState ({e})') from None
+    except InputRejected as e:
+        raise ToolError(f'--motion {path}: its first {first.topic}: {e}') from None
+    return sample.q, sample.root[:3, :3]
 
 
 def _vector(text, what):
@@ -418,6 +444,11 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--forward', default=None,
                    help="the character's forward in the URDF root frame (default: where the "
                    'toes point, else from the left and right names, else 1,0,0)')
+    g.add_argument('--motion', default=None,
+                   help="a recording of the character: the world's up (gravity, the floor) is "
+                   'the body\'s up at its first JointState, whatever turns its root')
+    g.add_argument('--world-joint', default='world_joint',
+                   help='the world joint the recording names (with --motion)')
     g.add_argument('--force', action='store_true', help='overwrite the output files')
     g.set_defaults(func=cmd_rig)
     w = sub.add_parser('warm', help="compile the node's kernels into numba's cache now, so its "
