@@ -314,6 +314,7 @@ def stepped(steps: CrowdSteps,
             sim.complete(reports[k], job, out, status != crowd_steps.STEPS_FAILED)
             if not reports[k].reset:        # the bones the call made are the state's
                 sim.ready_bones = steps.bones(index, status == crowd_steps.BONES_FINITE)
+            sim.check_bones(reports[k])     # before settle: a reset is never steady
             steps.settle(index, inputs[k][2], reports[k])
         cost = time.perf_counter_ns() - started
         for k in this:

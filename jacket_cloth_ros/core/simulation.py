@@ -43,6 +43,8 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 # Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
 # their stiffness is what one step of this length does (see per_step and xpbd_compliance).
 DESIGN_RATE = 120.0
+# The reset reason of an input whose bones were not finite (check_bones).
+NONFINITE_BONES = 'non-finite bones'
 # The body's up (root link to the hood's link) at the first input further than this (deg) from
 # the rig's world up: the world's up is taken from the body (issue 35 item 1).
 UP_TOLERANCE_DEG = 45.0
@@ -374,10 +376,11 @@ class JacketSimulation:
         returned as they are: the caller publishes none.
         """
         bones = self.bones()
-        if bones.finite or not report.accepted or self.last is None:
+        if (bones.finite or not report.accepted or self.last is None
+                or report.reset.startswith(NONFINITE_BONES)):      # done for this input
             return bones
         self.faults.nonfinite += 1
-        report.reset = 'non-finite bones' + self._degenerate_edge()
+        report.reset = NONFINITE_BONES + self._degenerate_edge()
         self._reset(self.last)
         bones = self.bones()
         if not bones.finite:
@@ -520,7 +523,8 @@ class JacketSimulation:
                 self._reset(sample)
             if first:
                 self.faults.rig += self._stretched_at_start()
-                report.warnings += [('rig', w) for w in self.faults.rig]
+                # A code each: the node logs one line per code at most every few seconds.
+                report.warnings += [(f'rig{k}', w) for k, w in enumerate(self.faults.rig)]
             return report, None
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns
