@@ -12,6 +12,8 @@ same work per tick; the driver only publishes and reads ``/diagnostics``:
 - cost: CPU per character per input against N, and memory per character, for both;
 - tf: one TFMessage for the crowd's characters against one per character (encode and
   publish, in this process), which the node's choice rests on;
+- intake: a crowd character's input, taken each way a JointState can arrive, against a lone
+  simulation's ``process`` (``crowd_intake``), in this process;
 - floor: how many characters the crowd's floor (floor_node --crowd, the least a crowd node
   of this design does) holds on one core: the ceiling for the crowd's one-core figure.
 """
@@ -24,6 +26,7 @@ import time
 
 import numpy as np
 
+from jacket_cloth_lab import crowd_intake
 from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 
 RATE = 120.0
@@ -295,6 +298,9 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
         single_counts = (1,) if quick else (1, 4)
         out['single_cost'] = [dict(singles(n, one), characters=n) for n in single_counts]
         out['tf'] = tf_batching(8 if quick else 64, 50 if quick else 300)
+        say('crowd: a character\'s input against a lone process')
+        out['intake'] = crowd_intake.intake_vs_process(
+            skeleton, 2 if quick else 8, 60 if quick else 600)
         if not quick:
             for label, cores in (('one_core', one), ('all_cores', every)):
                 say(f'crowd: characters held on {label.replace("_", " ")}')
@@ -352,6 +358,7 @@ def summary(c):
         lines += ['', f'One crowd process per core ({c["cores"]}, each one thread and its '
                   f'share of the characters): {pc} held ({pc / max(co, 1):.2f}x one crowd on '
                   'one core).']
+    lines += [''] + crowd_intake.summary(c['intake'])
     t = c['tf']
     lines += ['', f'/tf for {t["characters"]} characters per tick: one TFMessage each '
               f'{t["per_character_us"]:.0f} us, one for all {t["one_message_us"]:.0f} us '

@@ -42,6 +42,16 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert set(crowd['cost_ratio']) == {'1', '4'} or set(crowd['cost_ratio']) == {1, 4}
     assert crowd['tf']['ratio'] > 0 and (out / 'crowd.png').stat().st_size > 10_000
     assert 'Crowd: many characters in one node' in printed
+    # Issue 34's one-node figures: a crowd character's input, each way it can arrive, against
+    # a lone process; the steady way was taken only where the names are one object.
+    intake = crowd['intake']
+    assert set(intake['ratio']) == {'lone process', 'crowd, one name list',
+                                    'crowd, a new name list object each message',
+                                    'crowd, a list that changes every message'}
+    assert all(v > 0 for v in intake['us'].values())
+    assert intake['steady_inputs']['crowd, one name list'] > 0
+    assert intake['steady_inputs']['crowd, a list that changes every message'] == 0
+    assert 'against a lone simulation' in printed
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):
