@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``jacket_cloth_lab bench speed``: each cost as a ratio, measured in one run on this machine.
 
+- profile: where one input's CPU goes, by stage, on the replay's and the node's path
+  (``lab.profile``);
 - kernel: one cloth step of the shipped rig (``lab.bench.rig_at_grid``) against the compiled
   yardstick ``../shared/limit/cloth_ref.c`` at the same grid and iterations (built here when
   the file exists; the project never copies it);
@@ -39,6 +41,7 @@ from jacket_cloth_ros.core.simulation import JacketSimulation
 from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
 from .accuracy import clip_inputs
 from .bench import rig_at_grid
+from . import profile
 from .crowd import chart as crowd_chart, crowd_bench, summary as crowd_summary
 
 # The C yardstick beside the repository (never copied in); JACKET_CLOTH_LIMIT names another.
@@ -448,6 +451,9 @@ def run(quick, out_dir, say=print, endurance_s=None, only=None):
         steal[key] = taken.percent
     section('kernel', 'kernel against the yardstick', lambda: kernel_vs_limit(
         skeleton, GRIDS[:2] if quick else GRIDS, (8,) if quick else ITERATIONS, yardstick))
+    section('profile', 'where one input\'s time goes (replay, node)', lambda: [
+        profile.per_input_profile(skeleton, 5.0 if quick else 15.0, node=node)
+        for node in (False, True)])
     section('input', 'pipeline per input', lambda: input_vs_kernel(
         skeleton, 2.0 if quick else 10.0, 1.0 if quick else 5.0))
     with tempfile.TemporaryDirectory() as tmp:
@@ -486,6 +492,7 @@ def summary(results):
                      f'{r["kernel_ns"] / 1e3:.1f} | '
                      + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x |' if 'ratio' in r
                         else 'n/a | n/a |'))
+    lines += [''] + profile.summary(results['profile'])
     i = results['input']
     lines += ['', f'Pipeline per JointState (120 Hz in, 120 Hz steps): median '
               f'{i["input_us_median"]:.0f} us CPU, kernel {i["kernel_us_median"]:.0f} us: '

@@ -29,10 +29,19 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert (out / 'speed.png').stat().st_size > 10_000
     # Each part says how much of the machine the host took meanwhile (a share, in percent).
     steal = results['steal_percent']
-    assert set(steal) == {'kernel', 'input', 'replay', 'endurance', 'crowd'}
+    assert set(steal) == {'profile', 'kernel', 'input', 'replay', 'endurance', 'crowd'}
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
+    # Issue 37's profile: the replay's and the node's input by stage, the step the largest,
+    # the node's DDS take and publish only on the node's side, shares adding up to the whole.
+    replay, node = results['profile']
+    for p in (replay, node):
+        assert abs(sum(p['share'].values()) - 1.0) < 1e-6, p['share']
+        assert max(p['us'], key=p['us'].get) == 'step', p['us']
+        assert p['sweeps_per_input'] > 0 and p['writer_thread_us'] > 0
+    assert 'take' not in replay['us'] and node['us']['take'] > 0 and node['us']['publish'] > 0
+    assert 'Where one input\'s CPU goes' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
     crowd = results['crowd']
