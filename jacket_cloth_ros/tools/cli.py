@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth``: the motion source, capture import, the demo and session pictures.
+"""``jacket_cloth``: motion sources, capture import, the demo and session pictures.
 
 Every failure ends in one readable line on stderr and a non-zero exit, never a traceback.
 """
@@ -15,22 +15,11 @@ from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
 from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
 from ..motion.messages import clip_messages
+from .live import SourceError, Stopped, play_live
 
 
 class ToolError(Exception):
     """A failure to report in one line."""
-
-
-class Stopped(Exception):
-    """SIGINT or SIGTERM asked a live command to stop."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(f'stopped by {signal.Signals(signum).name}')
-        self.signum = signum
-
-
-def _stop(signum, frame):
-    raise Stopped(signum)
 
 
 def _skeleton(urdf_path=None):
@@ -44,50 +33,26 @@ def cmd_motion(args: argparse.Namespace) -> int:
     duration = args.duration if args.duration is not None else clip_length(args.clip)
     if args.output:
         return _motion_to_file(args, skeleton, duration)
-    import rclpy
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from sensor_msgs.msg import JointState
-    from std_msgs.msg import String
-    # Our handlers, not rclpy's: its own shut the context down under a publish (a traceback).
-    # The ROS arguments name, namespace and remap the node (ros2 launch gives __node).
-    try:
-        rclpy.init(args=['jacket_cloth', *args.ros_args],
-                   signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    except RuntimeError as e:           # rcl's RCLError: the text's first sentence is enough
-        raise ToolError(f'--ros-args: {str(e).split(". Error")[0]}') from None
-    previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    node = rclpy.create_node('jacket_cloth_motion')
-    try:
-        reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else \
-            ReliabilityPolicy.RELIABLE
-        pub = node.create_publisher(JointState, 'joint_states',
-                                    QoSProfile(depth=10, reliability=reliability))
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        # Relative, as robot_state_publisher's: a namespaced node hears its own character.
-        desc = node.create_publisher(String, 'robot_description', latched)
-        with open(urdf_path, encoding='utf-8') as f:
-            desc.publish(String(data=f.read()))
-        # The node subscribes once its character is loaded: wait for it (up to --wait s), so
-        # the clip's first message is not lost, then give discovery a moment to settle.
-        deadline = time.monotonic() + args.wait
-        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(min(0.3, args.wait))
-        node.get_logger().info(f'playing {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
-        start = node.get_clock().now().nanoseconds
-        wall0 = time.monotonic()
-        for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration, start,
-                                        args.world_joint):
-            delay = wall0 + (stamp - start) * 1e-9 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            pub.publish(msg)
-        node.get_logger().info(f'played {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    with open(urdf_path, encoding='utf-8') as f:
+        urdf = f.read()
+    inputs = ((stamp, msg.name, msg.position) for stamp, msg in clip_messages(
+        skeleton, args.clip, args.rate, duration, 0, args.world_joint))
+    play_live('jacket_cloth_motion', urdf, inputs, args.ros_args, args.best_effort, args.wait,
+              lambda log, verb: log.info(f'{verb} {args.clip!r} for {duration:.1f} s at '
+                                         f'{args.rate} Hz'))
+    return 0
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    """Publish a recording's JointStates live at their pace, and its URDF."""
+    from .play import recorded_inputs
+    urdf, inputs, what = recorded_inputs(args.input, args.topic, args.urdf)
+    if urdf is None:
+        print(f'jacket_cloth play: {args.input} holds no URDF and no --urdf was given: '
+              'robot_description is not published', file=sys.stderr)
+    sent = play_live('jacket_cloth_play', urdf, inputs, args.ros_args, args.best_effort,
+                     args.wait, lambda log, verb: log.info(f'{verb} {what}'))
+    print(f'played {sent} JointState messages of {args.input}')
     return 0
 
 
@@ -358,6 +323,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help='s to wait for a joint_states subscriber before the clip starts')
     m.add_argument('--force', action='store_true', help='overwrite the output file')
     m.set_defaults(func=cmd_motion)
+    y = sub.add_parser('play', help="publish a recording's JointState live at its pace (and its "
+                       'URDF on robot_description), to drive the node, RViz or Foxglove')
+    y.add_argument('input', help='an MCAP file or a rosbag2 bag directory (MCAP storage)')
+    y.add_argument('--topic', default=None,
+                   help='JointState topic (default: the only one in the file)')
+    y.add_argument('--urdf', default=None,
+                   help='the character for robot_description (default: the recorded one)')
+    y.add_argument('--best-effort', action='store_true', help='publish best effort')
+    y.add_argument('--wait', type=float, default=1.0,
+                   help='s to wait for a joint_states subscriber before the first message')
+    y.set_defaults(func=cmd_play)
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
     d.add_argument('--out', default='out/demo')
     d.add_argument('--domain-id', type=int, default=42,
@@ -448,13 +424,13 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 
 def main(argv: list[str] | None = None) -> int:
     # ROS arguments (ros2 launch adds some to every executable) are for the commands that
-    # start a node, motion and demo; the others have no node to give them to.
+    # start a node, motion, play and demo; the others have no node to give them to.
     own, ros = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(own)
     args.ros_args = ros
     try:
         return args.func(args)
-    except (ToolError, ConfigError, ValueError, OSError) as e:
+    except (ToolError, SourceError, ConfigError, ValueError, OSError) as e:
         print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
         return 1
     except Stopped as e:
