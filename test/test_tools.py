@@ -187,3 +187,25 @@ def test_play_publishes_a_recording_live_as_recorded_and_its_urdf(tmp_path):
     assert all(list(m.name) == list(r.name) and np.array_equal(m.position, r.position)
                for m, r in zip(got, recorded))
     assert stamp(got[0]) > recorded[0].stamp_ns + 10 ** 9      # stamped from now, not 1000 s
+
+
+def test_motion_says_which_clip_joints_a_urdf_lacks_and_refuses_one_it_cannot_move(
+        tmp_path, capsys):
+    # Issue 35 item 7: a clip on a skeleton that does not know its joints moved only the world.
+    from fetched import fetched
+
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        renamed = f.read().replace('name="l_knee"', 'name="left_knee"')
+    partial = tmp_path / 'partial.urdf'
+    partial.write_text(renamed)
+    assert main(['motion', '--clip', 'walk', '--urdf', str(partial), '--duration', '0.1',
+                 '-o', str(tmp_path / 'partial.mcap')]) == 0
+    assert capsys.readouterr().err.strip() == (
+        f"jacket_cloth motion: {partial} lacks 1 of the 11 joints the clip 'walk' moves: l_knee")
+    robot = fetched('g1_29dof_rev_1_0.urdf')
+    assert main(['motion', '--clip', 'walk', '--urdf', robot, '--duration', '0.1',
+                 '-o', str(tmp_path / 'robot.mcap')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f'{robot} has none of them, so only its root would move' in err[0]
+    assert not (tmp_path / 'robot.mcap').exists()

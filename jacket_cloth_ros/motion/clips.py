@@ -146,6 +146,16 @@ def joint_state_content(joint_names: Sequence[str], name: str, t: float,
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
 
 
+def clip_joints(name: str, samples: int = 64) -> set[str]:
+    """Return the joints a clip moves (those its poses name), sampled over its length.
+
+    :param name: a name of ``ALL_CLIPS``.
+    :param samples: poses sampled, evenly over the clip.
+    """
+    length = clip_length(name)
+    return set().union(*(pose(name, length * k / samples)[0] for k in range(samples + 1)))
+
+
 def showcase_highlights() -> list[tuple[float, str]]:
     """(time in the showcase, segment name) of each segment's highlight."""
     out, start = [], 0.0

@@ -13,7 +13,8 @@ import time
 
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
-from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
+from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
+                            showcase_highlights)
 from ..motion.messages import clip_messages
 from .live import SourceError, Stopped, play_live
 
@@ -30,6 +31,7 @@ def _skeleton(urdf_path=None):
 
 def cmd_motion(args: argparse.Namespace) -> int:
     skeleton, urdf_path = _skeleton(args.urdf)
+    _check_clip_fits(args.clip, skeleton, urdf_path)
     duration = args.duration if args.duration is not None else clip_length(args.clip)
     if args.output:
         return _motion_to_file(args, skeleton, duration)
@@ -54,6 +56,19 @@ def cmd_play(args: argparse.Namespace) -> int:
                      args.wait, lambda log, verb: log.info(f'{verb} {what}'))
     print(f'played {sent} JointState messages of {args.input}')
     return 0
+
+
+def _check_clip_fits(clip, skeleton, urdf_path):
+    """Refuse a clip none of whose joints the skeleton has; name those it lacks."""
+    moved = clip_joints(clip)
+    missing = sorted(moved - set(skeleton.joint_names))
+    if len(missing) == len(moved):
+        raise ToolError(f'the clip {clip!r} moves joints {", ".join(sorted(moved))}; '
+                        f'{urdf_path} has none of them, so only its root would move (play a '
+                        'recording of this character with `jacket_cloth play`)')
+    if missing:
+        print(f'jacket_cloth motion: {urdf_path} lacks {len(missing)} of the {len(moved)} '
+              f'joints the clip {clip!r} moves: {", ".join(missing)}', file=sys.stderr)
 
 
 def _motion_to_file(args, skeleton, duration):
