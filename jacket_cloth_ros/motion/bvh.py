@@ -46,10 +46,13 @@ if TYPE_CHECKING:           # for the annotations only: pybvh is imported when a
 # Rows give the Z-up coordinates of a BVH vector: x = z_bvh, y = x_bvh, z = y_bvh.
 Y_UP_TO_Z_UP = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _AXIS = {'X': 0, 'Y': 1, 'Z': 2}
-# Candidate units of a capture (metres per BVH unit), for guess_scale.
-UNITS = {'m': 1.0, 'cm': 0.01, 'mm': 0.001, 'in': 0.0254}
+# Candidate units of a capture (metres per BVH unit), for guess_scale. CMU's captures as
+# converted for 3ds Max (cgspeed's, the most shared) are in inches divided by 0.45.
+UNITS = {'m': 1.0, 'cm': 0.01, 'mm': 0.001, 'in': 0.0254, 'CMU (in / 0.45)': 0.0254 / 0.45}
 # The height a guessed unit aims for: an adult's, in metres.
 _TYPICAL_HEIGHT_M = 1.7
+# Heights of people outside which a capture's unit is likely wrong, in metres.
+HUMAN_HEIGHT_M = (1.2, 2.2)
 
 
 class BvhError(ValueError):
@@ -109,6 +112,18 @@ def rest_offsets(bvh: Bvh) -> np.ndarray:
         if node.parent is not None:
             out[i] = out[index[id(node.parent)]] + np.asarray(node.offset, dtype=float)
     return out
+
+
+def height_warning(capture: 'Capture') -> str | None:
+    """Return a line if the capture's rest height is not a person's, else None.
+
+    :param capture: an imported capture (its ``height_m`` and ``scale``).
+    """
+    low, high = HUMAN_HEIGHT_M
+    if low <= capture.height_m <= high:
+        return None
+    return (f'the capture is {capture.height_m:.2f} m tall at {capture.scale:g} m per unit, not '
+            f'a person\'s {low:g}-{high:g} m: give its unit with --scale')
 
 
 def guess_scale(bvh: Bvh) -> tuple[float, str]:

@@ -91,7 +91,8 @@ def _motion_to_file(args, skeleton, duration):
 
 def cmd_import(args: argparse.Namespace) -> int:
     """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording."""
-    from ..motion.bvh import BvhError, joint_state_content, load_capture, stamps_ns
+    from ..motion.bvh import BvhError, height_warning, joint_state_content, load_capture, \
+        stamps_ns
     from ..motion.deepmimic import ClipError, load_clip
     from ..recording.writer import SessionRecorder, qos_profile_yaml
     from ..ros.cdr import joint_state
@@ -111,6 +112,9 @@ def cmd_import(args: argparse.Namespace) -> int:
             load_capture(args.input, args.scale)
     except (BvhError, ClipError) as e:
         raise ToolError(str(e)) from None
+    warning = None if args.urdf else height_warning(capture)
+    if warning:
+        print(f'jacket_cloth import: {args.input}: {warning}', file=sys.stderr)
     stamps = stamps_ns(capture, int(round(args.start * 1e9)))
     with replacing(args.output, recording=True) as tmp:
         rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
