@@ -209,3 +209,22 @@ def test_motion_says_which_clip_joints_a_urdf_lacks_and_refuses_one_it_cannot_mo
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f'{robot} has none of them, so only its root would move' in err[0]
     assert not (tmp_path / 'robot.mcap').exists()
+
+
+def test_picture_animates_a_session_beside_its_filmstrip(tmp_path, capsys):
+    # Issue 35 item 7: a session seen moving, not only as stills.
+    from PIL import Image
+    clip, session = tmp_path / 'walk.mcap', tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '2', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(session)]) == 0
+    markers = sum(m.type_name.endswith('MarkerArray') for m in read_messages(str(session))[0])
+    capsys.readouterr()
+    assert main(['picture', str(session), '-o', str(tmp_path / 'strip.png'), '--animate']) == 0
+    out = capsys.readouterr().out.splitlines()
+    gif = tmp_path / 'strip.gif'
+    assert out[-1] == f'{gif} ({markers} frames)' and (tmp_path / 'strip.png').exists()
+    with Image.open(gif) as image:
+        assert image.n_frames == markers > 10
+        first = np.asarray(image.convert('RGB'))
+        image.seek(image.n_frames // 2)
+        assert np.abs(np.asarray(image.convert('RGB')).astype(int) - first).sum() > 0  # it moves

@@ -158,9 +158,17 @@ def cmd_picture(args: argparse.Namespace) -> int:
     skeleton, _ = _skeleton(args.urdf)
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     rig = load_rig(skeleton, args.rig)
+    gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
+    if gif:
+        _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
     with replacing(args.output) as tmp:
         render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig)
     print(args.output)
+    if gif:
+        from .animation import render_animation
+        with replacing(gif) as tmp:
+            frames = render_animation(args.input, tmp, skeleton, rig)
+        print(f'{gif} ({frames} frames)')
     return 0
 
 
@@ -364,6 +372,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument('--moments', type=int, default=6)
     f.add_argument('--urdf', default=None)
     f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
+    f.add_argument('--animate', action='store_true',
+                   help='also write the session as a GIF beside the picture (OUTPUT.gif)')
     f.add_argument('--force', action='store_true')
     f.set_defaults(func=cmd_picture)
     r = sub.add_parser('replay', help='run a recording through the simulation again')

@@ -163,6 +163,38 @@ def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
     return [frames[k] for k in picks]
 
 
+def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
+              across: tuple[float, float], upward: tuple[float, float]) -> None:
+    """Draw one view of a frame (in view coordinates, see in_view) into ``ax``.
+
+    :param ax: the matplotlib axes.
+    :param frame: the frame, in view coordinates.
+    :param skeleton: its character (the link parents).
+    :param axis: the view coordinate drawn across: 0 side view, 1 front view.
+    :param across: the limits across, metres.
+    :param upward: the limits up, metres.
+    """
+    f = frame
+    for i in range(1, len(f.links)):
+        p = f.links[[skeleton.parent[i], i]]
+        ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
+    ax.add_collection(matplotlib.collections.PolyCollection(
+        f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
+        edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
+    for seg in f.bones:
+        ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
+    ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
+    ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
+    for ref in (f.hem_ref, f.hood_ref):
+        if ref is not None:
+            ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
+    ax.set_xlim(*across)
+    ax.set_ylim(*upward)
+    ax.set_aspect('equal')
+    ax.grid(alpha=0.3)
+    ax.tick_params(labelsize=7)
+
+
 def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]', png_path: str,
                    t0: int, labels: Callable[[int], str] | None = None,
                    title: str | None = None, world_axes: np.ndarray | None = None,
@@ -184,25 +216,8 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
     for col, f in enumerate(in_view(f, world_axes, c) for f, c in zip(frames, centres)):
         for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
-            for i in range(1, len(f.links)):
-                p = f.links[[skeletons[col].parent[i], i]]
-                ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
-            ax.add_collection(matplotlib.collections.PolyCollection(
-                f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
-                edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
-            for seg in f.bones:
-                ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
-            ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
-            ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
-            for ref in (f.hem_ref, f.hood_ref):
-                if ref is not None:
-                    ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
-            ax.set_xlim(*across)
-            ax.set_ylim(*upward)
-            ax.set_aspect('equal')
-            ax.grid(alpha=0.3)
+            draw_view(ax, f, skeletons[col], axis, across, upward)
             ax.set_xlabel(xlabels[axis], fontsize=8)
-            ax.tick_params(labelsize=7)
             if col == 0:
                 ax.set_ylabel(f'{view} view: {ylabel}', fontsize=8)
             if row == 0 and columns:
