@@ -76,13 +76,19 @@ class SimParams:
             object.__setattr__(self, name, value)
 
     def with_values(self, **changes: object) -> 'SimParams':
-        """Return a copy with ``changes`` (validated)."""
+        """Return a copy with ``changes`` (validated).
+
+        :param changes: new values by field name.
+        """
         return replace(self, **changes)
 
     def wind_at(self, t_ns: int) -> np.ndarray:
         """Wind at a step's time: the set vector, varied by two slow incommensurate gusts.
 
         A function of the step's stamp only, so a replay sees exactly the live wind.
+
+        :param t_ns: the step's stamp, ns.
+        :returns: the wind, (3,) m/s in the world frame.
         """
         return np.asarray(self.wind, dtype=float) * gust_scale(
             int(t_ns), float(self.wind_gust), float(self.wind_gust_period))
@@ -100,7 +106,11 @@ SIM_FIELDS = {f.name: f for f in fields(SimParams)}
 
 
 def check_sim_value(name: str, value: object) -> str:
-    """Why ``value`` is not valid for SimParams field ``name``, or ''."""
+    """Why ``value`` is not valid for SimParams field ``name``, or ''.
+
+    :param name: a SimParams field.
+    :param value: the value asked for.
+    """
     meta = SIM_FIELDS[name].metadata
     if meta['choices'] is not None:
         return '' if str(value).upper() in meta['choices'].__members__ else (
