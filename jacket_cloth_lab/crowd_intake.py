@@ -80,7 +80,10 @@ def intake_vs_process(skeleton: Skeleton, characters: int = 8, inputs: int = 600
 
 
 def summary(intake: Dict) -> List[str]:
-    """Markdown lines of the intake figures."""
+    """Markdown lines of the intake figures.
+
+    :param intake: what :func:`intake_vs_process` returned.
+    """
     lines = [f'A crowd character\'s input against a lone simulation\'s `process` (thread CPU '
              f'per character-input, median of {intake["inputs"] - WARM_INPUTS} inputs, crowds '
              f'of {intake["characters"]}, interleaved in one thread):', '',
