@@ -344,7 +344,7 @@ def _pareto_axes(ax, clip, data, default_label, which='xpbd'):
 
 
 def charts(results: dict, out_dir: str) -> None:
-    """Draw the Pareto charts (per clip and all clips, against each reference) and convergence.
+    """Draw the Pareto charts, per clip and of all clips, against each reference; convergence.
 
     :param results: what :func:`bench` returned.
     :param out_dir: the folder the PNG files go to.
