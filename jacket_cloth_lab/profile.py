@@ -232,7 +232,10 @@ def _wait(done: Callable[[], bool], what: str, limit_s: float = 30.0) -> None:
 
 
 def summary(profiles: List[Dict]) -> List[str]:
-    """Markdown lines: one column of shares per profile (replay, node)."""
+    """Return markdown lines: one column of CPU and shares per profile.
+
+    :param profiles: :func:`per_input_profile` results (the replay's, the node's).
+    """
     names = [n for n in STAGES + ('other',) if any(n in p['us'] for p in profiles)]
     head = ' | '.join(f'{"node" if p["node"] else "replay"} us | share' for p in profiles)
     lines = ['Where one input\'s CPU goes (main thread; a 60 Hz walk, two 120 Hz steps per '
