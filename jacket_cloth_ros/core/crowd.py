@@ -225,7 +225,7 @@ class CrowdSteps:
         self._set_intake(index, steady_intake(
             self._mine[index], plan, (last.q, last.root, last.root_quat),
             (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
-            (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
+            (p.reset_gap, sim.teleport_m, p.teleport_angle_deg)))
         self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)
 
     def run(self, jobs: Sequence[tuple[int, 'StepJob']],

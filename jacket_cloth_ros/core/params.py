@@ -15,6 +15,10 @@ import numpy as np
 from .physics.cloth import Solver, StretchLimit
 from .physics.step import gust_scale
 
+# The automatic teleport distance per metre of the character's height (1 m for a person): a
+# threshold in metres would reset a giant's every stride and miss a doll's teleport.
+AUTO_TELEPORT_PER_HEIGHT = 0.6
+
 
 def _param(default, doc, lo=None, hi=None, choices=None):
     """Make a parameter's field: its default, meaning, range (inclusive) or choices."""
@@ -52,7 +56,8 @@ class SimParams:
     reset_gap: float = _param(1.0, 'a gap between stamps longer than this (s) resets the cloth',
                               0.05, 60.0)
     teleport_distance: float = _param(
-        1.0, 'world move between two inputs (m) treated as a teleport: reset', 0.01, 1000.0)
+        0.0, 'world move between two inputs (m) treated as a teleport: reset; 0: '
+        f'{AUTO_TELEPORT_PER_HEIGHT:g} times the character\'s height', 0.0, 1000.0)
     teleport_angle_deg: float = _param(
         90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
 

@@ -171,6 +171,8 @@ class Rig:
                                     top.vector('forward', 3, [1.0, 0.0, 0.0]), where)
         self.up = self.world_axes[:, 2].copy()
         self._rest = rest
+        # The skeleton's extent along up at rest, link origins: what thresholds scale with.
+        self.height_m = float(np.ptp(rest[:, :3, 3] @ self.up))
         cloth = top.section('cloth')
         self.cols = cloth.integer('cols', lo=3, hi=64)
         self.rows = cloth.integer('rows', lo=3, hi=64)

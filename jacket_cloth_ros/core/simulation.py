@@ -26,7 +26,7 @@ from .compiled import FixedTypes
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
 from .measures import edge_strain
-from .params import SimParams
+from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
@@ -436,10 +436,15 @@ class JacketSimulation:
         if gap > self.params.reset_gap:
             report.reset = f'gap of {gap:.2f} s between stamps'
 
+    @property
+    def teleport_m(self) -> float:
+        """The world move between two inputs (m) treated as a teleport: set, or from the height."""
+        return self.params.teleport_distance or AUTO_TELEPORT_PER_HEIGHT * self.rig.height_m
+
     def _jump(self, a, b):
         """Why the world move from sample a to b is too big to simulate through, or ''."""
         move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
-        if move > self.params.teleport_distance:
+        if move > self.teleport_m:
             return f'teleport: moved {move:.2f} m between two inputs'
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
