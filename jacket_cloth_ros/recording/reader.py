@@ -5,6 +5,7 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 ``metadata.yaml`` lists the files in order; without it, the folder's ``.mcap`` files by name).
 """
 
+import hashlib
 import os
 import struct
 import zlib
@@ -201,3 +202,33 @@ def _damaged(path, error):
 def _recorded(schema, channel, message):
     return RecordedMessage(channel.topic, schema.name if schema else '', message.log_time,
                            message.data)
+
+
+class _Digests(list):
+    """Stands in for Recording.messages: keeps a digest of each message's bytes, not the bytes."""
+
+    def append(self, message):
+        super().append(message_digest(message.data))
+
+
+def message_digest(data: bytes) -> bytes:
+    """Return the digest :func:`message_digests` keeps of a message's bytes.
+
+    :param data: the message's serialized bytes.
+    """
+    return hashlib.blake2b(bytes(data), digest_size=16).digest()
+
+
+def message_digests(path: str, topic: str) -> list[bytes]:
+    """Return a digest of each message on ``topic``, in file order, read as a stream.
+
+    A session's /tf compared message by message without holding it (hours of it are
+    gigabytes).
+
+    :param path: an MCAP file or a rosbag2 bag directory.
+    :param topic: the topic.
+    """
+    out = Recording(path, _Digests())
+    for one in mcap_files(path):
+        _read_file(one, (topic,), out)
+    return list(out.messages)

@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
+from ..recording.reader import message_digest, message_digests  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import SessionInput, run_session  # noqa: E402
@@ -47,7 +48,7 @@ class SessionFigures:
         # The node's /tf (a file with its set-up), in the order it was published: the n-th
         # re-simulated /tf must equal the n-th recorded one (stamps can repeat after a reset).
         recording = session.recording
-        self.recorded_tf = [m.data for m in recording.messages if m.topic == '/tf'] \
+        self.recorded_tf = message_digests(recording.path, '/tf') \
             if SESSION_CONFIG in recording.metadata else []
         self.rows = []
         self.worst = {name: [] for name in MEASURES}        # (time s, Worst) per input
@@ -78,7 +79,7 @@ class SessionFigures:
         for data in tf:             # with publish_world_tf, two per input: compare each
             if self.tf_sent < len(self.recorded_tf):
                 self.tf_compared += 1
-                self.tf_equal += self.recorded_tf[self.tf_sent] == data
+                self.tf_equal += self.recorded_tf[self.tf_sent] == message_digest(data)
             self.tf_sent += 1
         rig = sim.rig
         t = (stamp - self.t0) * 1e-9

@@ -12,9 +12,7 @@ from ..core.config import read_text
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from .session import joint_state_topic
-
-_NO_TOPIC = ('',)           # a filter no message passes: a first read for the topics only
+from .session import NO_MESSAGES, joint_state_topic
 
 
 def recorded_inputs(path: str, topic: str | None = None,
@@ -28,7 +26,7 @@ def recorded_inputs(path: str, topic: str | None = None,
         order, offsets from the first header stamp, a line saying what plays).
     :raises RecordingError: no JointState, or one that does not decode (named by its stamp).
     """
-    recording = read_recording(path, _NO_TOPIC)
+    recording = read_recording(path, NO_MESSAGES)
     topic = joint_state_topic(recording, topic)
     urdf = read_text(urdf_path, 'URDF') if urdf_path else \
         recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None

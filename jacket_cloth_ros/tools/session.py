@@ -83,12 +83,28 @@ def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
     return found[0]
 
 
+NO_MESSAGES = ('',)         # a topic filter no message passes: a recording's topics alone
+
+
+def input_topics(recording: Recording, topic: str) -> list[str]:
+    """Return the topics a session's simulation is fed: JointState, parameters, wind, viewer.
+
+    :param recording: the recording (its topics; messages are not needed).
+    :param topic: its JointState topic.
+    """
+    fed = {PARAMETER_EVENT, WIND, VIEWER_TYPE}
+    return [topic] + sorted(t for t, kind in recording.topics.items() if kind in fed)
+
+
 def load_session(path: str, topic: str | None = None, urdf: str | None = None,
                  rig: str | None = None, fabric: str | None = None,
                  overrides: Iterable[str] = ()) -> SessionInput:
     """Read a recording and settle its set-up: recorded values, then the options given."""
-    recording = read_recording(path)
-    topic = joint_state_topic(recording, topic)
+    # First its topics, then only what the simulation is fed: a session's /tf and markers
+    # are most of its bytes.
+    listed = read_recording(path, NO_MESSAGES)
+    topic = joint_state_topic(listed, topic)
+    recording = read_recording(path, input_topics(listed, topic))
     recorded = recording.metadata.get(SESSION_CONFIG, {})
     if urdf:        # a file given: its own errors, an empty one too, never the shipped one
         urdf_text = read_text(urdf, 'URDF')
