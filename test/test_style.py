@@ -116,7 +116,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/recording/mcap_file.py',
     'jacket_cloth_ros/recording/reader.py',
     'jacket_cloth_ros/recording/writer.py',
-    'jacket_cloth_ros/rigging/picture.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',
     'jacket_cloth_ros/ros/characters.py',
