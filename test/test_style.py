@@ -118,7 +118,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/recording/writer.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',
-    'jacket_cloth_ros/ros/characters.py',
     'jacket_cloth_ros/ros/node.py',
     'jacket_cloth_ros/ros/parameters.py',
     'jacket_cloth_ros/ros/viewer.py',
