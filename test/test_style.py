@@ -112,7 +112,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/core/skeleton.py',
     'jacket_cloth_ros/core/urdf_colliders.py',
     'jacket_cloth_ros/motion/bvh.py',
-    'jacket_cloth_ros/recording/definitions.py',
     'jacket_cloth_ros/recording/mcap_file.py',
     'jacket_cloth_ros/recording/reader.py',
     'jacket_cloth_ros/recording/writer.py',
