@@ -112,7 +112,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/core/urdf_colliders.py',
     'jacket_cloth_ros/motion/bvh.py',
     'jacket_cloth_ros/recording/mcap_file.py',
-    'jacket_cloth_ros/recording/reader.py',
     'jacket_cloth_ros/recording/writer.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',

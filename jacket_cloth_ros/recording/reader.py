@@ -45,7 +45,10 @@ class Recording:
 
 
 def mcap_files(path: str) -> list[str]:
-    """Return a recording's MCAP files: the file itself, or a bag directory's files in order."""
+    """Return a recording's MCAP files: the file itself, or a bag directory's files in order.
+
+    :param path: the recording, an MCAP file or a bag directory.
+    """
     if not os.path.isdir(path):
         if not os.path.exists(path):
             raise RecordingError(f'{path}: no such file or directory')
@@ -75,7 +78,11 @@ def mcap_files(path: str) -> list[str]:
 
 
 def read_recording(path: str, topics: Collection[str] | None = None) -> Recording:
-    """Every message (optionally of some topics), metadata and topic types of a recording."""
+    """Every message (optionally of some topics), metadata and topic types of a recording.
+
+    :param path: the recording, an MCAP file or a bag directory.
+    :param topics: the topics whose messages are read; None: every topic.
+    """
     out = Recording(path, [])
     for one in mcap_files(path):
         _read_file(one, topics, out)
@@ -93,6 +100,8 @@ def count_messages(path: str) -> tuple[dict[str, int], bool]:
     """Count messages per topic and tell whether the recording is complete, streamed.
 
     An hour of session (gigabytes of /tf and markers) is counted without holding it in memory.
+
+    :param path: the recording, an MCAP file or a bag directory.
     """
     out = Recording(path, _TopicCounter())
     for one in mcap_files(path):
@@ -102,7 +111,11 @@ def count_messages(path: str) -> tuple[dict[str, int], bool]:
 
 def read_messages(path: str,
                   topics: Collection[str] | None = None) -> tuple[list[RecordedMessage], bool]:
-    """All messages (optionally of some topics) in file order; (messages, complete)."""
+    """All messages (optionally of some topics) in file order; (messages, complete).
+
+    :param path: the recording, an MCAP file or a bag directory.
+    :param topics: the topics whose messages are read; None: every topic.
+    """
     rec = read_recording(path, topics)
     return rec.messages, rec.complete
 
