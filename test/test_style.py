@@ -120,7 +120,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/tools/analyze.py',
     'jacket_cloth_ros/tools/cli.py',
     'jacket_cloth_ros/tools/picture.py',
-    'jacket_cloth_ros/tools/session.py',
 })
 
 _PARAM = re.compile(r'^:param\s+\\?\*{0,2}(\w+)\s*:')
