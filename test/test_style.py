@@ -109,7 +109,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/core/config.py',
     'jacket_cloth_ros/core/simulation.py',
     'jacket_cloth_ros/motion/bvh.py',
-    'jacket_cloth_ros/recording/writer.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',
     'jacket_cloth_ros/ros/node.py',
