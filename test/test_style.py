@@ -111,7 +111,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/motion/bvh.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',
-    'jacket_cloth_ros/ros/node.py',
     'jacket_cloth_ros/ros/parameters.py',
     'jacket_cloth_ros/tools/analyze.py',
     'jacket_cloth_ros/tools/cli.py',
