@@ -39,7 +39,11 @@ REPORTED_PARAMETERS = ('fabric_preset', 'sim_rate', 'stretch_limit', 'fabric.ite
 
 
 class SessionFigures:
-    """Per-input series of one session, gathered while it runs."""
+    """Per-input series of one session, gathered while it runs.
+
+    :param session: the recording's input and set-up.
+    :param moments: how many instants, evenly spread, the filmstrip shows.
+    """
 
     def __init__(self, session: SessionInput, moments: int):
         self.session = session
@@ -64,6 +68,13 @@ class SessionFigures:
 
     def probe(self, pipeline: 'SessionPipeline', report: 'StepReport', stamp: int,
               outputs: list[tuple[str, bytes]]) -> None:
+        """Take the figures of the state after one input (``run_session``'s probe).
+
+        :param pipeline: the session's pipeline, past the input.
+        :param report: what the input did.
+        :param stamp: the input's stamp, ns.
+        :param outputs: the (key, CDR bytes) messages it gave.
+        """
         sim = pipeline.sim
         if not report.accepted:
             return
@@ -108,6 +119,10 @@ class SessionFigures:
             self.frames.append(sim_frame(sim, stamp))
 
     def report(self, pipeline: 'SessionPipeline') -> dict:
+        """Return the session's report.json entry.
+
+        :param pipeline: the session's pipeline, once it has run.
+        """
         a = np.array(self.rows, dtype=float).reshape(-1, 9)
         step_us = a[:, 6][np.isfinite(a[:, 6])]
         values = pipeline.values
@@ -140,7 +155,10 @@ class SessionFigures:
         }
 
     def report_where(self, name: str) -> str:
-        """Say where a measure was worst: vertex (row, column) and collider, if known."""
+        """Say where a measure was worst: vertex (row, column) and collider, if known.
+
+        :param name: a name of ``MEASURES``.
+        """
         m = self._measure(name, self.session.setup.rig.cols)
         parts = ['r{} c{}'.format(*m['vertex'])] if 'vertex' in m else []
         return ' '.join(parts + ([m['collider']] if 'collider' in m else []))
@@ -198,7 +216,10 @@ CHARTS = {
 
 
 def output_names(count: int) -> list[str]:
-    """Return the files ``analyze`` writes into its folder for ``count`` sessions."""
+    """Return the files ``analyze`` writes into its folder for ``count`` sessions.
+
+    :param count: how many sessions.
+    """
     strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
                                                    for k in range(1, count + 1)]
     worst = ['worst_instant.png'] if count == 1 else [f'worst_instant_{k}.png'
@@ -208,7 +229,13 @@ def output_names(count: int) -> list[str]:
 
 def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None = None,
             moments: int = 6) -> dict:
-    """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
+    """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir.
+
+    :param sessions: the sessions, each a recording's input and set-up.
+    :param out_dir: the output folder, made if missing.
+    :param names: each session's name in the summary; None: its recording's file name.
+    :param moments: how many instants each filmstrip shows.
+    """
     os.makedirs(out_dir, exist_ok=True)
     names = names or [os.path.basename(s.recording.path.rstrip('/')) for s in sessions]
     reports, series = [], []
@@ -286,6 +313,8 @@ def summary_line(report: dict) -> str:
 
     Per session: frames, strain and step time, or how many inputs were dropped when none was
     simulated.
+
+    :param report: what ``analyze`` returned.
     """
     parts = []
     for r in report.get('sessions', [report]):
