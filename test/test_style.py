@@ -111,7 +111,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/ros/character.py',
     'jacket_cloth_ros/ros/parameters.py',
     'jacket_cloth_ros/tools/cli.py',
-    'jacket_cloth_ros/tools/picture.py',
 })
 
 _PARAM = re.compile(r'^:param\s+\\?\*{0,2}(\w+)\s*:')
