@@ -109,7 +109,6 @@ NOT_YET_CONVERTED = frozenset({
     'jacket_cloth_ros/core/simulation.py',
     'jacket_cloth_ros/rigging/propose.py',
     'jacket_cloth_ros/ros/character.py',
-    'jacket_cloth_ros/tools/cli.py',
 })
 
 _PARAM = re.compile(r'^:param\s+\\?\*{0,2}(\w+)\s*:')

@@ -30,6 +30,10 @@ def _skeleton(urdf_path=None):
 
 
 def cmd_motion(args: argparse.Namespace) -> int:
+    """Play a built-in clip live on joint_states (with its URDF), or write it to a recording.
+
+    :param args: the ``motion`` command's options.
+    """
     skeleton, urdf_path = _skeleton(args.urdf)
     _check_clip_fits(args.clip, skeleton, urdf_path)
     duration = args.duration if args.duration is not None else clip_length(args.clip)
@@ -46,7 +50,10 @@ def cmd_motion(args: argparse.Namespace) -> int:
 
 
 def cmd_play(args: argparse.Namespace) -> int:
-    """Publish a recording's JointStates live at their pace, and its URDF."""
+    """Publish a recording's JointStates live at their pace, and its URDF.
+
+    :param args: the ``play`` command's options.
+    """
     from .play import recorded_inputs
     urdf, inputs, what = recorded_inputs(args.input, args.topic, args.urdf)
     if urdf is None:
@@ -90,7 +97,10 @@ def _motion_to_file(args, skeleton, duration):
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording."""
+    """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording.
+
+    :param args: the ``import`` command's options.
+    """
     from ..motion.bvh import BvhError, height_warning, joint_state_content, load_capture, \
         stamps_ns
     from ..motion.deepmimic import ClipError, load_clip
@@ -153,6 +163,10 @@ def _check_output(path, force, inputs=(), recording=False):
 
 
 def cmd_picture(args: argparse.Namespace) -> int:
+    """Draw a filmstrip PNG of a recorded session.
+
+    :param args: the ``picture`` command's options.
+    """
     from ..tools.picture import render_filmstrip
     from .outputs import replacing
     skeleton, _ = _skeleton(args.urdf)
@@ -185,6 +199,10 @@ def _session(args):
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
+    """Run a recording (a crowd's too) through the simulation again into a new recording.
+
+    :param args: the ``replay`` command's options.
+    """
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
     if _is_crowd(args.input):
@@ -221,6 +239,10 @@ def _replay_crowd(args):
 
 
 def cmd_analyze(args: argparse.Namespace) -> int:
+    """Write the figures, charts and filmstrips of recorded sessions; print the summary line.
+
+    :param args: the ``analyze`` command's options.
+    """
     from .analyze import analyze, output_names, summary_line
     from .outputs import check_output_folder
     if len(args.input) > 1 and not args.compare:
@@ -236,7 +258,10 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
+    """Node + motion source live over real DDS for the showcase clip, then a filmstrip.
+
+    :param args: the ``demo`` command's options.
+    """
     from ..tools.picture import render_filmstrip
     os.makedirs(args.out, exist_ok=True)
     session = os.path.join(args.out, 'session.mcap')
@@ -282,7 +307,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_rig(args: argparse.Namespace) -> int:
-    """Propose a rig for a URDF: say which links and why, write commented YAML, a picture."""
+    """Propose a rig for a URDF: say which links and why, write commented YAML, a picture.
+
+    :param args: the ``rig`` command's options.
+    """
     import yaml
     from ..core.rig import Rig
     from ..core.skeleton import load_skeleton
@@ -326,6 +354,10 @@ def _vector(text, what):
 
 
 def cmd_warm(args: argparse.Namespace) -> int:
+    """Compile the node's kernels into numba's cache now (or load them); say how long it took.
+
+    :param args: the ``warm`` command's options (none of its own).
+    """
     from ..ros.warm import warm_kernels
     took, cached = warm_kernels()
     print(f'kernels {"loaded from the cache" if cached else "compiled and cached"} in '
@@ -438,6 +470,8 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
     """Split ``argv`` into the command's own arguments and the ROS ones (``--ros-args`` ...).
 
     A ROS block runs to a ``--`` or the end, as rcl reads it; there may be several.
+
+    :param argv: the command line, without the program's name.
     """
     own, ros, inside = [], [], False
     for a in argv:
@@ -452,6 +486,10 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run a ``jacket_cloth`` command; a failure is one line on stderr and exit 1.
+
+    :param argv: the arguments, without the program's name; None: the process's.
+    """
     # ROS arguments (ros2 launch adds some to every executable) are for the commands that
     # start a node, motion, play and demo; the others have no node to give them to.
     own, ros = split_ros_args(sys.argv[1:] if argv is None else list(argv))
