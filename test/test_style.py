@@ -102,12 +102,6 @@ def test_public_functions_have_type_hints():
                          f'({len(missing)}):\n' + '\n'.join(missing))
 
 
-# Modules other engineers are editing in parallel branches (issue 36): their docstrings await
-# conversion to the :param fields after that work merges. The set only shrinks: the test fails
-# on a module here that has become clean.
-NOT_YET_CONVERTED = frozenset({
-})
-
 _PARAM = re.compile(r'^:param\s+\\?\*{0,2}(\w+)\s*:')
 _FOREIGN = (
     (re.compile(r'^(Args|Arguments|Keyword Args|Returns|Yields|Raises):$'), 'Google-style'),
@@ -173,15 +167,10 @@ def _undocumented(statements, where, class_doc=None):
 
 
 def test_public_functions_say_each_parameter_in_a_param_field():
-    faults = {module: list(_undocumented(tree.body, '')) for module, tree in _modules()}
-    offenders = [f'{module}: {f}' for module, found in faults.items() for f in found
-                 if module not in NOT_YET_CONVERTED]
+    offenders = [f'{module}: {f}' for module, tree in _modules()
+                 for f in _undocumented(tree.body, '')]
     assert not offenders, (f'public functions against the :param convention ({len(offenders)}):'
                            '\n' + '\n'.join(offenders))
-    clean = sorted(m for m in NOT_YET_CONVERTED if not faults.get(m))
-    assert not clean, f'converted now, take them out of NOT_YET_CONVERTED: {clean}'
-    unknown = sorted(NOT_YET_CONVERTED - set(faults))
-    assert not unknown, f'no such modules: {unknown}'
 
 
 _MADE_UP = '''
