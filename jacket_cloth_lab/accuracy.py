@@ -25,6 +25,7 @@ JointState of a motion clip.
 import math
 import time
 from dataclasses import dataclass, replace
+from typing import Sequence
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from jacket_cloth_ros.core.physics.cloth import Solver, StretchLimit
 from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.core.bundles import (
     ClothModel, ClothState, ColliderModel, Posed, StepControl, Tuning)
+from jacket_cloth_ros.core.fabric import Fabric
+from jacket_cloth_ros.core.rig import Rig
+from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.core.simulation import (
     AUTO_SWEEP_SHARE, DESIGN_RATE, JacketSimulation, SimParams, per_step,
     xpbd_compliance)
@@ -42,6 +46,9 @@ CLIP_RATE = 60.0                 # Hz of the lab's JointState
 HEM_SAMPLES = 33                 # points along the hem curve, so grids of any width compare
 REFERENCE_RATE = 1920.0          # Hz: a step 16 times shorter than the default's
 REFERENCE_ITERATIONS = 48
+
+# One JointState as the lab feeds it: (stamp ns, names, positions).
+Input = tuple[int, list[str], list[float]]
 
 
 @dataclass(frozen=True)
@@ -56,19 +63,25 @@ class Method:
     tolerance: float = 0.0           # m, the automatic quality mode (0: off)
 
     @property
-    def family(self):
+    def family(self) -> str:
         """The method without its budget: what the charts colour by."""
         name = 'GS' if self.solver == 'gauss_seidel' else 'XPBD'
         return name if self.stretch_limit == 'none' else f'{name}+{self.stretch_limit}'
 
     @property
-    def label(self):
+    def label(self) -> str:
+        """The method as the tables and charts name it."""
         auto = f' auto {self.tolerance * 1e3:g} mm' if self.tolerance else ''
         return (f'{self.family} it{self.iterations} sub{self.substeps} '
                 f'{self.sim_rate:g} Hz{auto}')
 
-    def params(self, **base):
-        # Every step a clip asks for runs, however fine the step (the reference's are).
+    def params(self, **base: object) -> SimParams:
+        """Return the simulation's parameters for this method.
+
+        Every step a clip asks for runs, however fine the step (the reference's are).
+
+        :param base: other SimParams fields by name.
+        """
         steps = int(math.ceil(self.sim_rate / CLIP_RATE)) + 4
         return SimParams(sim_rate=self.sim_rate, stretch_limit=self.stretch_limit,
                          solver=self.solver, substeps=self.substeps,
@@ -82,8 +95,15 @@ REFERENCE = Method('xpbd', 'none', REFERENCE_ITERATIONS, 1, REFERENCE_RATE)
 GS_REFERENCE = Method('gauss_seidel', 'none', REFERENCE_ITERATIONS, 1, REFERENCE_RATE)
 
 
-def clip_inputs(skeleton, clip, seconds, start_s=10.0):
-    """(stamp_ns, names, positions) of ``clip`` at CLIP_RATE for ``seconds``."""
+def clip_inputs(skeleton: Skeleton, clip: str, seconds: float,
+                start_s: float = 10.0) -> list[Input]:
+    """(stamp_ns, names, positions) of ``clip`` at CLIP_RATE for ``seconds``.
+
+    :param skeleton: the character whose joints the inputs name.
+    :param clip: a name of ``clips.ALL_CLIPS``.
+    :param seconds: how long.
+    :param start_s: the first stamp, seconds.
+    """
     out = []
     for k in range(int(round(seconds * CLIP_RATE))):
         t = k / CLIP_RATE
@@ -109,13 +129,16 @@ class Trace:
     steps: int                       # simulation steps run
 
     @property
-    def cost_ms_per_s(self):
+    def cost_ms_per_s(self) -> float:
         """Measured cost per simulated second: the median input's CPU time at the input rate."""
         return float(np.median(self.step_ns)) * 1e-6 * CLIP_RATE
 
 
-def edge_classes(rig):
-    """Constraint indices of the simulated vertical, horizontal and shear edges."""
+def edge_classes(rig: Rig) -> dict[str, np.ndarray]:
+    """Constraint indices of the simulated vertical, horizontal and shear edges.
+
+    :param rig: the rig whose constraints are sorted.
+    """
     C = rig.cols
     ra, ca = np.divmod(rig.con_a, C)
     rb, cb = np.divmod(rig.con_b, C)
@@ -126,8 +149,12 @@ def edge_classes(rig):
             'shear': np.nonzero((dr == 1) & (dc == 1) & simulated)[0]}
 
 
-def hem_curve(rig, x):
-    """Return the bottom row as HEM_SAMPLES points evenly spaced in column parameter."""
+def hem_curve(rig: Rig, x: np.ndarray) -> np.ndarray:
+    """Return the bottom row as HEM_SAMPLES points evenly spaced in column parameter.
+
+    :param rig: the rig (its grid's rows and columns).
+    :param x: (N, 3) the cloth's vertices, simulation frame.
+    """
     hem = x[(rig.rows - 1) * rig.cols:]
     u = np.linspace(0.0, rig.cols - 1, HEM_SAMPLES)
     i = np.minimum(u.astype(int), rig.cols - 2)
@@ -135,14 +162,25 @@ def hem_curve(rig, x):
     return (1.0 - w) * hem[i] + w * hem[i + 1]
 
 
-def deepest_inside(sim):
-    """Return the deepest free vertex's depth inside any collider (m), as analyze reports it."""
+def deepest_inside(sim: JacketSimulation) -> float:
+    """Return the deepest free vertex's depth inside any collider (m), as analyze reports it.
+
+    :param sim: the simulation, after a step.
+    """
     return depth_inside(sim.x, sim.rig.free, sim.collider_frames(sim.links),
                         collider_labels(sim.rig)).value
 
 
-def run(skeleton, rig, fabric, method, inputs):
-    """Feed ``inputs`` to a fresh simulation with ``method``; the Trace of what it did."""
+def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
+        inputs: Sequence[Input]) -> Trace:
+    """Feed ``inputs`` to a fresh simulation with ``method``; the Trace of what it did.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset; its sweeps are the method's.
+    :param method: solver, stretch limit and budget.
+    :param inputs: the JointStates fed, the first a reset.
+    """
     sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
                            method.params())
     edges = edge_classes(rig)
@@ -178,32 +216,52 @@ def run(skeleton, rig, fabric, method, inputs):
                  np.array(kinetic), np.array(step_ns), sweeps, steps)
 
 
-def finer(method):
+def finer(method: Method) -> Method:
     """Return the run that checks a reference: half the step (Gauss-Seidel: twice the sweeps too).
 
     Gauss-Seidel's stiffness is per sweep, so its converged model is reached by more sweeps as
     well as by smaller steps; XPBD's compliance makes the sweeps only a solver budget.
+
+    :param method: the reference's method.
     """
     sweeps = 2 if method.solver == 'gauss_seidel' else 1
     return replace(method, sim_rate=method.sim_rate * 2, iterations=method.iterations * sweeps)
 
 
-def reference(skeleton, rig, fabric, inputs, method=REFERENCE, keep_check=False):
+def reference(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[Input],
+              method: Method = REFERENCE, keep_check: bool = False) -> tuple:
     """Run the converged reference; return (trace, Richardson figures) with its error estimate.
 
-    The estimate compares the reference with its ``finer`` run (Richardson), also returned
-    with ``keep_check``.
+    The estimate compares the reference with its ``finer`` run (Richardson).
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset.
+    :param inputs: the JointStates fed, the first a reset.
+    :param method: the reference's method.
+    :param keep_check: whether the finer run's trace is returned too, third.
     """
     ref = run(skeleton, rig, fabric, method, inputs)
     check = run(skeleton, rig, fabric, finer(method), inputs)
     return (ref, compare(ref, check)) + ((check,) if keep_check else ())
 
 
-def convergence(skeleton, rig, fabric, inputs, method, sweeps=(6, 12, 24, 48),
-                rates=(240.0, 480.0, 960.0, 1920.0), best=None):
-    """Error of ``method`` against its ``finer`` run (``best`` if given), sweeps then rates varied.
+def convergence(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[Input],
+                method: Method, sweeps: Sequence[int] = (6, 12, 24, 48),
+                rates: Sequence[float] = (240.0, 480.0, 960.0, 1920.0),
+                best: Trace | None = None) -> dict:
+    """Error of ``method`` against its ``finer`` run, sweeps then rates varied.
 
     What shows a reference converged: the error flattening as either grows.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset.
+    :param inputs: the JointStates fed, the first a reset.
+    :param method: the method whose sweeps and rate are varied.
+    :param sweeps: the sweeps per step tried, at the method's rate.
+    :param rates: the simulation rates tried (Hz), at the method's sweeps.
+    :param best: the run compared against; None: the finer run, run here.
     """
     if best is None:
         best = run(skeleton, rig, fabric, finer(method), inputs)
@@ -217,8 +275,12 @@ def convergence(skeleton, rig, fabric, inputs, method, sweeps=(6, 12, 24, 48),
     return out
 
 
-def compare(trace, ref):
-    """Position error of ``trace`` against ``ref`` (m): hem, hood and every vertex, RMS and max."""
+def compare(trace: Trace, ref: Trace) -> dict[str, float]:
+    """Position error of ``trace`` against ``ref`` (m): hem, hood and every vertex, RMS and max.
+
+    :param trace: the run measured.
+    :param ref: the run it is measured against.
+    """
     hem = np.linalg.norm(trace.hem - ref.hem, axis=2)
     hood = np.linalg.norm(trace.hood - ref.hood, axis=1)
     out = {'hem_rms_m': float(np.sqrt((hem ** 2).mean())), 'hem_max_m': float(hem.max()),
@@ -230,8 +292,13 @@ def compare(trace, ref):
     return out
 
 
-def metrics(trace, ref, gs_ref=None):
-    """Every figure of one run against the reference (and ``vs_gs``: the article's), for tables."""
+def metrics(trace: Trace, ref: Trace, gs_ref: Trace | None = None) -> dict:
+    """Every figure of one run against the reference, for tables.
+
+    :param trace: the run.
+    :param ref: the reference it is measured against.
+    :param gs_ref: the article's reference; its errors go under ``vs_gs``.
+    """
     out = {'method': trace.method.family, 'label': trace.method.label,
            'solver': trace.method.solver, 'stretch_limit': trace.method.stretch_limit,
            'iterations': trace.method.iterations, 'substeps': trace.method.substeps,
@@ -252,26 +319,42 @@ def metrics(trace, ref, gs_ref=None):
 
 # -- exact references -----------------------------------------------------------------------------
 
-def elliptic_k(k):
-    """Complete elliptic integral of the first kind K(k), by the arithmetic-geometric mean."""
+def elliptic_k(k: float) -> float:
+    """Complete elliptic integral of the first kind K(k), by the arithmetic-geometric mean.
+
+    :param k: the modulus, 0 <= k < 1.
+    """
     a, b = 1.0, math.sqrt(1.0 - k * k)
     while abs(a - b) > 1e-15 * a:
         a, b = (a + b) / 2.0, math.sqrt(a * b)
     return math.pi / (2.0 * a)
 
 
-def pendulum_period_exact(length, gravity, theta0):
-    """T = 4 sqrt(L/g) K(sin(theta0 / 2)): the large-amplitude pendulum."""
+def pendulum_period_exact(length: float, gravity: float, theta0: float) -> float:
+    """T = 4 sqrt(L/g) K(sin(theta0 / 2)): the large-amplitude pendulum.
+
+    :param length: the rod, metres.
+    :param gravity: m/s^2.
+    :param theta0: the amplitude, radians.
+    """
     return 4.0 * math.sqrt(length / gravity) * elliptic_k(math.sin(theta0 / 2.0))
 
 
-def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
+def pendulum(skeleton: Skeleton, rig: Rig, fabric: Fabric, sim_rate: float, theta0_deg: float,
+             periods: int = 4) -> dict[str, float]:
     """Release the M8 hood from ``theta0_deg`` with no damping, the skeleton still.
 
     Verlet with a projection onto the rod loses energy each step (first order in the step), so
     the amplitude falls from cycle to cycle; each cycle's period is compared with the exact
     period at that cycle's own amplitude, which separates the phase error from that loss.
-    Returns the first cycle's figures and the amplitude lost per cycle.
+
+    :param skeleton: the character.
+    :param rig: its rig (its hood).
+    :param fabric: the fabric preset; its hood damping is set to 0.
+    :param sim_rate: the simulation rate, Hz.
+    :param theta0_deg: the release angle from the vertical, degrees.
+    :param periods: how many exact periods to run.
+    :returns: the first cycle's figures and the amplitude lost per cycle.
     """
     sim = JacketSimulation(skeleton, rig, fabric.with_values(hood_damping=0.0),
                            SimParams(sim_rate=sim_rate))
@@ -302,12 +385,21 @@ def pendulum(skeleton, rig, fabric, sim_rate, theta0_deg, periods=4):
             'amplitude_loss_per_cycle': float(loss), 'rod_error_m': float(np.abs(rod - L).max())}
 
 
-def hanging_chain(fabric, method, rows=12, spacing=0.06, seconds=4.0, gravity=9.81):
+def hanging_chain(fabric: Fabric, method: Method, rows: int = 12, spacing: float = 0.06,
+                  seconds: float = 4.0, gravity: float = 9.81) -> dict:
     """Release a column of the cloth, pinned at the top, from horizontal through the kernel.
 
-    Its exact equilibrium hangs straight down at its rest length. Returns the stretch of the
-    whole column and of its worst link at the end, how far the bottom is from the exact
-    equilibrium, and the settling time (the bottom stays within 1 cm of it from then on).
+    Its exact equilibrium hangs straight down at its rest length.
+
+    :param fabric: the fabric preset (stiffness, damping, sweeps).
+    :param method: solver, stretch limit, rate and substeps.
+    :param rows: the column's vertices.
+    :param spacing: their rest distance, metres.
+    :param seconds: how long to run.
+    :param gravity: m/s^2.
+    :returns: the stretch of the whole column and of its worst link at the end, how far the
+        bottom is from the exact equilibrium, and the settling time (the bottom stays within
+        1 cm of it from then on).
     """
     n = rows
     x = np.zeros((n, 3))

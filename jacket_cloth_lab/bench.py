@@ -14,13 +14,14 @@ import copy
 import json
 import os
 from dataclasses import replace
+from typing import Callable, Sequence
 
 import numpy as np
 
 from jacket_cloth_ros.core.config import load_yaml, shipped
-from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.fabric import Fabric, load_fabric
 from jacket_cloth_ros.core.rig import Rig
-from jacket_cloth_ros.core.skeleton import load_shipped_character
+from jacket_cloth_ros.core.skeleton import Skeleton, load_shipped_character
 from . import accuracy
 from .accuracy import SHIPPED, Method
 
@@ -37,16 +38,22 @@ PENDULUM = ((60.0, 120.0, 240.0), (10.0, 60.0, 120.0, 170.0))   # rates (Hz) x a
 QUICK_CONVERGENCE = {'sweeps': (8, 16, 32), 'rates': (240.0, 480.0, 960.0)}
 
 
-def reference_methods(quick=False):
-    """Return the (XPBD, Gauss-Seidel) references; quick mode's are coarser (960 Hz, 32 sweeps)."""
+def reference_methods(quick: bool = False) -> tuple[Method, Method]:
+    """Return the (XPBD, Gauss-Seidel) references.
+
+    :param quick: whether the quick mode's, coarser (960 Hz, 32 sweeps).
+    """
     if quick:
         return tuple(replace(m, sim_rate=960.0, iterations=32)
                      for m in (accuracy.REFERENCE, accuracy.GS_REFERENCE))
     return accuracy.REFERENCE, accuracy.GS_REFERENCE
 
 
-def sweep(quick=False):
-    """Return the methods run on every clip."""
+def sweep(quick: bool = False) -> list[Method]:
+    """Return the methods run on every clip.
+
+    :param quick: whether the quick mode's few methods.
+    """
     if quick:
         return [SHIPPED, Method('gauss_seidel', 'none'), Method('gauss_seidel', 'hard_pass', 2),
                 Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2), Method('xpbd', 'hard_pass'),
@@ -60,17 +67,26 @@ def sweep(quick=False):
     return out
 
 
-def auto_methods(quick=False):
-    """Return the automatic quality mode at each tolerance, over the default method and budget."""
+def auto_methods(quick: bool = False) -> list[Method]:
+    """Return the automatic quality mode at each tolerance, over the default method and budget.
+
+    :param quick: whether the quick mode's one tolerance.
+    """
     tolerances = TOLERANCES[2:3] if quick else TOLERANCES
     return [replace(SHIPPED, tolerance=t, **AUTO_BUDGET) for t in tolerances]
 
 
-def rig_at_grid(skeleton, cols, rows, colliders=None):
-    """Return the shipped rig with another grid over the same jacket (optionally fewer colliders).
+def rig_at_grid(skeleton: Skeleton, cols: int, rows: int,
+                colliders: Sequence[str] | None = None) -> Rig:
+    """Return the shipped rig with another grid over the same jacket, perhaps fewer colliders.
 
     Row spacing and flare are rescaled so the hem stays where it is; region ranges scale with
     the grid.
+
+    :param skeleton: the shipped character.
+    :param cols: the grid's vertex columns.
+    :param rows: the grid's vertex rows.
+    :param colliders: the names of the colliders kept; None: all.
     """
     data = copy.deepcopy(load_yaml(shipped('jacket_rig.yaml')))
     cloth = data['cloth']
@@ -87,8 +103,13 @@ def rig_at_grid(skeleton, cols, rows, colliders=None):
     return Rig(data, skeleton, where=f'shipped rig at {cols}x{rows}')
 
 
-def pareto_front(rows, error=lambda r: r['hem_rms_m']):
-    """Return the indices of the rows no other row beats on both cost and ``error``."""
+def pareto_front(rows: Sequence[dict],
+                 error: Callable[[dict], float] = lambda r: r['hem_rms_m']) -> list[int]:
+    """Return the indices of the rows no other row beats on both cost and error.
+
+    :param rows: the runs' figures, ``cost_ms_per_s`` in each.
+    :param error: a run's error, its figures given.
+    """
     order = sorted(range(len(rows)), key=lambda i: (rows[i]['cost_ms_per_s'], error(rows[i])))
     front, best = [], np.inf
     for i in order:
@@ -102,9 +123,17 @@ def _gs_error(row):
     return row['vs_gs']['hem_rms_m']
 
 
-def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jacket',
-          progress=None):
-    """Run everything; a JSON-ready dict of results."""
+def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CLIP_SECONDS,
+          fabric_name: str = 'tweed_jacket',
+          progress: Callable[[str], None] | None = None) -> dict:
+    """Run everything; a JSON-ready dict of results.
+
+    :param clips: the motion clips run.
+    :param quick: whether the quick mode: fewer methods, coarser references.
+    :param seconds: each clip's length.
+    :param fabric_name: the fabric preset.
+    :param progress: called with a line of text as each part goes.
+    """
     say = progress or (lambda text: None)
     skeleton = load_shipped_character()
     fabric = load_fabric(fabric_name)
@@ -147,8 +176,18 @@ def bench(clips=CLIPS, quick=False, seconds=CLIP_SECONDS, fabric_name='tweed_jac
     return out
 
 
-def rig_detail(skeleton, fabric, clips, seconds, ref_method, quick, say):
-    """Converged cloth of each grid and collider set against the finest grid's, per clip."""
+def rig_detail(skeleton: Skeleton, fabric: Fabric, clips: Sequence[str], seconds: float,
+               ref_method: Method, quick: bool, say: Callable[[str], None]) -> list[dict]:
+    """Converged cloth of each grid and collider set against the finest grid's, per clip.
+
+    :param skeleton: the shipped character.
+    :param fabric: the fabric preset.
+    :param clips: the motion clips run.
+    :param seconds: each clip's length.
+    :param ref_method: the converged method every rig runs with.
+    :param quick: whether the quick mode's two grids.
+    :param say: called with a line of text as each clip goes.
+    """
     grids = GRIDS[1:3] if quick else GRIDS
     variants = [(f'{c}x{r}', rig_at_grid(skeleton, c, r)) for c, r in grids]
     variants.append(('9x12, no thigh colliders',
@@ -177,8 +216,12 @@ def _mm(v):
     return f'{v * 1e3:.1f}'
 
 
-def write(results, out_dir):
-    """bench.json, bench.md and the charts."""
+def write(results: dict, out_dir: str) -> None:
+    """bench.json, bench.md and the charts.
+
+    :param results: what :func:`bench` returned.
+    :param out_dir: the folder the files go to.
+    """
     os.makedirs(out_dir, exist_ok=True)
     with open(os.path.join(out_dir, 'bench.json'), 'w', encoding='utf-8') as f:
         json.dump(results, f, indent=1)
@@ -187,7 +230,11 @@ def write(results, out_dir):
     charts(results, out_dir)
 
 
-def markdown(results):
+def markdown(results: dict) -> str:
+    """Return bench.md: every table of the results.
+
+    :param results: what :func:`bench` returned.
+    """
     lines = ['# jacket_cloth bench', '',
              f'Fabric `{results["fabric"]}`, clips of {results["clip_seconds"]} s at 60 Hz '
              f'JointState. References, float64: XPBD\'s model ({results["reference"]}) and '
@@ -296,7 +343,12 @@ def _pareto_axes(ax, clip, data, default_label, which='xpbd'):
     ax.grid(True, which='both', alpha=0.3)
 
 
-def charts(results, out_dir):
+def charts(results: dict, out_dir: str) -> None:
+    """Draw the Pareto charts, per clip and of all clips, against each reference; convergence.
+
+    :param results: what :func:`bench` returned.
+    :param out_dir: the folder the PNG files go to.
+    """
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt

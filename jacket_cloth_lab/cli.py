@@ -7,6 +7,7 @@ Every failure ends in one readable line on stderr and a non-zero exit, never a t
 import argparse
 import os
 import sys
+from typing import Sequence
 
 from jacket_cloth_ros.core.config import ConfigError
 
@@ -17,7 +18,12 @@ class LabError(Exception):
     """A failure to report in one line."""
 
 
-def cmd_stress(args):
+def cmd_stress(args: argparse.Namespace) -> int:
+    """Run the stress scenes for the methods asked; write stress.md and say what failed.
+
+    :param args: the ``stress`` command's options.
+    :returns: the exit status.
+    """
     from .stress import METHODS, XPBD_METHODS, stress, write_matrix
     methods = tuple(args.methods.split(',')) if args.methods else METHODS + XPBD_METHODS
     known = METHODS + XPBD_METHODS
@@ -34,7 +40,12 @@ def cmd_stress(args):
     return 0
 
 
-def cmd_bench(args):
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Run a benchmark (accuracy, speed or lod); write its files and say its headline figure.
+
+    :param args: the ``bench`` command's options.
+    :returns: the exit status.
+    """
     folders = {'speed': 'out/bench_speed', 'lod': 'out/bench_lod'}
     args.out = args.out or folders.get(args.what, 'out/bench')
     if args.what == 'speed':
@@ -75,7 +86,8 @@ def cmd_bench(args):
     return 0
 
 
-def build_parser():
+def build_parser() -> argparse.ArgumentParser:
+    """Return the lab's command line: ``stress`` and ``bench``."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True)
     st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
@@ -102,7 +114,12 @@ def build_parser():
     return p
 
 
-def main(argv=None):
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the lab's command; a failure is one line on stderr and exit 1.
+
+    :param argv: the arguments; None: the process's.
+    :returns: the exit status.
+    """
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

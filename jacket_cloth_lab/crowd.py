@@ -12,6 +12,8 @@ same work per tick; the driver only publishes and reads ``/diagnostics``:
 - cost: CPU per character per input against N, and memory per character, for both;
 - tf: one TFMessage for the crowd's characters against one per character (encode and
   publish, in this process), which the node's choice rests on;
+- intake: a crowd character's input, taken each way a JointState can arrive, against a lone
+  simulation's ``process`` (``crowd_intake``), in this process;
 - floor: how many characters the crowd's floor (floor_node --crowd, the least a crowd node
   of this design does) holds on one core: the ceiling for the crowd's one-core figure.
 """
@@ -21,10 +23,12 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import Callable, Sequence
 
 import numpy as np
 
-from jacket_cloth_ros.core.skeleton import shipped_character_urdf
+from jacket_cloth_lab import crowd_intake
+from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 
 RATE = 120.0
 STEP_US = 1e6 / RATE
@@ -50,8 +54,14 @@ def _rss_mb(pid):
     return float('nan')
 
 
-def crowd_command(n, folder, threads, name='c'):
-    """Return the argv of a crowd node of ``n`` characters, all hearing /joint_states."""
+def crowd_command(n: int, folder: str, threads: int, name: str = 'c') -> list[str]:
+    """Return the argv of a crowd node, all its characters hearing /joint_states.
+
+    :param n: how many characters.
+    :param folder: where its characters file is written.
+    :param threads: the crowd's threads.
+    :param name: the characters' name (``<name>_<k>``) and the node's suffix.
+    """
     path = os.path.join(folder, f'crowd_{name}_{n}.yaml')
     with open(path, 'w', encoding='utf-8') as f:
         f.write(f'characters:\n  - name: {name}\n    count: {n}\n    urdf: character.urdf\n')
@@ -63,23 +73,32 @@ def crowd_command(n, folder, threads, name='c'):
             f'threads:={threads}'] + remaps
 
 
-def floor_command(n):
-    """Return the argv of the crowd's floor for ``n`` characters (floor_node --crowd)."""
+def floor_command(n: int) -> list[str]:
+    """Return the argv of the crowd's floor (floor_node --crowd).
+
+    :param n: how many characters.
+    """
     return [sys.executable, '-m', 'jacket_cloth_lab.floor_node', '--crowd', str(n), '--kernel']
 
 
-def single_commands(n):
-    """Return the argv of ``n`` single-character nodes (the ROS default), one per character."""
+def single_commands(n: int) -> list[list[str]]:
+    """Return the argv of single-character nodes (the ROS default), one per character.
+
+    :param n: how many characters.
+    """
     return [[sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args', '-r',
              f'__node:=jacket_cloth_node_{k}', '-p', f'frame_prefix:=s{k}/'] for k in range(n)]
 
 
-def endless_walk(skeleton):
+def endless_walk(skeleton: Skeleton) -> tuple[list, tuple[int, list[float]], float]:
     """Return the walk clip's JointStates, and how to walk on past its end without a teleport.
 
     The clip's root jumps back to its start every loop, which made every character of a crowd
-    reset at once each 4 s. Returns (messages of one loop, (index of world_joint/trans_x, its
-    values), x to add per loop).
+    reset at once each 4 s.
+
+    :param skeleton: the character whose joints the messages name.
+    :returns: (messages of one loop, (index of world_joint/trans_x, its values), x to add per
+        loop, metres).
     """
     from jacket_cloth_ros.motion.messages import clip_messages
     walk = [m for _, m in clip_messages(skeleton, 'walk', RATE, 4.0, 10 ** 10)][:-1]
@@ -88,15 +107,23 @@ def endless_walk(skeleton):
     return walk, (i, x), (x[-1] - x[0]) * len(x) / (len(x) - 1)
 
 
-def live(skeleton, commands, characters, seconds, domain, cores=None, start_limit_s=120.0,
-         cores_each=None):
+def live(skeleton: Skeleton, commands: Sequence[list[str]], characters: int, seconds: float,
+         domain: int, cores: set[int] | None = None, start_limit_s: float = 120.0,
+         cores_each: Sequence[set[int]] | None = None) -> dict:
     """Drive node processes with one JointState stream at RATE; say if the characters hold.
 
-    ``commands``: argv lists (started at once, pinned to ``cores`` if given, or each to its
-    own set of ``cores_each``; the driver to the other cores); ``characters``: how many
-    diagnostics statuses to wait for. Returns
-    {held, latency_us_p99 (worst window of any character), answered (worst share of the
-    inputs a character took), cpu_us (per character per input), rss_mb_per_character}.
+    :param skeleton: the character the stream moves.
+    :param commands: the processes' argv lists, started at once; the driver runs on the
+        cores they are not pinned to.
+    :param characters: how many diagnostics statuses to wait for.
+    :param seconds: how long to measure, after the start and a warm-up.
+    :param domain: the ROS domain id the run has to itself.
+    :param cores: the cores every process is pinned to; None: not pinned.
+    :param start_limit_s: how long the characters may take to start answering.
+    :param cores_each: a set of cores per process, instead of ``cores``.
+    :returns: {held, latency_us_p99 (worst window of any character), answered (worst share
+        of the inputs a character took), cpu_us (per character per input),
+        rss_mb_per_character, sent}.
     """
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -202,10 +229,13 @@ def live(skeleton, commands, characters, seconds, domain, cores=None, start_limi
             'rss_mb_per_character': rss / characters, 'sent': n}
 
 
-def tf_batching(n=64, repeat=200):
-    """Time /tf for ``n`` characters: one TFMessage each against one for all (CPU us per tick).
+def tf_batching(n: int = 64, repeat: int = 200) -> dict:
+    """Time /tf for many characters: one TFMessage each against one for all (CPU us per tick).
 
     Encode (the templates the node uses) and publish, to a subscriber in this process.
+
+    :param n: how many characters.
+    :param repeat: how many ticks timed; the medians are reported.
     """
     import rclpy
     from tf2_msgs.msg import TFMessage
@@ -265,8 +295,15 @@ def _ladder(measure, ladder):
     return best, rows
 
 
-def crowd_bench(skeleton, quick=False, seconds=None, say=print):
-    """Run the crowd part; returns its figures (see the module's docstring)."""
+def crowd_bench(skeleton: Skeleton, quick: bool = False, seconds: float | None = None,
+                say: Callable[[str], None] = print) -> dict:
+    """Run the crowd part; returns its figures (see the module's docstring).
+
+    :param skeleton: the shipped character.
+    :param quick: whether the quick mode: the costs at 1 and 4 characters, no ladders.
+    :param seconds: how long each count is measured; None: 2.5 s quick, else 4 s.
+    :param say: called with a line of text as each part starts.
+    """
     # At least two diagnostics windows (about 1 s apart) after the warm-up, whatever their
     # phase: 1.5 s gave one now and then, and a run with one window counts as not answering.
     seconds = seconds or (2.5 if quick else 4.0)
@@ -295,6 +332,9 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
         single_counts = (1,) if quick else (1, 4)
         out['single_cost'] = [dict(singles(n, one), characters=n) for n in single_counts]
         out['tf'] = tf_batching(8 if quick else 64, 50 if quick else 300)
+        say('crowd: a character\'s input against a lone process')
+        out['intake'] = crowd_intake.intake_vs_process(
+            skeleton, 2 if quick else 8, 60 if quick else 600)
         if not quick:
             for label, cores in (('one_core', one), ('all_cores', every)):
                 say(f'crowd: characters held on {label.replace("_", " ")}')
@@ -315,8 +355,11 @@ def crowd_bench(skeleton, quick=False, seconds=None, say=print):
     return out
 
 
-def summary(c):
-    """Markdown lines of the crowd part."""
+def summary(c: dict) -> list[str]:
+    """Markdown lines of the crowd part.
+
+    :param c: what :func:`crowd_bench` returned.
+    """
     single = c['single_cost'][0]
     lines = ['## Crowd: many characters in one node (jacket_cloth_crowd)', '',
              'One 120 Hz JointState stream that every character hears; processes pinned to one '
@@ -352,6 +395,7 @@ def summary(c):
         lines += ['', f'One crowd process per core ({c["cores"]}, each one thread and its '
                   f'share of the characters): {pc} held ({pc / max(co, 1):.2f}x one crowd on '
                   'one core).']
+    lines += [''] + crowd_intake.summary(c['intake'])
     t = c['tf']
     lines += ['', f'/tf for {t["characters"]} characters per tick: one TFMessage each '
               f'{t["per_character_us"]:.0f} us, one for all {t["one_message_us"]:.0f} us '
@@ -359,8 +403,12 @@ def summary(c):
     return lines
 
 
-def chart(c, path):
-    """Cost per character against N (log-log), the single node's as a line."""
+def chart(c: dict, path: str) -> None:
+    """Cost per character against N (log-log), the single node's as a line.
+
+    :param c: what :func:`crowd_bench` returned.
+    :param path: the PNG file.
+    """
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -386,15 +434,17 @@ PICTURE = (('npc1', 'walk', 'tweed_jacket', None), ('npc2', 'run', 'down_jacket'
            ('npc5', 'arms_up', 'down_jacket', None), ('npc6', 'jump', 'tweed_jacket', None))
 
 
-def crowd_picture(png_path, at_s=1.15):
+def crowd_picture(png_path: str, at_s: float = 1.15) -> None:
     """Draw six characters of one crowd (its one compiled call) at one instant, side by side.
 
     Each its own clip and fabric, one of them on another skeleton (the mannequin example).
+
+    :param png_path: the PNG file.
+    :param at_s: the instant drawn, seconds into the clips.
     """
     from jacket_cloth_ros.core.config import shipped
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.core.rig import load_rig
-    from jacket_cloth_ros.core.skeleton import Skeleton
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.ros.cdr import JointStateContent
     from jacket_cloth_ros.ros.parameters import default_values

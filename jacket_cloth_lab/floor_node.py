@@ -22,10 +22,12 @@ subscriptions to /joint_states, and with ``--kernel`` their steps by the crowd's
 
 import sys
 import time
+from typing import Callable, Sequence
 
 import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
 
 from jacket_cloth_ros.ros.cdr import JointStateReader, TfTemplate
 from jacket_cloth_ros.ros.character import CrowdInputs
@@ -35,11 +37,13 @@ from jacket_cloth_ros.ros.pipeline import quantile
 BONES = 68          # the shipped rig's bones on /tf
 
 
-def kernel_stepper(steps=None):
-    """Return a callable running one bare kernel step per call, cycling through ``steps``.
+def kernel_stepper(steps: Sequence[tuple] | None = None) -> Callable[[], None]:
+    """Return a callable running one bare kernel step per call, cycling through the steps.
 
-    ``steps`` are kernel arguments; by default the shipped rig's, captured from a walk. Each
-    state moves on.
+    Each state moves on.
+
+    :param steps: ``cloth_step``'s arguments, one tuple per step; None: the shipped rig's,
+        captured from a walk.
     """
     from jacket_cloth_ros.core.compiled import FixedTypes
     from jacket_cloth_ros.core.physics import cloth
@@ -61,8 +65,13 @@ def _prebuilt_tf(prefix=''):
     return TfTemplate(names, ['spine'] * BONES, prefix).encode(identity, 0)
 
 
-def floor(node, n, with_kernel):
-    """Set ``node`` up as the floor of a node of ``n`` characters (see the module's docstring)."""
+def floor(node: Node, n: int, with_kernel: bool) -> None:
+    """Set a node up as the floor of a node of many characters (see the module's docstring).
+
+    :param node: the node, not spinning yet.
+    :param n: how many characters.
+    :param with_kernel: whether each batch steps the cloth too (``--kernel``).
+    """
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     data = [_prebuilt_tf(f'f{k}/' if n > 1 else '') for k in range(n)]
     step = (_alone_stepper() if n == 1 else crowd_stepper(n)) if with_kernel else None
@@ -117,14 +126,16 @@ def _alone_stepper():
     return step
 
 
-def crowd_stepper(n):
+def crowd_stepper(n: int) -> Callable[[list[int]], None]:
     """Return a callable stepping, for a list of character indices, those characters' cloth.
 
     What the crowd's core does for a batch of steady inputs (``core.crowd.stepped``: the
-    compiled intake, one compiled call, each simulation's completion), for ``n`` shipped
+    compiled intake, one compiled call, each simulation's completion), for shipped
     characters walking on, each input the next 1/120 s of the walk; nothing of the node.
     A character twice in the list is stepped twice, in two rounds, as the crowd does. The
     callable's ``crowd`` is its CrowdSteps.
+
+    :param n: how many characters.
     """
     from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
     from jacket_cloth_ros.core.simulation import JacketSimulation
@@ -166,7 +177,8 @@ def _walk_steps():
     return captured_steps(*_shipped())
 
 
-def main():
+def main() -> int:
+    """Run the floor node as ``sys.argv`` says (``--crowd N``, ``--kernel``) until stopped."""
     crowd = '--crowd' in sys.argv
     rclpy.init(args=sys.argv)
     node = rclpy.create_node('jacket_cloth_crowd_floor' if crowd else 'jacket_cloth_floor')

@@ -11,6 +11,7 @@ stepped together (core/crowd.py) with the level of detail on and off, alternatel
 import json
 import os
 import time
+from typing import Sequence
 
 import numpy as np
 
@@ -41,8 +42,16 @@ def _run(skeleton, rig, fabric, inputs, distance):
     return np.array(xs), np.array(spent[1:]), levels
 
 
-def lod_bench(clip='walk', seconds=3.0, distances=DISTANCES, repeats=REPEATS):
-    """Return per distance: level reached, cost (ms/s and against full detail), error (m)."""
+def lod_bench(clip: str = 'walk', seconds: float = 3.0,
+              distances: Sequence[float | None] = DISTANCES, repeats: int = REPEATS) -> dict:
+    """Return per distance: level reached, cost (ms/s and against full detail), error (m).
+
+    :param clip: the motion clip.
+    :param seconds: its length.
+    :param distances: the viewer's distances from the root, metres; None: no viewer, full detail
+        (the error's reference, so it must be among them).
+    :param repeats: runs at each distance, interleaved; the median cost is kept.
+    """
     skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     fabric = load_fabric('tweed_jacket')
@@ -88,10 +97,14 @@ def _crowd_run(skeleton, rig, fabric, inputs, n, lod, threads):
     return float(np.median(spent)), levels
 
 
-def crowd_lod_bench(crowds=CROWDS, seconds=2.0, repeats=REPEATS, threads=1):
+def crowd_lod_bench(crowds: Sequence[int] = CROWDS, seconds: float = 2.0,
+                    repeats: int = REPEATS, threads: int = 1) -> dict:
     """Return per crowd size: CPU per character-input with the level of detail on and off.
 
-    ``threads``: the crowd call's threads (1: one core, the issue's first target).
+    :param crowds: the crowd sizes, characters.
+    :param seconds: the walk's length.
+    :param repeats: runs of each size, on and off alternately; the median is kept.
+    :param threads: the crowd call's threads (1: one core, the issue's first target).
     """
     skeleton = load_shipped_character()
     rig = load_rig(skeleton)
@@ -133,8 +146,12 @@ def _save(out_dir, stem, results, lines, fig):
     _pyplot().close(fig)
 
 
-def write_crowd(results, out_dir):
-    """crowd_lod.json, crowd_lod.md and crowd_lod.png."""
+def write_crowd(results: dict, out_dir: str) -> None:
+    """crowd_lod.json, crowd_lod.md and crowd_lod.png.
+
+    :param results: what :func:`crowd_lod_bench` returned.
+    :param out_dir: the folder the files go to.
+    """
     plt = _pyplot()
     lines = [f'# A crowd spread from 0 to {results["spread_m"]:g} m, level of detail on and off '
              f'(walk, {results["seconds"]} s, {results["threads"]} thread(s), lod_distances '
@@ -159,8 +176,12 @@ def write_crowd(results, out_dir):
     _save(out_dir, 'crowd_lod', results, lines, fig)
 
 
-def write(results, out_dir):
-    """lod.json, lod.md and lod.png."""
+def write(results: dict, out_dir: str) -> None:
+    """lod.json, lod.md and lod.png.
+
+    :param results: what :func:`lod_bench` returned.
+    :param out_dir: the folder the files go to.
+    """
     plt = _pyplot()
     lines = [f'# Level of detail against distance ({results["clip"]}, {results["seconds"]} s, '
              f'lod_distances {results["lod_distances"]})', '',

@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``jacket_cloth_lab bench speed``: each cost as a ratio, measured in one run on this machine.
 
+- profile: where one input's CPU goes, by stage, on the replay's and the node's path
+  (``lab.profile``);
 - kernel: one cloth step of the shipped rig (``lab.bench.rig_at_grid``) against the compiled
   yardstick ``../shared/limit/cloth_ref.c`` at the same grid and iterations (built here when
   the file exists; the project never copies it);
@@ -20,6 +22,7 @@
 Each part also says how much CPU time the host gave to other guests while it ran (steal).
 """
 
+import argparse
 import itertools
 import json
 import os
@@ -28,17 +31,21 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
 from jacket_cloth_ros.core.bundles import copied
 from jacket_cloth_ros.core.compiled import FixedTypes
 from jacket_cloth_ros.core.physics import cloth
-from jacket_cloth_ros.core.fabric import load_fabric, load_fabrics
+from jacket_cloth_ros.core.fabric import Fabric, load_fabric, load_fabrics
+from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.simulation import JacketSimulation
-from jacket_cloth_ros.core.skeleton import load_shipped_character, shipped_character_urdf
+from jacket_cloth_ros.core.skeleton import (
+    Skeleton, load_shipped_character, shipped_character_urdf)
 from .accuracy import clip_inputs
 from .bench import rig_at_grid
+from . import profile
 from .crowd import chart as crowd_chart, crowd_bench, summary as crowd_summary
 
 # The C yardstick beside the repository (never copied in); JACKET_CLOTH_LIMIT names another.
@@ -67,42 +74,63 @@ class Steal:
     9-25 %).
     """
 
-    def __enter__(self):
+    def __enter__(self) -> 'Steal':
         self._start = _cpu_ticks()
         self.percent = float('nan')
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> bool:
+        """Take the share since ``__enter__`` into ``percent``; let any exception through.
+
+        :param exc: the exception's type, value and traceback, if one ended the section.
+        """
         steal, total = (b - a for a, b in zip(self._start, _cpu_ticks()))
         self.percent = 100.0 * steal / total if total else float('nan')
         return False
 
 
-def limit_source():
+def limit_source() -> str | None:
     """Return the yardstick's source if this checkout sits beside ../shared, else None."""
     path = os.environ.get('JACKET_CLOTH_LIMIT', os.path.abspath(LIMIT_SOURCE))
     return path if os.path.isfile(path) else None
 
 
 class Yardstick:
-    """cloth_ref built once into a temporary folder."""
+    """cloth_ref built once into a temporary folder.
 
-    def __init__(self, source):
+    :param source: the yardstick's C file.
+    """
+
+    def __init__(self, source: str):
         self._tmp = tempfile.TemporaryDirectory()
         self.exe = os.path.join(self._tmp.name, 'cloth_ref')
         subprocess.run(['cc', '-O3', '-march=native', '-o', self.exe, source, '-lm'], check=True)
 
-    def step_ns(self, cols, rows, iterations, steps=4200):
+    def step_ns(self, cols: int, rows: int, iterations: int, steps: int = 4200) -> dict:
+        """Run the yardstick on a grid; its figures (``step_ns_median``, ``constraints``).
+
+        :param cols: the grid's vertex columns.
+        :param rows: the grid's vertex rows.
+        :param iterations: sweeps per step.
+        :param steps: how many steps it times.
+        """
         out = subprocess.run([self.exe, str(cols), str(rows), str(iterations), str(steps)],
                              check=True, capture_output=True, text=True).stdout
         return json.loads(out)
 
 
-def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
+def captured_steps(skeleton: Skeleton, rig: Rig, fabric: Fabric, clip: str = 'walk',
+                   seconds: float = 1.0) -> list[tuple]:
     """Return the kernel's arguments after each input of a clip.
 
     One step of the state and pose the simulation reached there
     (JacketSimulation.kernel_arguments).
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset.
+    :param clip: a name of ``clips.ALL_CLIPS``.
+    :param seconds: how long.
     """
     sim = JacketSimulation(skeleton, rig, fabric)
     captured = []
@@ -112,8 +140,12 @@ def captured_steps(skeleton, rig, fabric, clip='walk', seconds=1.0):
     return captured[2:]             # past the reset and the first step after it
 
 
-def kernel_step_ns(steps, repeat=3):
-    """Median time of the kernel on each captured state (copies made outside the timing)."""
+def kernel_step_ns(steps: Sequence[tuple], repeat: int = 3) -> float:
+    """Median time of the kernel on each captured state (copies made outside the timing).
+
+    :param steps: ``cloth_step``'s arguments, one tuple per captured state.
+    :param repeat: how many times each state is timed.
+    """
     times = []
     step = FixedTypes(cloth.cloth_step, check=False)   # typed once, as the simulation does
     for _ in range(repeat):
@@ -125,7 +157,16 @@ def kernel_step_ns(steps, repeat=3):
     return float(np.median(times))
 
 
-def kernel_vs_limit(skeleton, grids=GRIDS, iterations=ITERATIONS, yardstick=None):
+def kernel_vs_limit(skeleton: Skeleton, grids: Sequence[tuple[int, int]] = GRIDS,
+                    iterations: Sequence[int] = ITERATIONS,
+                    yardstick: Yardstick | None = None) -> list[dict]:
+    """Time the kernel on each grid and sweep count, against the yardstick's if built.
+
+    :param skeleton: the shipped character.
+    :param grids: (cols, rows) of each grid.
+    :param iterations: the sweeps per step tried on each.
+    :param yardstick: the built C yardstick; None: the kernel alone.
+    """
     rows = []
     for cols, nrows in grids:
         rig = rig_at_grid(skeleton, cols, nrows)
@@ -142,14 +183,18 @@ def kernel_vs_limit(skeleton, grids=GRIDS, iterations=ITERATIONS, yardstick=None
     return rows
 
 
-def input_vs_kernel(skeleton, seconds=10.0, paced_s=3.0):
+def input_vs_kernel(skeleton: Skeleton, seconds: float = 10.0, paced_s: float = 3.0) -> dict:
     """Time the pipeline's CPU per JointState at 120 Hz against the bare kernel's for that step.
 
     One step per JointState; each figure is the median of its own run.
 
     Back to back, caches stay warm; a node gets its inputs 8.3 ms apart, and in between other
-    processes evict its code and data. ``paced`` is the same pipeline fed at 120 Hz with the
-    wait slept away: the cost a live node's callback sees.
+    processes evict its code and data.
+
+    :param skeleton: the shipped character.
+    :param seconds: how long the walk fed back to back runs.
+    :param paced_s: how long it then runs paced: the same pipeline fed at 120 Hz with the
+        wait slept away, the cost a live node's callback sees.
     """
     from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
@@ -183,17 +228,24 @@ def _cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
-def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
+def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], seconds: float,
+               domain: int, start_limit_s: float = 30.0) -> dict[str, dict]:
     """Drive node processes at once with one JointState stream at RATE; what each cost.
 
-    ``commands``: name -> (argv, the /tf topic it publishes on). All of them take the same
-    messages over the same wall-clock interval, so a drift in this machine's speed (other
-    guests on the host) reaches each alike. Returns name -> {cpu_us_per_message, start_s
-    (to its first /tf), answered, sent, latency_by_status (each diagnostics status's p99
-    per window), latency_us_p99 (those of the only status, if one)}.
+    All of them take the same messages over the same wall-clock interval, so a drift in this
+    machine's speed (other guests on the host) reaches each alike.
 
     The character's URDF is on /robot_description, latched, as robot_state_publisher offers
     it: the node does not wait out its robot_description_timeout for the shipped character.
+
+    :param skeleton: the character the stream moves.
+    :param commands: name -> (argv, the /tf topic it publishes on).
+    :param seconds: how long to measure, once every process publishes.
+    :param domain: the ROS domain id the run has to itself.
+    :param start_limit_s: how long the processes may take to publish their first /tf.
+    :returns: name -> {cpu_us_per_message, start_s (to its first /tf), answered, sent,
+        latency_by_status (each diagnostics status's p99 per window), latency_us_p99 (those
+        of the only status, if one)}.
     """
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -284,24 +336,39 @@ def live_nodes(skeleton, commands, seconds, domain, start_limit_s=30.0):
             for name in commands}
 
 
-def live_node(skeleton, command, seconds, domain, start_limit_s=30.0):
-    """One node process driven alone (live_nodes)."""
+def live_node(skeleton: Skeleton, command: list[str], seconds: float, domain: int,
+              start_limit_s: float = 30.0) -> dict:
+    """One node process driven alone (live_nodes).
+
+    :param skeleton: the character the stream moves.
+    :param command: the node's argv; it publishes on /tf.
+    :param seconds: how long to measure, once it publishes.
+    :param domain: the ROS domain id the run has to itself.
+    :param start_limit_s: how long it may take to publish its first /tf.
+    """
     return live_nodes(skeleton, {'node': (command, '/tf')}, seconds, domain,
                       start_limit_s)['node']
 
 
-def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
+def node_vs_floor(skeleton: Skeleton, seconds: float, kernel_us: float, record_dir: str,
+                  rounds: int = 3) -> dict:
     """Measure the node's CPU per message against two floors, each measured the same way.
 
     - ``floor_us``: the floor node with one bare kernel step in each callback, so the kernel
       runs as it does in the node (8 ms apart, after a sleep; the issue's floor);
-    - ``warm_floor_us``: the floor node without it plus the kernel's back-to-back median
-      ``kernel_us``, a stricter floor no node meets (its kernel never runs warm).
+    - ``warm_floor_us``: the floor node without it plus the kernel's back-to-back median,
+      a stricter floor no node meets (its kernel never runs warm).
 
-    The three run at once on the same stream (each floor's /tf remapped), ``rounds`` times:
+    The three run at once on the same stream (each floor's /tf remapped), a few rounds:
     run one after another, this machine's drift made a floor with its kernel cost less than
     the same floor without it (host steal 9-25 % while idle). The median round is reported.
     The node's start and latency come from a run of the node alone first.
+
+    :param skeleton: the shipped character.
+    :param seconds: how long each round measures.
+    :param kernel_us: the kernel's back-to-back median, us (:func:`input_vs_kernel`'s).
+    :param record_dir: where the node records its session (recording on, as the issue sets).
+    :param rounds: how many rounds.
     """
     domain = 40 + os.getpid() % 50
     node_cmd = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
@@ -330,10 +397,13 @@ def node_vs_floor(skeleton, seconds, kernel_us, record_dir, rounds=3):
                 latency_windows=alone['latency_us_p99'], start_s=alone['start_s'])
 
 
-def cold_start(skeleton, seconds=1.0, warmed=False):
+def cold_start(skeleton: Skeleton, seconds: float = 1.0, warmed: bool = False) -> float:
     """Time the first /tf after start with an empty numba cache: what a fresh install pays.
 
-    With ``warmed``, after `jacket_cloth warm` filled that cache (what the set-up does).
+    :param skeleton: the character the stream moves.
+    :param seconds: how long the node is driven once it publishes.
+    :param warmed: whether `jacket_cloth warm` fills that cache first (what the set-up does).
+    :returns: seconds from the start to the first /tf.
     """
     with tempfile.TemporaryDirectory() as cache:
         os.environ['NUMBA_CACHE_DIR'] = cache
@@ -349,8 +419,13 @@ def cold_start(skeleton, seconds=1.0, warmed=False):
 
 # -- replay and endurance --------------------------------------------------------------------
 
-def replay_scaling(skeleton, lengths, folder):
-    """Replay throughput (simulated s per s) for sessions of each length (s)."""
+def replay_scaling(skeleton: Skeleton, lengths: Sequence[float], folder: str) -> list[dict]:
+    """Replay throughput (simulated s per s) for sessions of each length.
+
+    :param skeleton: the character the sessions move.
+    :param lengths: the sessions' lengths, seconds.
+    :param folder: where the sessions and replays are written.
+    """
     from rclpy.serialization import serialize_message
 
     from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
@@ -372,12 +447,19 @@ def replay_scaling(skeleton, lengths, folder):
     return rows
 
 
-def endurance(skeleton, simulated_s, folder, window_s=60.0):
+def endurance(skeleton: Skeleton, simulated_s: float, folder: str,
+              window_s: float = 60.0) -> dict:
     """Simulate motion through the node's JointState callback with recording on.
 
     The real JacketClothNode in this process, fed serialized JointState at 120 Hz stamps as
-    fast as it takes them (DDS is skipped: nothing can be lost on the way). Returns resident
-    memory and step cost per window and the recording's input and output counts.
+    fast as it takes them (DDS is skipped: nothing can be lost on the way).
+
+    :param skeleton: the character the inputs move.
+    :param simulated_s: how much motion, seconds.
+    :param folder: where the recording is written.
+    :param window_s: the simulated seconds each window of figures covers.
+    :returns: resident memory and step cost per window and the recording's input and output
+        counts.
     """
     import rclpy
     from rclpy.parameter import Parameter
@@ -431,7 +513,17 @@ def _rss_mb():
 
 # -- the command -----------------------------------------------------------------------------
 
-def run(quick, out_dir, say=print, endurance_s=None, only=None):
+def run(quick: bool, out_dir: str, say: Callable[[str], None] = print,
+        endurance_s: float | None = None, only: str | None = None) -> dict:
+    """Run every part of ``bench speed``, write its files; return the figures.
+
+    :param quick: whether the quick mode: short runs, two grids, no node against the floor,
+        no start times, the crowd's quick part.
+    :param out_dir: the folder the files go to.
+    :param say: called with each part's title as it starts.
+    :param endurance_s: simulated seconds of the endurance run; None: 10 quick, else 600.
+    :param only: run this part only (e.g. ``crowd``); None: all.
+    """
     skeleton = load_shipped_character()
     os.makedirs(out_dir, exist_ok=True)
     source = limit_source()
@@ -448,6 +540,9 @@ def run(quick, out_dir, say=print, endurance_s=None, only=None):
         steal[key] = taken.percent
     section('kernel', 'kernel against the yardstick', lambda: kernel_vs_limit(
         skeleton, GRIDS[:2] if quick else GRIDS, (8,) if quick else ITERATIONS, yardstick))
+    section('profile', 'where one input\'s time goes (replay, node)', lambda: [
+        profile.per_input_profile(skeleton, 5.0 if quick else 15.0, node=node)
+        for node in (False, True)])
     section('input', 'pipeline per input', lambda: input_vs_kernel(
         skeleton, 2.0 if quick else 10.0, 1.0 if quick else 5.0))
     with tempfile.TemporaryDirectory() as tmp:
@@ -469,7 +564,11 @@ def run(quick, out_dir, say=print, endurance_s=None, only=None):
     return results
 
 
-def summary(results):
+def summary(results: dict) -> str:
+    """Return speed.md: the parts' figures as ratios, with the steal each saw.
+
+    :param results: what :func:`run` returned.
+    """
     lines = ['# jacket_cloth bench speed', '']
     steal = results.get('steal_percent', {})
     if steal:
@@ -486,6 +585,7 @@ def summary(results):
                      f'{r["kernel_ns"] / 1e3:.1f} | '
                      + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x |' if 'ratio' in r
                         else 'n/a | n/a |'))
+    lines += [''] + profile.summary(results['profile'])
     i = results['input']
     lines += ['', f'Pipeline per JointState (120 Hz in, 120 Hz steps): median '
               f'{i["input_us_median"]:.0f} us CPU, kernel {i["kernel_us_median"]:.0f} us: '
@@ -539,7 +639,12 @@ def summary(results):
     return '\n'.join(lines) + '\n'
 
 
-def write(results, out_dir):
+def write(results: dict, out_dir: str) -> None:
+    """Write speed.json, speed.md and the charts.
+
+    :param results: what :func:`run` returned.
+    :param out_dir: the folder the files go to.
+    """
     with open(os.path.join(out_dir, 'speed.json'), 'w', encoding='utf-8') as f:
         json.dump(results, f, indent=1)
     with open(os.path.join(out_dir, 'speed.md'), 'w', encoding='utf-8') as f:
@@ -575,15 +680,23 @@ def write(results, out_dir):
     plt.close(fig)
 
 
-def main(args):
+def main(args: argparse.Namespace) -> int:
+    """Run ``bench speed`` with the command's options and print its summary.
+
+    :param args: the ``bench`` command's options (quick, out, endurance, only).
+    :returns: the exit status.
+    """
     results = run(args.quick, args.out, say=lambda t: print(t, flush=True),
                   endurance_s=args.endurance, only=args.only)
     print(summary(results))
     return 0
 
 
-def stop_processes(procs) -> None:
-    """SIGINT every process, then wait for each (10 s) and kill what is still running."""
+def stop_processes(procs: Iterable[subprocess.Popen]) -> None:
+    """SIGINT every process, then wait for each (10 s) and kill what is still running.
+
+    :param procs: the processes, started by this one.
+    """
     procs = list(procs)
     for p in procs:
         p.send_signal(signal.SIGINT)

@@ -18,16 +18,17 @@ and is judged on what a user would see:
 
 import math
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.geometry import grid_triangles
-from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.core.rig import Rig, load_rig
 from jacket_cloth_ros.core.physics.cloth import StretchLimit
 from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
-from jacket_cloth_ros.core.skeleton import load_shipped_character
+from jacket_cloth_ros.core.skeleton import Skeleton, load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content
 from .accuracy import deepest_inside
 
@@ -77,8 +78,12 @@ def _with_calm(skeleton, inputs):
     return inputs + _calm(skeleton, stamp * 1e-9, (names, pos))
 
 
-def scenes(skeleton, loop_s=60.0):
-    """Return the failure scenes, as JointState content for the shipped character."""
+def scenes(skeleton: Skeleton, loop_s: float = 60.0) -> list[Scene]:
+    """Return the failure scenes, as JointState content for the shipped character.
+
+    :param skeleton: the shipped character.
+    :param loop_s: how long the looped walk runs, seconds.
+    """
     joints = len(skeleton.joint_names)
 
     def turned(names, pos, t):          # 180 degrees about z in one frame, at 1 s
@@ -132,8 +137,16 @@ def _flipped_share(sim):
     return float(((normals(sim.x) * normals(ref)).sum(axis=1) < 0).mean())
 
 
-def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
-    """Judge one method on one scene: 'holds' or how it failed, and the figures."""
+def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
+              fabric_name: str = 'tweed_jacket') -> tuple[str, dict]:
+    """Judge one method on one scene: 'holds' or how it failed, and the figures.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param scene: the inputs, and the parameters and fabric values it changes.
+    :param method: a stretch limit, ``xpbd+<stretch limit>`` for XPBD as the solver.
+    :param fabric_name: the fabric preset the scene's values change.
+    """
     fabric = load_fabric(fabric_name).with_values(**scene.fabric)
     solver, _, limit = method.rpartition('+')
     params = SimParams(stretch_limit=limit, solver=solver or 'gauss_seidel', **scene.params)
@@ -184,8 +197,12 @@ def run_scene(skeleton, rig, scene, method, fabric_name='tweed_jacket'):
     return verdict, figures
 
 
-def stress(methods=METHODS, loop_s=60.0):
-    """Every method on every scene: {(scene, method): (verdict, figures)}."""
+def stress(methods: Sequence[str] = METHODS, loop_s: float = 60.0) -> dict:
+    """Every method on every scene: {(scene, method): (verdict, figures)}.
+
+    :param methods: stretch limits, ``xpbd+<stretch limit>`` for XPBD as the solver.
+    :param loop_s: how long the looped walk runs, seconds.
+    """
     skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     out = {}
@@ -195,8 +212,13 @@ def stress(methods=METHODS, loop_s=60.0):
     return out
 
 
-def write_matrix(results, out_dir, methods):
-    """stress.md, stress.json and stress.png: scene x method -> verdict."""
+def write_matrix(results: dict, out_dir: str, methods: Sequence[str]) -> None:
+    """stress.md, stress.json and stress.png: scene x method -> verdict.
+
+    :param results: what :func:`stress` returned.
+    :param out_dir: the folder the files go to.
+    :param methods: the methods, the matrix's columns in order.
+    """
     import json
     import os
 

@@ -35,6 +35,8 @@ def guard(program: str) -> None:
     """Take SIGINT and SIGTERM for ``program``, starting: from now on a signal stops it cleanly.
 
     Installed before rclpy.init, so rclpy's handlers chain to this one.
+
+    :param program: the executable's name, which the line starts with.
     """
     _now.update(program=program, phase=STARTING, doing='starting')
     for signum in _SIGNALS:
@@ -42,7 +44,10 @@ def guard(program: str) -> None:
 
 
 def doing(what: str) -> None:
-    """Name what the program does while it starts (``compiling the kernels``), for the line."""
+    """Name what the program does while it starts (``compiling the kernels``), for the line.
+
+    :param what: the doing, as the line ``stopped while ...`` says it.
+    """
     _now['doing'] = what
 
 

@@ -172,3 +172,36 @@ def test_a_mocap_session_replays_with_the_jacket_fitted_to_its_skeleton(tmp_path
         assert 0.0 < report['max_vertical_strain'] < 0.5
         assert report['sim_steps'] >= 454 * 2
     assert second['replay_matches_recording'] is True and second['recorded_tf_compared'] == 455
+
+
+def _in_unit(text: str, factor: float) -> str:
+    """Return a BVH text whose lengths (OFFSETs, the root's positions) are times ``factor``."""
+    lines, frames = [], False
+    for line in text.splitlines():
+        words = line.split()
+        if words[:1] == ['OFFSET']:
+            line = 'OFFSET ' + ' '.join(f'{float(v) * factor:.6f}' for v in words[1:])
+        elif frames and words:
+            line = ' '.join([f'{float(v) * factor:.6f}' for v in words[:3]] + words[3:])
+        frames = frames or line.startswith('Frame Time')
+        lines.append(line)
+    return '\n'.join(lines) + '\n'
+
+
+def test_a_cmu_capture_is_guessed_in_its_unit_and_a_wrong_unit_is_said(tmp_path, capsys):
+    # Issue 35 item 6: CMU's 3ds Max conversion (in / 0.45) imported as a 0.62 m person.
+    path = fetched('test_mocapbank.bvh')
+    in_cm = load_capture(path)
+    with open(path, encoding='utf-8') as f:
+        text = f.read()
+    cmu = tmp_path / 'cmu.bvh'
+    cmu.write_text(_in_unit(text, 0.01 / (0.0254 / 0.45)))
+    got = load_capture(str(cmu))
+    assert got.scale == 0.0254 / 0.45
+    assert abs(got.height_m - in_cm.height_m) < 1e-4
+    # A unit given wrong is imported as asked, with one line saying so.
+    assert main(['import', path, '-o', str(tmp_path / 'mm.mcap'), '--scale', '0.001']) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'tall at 0.001 m per unit' in err[0] and '--scale' in err[0], err
+    assert main(['import', str(cmu), '-o', str(tmp_path / 'cmu.mcap')]) == 0
+    assert capsys.readouterr().err == ''

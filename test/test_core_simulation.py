@@ -564,3 +564,37 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
     # first two inputs of each character and, for each case, at most three inputs.
     assert 3 * 60 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 60 - 3 * 2
     assert [s.resets for s in sims] == [1, 6, 1]     # a teleport and a turn go and come back
+
+
+def test_the_teleport_distance_scales_with_the_characters_height_unless_set():
+    """Issue 35 item 6: a giant's stride was a teleport (a reset) at a person's threshold."""
+    import re
+
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.params import SimParams
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+
+    def scaled(urdf, k):
+        return re.sub(r'xyz="([^"]*)"', lambda m: 'xyz="%s"' % ' '.join(
+            repr(float(v) * k) for v in m.group(1).split()), urdf)
+
+    def reset_by_a_move_of(move, urdf, **params):
+        skeleton = Skeleton(urdf)
+        sim = JacketSimulation(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'),
+                               SimParams(**params))
+        names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+        pos = np.array(pos)
+        sim.process(1_000_000_000, names, pos)
+        pos[names.index('world_joint/trans_x')] += move
+        return sim.process(1_000_000_000 + 16_666_667, names, pos).reset, sim.teleport_m
+
+    person = shipped_character_urdf()
+    giant = scaled(person, 3.0)
+    reset, person_m = reset_by_a_move_of(1.5, person)
+    assert reset.startswith('teleport') and 0.9 < person_m < 1.1
+    reset, giant_m = reset_by_a_move_of(1.5, giant)
+    assert reset == '' and giant_m == pytest.approx(3 * person_m)
+    reset, set_m = reset_by_a_move_of(1.5, giant, teleport_distance=1.0)
+    assert reset.startswith('teleport') and set_m == 1.0

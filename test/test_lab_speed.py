@@ -29,10 +29,19 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert (out / 'speed.png').stat().st_size > 10_000
     # Each part says how much of the machine the host took meanwhile (a share, in percent).
     steal = results['steal_percent']
-    assert set(steal) == {'kernel', 'input', 'replay', 'endurance', 'crowd'}
+    assert set(steal) == {'profile', 'kernel', 'input', 'replay', 'endurance', 'crowd'}
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
+    # Issue 37's profile: the replay's and the node's input by stage, the step the largest,
+    # the node's DDS take and publish only on the node's side, shares adding up to the whole.
+    replay, node = results['profile']
+    for p in (replay, node):
+        assert abs(sum(p['share'].values()) - 1.0) < 1e-6, p['share']
+        assert max(p['us'], key=p['us'].get) == 'step', p['us']
+        assert p['sweeps_per_input'] > 0 and p['writer_thread_us'] > 0
+    assert 'take' not in replay['us'] and node['us']['take'] > 0 and node['us']['publish'] > 0
+    assert 'Where one input\'s CPU goes' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
     crowd = results['crowd']
@@ -42,6 +51,16 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert set(crowd['cost_ratio']) == {'1', '4'} or set(crowd['cost_ratio']) == {1, 4}
     assert crowd['tf']['ratio'] > 0 and (out / 'crowd.png').stat().st_size > 10_000
     assert 'Crowd: many characters in one node' in printed
+    # Issue 34's one-node figures: a crowd character's input, each way it can arrive, against
+    # a lone process; the steady way was taken only where the names are one object.
+    intake = crowd['intake']
+    assert set(intake['ratio']) == {'lone process', 'crowd, one name list',
+                                    'crowd, a new name list object each message',
+                                    'crowd, a list that changes every message'}
+    assert all(v > 0 for v in intake['us'].values())
+    assert intake['steady_inputs']['crowd, one name list'] > 0
+    assert intake['steady_inputs']['crowd, a list that changes every message'] == 0
+    assert 'against a lone simulation' in printed
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):

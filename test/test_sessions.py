@@ -634,3 +634,19 @@ def test_diagnosticsquantiles_are_numpys_on_lists_of_any_length():
         values = sorted(int(v) for v in rng.integers(0, 10 ** 9, n))
         assert quantile(values, 0.5) == pytest.approx(np.median(values), rel=1e-12)
         assert quantile(values, 0.99) == pytest.approx(np.percentile(values, 99), rel=1e-12)
+
+
+def test_a_session_is_read_without_its_outputs_and_its_tf_compared_by_digest(tmp_path):
+    # Issue 38 item 19: replay and analyze held a whole recording (markers and /tf, most of
+    # its bytes) in memory; only what the simulation is fed is read now.
+    from jacket_cloth_ros.recording.reader import message_digest, read_messages
+    from jacket_cloth_ros.tools.analyze import SessionFigures
+    from jacket_cloth_ros.tools.session import load_session
+    clip, session = tmp_path / 'walk.mcap', tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '1', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(session)]) == 0
+    loaded = load_session(str(session))
+    assert {m.topic for m in loaded.recording.messages} == {'/joint_states'}
+    tf = [m.data for m in read_messages(str(session))[0] if m.topic == '/tf']
+    figures = SessionFigures(loaded, 2)
+    assert figures.recorded_tf == [message_digest(d) for d in tf] and len(tf) > 30

@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -123,3 +124,107 @@ def test_live_motion_stops_on_a_signal_with_one_line(stop):
     assert motion.returncode == 128 + stop, err
     assert 'Traceback' not in err and err.strip().splitlines() == [
         f'jacket_cloth motion: stopped by {signal.Signals(stop).name}'], err
+
+
+def test_play_publishes_a_recording_live_as_recorded_and_its_urdf(tmp_path):
+    # Issue 35 item 7: a recording drives the graph where `ros2 bag play` is absent. Each
+    # message keeps its names, positions and spacing of stamps; the URDF goes latched.
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.ros.cdr import JointStateReader
+
+    recording = tmp_path / 'walk.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '1', '--rate', '30', '-o',
+                 str(recording)]) == 0
+    reader = JointStateReader()
+    recorded = [reader.read(m.data) for m in read_messages(str(recording))[0]]
+    urdf = shipped('character.urdf')
+    domain = DOMAIN_ID + 12
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    peer = rclpy.create_node('play_peer', context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(peer)
+    got, description = [], []
+    peer.create_subscription(JointState, '/npc/joint_states', got.append, 100)
+    peer.create_subscription(String, '/npc/robot_description', description.append,
+                             QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    play = subprocess.Popen(
+        [sys.executable, '-m', 'jacket_cloth_ros', 'play', str(recording), '--urdf', urdf,
+         '--wait', '120', '--ros-args', '-r', '__ns:=/npc'],
+        env=dict(os.environ, ROS_DOMAIN_ID=str(domain)), stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300      # a limit for a hung source, not a pace
+        while len(got) < len(recorded) or not description:
+            assert play.poll() in (None, 0), play.communicate()[1]
+            assert time.monotonic() < deadline, f'{len(got)} of {len(recorded)} heard'
+            ex.spin_once(timeout_sec=0.05)
+        out, err = play.communicate(timeout=60)
+    finally:
+        if play.poll() is None:
+            play.kill()
+            play.wait()
+        ex.shutdown()
+        peer.destroy_node()
+        rclpy.shutdown(context=ctx)
+    assert play.returncode == 0 and 'Traceback' not in err, err
+    assert out.strip() == f'played {len(recorded)} JointState messages of {recording}'
+    assert len(got) == len(recorded)
+    with open(urdf, encoding='utf-8') as f:
+        assert [d.data for d in description] == [f.read()]
+
+    def stamp(m):
+        return m.header.stamp.sec * 10 ** 9 + m.header.stamp.nanosec
+    assert [stamp(m) - stamp(got[0]) for m in got] == [
+        r.stamp_ns - recorded[0].stamp_ns for r in recorded]
+    assert all(list(m.name) == list(r.name) and np.array_equal(m.position, r.position)
+               for m, r in zip(got, recorded))
+    assert stamp(got[0]) > recorded[0].stamp_ns + 10 ** 9      # stamped from now, not 1000 s
+
+
+def test_motion_says_which_clip_joints_a_urdf_lacks_and_refuses_one_it_cannot_move(
+        tmp_path, capsys):
+    # Issue 35 item 7: a clip on a skeleton that does not know its joints moved only the world.
+    from fetched import fetched
+
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        renamed = f.read().replace('name="l_knee"', 'name="left_knee"')
+    partial = tmp_path / 'partial.urdf'
+    partial.write_text(renamed)
+    assert main(['motion', '--clip', 'walk', '--urdf', str(partial), '--duration', '0.1',
+                 '-o', str(tmp_path / 'partial.mcap')]) == 0
+    assert capsys.readouterr().err.strip() == (
+        f"jacket_cloth motion: {partial} lacks 1 of the 11 joints the clip 'walk' moves: l_knee")
+    robot = fetched('g1_29dof_rev_1_0.urdf')
+    assert main(['motion', '--clip', 'walk', '--urdf', robot, '--duration', '0.1',
+                 '-o', str(tmp_path / 'robot.mcap')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f'{robot} has none of them, so only its root would move' in err[0]
+    assert not (tmp_path / 'robot.mcap').exists()
+
+
+def test_picture_animates_a_session_beside_its_filmstrip(tmp_path, capsys):
+    # Issue 35 item 7: a session seen moving, not only as stills.
+    from PIL import Image
+    clip, session = tmp_path / 'walk.mcap', tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '2', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(session)]) == 0
+    markers = sum(m.type_name.endswith('MarkerArray') for m in read_messages(str(session))[0])
+    capsys.readouterr()
+    assert main(['picture', str(session), '-o', str(tmp_path / 'strip.png'), '--animate']) == 0
+    out = capsys.readouterr().out.splitlines()
+    gif = tmp_path / 'strip.gif'
+    assert out[-1] == f'{gif} ({markers} frames)' and (tmp_path / 'strip.png').exists()
+    with Image.open(gif) as image:
+        assert image.n_frames == markers > 10
+        first = np.asarray(image.convert('RGB'))
+        image.seek(image.n_frames // 2)
+        assert np.abs(np.asarray(image.convert('RGB')).astype(int) - first).sum() > 0  # it moves

@@ -42,7 +42,11 @@ class BodyProxy:
     labels: list                    # E + K link names, ellipsoids first
 
     def posed(self, links: np.ndarray) -> Colliders:
-        """Return the proxy at a skeleton pose (links' 4x4 poses), as measures take it."""
+        """Return the proxy at a skeleton pose, as measures.depth_inside takes it.
+
+        :param links: the link transforms (L, 4, 4) in the frame the depths are wanted in.
+        :returns: its ellipsoids and capsules posed, no planes.
+        """
         t = links[self.ellipsoid_link]
         centers = np.einsum('kij,kj->ki', t[:, :3, :3], self.center) + t[:, :3, 3]
         axes = np.einsum('kij,kjl->kil', t[:, :3, :3], self.rotation)
@@ -55,12 +59,20 @@ class BodyProxy:
 
 
 def sleeved_links(rig: 'Rig') -> list[int]:
-    """Return the links a rig's M1 sleeves ride on: the body proxy leaves them out."""
+    """Return the links a rig's M1 sleeves ride on: the body proxy leaves them out.
+
+    :param rig: the rig.
+    :returns: link indices; none without a ``jacket_bones`` section.
+    """
     return [s.link for s in rig.layer.sleeves] if rig.layer is not None else []
 
 
 def body_proxy(skeleton: 'Skeleton', leave_out: Sequence[int] = ()) -> BodyProxy:
-    """Return the body proxy of ``skeleton``, without the links ``leave_out`` and those below."""
+    """Return the body proxy of ``skeleton``.
+
+    :param skeleton: the URDF skeleton, its ``<collision>`` shapes read from its text.
+    :param leave_out: link indices left out with every link below them (the sleeved arms).
+    """
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
     names = list(skeleton.link_names)
     out_of_it = {int(k) for k in leave_out}

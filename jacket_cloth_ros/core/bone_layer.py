@@ -72,7 +72,15 @@ class LayerPose:
 
 
 class BoneLayer:
-    """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section)."""
+    """The M1 sleeves and M2 upper-jacket bones of a rig (the ``jacket_bones`` section).
+
+    :param section: the rig's ``jacket_bones`` section.
+    :param skeleton: the skeleton the rig is fitted to.
+    :param rest: every link's world transform at rest, (L, 4, 4).
+    :param where: the section's place in the rig file, for error messages.
+    :param axes_at: the body part's axes at a link (``axes_at(link, part)``, 3x3); None: the link's
+        own.
+    """
 
     def __init__(self, section: Section, skeleton: 'Skeleton', rest: np.ndarray, where: str,
                  axes_at: Callable[..., np.ndarray] | None = None):
@@ -131,7 +139,11 @@ class BoneLayer:
         upper.reject_unknown()
 
     def pad_ends_gap(self, links: np.ndarray) -> float:
-        """Distance between the two pad ends before the left/right constraint: their tips."""
+        """Distance between the two pad ends before the left/right constraint: their tips.
+
+        :param links: every link's world transform, (L, 4, 4).
+        :returns: the gap in metres.
+        """
         pose = self.solve(links)
         first = 2 * len(self.sleeves)
         return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
@@ -139,8 +151,10 @@ class BoneLayer:
     def solve(self, links: np.ndarray, full: bool = True) -> LayerPose:
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
-        ``full=False`` solves only what the cloth needs each step: the bones below the pads.
         Compiled: physics.pose.solve_layer.
+
+        :param links: every link's world transform, (L, 4, 4).
+        :param full: False solves only what the cloth needs each step: the bones below the pads.
         """
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
@@ -150,7 +164,10 @@ class BoneLayer:
 
 
 def layer_model(layer: 'BoneLayer | None' = None) -> LayerModel:
-    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``."""
+    """Return a core.bone_layer.BoneLayer's arrays; an empty layer for ``None``.
+
+    :param layer: the layer, or None for a rig without one.
+    """
     if layer is None:
         return LayerModel(ints([]), ints([]), floats(np.zeros((0, 3))), floats([]), floats([]),
                           floats(np.zeros((0, 3, 3))),

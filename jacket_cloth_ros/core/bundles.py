@@ -35,17 +35,26 @@ _Bundle = TypeVar('_Bundle')
 
 
 def floats(a: npt.ArrayLike) -> np.ndarray:
-    """Return ``a`` as a C-contiguous float64 array (the kernels' float type)."""
+    """Return ``a`` as a C-contiguous float64 array (the kernels' float type).
+
+    :param a: any array-like of numbers.
+    """
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def ints(a: npt.ArrayLike) -> np.ndarray:
-    """Return ``a`` as a C-contiguous int64 array (the kernels' index type)."""
+    """Return ``a`` as a C-contiguous int64 array (the kernels' index type).
+
+    :param a: any array-like of integers.
+    """
     return np.ascontiguousarray(a, dtype=np.int64)
 
 
 def flags(a: npt.ArrayLike) -> np.ndarray:
-    """Return ``a`` as a C-contiguous boolean array."""
+    """Return ``a`` as a C-contiguous boolean array.
+
+    :param a: any array-like of truth values.
+    """
     return np.ascontiguousarray(a, dtype=np.bool_)
 
 
@@ -302,13 +311,25 @@ class SteadyIntake(NamedTuple):
 
 def name_plan(joint_from: tuple = (), joint_to: tuple = (), world_from: tuple = (),
               world_to: tuple = (), whole_world: bool = False) -> NamePlan:
-    """Return a NamePlan with its index arrays as int64."""
+    """Return a NamePlan with its index arrays as int64.
+
+    :param joint_from: message index of each joint value the plan takes.
+    :param joint_to: the skeleton joint index each goes to.
+    :param world_from: message index of each world_joint variable the plan takes.
+    :param world_to: the world_joint variable each goes to.
+    :param whole_world: whether every world_joint variable is in the message.
+    """
     return NamePlan(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
                     bool(whole_world))
 
 
 def joint_sample(q: npt.ArrayLike, root: npt.ArrayLike, quat: npt.ArrayLike) -> JointSample:
-    """Return a JointSample of new C float64 arrays with the values given."""
+    """Return a JointSample of new C float64 arrays with the values given.
+
+    :param q: joint values, radians or metres by joint type.
+    :param root: the root's world pose, 4x4.
+    :param quat: the root's orientation as a quaternion (x, y, z, w).
+    """
     return JointSample(floats(q).copy(), floats(root).copy(), floats(quat).copy())
 
 
@@ -317,7 +338,11 @@ def steady_intake(slot: 'CrowdSlot', plan: NamePlan | None = None,
                   limits: tuple = (0.0, 0.0, 0.0)) -> SteadyIntake:
     """Return the SteadyIntake of ``slot``; without ``plan`` and ``last``, unarmed.
 
-    ``last``: (q, root, quaternion) of the last sample.
+    :param slot: the character's crowd slot, whose motion arrays the intake writes.
+    :param plan: where each value of the steady name list goes.
+    :param last: (q, root, quaternion) of the last sample.
+    :param clock: the last sample's stamp (ns), dt_ns and max_steps_per_input.
+    :param limits: reset_gap (s), teleport_distance (m) and teleport_angle_deg.
     """
     q = slot.q_a.shape[0]
     last = last or (np.zeros(q), np.eye(4), np.zeros(4))
@@ -365,7 +390,11 @@ class Scene(NamedTuple):
 
 
 def posed_like(colliders: ColliderModel, n: int) -> Posed:
-    """Zeroed arrays for where ``colliders`` and ``n`` references are at one instant."""
+    """Zeroed arrays for where ``colliders`` and ``n`` references are at one instant.
+
+    :param colliders: the model whose colliders are posed.
+    :param n: how many M11 references.
+    """
     k = len(colliders.capsule_links)
     return Posed(np.zeros(colliders.centers.shape), np.zeros(colliders.rotations.shape),
                  np.zeros((k, 3)), np.zeros((k, 3)), np.zeros(colliders.plane_points.shape),
@@ -373,7 +402,10 @@ def posed_like(colliders: ColliderModel, n: int) -> Posed:
 
 
 def copied(bundle: _Bundle) -> _Bundle:
-    """Return a copy of a bundle (nested ones too) with new arrays of the same values."""
+    """Return a copy of a bundle (nested ones too) with new arrays of the same values.
+
+    :param bundle: a named tuple of arrays, numbers and bundles.
+    """
     if hasattr(bundle, '_fields'):
         return type(bundle)(*(copied(v) for v in bundle))
     if isinstance(bundle, tuple):

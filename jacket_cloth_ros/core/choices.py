@@ -14,7 +14,11 @@ class Choice(enum.IntEnum):
 
     @classmethod
     def parse(cls, text: str, what: str) -> 'Choice':
-        """Return the member named ``text``; else ValueError naming ``what`` and the choices."""
+        """Return the member named ``text``; else ValueError naming ``what`` and the choices.
+
+        :param text: the member's name in lower case, as a parameter gives it.
+        :param what: what the value is, for the error message (a parameter's name).
+        """
         try:
             return cls[str(text).upper()]
         except KeyError:

@@ -110,8 +110,11 @@ class FixedTypes:
     every caller builds its arguments with the bundles' builders, which fix each dtype and
     layout (physics.crowd.load_motion also takes InputParser's Samples, C float64 arrays it
     makes itself; another layout would be misread, which the tests' type check catches).
-    ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call; ``check`` False never
-    does (for timing).
+    ``JACKET_CLOTH_CHECK_TYPES=1`` (set by the tests) checks every call.
+
+    :param dispatcher: the numba dispatcher of the kernel.
+    :param check: whether every call checks its argument types; None: as JACKET_CLOTH_CHECK_TYPES
+        says, False never (for timing).
     """
 
     def __init__(self, dispatcher: 'Dispatcher', check: bool | None = None):
@@ -121,6 +124,11 @@ class FixedTypes:
         self._types = None
 
     def __call__(self, *args: object) -> object:
+        """Call the kernel; the first call through numba's dispatcher, later ones straight in.
+
+        :param args: the kernel's arguments, typed as in the first call.
+        :returns: what the kernel returns.
+        """
         if self._entry is not None:
             if self._check:
                 types = tuple(typeof(a, Purpose.argument) for a in args)

@@ -17,7 +17,10 @@ _SHOW.maxlevel = 2
 
 
 def shown(value: object) -> str:
-    """Return a bounded repr for error lines, whatever the value's size."""
+    """Return a bounded repr for error lines, whatever the value's size.
+
+    :param value: the value shown.
+    """
     return _SHOW.repr(value)
 
 
@@ -44,6 +47,8 @@ def bounded_load(text: str) -> object:
     """Load YAML as yaml.safe_load does, bounded: size, no aliases, no deep nesting.
 
     At most MAX_YAML_BYTES; every refusal is a yaml.YAMLError.
+
+    :param text: the YAML text.
     """
     if len(text) > MAX_YAML_BYTES:
         raise yaml.YAMLError(f'larger than {MAX_YAML_BYTES} bytes')
@@ -73,11 +78,19 @@ def config_dir() -> str:
 
 
 def shipped(name: str) -> str:
+    """Return the path of a file of the shipped config folder.
+
+    :param name: the file's name there (``jacket_rig.yaml``).
+    """
     return os.path.join(config_dir(), name)
 
 
 def parse_yaml(text: str, where: str) -> dict:
-    """YAML text (e.g. carried in a recording) to a mapping, with load_yaml's errors."""
+    """YAML text (e.g. carried in a recording) to a mapping, with load_yaml's errors.
+
+    :param text: the YAML text.
+    :param where: what the text is, as errors name it.
+    """
     try:
         data = bounded_load(text)
     except yaml.YAMLError as e:
@@ -88,7 +101,11 @@ def parse_yaml(text: str, where: str) -> dict:
 
 
 def read_text(path: str, what: str) -> str:
-    """Read a configuration file's text; errors name the file (``what``: 'URDF', 'rig', ...)."""
+    """Read a configuration file's text; errors name the file (``what``: 'URDF', 'rig', ...).
+
+    :param path: the file.
+    :param what: what kind of file, as errors name it.
+    """
     try:
         with open(path, encoding='utf-8') as f:
             return f.read()
@@ -99,6 +116,10 @@ def read_text(path: str, what: str) -> str:
 
 
 def load_yaml(path: str) -> dict:
+    """Read a YAML file's top-level mapping, bounded as ``bounded_load``; errors name the file.
+
+    :param path: the YAML file.
+    """
     try:
         with open(path, encoding='utf-8') as f:
             data = bounded_load(f.read(MAX_YAML_BYTES + 1))
@@ -118,7 +139,14 @@ def _one_line(error):
 
 
 class Section:
-    """Typed access to one mapping of a config file; every error names file and key path."""
+    """Typed access to one mapping of a config file; every error names file and key path.
+
+    A getter with no ``default`` refuses a missing key. Every key read is marked used, for
+    ``reject_unknown``.
+
+    :param data: the mapping.
+    :param where: its file and key path, as errors name it.
+    """
 
     def __init__(self, data: object, where: str):
         if not isinstance(data, dict):
@@ -131,9 +159,18 @@ class Section:
         return f'{self._where}.{key}'
 
     def has(self, key: str) -> bool:
+        """Tell whether the mapping holds ``key`` (without marking it used).
+
+        :param key: the key.
+        """
         return key in self._data
 
     def section(self, key: str, default: dict | None = None) -> 'Section':
+        """Return the mapping under ``key`` as a Section.
+
+        :param key: the key.
+        :param default: the mapping when the key is missing; None: it must be there.
+        """
         self._used.add(key)
         if key not in self._data:
             if default is None:
@@ -142,6 +179,10 @@ class Section:
         return Section(self._data[key], self._path(key))
 
     def sections(self, key: str) -> list['Section']:
+        """Return the list of mappings under ``key`` (at most MAX_ITEMS), each as a Section.
+
+        :param key: the key; missing: an empty list.
+        """
         self._used.add(key)
         items = self._data.get(key, [])
         if not isinstance(items, list):
@@ -152,6 +193,13 @@ class Section:
 
     def number(self, key: str, default: float | None = None, lo: float | None = None,
                hi: float | None = None) -> float:
+        """Return the finite number under ``key``.
+
+        :param key: the key.
+        :param default: the value when the key is missing; None: it must be there.
+        :param lo: the least value accepted; None: no bound.
+        :param hi: the greatest value accepted; None: no bound.
+        """
         self._used.add(key)
         v = self._data.get(key, default)
         if v is None:
@@ -166,6 +214,13 @@ class Section:
 
     def integer(self, key: str, default: int | None = None, lo: int | None = None,
                 hi: int | None = None) -> int:
+        """Return the whole number under ``key``.
+
+        :param key: the key.
+        :param default: the value when the key is missing; None: it must be there.
+        :param lo: the least value accepted; None: no bound.
+        :param hi: the greatest value accepted; None: no bound.
+        """
         v = self.number(key, default, lo, hi)
         if v != int(v):
             raise ConfigError(f'{self._path(key)}: expected a whole number, got {v}')
@@ -173,7 +228,14 @@ class Section:
 
     def vector(self, key: str, n: int = 3, default: list[float] | None = None,
                lo: float = -MAX_COORDINATE, hi: float = MAX_COORDINATE) -> list[float]:
-        """Return a list of ``n`` finite numbers, each in [lo, hi]."""
+        """Return a list of ``n`` finite numbers, each in [lo, hi].
+
+        :param key: the key.
+        :param n: how many numbers.
+        :param default: the list when the key is missing; None: it must be there.
+        :param lo: the least value accepted of each.
+        :param hi: the greatest value accepted of each.
+        """
         self._used.add(key)
         v = self._data.get(key, default)
         ok = isinstance(v, (list, tuple)) and len(v) == n and all(
@@ -189,6 +251,12 @@ class Section:
 
     def text(self, key: str, default: str | None = None,
              choices: tuple[str, ...] | None = None) -> str:
+        """Return the non-empty string under ``key``.
+
+        :param key: the key.
+        :param default: the value when the key is missing; None: it must be there.
+        :param choices: the values accepted; None: any.
+        """
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, str) or not v:
@@ -198,6 +266,11 @@ class Section:
         return v
 
     def texts(self, key: str, default: list[str] | None = None) -> list[str]:
+        """Return the list of strings under ``key``.
+
+        :param key: the key.
+        :param default: the list when the key is missing; None: it must be there.
+        """
         self._used.add(key)
         v = self._data.get(key, default)
         if not isinstance(v, list) or not all(isinstance(e, str) for e in v):

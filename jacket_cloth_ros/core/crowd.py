@@ -36,7 +36,10 @@ if TYPE_CHECKING:           # for the annotations only
 
 
 def threads_for(wanted: int) -> int:
-    """Return the threads a crowd uses for ``wanted`` (0: one per core numba sees)."""
+    """Return how many threads a crowd uses.
+
+    :param wanted: the threads asked for; 0: one per core numba sees.
+    """
     most = numba.config.NUMBA_NUM_THREADS
     return most if wanted <= 0 else min(int(wanted), most)
 
@@ -56,7 +59,7 @@ def threading_layer() -> str:
 class CrowdSteps:
     """The compiled steps of many simulations, run together.
 
-    ``threads``: how many threads the call spreads over (0: all cores, as NUMBA_NUM_THREADS).
+    :param threads: how many threads the call spreads over (0: all cores, as NUMBA_NUM_THREADS).
     """
 
     def __init__(self, threads: int = 0):
@@ -79,7 +82,10 @@ class CrowdSteps:
         self.steady_inputs = 0      # inputs the compiled intake took
 
     def add(self, sim: 'JacketSimulation') -> int:
-        """Add a simulation; returns its index."""
+        """Add a simulation; returns its index.
+
+        :param sim: a simulation, stepped with the others from now on.
+        """
         index = len(self.sims)
         self.sims.append(sim)
         slot, key = self._slot(sim)
@@ -142,10 +148,11 @@ class CrowdSteps:
     def prepare_steady(self, inputs: Sequence[tuple]) -> tuple[list, list]:
         """Check and load the inputs of armed simulations in one compiled call.
 
-        ``inputs``: (k, simulation index, stamp ns, names, positions), at most one per
-        simulation. Returns (taken, rest): taken as (k, index, StepReport, StepJob), what
-        JacketSimulation.prepare would have returned, their motion already in the slot (for
-        :meth:`run`'s ``loaded``); the rest, in the same form as given, for prepare.
+        :param inputs: (k, simulation index, stamp ns, names, positions), at most one per
+            simulation.
+        :returns: (taken, rest): taken as (k, index, StepReport, StepJob), what
+            JacketSimulation.prepare would have returned, their motion already in the slot (for
+            :meth:`run`'s ``loaded``); the rest, in the same form as given, for prepare.
         """
         armed, sims, mine = self._armed, self.sims, self._mine
         fast, rest = [], []
@@ -198,6 +205,10 @@ class CrowdSteps:
         It may if prepare would take it on from here as steady_input does: this input was
         stepped without a warning, reset or skipped step, at full detail with no viewer, and
         its name list is a tuple (a list could change under the same object).
+
+        :param index: the simulation's index in the crowd.
+        :param names: the input's joint name list.
+        :param report: the input's step report.
         """
         sim = self.sims[index]
         if (not isinstance(names, tuple) or not report.accepted or report.reset
@@ -214,17 +225,19 @@ class CrowdSteps:
         self._set_intake(index, steady_intake(
             self._mine[index], plan, (last.q, last.root, last.root_quat),
             (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
-            (p.reset_gap, p.teleport_distance, p.teleport_angle_deg)))
+            (p.reset_gap, sim.teleport_m, p.teleport_angle_deg)))
         self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)
 
     def run(self, jobs: Sequence[tuple[int, 'StepJob']],
             loaded: frozenset = frozenset()) -> list[tuple[StepOutput, int]]:
         """Run each (simulation index, prepared job) in one call; returns (output, status) each.
 
-        The status is crowd_steps's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). At most
-        one job per simulation; ``loaded``: the simulations whose job :meth:`prepare_steady`
-        loaded. Each output is that simulation's own arrays, written again by its next job:
+        The status is crowd_steps's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). Each
+        output is that simulation's own arrays, written again by its next job:
         JacketSimulation.complete takes them at once.
+
+        :param jobs: (simulation index, job from prepare), at most one job per simulation.
+        :param loaded: the simulations whose job :meth:`prepare_steady` loaded.
         """
         if not jobs:
             return []
@@ -257,7 +270,11 @@ class CrowdSteps:
         return out
 
     def bones(self, index: int, finite: bool) -> Bones:
-        """Return simulation ``index``'s bones as the last call left them (a copy)."""
+        """Return simulation ``index``'s bones as the last call left them (a copy).
+
+        :param index: the simulation's index in the crowd.
+        :param finite: whether the call found the bones finite (its status), kept in the Bones.
+        """
         sim = self.sims[index]
         return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
 
@@ -281,13 +298,18 @@ def _put(items, mine, put, index, item):
 def stepped(steps: CrowdSteps,
             inputs: Sequence[tuple[int, int, Sequence[str], np.ndarray]],
             after_round: Callable[[list[int], list, bool], None] | None = None) -> list:
-    """Process inputs (simulation index, stamp ns, names, positions) as rounds of one call.
+    """Process inputs as rounds of one call.
 
-    A round takes at most one input per simulation, in their order. Returns each input's
-    StepReport, in the inputs' order; ``step_cost_ns`` is its round's wall time. After each
-    round, ``after_round(its inputs' indices, the reports, whether it was the last)`` may take
-    the outputs of its inputs: a simulation with another input in a later round is stepped on
-    then, and its state is no longer this input's.
+    A round takes at most one input per simulation, in their order.
+
+    :param steps: the crowd's compiled steps, every simulation of the inputs added.
+    :param inputs: (simulation index, stamp ns, names, positions) each.
+    :param after_round: called after each round with its inputs' indices, the reports and
+        whether it was the last; it may take the outputs of its inputs (a simulation with
+        another input in a later round is stepped on then, and its state is no longer this
+        input's).
+    :returns: each input's StepReport, in the inputs' order; ``step_cost_ns`` is its round's
+        wall time.
     """
     sims = steps.sims
     reports = [None] * len(inputs)

@@ -28,6 +28,10 @@ class Fabric:
     max_horizontal_stretch: float = DEFAULT_MAX_HORIZONTAL_STRETCH
 
     def with_values(self, **changes: float) -> 'Fabric':
+        """Return a copy of the preset with some values changed.
+
+        :param changes: the new values by field name.
+        """
         return replace(self, **changes)
 
 
@@ -42,13 +46,20 @@ OPTIONAL = {'max_horizontal_stretch': DEFAULT_MAX_HORIZONTAL_STRETCH}
 
 
 def load_fabrics(path: str | None = None) -> dict[str, Fabric]:
-    """All presets of a fabrics YAML file, validated; {name: Fabric}."""
+    """All presets of a fabrics YAML file, validated; {name: Fabric}.
+
+    :param path: the fabrics YAML file; None: the shipped ``fabrics.yaml``.
+    """
     path = path or shipped('fabrics.yaml')
     return fabrics_from_data(load_yaml(path), path)
 
 
 def fabrics_from_data(data: dict, path: str) -> dict[str, Fabric]:
-    """Presets from parsed YAML; ``path`` names where they came from in error messages."""
+    """Presets from parsed YAML; ``path`` names where they came from in error messages.
+
+    :param data: the parsed YAML, {name: {field: value}}.
+    :param path: where the data came from, named in error messages.
+    """
     out = {}
     for name in data:
         sec = Section(data[name], f'{path}: {shown(name)}')
@@ -65,6 +76,11 @@ def fabrics_from_data(data: dict, path: str) -> dict[str, Fabric]:
 
 
 def load_fabric(name: str, path: str | None = None) -> Fabric:
+    """Return one preset of a fabrics YAML file, validated.
+
+    :param name: the preset's name.
+    :param path: the fabrics YAML file; None: the shipped ``fabrics.yaml``.
+    """
     presets = load_fabrics(path)
     if name not in presets:
         raise ConfigError(f'fabric {name!r} is not a preset (presets: {", ".join(presets)})')

@@ -12,7 +12,11 @@ import numpy as np
 
 @functools.lru_cache(maxsize=8)
 def grid_triangles(rows: int, cols: int) -> np.ndarray:
-    """Vertex indices of the cloth mesh: two triangles per grid quad, flat (3 per triangle)."""
+    """Vertex indices of the cloth mesh: two triangles per grid quad, flat (3 per triangle).
+
+    :param rows: the grid's vertex rows.
+    :param cols: the grid's vertex columns.
+    """
     tri = []
     for r in range(rows - 1):
         for c in range(cols - 1):
@@ -23,7 +27,11 @@ def grid_triangles(rows: int, cols: int) -> np.ndarray:
 
 @functools.lru_cache(maxsize=8)
 def grid_lines(rows: int, cols: int) -> np.ndarray:
-    """Vertex indices of the grid's horizontal and vertical edges, flat (2 per edge)."""
+    """Vertex indices of the grid's horizontal and vertical edges, flat (2 per edge).
+
+    :param rows: the grid's vertex rows.
+    :param cols: the grid's vertex columns.
+    """
     lines = []
     for r in range(rows):
         for c in range(cols):

@@ -25,7 +25,11 @@ WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', '
 
 
 class InputRejected(ValueError):
-    """The message cannot be used at all; ``code`` names the case for rate-limited logging."""
+    """The message cannot be used at all.
+
+    :param code: names the case, for rate-limited logging.
+    :param text: the line to log.
+    """
 
     def __init__(self, code: str, text: str):
         super().__init__(text)
@@ -42,7 +46,11 @@ class Sample:
 
 
 class InputParser:
-    """Maps names to skeleton joints; holds the last value of joints a message leaves out."""
+    """Maps names to skeleton joints; holds the last value of joints a message leaves out.
+
+    :param skeleton: the skeleton whose joints the messages move.
+    :param world_joint: the prefix of the root's world pose variables (``world_joint/trans_x``).
+    """
 
     def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint'):
         self.skeleton = skeleton
@@ -52,6 +60,10 @@ class InputParser:
                                 np.array([0.0, 0.0, 0.0, 1.0]))
 
     def set_world_joint(self, name: str) -> None:
+        """Take the root's world pose from variables with another prefix; forget the plans.
+
+        :param name: the new prefix.
+        """
         self.world_joint = name
         self.world_names = {f'{name}/{v}': k for k, v in enumerate(WORLD_VARIABLES)}
         self._plans = {}
@@ -60,6 +72,8 @@ class InputParser:
         """Return where each name of a message goes, and the warnings its name list earns.
 
         Worked out once per distinct name list (a publisher sends the same list every time).
+
+        :param names: a message's joint name list.
         """
         plan = self._plans.get(names)
         if plan is not None:
@@ -96,6 +110,12 @@ class InputParser:
         return plan
 
     def parse(self, stamp_ns: int, names: Sequence[str], positions: npt.ArrayLike) -> Sample:
+        """Return a message's skeleton sample; InputRejected if it cannot be used at all.
+
+        :param stamp_ns: the message's stamp, ns.
+        :param names: its joint names.
+        :param positions: its positions, radians or metres by joint type, one per name.
+        """
         names = tuple(names)
         positions = np.asarray(positions, dtype=float)
         if len(names) == 0 and len(positions) == 0:

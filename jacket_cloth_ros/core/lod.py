@@ -46,7 +46,10 @@ class LevelOfDetail:
         self._tuned = (None, None, None)    # (tuning, step, the tuning at that step)
 
     def set_viewer(self, position: np.ndarray | None) -> None:
-        """Set the viewer's world position (None: no viewer, full detail)."""
+        """Set the viewer's world position (None: no viewer, full detail).
+
+        :param position: the viewer's world position, (3,) metres; None: no viewer, full detail.
+        """
         self.viewer = None if position is None else np.array(position, dtype=float)
 
     def _level_at(self, distance: float, distances: tuple) -> int:
@@ -59,7 +62,14 @@ class LevelOfDetail:
 
     def plan(self, root_position: np.ndarray, distances: tuple, blend_s: float,
              steps: int, dt_s: float) -> LodStep:
-        """Decide the level for ``steps`` steps of ``dt_s`` with the root at ``root_position``."""
+        """Decide the level of one input's steps, and their skinned share from and to.
+
+        :param root_position: the skeleton root's world position, (3,) metres.
+        :param distances: the viewer distances (m) at which each coarser level starts.
+        :param blend_s: how long the skinned share takes to blend between 0 and 1, seconds.
+        :param steps: how many steps the input runs.
+        :param dt_s: each step's length, seconds.
+        """
         if self.viewer is None:
             distance = 0.0
         else:
@@ -78,6 +88,9 @@ class LevelOfDetail:
         A crowd hands a character's tuning to its compiled slot only when the object changes
         (core/crowd.py), so a new one per input would cost the far characters what the level
         saves them.
+
+        :param tuning: the character's full-detail tuning.
+        :param step: the level the input's steps run at.
         """
         base, last, tuned = self._tuned
         if base is not tuning or last != step:
@@ -87,7 +100,11 @@ class LevelOfDetail:
 
     @staticmethod
     def tuning(tuning: Tuning, step: LodStep) -> Tuning:
-        """Return ``tuning`` as the compiled steps take it at ``step``'s level."""
+        """Return ``tuning`` as the compiled steps take it at ``step``'s level.
+
+        :param tuning: the character's full-detail tuning.
+        :param step: the level the input's steps run at.
+        """
         if step.level == 0 and step.skin_from == step.skin_to == 0.0:
             return tuning
         if step.level >= 1:

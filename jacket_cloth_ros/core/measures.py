@@ -32,6 +32,11 @@ def edge_strain(x: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -
 
     As ``length / rest - 1`` and ``1 - length / rest`` (0 if none); each names the edge's
     lower vertex ``b``.
+
+    :param x: the vertices' positions, (N, 3) in m.
+    :param a: each edge's first vertex.
+    :param b: each edge's second (lower) vertex.
+    :param rest: each edge's rest length, m.
     """
     if len(a) == 0:
         return Worst(0.0, -1), Worst(0.0, -1)
@@ -45,9 +50,12 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
                  labels: Sequence[str]) -> Worst:
     """Find the deepest free vertex inside any collider (m), with the collider's label.
 
-    ``colliders``: bundles.Colliders in the frame of ``x``; ``labels``: one name per
-    ellipsoid, capsule and plane, in that order. Depth is the distance to the surface point
-    the push-out would move the vertex to.
+    Depth is the distance to the surface point the push-out would move the vertex to.
+
+    :param x: the vertices' positions, (N, 3) in m.
+    :param free: which vertices are free (not pinned), (N,).
+    :param colliders: the body's colliders in the frame of ``x``.
+    :param labels: one name per ellipsoid, capsule and plane, in that order.
     """
     best = Worst(SURFACE, -1)       # on the surface (rounding) is not inside
     idx = np.flatnonzero(free)
@@ -84,5 +92,8 @@ def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
 
 
 def collider_labels(rig: 'Rig') -> list:
-    """Return the rig's name of each collider, in the order of bundles.Colliders."""
+    """Return the rig's name of each collider, in the order of bundles.Colliders.
+
+    :param rig: the rig whose ellipsoids, capsules and planes are named.
+    """
     return [c.name for c in (*rig.colliders, *rig.capsules, *rig.planes)]

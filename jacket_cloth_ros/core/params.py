@@ -15,6 +15,10 @@ import numpy as np
 from .physics.cloth import Solver, StretchLimit
 from .physics.step import gust_scale
 
+# The automatic teleport distance per metre of the character's height (1 m for a person): a
+# threshold in metres would reset a giant's every stride and miss a doll's teleport.
+AUTO_TELEPORT_PER_HEIGHT = 0.6
+
 
 def _param(default, doc, lo=None, hi=None, choices=None):
     """Make a parameter's field: its default, meaning, range (inclusive) or choices."""
@@ -52,7 +56,8 @@ class SimParams:
     reset_gap: float = _param(1.0, 'a gap between stamps longer than this (s) resets the cloth',
                               0.05, 60.0)
     teleport_distance: float = _param(
-        1.0, 'world move between two inputs (m) treated as a teleport: reset', 0.01, 1000.0)
+        0.0, 'world move between two inputs (m) treated as a teleport: reset; 0: '
+        f'{AUTO_TELEPORT_PER_HEIGHT:g} times the character\'s height', 0.0, 1000.0)
     teleport_angle_deg: float = _param(
         90.0, 'world turn between two inputs (deg) treated as a jump: reset', 1.0, 180.0)
 
@@ -76,13 +81,19 @@ class SimParams:
             object.__setattr__(self, name, value)
 
     def with_values(self, **changes: object) -> 'SimParams':
-        """Return a copy with ``changes`` (validated)."""
+        """Return a copy with ``changes`` (validated).
+
+        :param changes: new values by field name.
+        """
         return replace(self, **changes)
 
     def wind_at(self, t_ns: int) -> np.ndarray:
         """Wind at a step's time: the set vector, varied by two slow incommensurate gusts.
 
         A function of the step's stamp only, so a replay sees exactly the live wind.
+
+        :param t_ns: the step's stamp, ns.
+        :returns: the wind, (3,) m/s in the world frame.
         """
         return np.asarray(self.wind, dtype=float) * gust_scale(
             int(t_ns), float(self.wind_gust), float(self.wind_gust_period))
@@ -100,7 +111,11 @@ SIM_FIELDS = {f.name: f for f in fields(SimParams)}
 
 
 def check_sim_value(name: str, value: object) -> str:
-    """Why ``value`` is not valid for SimParams field ``name``, or ''."""
+    """Why ``value`` is not valid for SimParams field ``name``, or ''.
+
+    :param name: a SimParams field.
+    :param value: the value asked for.
+    """
     meta = SIM_FIELDS[name].metadata
     if meta['choices'] is not None:
         return '' if str(value).upper() in meta['choices'].__members__ else (

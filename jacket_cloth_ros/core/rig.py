@@ -76,6 +76,11 @@ def interleaved_order(a: npt.ArrayLike, b: npt.ArrayLike, window: int = 4) -> np
     comes next). Each projection then no longer waits for the one before it to store its vertex,
     so the CPU overlaps their square roots and divisions (docs/performance.md); the order stays
     top-down to within a few constraints.
+
+    :param a: each constraint's first vertex, in top-down order.
+    :param b: each constraint's second vertex.
+    :param window: how many constraints before each share no vertex with it.
+    :returns: the constraints' indices in the new order.
     """
     left = list(range(len(a)))
     order, recent = [], []
@@ -97,6 +102,12 @@ def split_ellipsoid(center: npt.ArrayLike, rotation: np.ndarray, radii: npt.Arra
 
     Pushing out in ellipsoid space bends the push direction more the more the ellipsoid is
     stretched, so the longest axis is cut until no piece's ratio exceeds ``max_ratio``.
+
+    :param center: the ellipsoid's centre, (3,) in its link's frame.
+    :param rotation: its axes as columns, 3x3.
+    :param radii: its three radii, metres.
+    :param max_ratio: the largest ratio of a piece's longest radius to its shortest.
+    :returns: (center, rotation, radii) of each piece.
     """
     radii = np.asarray(radii, dtype=float)
     long_axis = int(np.argmax(radii))
@@ -118,9 +129,13 @@ def split_ellipsoid(center: npt.ArrayLike, rotation: np.ndarray, radii: npt.Arra
 
 
 def body_axes(up: npt.ArrayLike, forward: npt.ArrayLike, where: str) -> np.ndarray:
-    """Return columns forward, left, up (world) of a rig's ``up`` and ``forward`` vectors.
+    """Return columns forward, left, up (world) of a rig's up and forward vectors.
 
-    ``forward`` is made square to ``up``; one clear line if either is zero or they are parallel.
+    One clear line if either is zero or they are parallel.
+
+    :param up: the rig's up vector, world.
+    :param forward: the rig's forward vector, world; made square to ``up``.
+    :param where: the rig's place, for error messages.
     """
     up, forward = np.asarray(up, dtype=float), np.asarray(forward, dtype=float)
     for key, v in (('up', up), ('forward', forward)):
@@ -142,7 +157,12 @@ def _clean(rotation):
 
 
 class Rig:
-    """A validated rig fitted to a skeleton."""
+    """A validated rig fitted to a skeleton.
+
+    :param data: the parsed rig YAML.
+    :param skeleton: the skeleton it is fitted to.
+    :param where: the rig's file, for error messages.
+    """
 
     def __init__(self, data: dict, skeleton: 'Skeleton', where: str = 'rig'):
         top = Section(data, where)
@@ -160,6 +180,8 @@ class Rig:
                 raise ConfigError(f'{where}.world_up: {world_up.tolist()} must not be zero')
             self.world_up = world_up / np.linalg.norm(world_up)
         self._rest = rest
+        # The skeleton's extent along up at rest, link origins: what thresholds scale with.
+        self.height_m = float(np.ptp(rest[:, :3, 3] @ self.up))
         cloth = top.section('cloth')
         self.cols = cloth.integer('cols', lo=3, hi=64)
         self.rows = cloth.integer('rows', lo=3, hi=64)
@@ -229,8 +251,9 @@ class Rig:
     def axes_at(self, link: int, section: Section | None = None) -> np.ndarray:
         """Return a part's front, left and up axes (columns) in its link's frame.
 
-        From the section's ``rpy_deg`` if it has one, else the rig's forward and up seen from
-        the link at the zero pose.
+        :param link: the part's link index.
+        :param section: the part's rig section; from its ``rpy_deg`` if it has one, else the rig's
+            forward and up seen from the link at the zero pose.
         """
         if section is not None and section.has('rpy_deg'):
             return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
@@ -434,12 +457,20 @@ def _collider_entries(top, skeleton, where):
 
 
 def load_rig(skeleton: 'Skeleton', path: str | None = None) -> Rig:
+    """Return the rig of a YAML file, fitted to ``skeleton``.
+
+    :param skeleton: the skeleton the rig is fitted to.
+    :param path: the rig file; None: the shipped ``jacket_rig.yaml``.
+    """
     path = path or shipped('jacket_rig.yaml')
     return Rig(load_yaml(path), skeleton, where=path)
 
 
 def cloth_model(rig: Rig) -> ClothModel:
-    """Return a core.rig.Rig's cloth, pins, references and hood."""
+    """Return a core.rig.Rig's cloth, pins, references and hood.
+
+    :param rig: the rig.
+    """
     pinned_a, pinned_b = ~rig.free[rig.con_a], ~rig.free[rig.con_b]
     held, top_row = rig.horiz & ~(pinned_a & pinned_b), rig.horiz & pinned_a & pinned_b
     # Row by row, as the hard pass walks them (physics.cloth.hard_pass_with_strain_limit).
@@ -457,7 +488,10 @@ def cloth_model(rig: Rig) -> ClothModel:
 
 
 def collider_model(rig: Rig) -> ColliderModel:
-    """Return a core.rig.Rig's colliders in their links' frames."""
+    """Return a core.rig.Rig's colliders in their links' frames.
+
+    :param rig: the rig.
+    """
     return ColliderModel(
         ints(rig.collider_links), floats(rig.collider_centers), floats(rig.collider_rotations),
         floats(rig.collider_radii), ints(rig.capsule_links), floats(rig.capsule_ends),
@@ -466,6 +500,10 @@ def collider_model(rig: Rig) -> ColliderModel:
 
 
 def model_of(skeleton: 'Skeleton', rig: Rig) -> Model:
-    """Return the fixed bundle of a skeleton and the rig fitted to it."""
+    """Return the fixed bundle of a skeleton and the rig fitted to it.
+
+    :param skeleton: the skeleton.
+    :param rig: the rig fitted to it.
+    """
     return Model(skeleton.model, rig.layer.model if rig.layer else layer_model(), cloth_model(rig),
                  collider_model(rig))

@@ -26,7 +26,7 @@ from .compiled import FixedTypes
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
 from .measures import collider_labels, depth_inside, edge_strain
-from .params import SimParams
+from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
@@ -62,6 +62,9 @@ def per_step(share: npt.ArrayLike, exponent: float) -> float | np.ndarray:
     """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
 
     The compiled step's formula: physics.step.lost_per.
+
+    :param share: the share lost per design step (1 / DESIGN_RATE s), one or an array.
+    :param exponent: the step's length in design steps.
     """
     if np.ndim(share) == 0:
         return step.lost_per(float(share), float(exponent))
@@ -77,6 +80,9 @@ def xpbd_compliance(stiffness: npt.ArrayLike, iterations: int) -> np.ndarray | f
     For one constraint between two unit masses, n sweeps of stiffness k correct a share
     k_n = 1 - (1 - k)^n of the error, and XPBD corrects 2 / (2 + alpha / dt^2), so
     alpha = 2 dt^2 (1 - k_n) / k_n with dt = 1 / DESIGN_RATE. Stiffness 1 gives alpha = 0.
+
+    :param stiffness: the share of the error a sweep corrects, one or an array.
+    :param iterations: the sweeps per design step.
     """
     k = 1.0 - (1.0 - np.asarray(stiffness, dtype=float)) ** iterations
     with np.errstate(divide='ignore'):
@@ -129,7 +135,14 @@ class StepJob:
 
 
 def motion_between(a: Sample, b: Sample, t_sim: int, dt_ns: int, steps: int) -> Motion:
-    """Return the Motion of ``steps`` fixed steps from sample ``a`` towards ``b``."""
+    """Return the Motion of ``steps`` fixed steps from sample ``a`` towards ``b``.
+
+    :param a: the input the steps run from.
+    :param b: the input they run to.
+    :param t_sim: the time of the last step run before them, ns.
+    :param dt_ns: a step's length, ns.
+    :param steps: how many steps.
+    """
     return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
                   floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
                   int(b.stamp_ns - a.stamp_ns), int(t_sim), int(dt_ns), int(steps))
@@ -168,6 +181,12 @@ class JacketSimulation:
     skeleton, rig and their compiled ``model`` (fixed), the fabric's and parameters' values
     as ``tuning`` (rebuilt on a live change) and the moving ``state`` (cloth, hood, root),
     each once: ``x``, ``hood_p`` and the rest are views of ``state``.
+
+    :param skeleton: the character.
+    :param rig: its jacket rig.
+    :param fabric: the fabric's values.
+    :param params: the simulation's parameters.
+    :param world_joint: the prefix of the root's world pose variables in a JointState.
     """
 
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabric: 'Fabric',
@@ -286,23 +305,37 @@ class JacketSimulation:
 
     # -- parameters -------------------------------------------------------------------------
     def set_fabric(self, fabric: 'Fabric') -> None:
-        """Live change: new parameters act from the next step; the cloth is not reset."""
+        """Live change: new parameters act from the next step; the cloth is not reset.
+
+        :param fabric: the fabric's new values.
+        """
         self.fabric = fabric
         self.tuning = self._tuning()
 
     def set_params(self, params: SimParams) -> None:
-        """Live change of the simulation's parameters, as set_fabric."""
+        """Live change of the simulation's parameters, as set_fabric.
+
+        :param params: the new parameters.
+        """
         self.params = params
         self.tuning = self._tuning()
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links: np.ndarray,
                          layer: LayerPose | None = None) -> np.ndarray:
-        """M11: each vertex's rest position carried by its nearest bone (see _skinned_pose)."""
+        """M11: each vertex's rest position carried by its nearest bone (see _skinned_pose).
+
+        :param links: the link transforms (L, 4, 4) in the simulation frame.
+        :param layer: the M1/M2 bones solved for ``links``; None: none.
+        """
         return self._skinned_pose(links, layer)[1]
 
     def pinned_points(self, links: np.ndarray, layer: LayerPose | None = None) -> np.ndarray:
-        """M6: where the top row is (see _skinned_pose)."""
+        """M6: where the top row is (see _skinned_pose).
+
+        :param links: the link transforms (L, 4, 4) in the simulation frame.
+        :param layer: the M1/M2 bones solved for ``links``; None: none.
+        """
         return self._skinned_pose(links, layer)[0]
 
     def _skinned_pose(self, links, layer, outside=True):
@@ -336,7 +369,10 @@ class JacketSimulation:
         return self._layer[1]
 
     def hood_anchor(self, links: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return the hood bone's centre and its link's rotation, in the simulation frame."""
+        """Return the hood bone's centre and its link's rotation, in the simulation frame.
+
+        :param links: the link transforms (L, 4, 4) in the simulation frame.
+        """
         t = links[self.rig.hood.link]
         return t[:3, :3] @ self.rig.hood.pivot + t[:3, 3], t[:3, :3]
 
@@ -374,6 +410,9 @@ class JacketSimulation:
         skinned pose as it is, before the colliders. Such an input is counted in ``faults``
         and ``report.reset`` says why. Bones still not finite (a degenerate skeleton pose) are
         returned as they are: the caller publishes none.
+
+        :param report: the report of the input just processed; its ``reset`` is set if the
+            cloth resets here. An input is checked once, however often this is called.
         """
         bones = self.bones()
         if (bones.finite or not report.accepted or self.last is None
@@ -475,7 +514,12 @@ class JacketSimulation:
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns: int, names: Sequence[str],
                 positions: npt.ArrayLike) -> StepReport:
-        """Advance the simulation to ``stamp_ns`` with one JointState's content."""
+        """Advance the simulation to ``stamp_ns`` with one JointState's content.
+
+        :param stamp_ns: the JointState's header stamp, ns.
+        :param names: its joint names.
+        :param positions: its positions, one per name (rad or m).
+        """
         started = time.perf_counter_ns()
         report, job = self.prepare(stamp_ns, names, positions)
         if job is not None:
@@ -498,6 +542,10 @@ class JacketSimulation:
         Else run the job's motion through physics.step.advance (alone ``job.motion``; a crowd
         loads it into its slot, physics.crowd.load_motion) and hand the outcome to
         :meth:`complete`.
+
+        :param stamp_ns: the JointState's header stamp, ns.
+        :param names: its joint names.
+        :param positions: its positions, one per name (rad or m).
         """
         report = StepReport(stamp_ns)
         self.ready_bones = None
@@ -548,7 +596,10 @@ class JacketSimulation:
     def complete(self, report: StepReport, job: 'StepJob', out: StepOutput, ran: bool) -> None:
         """Take a job's steps into the simulation; a non-finite cloth is reset.
 
-        ``out`` is what the steps left; ``ran`` is False if they stopped on a division by zero.
+        :param report: the input's report, from :meth:`prepare`.
+        :param job: the steps run.
+        :param out: what the steps left.
+        :param ran: False if they stopped on a division by zero.
         """
         finite = ran
         if ran:
@@ -580,10 +631,15 @@ class JacketSimulation:
         if gap > self.params.reset_gap:
             report.reset = f'gap of {gap:.2f} s between stamps'
 
+    @property
+    def teleport_m(self) -> float:
+        """The world move between two inputs (m) treated as a teleport: set, or from the height."""
+        return self.params.teleport_distance or AUTO_TELEPORT_PER_HEIGHT * self.rig.height_m
+
     def _jump(self, a, b):
         """Why the world move from sample a to b is too big to simulate through, or ''."""
         move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
-        if move > self.params.teleport_distance:
+        if move > self.teleport_m:
             return f'teleport: moved {move:.2f} m between two inputs'
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
@@ -609,6 +665,8 @@ class JacketSimulation:
         """Set the viewer's world position for the level of detail (None: full detail).
 
         An input like a JointState: from the next one on, until set again.
+
+        :param position: the viewer, (3,) in the world frame, m; None: full detail.
         """
         self.lod.set_viewer(position)
 
@@ -644,6 +702,15 @@ class JacketSimulation:
         """Return cloth.cloth_step's bundles for one step of the current state, no substeps.
 
         By default at the current pose with the fabric's forces; the lab times the kernel on them.
+
+        :param links: the link transforms (L, 4, 4) in the simulation frame; None: the current.
+        :param root: the root's world pose (4, 4); None: the current.
+        :param ref: the M11 reference points (N, 3); None: those of ``links``.
+        :param acc: each vertex's acceleration (N, 3), m/s^2 in the simulation frame; None:
+            gravity and wind.
+        :param damping: each vertex's share of velocity lost per step; None: the fabric's.
+        :param contact_damping: the share lost per step in contact; None: the fabric's.
+        :param dt: the step's length, s; None: the simulation's.
         """
         p, f = self.params, self.fabric
         links = self.links if links is None else links
@@ -667,7 +734,13 @@ class JacketSimulation:
                 now)
 
     def hood_step(self, links: np.ndarray, acc: np.ndarray, dt: float, damping: float) -> None:
-        """M8: one Verlet particle on a rod of fixed length from the hood bone's centre."""
+        """M8: one Verlet particle on a rod of fixed length from the hood bone's centre.
+
+        :param links: the link transforms (L, 4, 4) in the simulation frame.
+        :param acc: the particle's acceleration (3,), m/s^2 in the simulation frame.
+        :param dt: the step's length, s.
+        :param damping: the share of velocity lost in the step.
+        """
         hood.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
                        float(dt), float(damping))
 
@@ -683,7 +756,9 @@ class JacketSimulation:
     def collider_frames(self, links: np.ndarray, root: np.ndarray | None = None) -> Colliders:
         """Every collider in the simulation frame, for the kernel and the markers.
 
-        Planes fixed in the world (the floor) need the root's world pose ``root``.
+        :param links: the link transforms (L, 4, 4) in the simulation frame.
+        :param root: the root's world pose (4, 4), for the planes fixed in the world (the
+            floor); None: the current.
         """
         c = self._posed(links, self.root if root is None else root)
         return Colliders(c.centers, c.axes, floats(self.rig.collider_radii), c.cap_a, c.cap_b,

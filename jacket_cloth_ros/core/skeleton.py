@@ -23,7 +23,10 @@ _MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
 
 
 class Skeleton:
-    """Links, joints and forward kinematics of a URDF character."""
+    """Links, joints and forward kinematics of a URDF character.
+
+    :param urdf_xml: the URDF's XML text.
+    """
 
     def __init__(self, urdf_xml: str):
         if not isinstance(urdf_xml, str) or not urdf_xml.strip():
@@ -101,13 +104,21 @@ class Skeleton:
         self.model = skeleton_model(self)
 
     def link(self, name: str, where: str = 'rig') -> int:
+        """Return the index of a link; a ConfigError if the URDF has no such link.
+
+        :param name: the link's name.
+        :param where: what names it, the error's prefix.
+        """
         if name not in self.link_index:
             raise ConfigError(f'{where}: link {name!r} is not in the URDF '
                               f'(links: {", ".join(self.link_names)})')
         return self.link_index[name]
 
     def forward(self, q: np.ndarray) -> np.ndarray:
-        """Link transforms (L,4,4) in the root link's frame for joint values q (J,)."""
+        """Link transforms (L,4,4) in the root link's frame for joint values q (J,).
+
+        :param q: the joint values (rad or m), in ``joint_names``' order.
+        """
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
@@ -193,8 +204,10 @@ def load_shipped_character() -> Skeleton:
 def skeleton_from(text: str, where: str) -> Skeleton:
     """Return the skeleton of a URDF's text read from a file.
 
-    Every error names the file (``where``, e.g. 'URDF path'), an empty file too: it never
-    means the shipped character.
+    Every error names the file, an empty file too: it never means the shipped character.
+
+    :param text: the URDF's XML text.
+    :param where: the file, as errors name it (e.g. 'URDF path').
     """
     if not text.strip():
         raise ConfigError(f'{where}: empty file')
@@ -208,12 +221,18 @@ def skeleton_from(text: str, where: str) -> Skeleton:
 
 
 def load_skeleton(path: str) -> Skeleton:
-    """Load the skeleton of a URDF file; errors name the file."""
+    """Load the skeleton of a URDF file; errors name the file.
+
+    :param path: the URDF file.
+    """
     return skeleton_from(read_text(path, 'URDF'), f'URDF {path}')
 
 
 def skeleton_model(skeleton: Skeleton) -> SkeletonModel:
-    """Return the kinematic arrays of a core.skeleton.Skeleton."""
+    """Return the kinematic arrays of a core.skeleton.Skeleton.
+
+    :param skeleton: the character whose arrays the kernels take.
+    """
     return SkeletonModel(floats(skeleton.origin), floats(skeleton.axis), ints(skeleton.kind),
                          ints(skeleton.var), floats(skeleton.mult), floats(skeleton.offset),
                          ints(skeleton.parent))

@@ -6,7 +6,10 @@ import numpy.typing as npt
 
 
 def rpy_matrix(rpy: npt.ArrayLike) -> np.ndarray:
-    """URDF roll-pitch-yaw (fixed axes x, y, z) to a 3x3 rotation."""
+    """URDF roll-pitch-yaw (fixed axes x, y, z) to a 3x3 rotation.
+
+    :param rpy: roll, pitch, yaw in radians.
+    """
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
     return np.array([
@@ -17,7 +20,10 @@ def rpy_matrix(rpy: npt.ArrayLike) -> np.ndarray:
 
 
 def quat_to_matrix(q: npt.ArrayLike) -> np.ndarray:
-    """(...,4) quaternions (x, y, z, w), normalised here, to (...,3,3) rotations."""
+    """(...,4) quaternions (x, y, z, w), normalised here, to (...,3,3) rotations.
+
+    :param q: (..., 4) quaternions (x, y, z, w).
+    """
     q = np.asarray(q, dtype=float)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
@@ -38,6 +44,9 @@ def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:
     """Return np.cross of (..., 3) arrays without its axis juggling.
 
     The juggling costs more than the product at these sizes.
+
+    :param a: (..., 3) vectors.
+    :param b: (..., 3) vectors.
     """
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
@@ -48,7 +57,10 @@ def cross(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:
 
 
 def matrix_to_quat(r: npt.ArrayLike) -> np.ndarray:
-    """(...,3,3) rotations to unit (...,4) quaternions (x, y, z, w) with w >= 0."""
+    """(...,3,3) rotations to unit (...,4) quaternions (x, y, z, w) with w >= 0.
+
+    :param r: (..., 3, 3) rotations.
+    """
     r = np.asarray(r, dtype=float)
     m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
     # Four candidate magnitudes; take each component's sign from the largest (Shepperd).
@@ -65,7 +77,12 @@ def matrix_to_quat(r: npt.ArrayLike) -> np.ndarray:
 
 
 def quat_slerp(q0: npt.ArrayLike, q1: npt.ArrayLike, t: float) -> np.ndarray:
-    """Spherical interpolation between two unit quaternions (x, y, z, w)."""
+    """Spherical interpolation between two unit quaternions (x, y, z, w).
+
+    :param q0: the quaternion at ``t`` 0.
+    :param q1: the quaternion at ``t`` 1.
+    :param t: the fraction of the way from q0 to q1.
+    """
     q0 = np.asarray(q0, dtype=float)
     q1 = np.asarray(q1, dtype=float)
     d = float(np.dot(q0, q1))
@@ -81,6 +98,11 @@ def quat_slerp(q0: npt.ArrayLike, q1: npt.ArrayLike, t: float) -> np.ndarray:
 
 def make_transform(rotation: npt.ArrayLike | None = None,
                    translation: npt.ArrayLike | None = None) -> np.ndarray:
+    """Return a 4x4 transform of a rotation and a translation.
+
+    :param rotation: 3x3; None: identity.
+    :param translation: (3,); None: zero.
+    """
     t = np.eye(4)
     if rotation is not None:
         t[:3, :3] = rotation
@@ -90,6 +112,10 @@ def make_transform(rotation: npt.ArrayLike | None = None,
 
 
 def invert_transform(t: np.ndarray) -> np.ndarray:
+    """Return the inverse of a rigid 4x4 transform.
+
+    :param t: a rigid 4x4 transform.
+    """
     out = np.eye(4)
     out[:3, :3] = t[:3, :3].T
     out[:3, 3] = -t[:3, :3].T @ t[:3, 3]
@@ -97,5 +123,9 @@ def invert_transform(t: np.ndarray) -> np.ndarray:
 
 
 def apply_transform(t: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Apply a 4x4 transform to (N,3) points."""
+    """Apply a 4x4 transform to (N,3) points.
+
+    :param t: a 4x4 transform.
+    :param points: (N, 3) points.
+    """
     return points @ t[:3, :3].T + t[:3, 3]

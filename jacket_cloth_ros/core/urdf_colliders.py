@@ -30,7 +30,10 @@ class UrdfShape:
     length: float = 0.0
 
     def as_collider(self, name: str) -> dict:
-        """Return the rig collider entry (a dict as in a rig YAML) this shape becomes."""
+        """Return the rig collider entry (a dict as in a rig YAML) this shape becomes.
+
+        :param name: the collider's name.
+        """
         if self.kind in ('sphere', 'box'):
             radii = [self.radius] * 3 if self.kind == 'sphere' else list(self.size / 2)
             return {'name': name, 'type': 'ellipsoid', 'link': self.link,
@@ -45,7 +48,10 @@ class UrdfShape:
                 'radius': max(self.radius, 1e-3)}
 
     def extent(self, direction: np.ndarray) -> float:
-        """Half-extent of the shape along a unit direction given in the link's frame."""
+        """Half-extent of the shape along a unit direction given in the link's frame.
+
+        :param direction: the unit direction, (3,) in the link's frame.
+        """
         d = self.rotation.T @ direction
         if self.kind == 'sphere':
             return self.radius
@@ -67,7 +73,10 @@ def _floats(text, n, where):
 
 
 def urdf_shapes(urdf_xml: str) -> dict[str, list[UrdfShape]]:
-    """Return every link's primitive collision shapes, by link name (links without: absent)."""
+    """Return every link's primitive collision shapes, by link name (links without: absent).
+
+    :param urdf_xml: the URDF's XML text.
+    """
     try:
         root = ElementTree.fromstring(urdf_xml.rstrip('\0 \r\n\t'))
     except ElementTree.ParseError as e:
@@ -101,12 +110,21 @@ def urdf_shapes(urdf_xml: str) -> dict[str, list[UrdfShape]]:
 
 
 def collider_name(link: str, k: int, count: int) -> str:
-    """Name of the k-th of ``count`` colliders made from one link's shapes."""
+    """Name of the k-th of ``count`` colliders made from one link's shapes.
+
+    :param link: the link's name.
+    :param k: the shape's index among the link's, from 0.
+    :param count: how many colliders the link's shapes make.
+    """
     return link if count == 1 else f'{link}_{k}'
 
 
 def colliders_from_urdf(urdf_xml: str, links: list[str] | None = None) -> list[dict]:
-    """Rig collider entries for the links' primitive shapes (every link's when ``links``=None)."""
+    """Rig collider entries for the links' primitive shapes (every link's when ``links``=None).
+
+    :param urdf_xml: the URDF's XML text.
+    :param links: the links whose shapes become colliders; None: every link with shapes.
+    """
     shapes = urdf_shapes(urdf_xml)
     names = list(shapes) if links is None else links
     out = []

@@ -46,10 +46,13 @@ if TYPE_CHECKING:           # for the annotations only: pybvh is imported when a
 # Rows give the Z-up coordinates of a BVH vector: x = z_bvh, y = x_bvh, z = y_bvh.
 Y_UP_TO_Z_UP = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _AXIS = {'X': 0, 'Y': 1, 'Z': 2}
-# Candidate units of a capture (metres per BVH unit), for guess_scale.
-UNITS = {'m': 1.0, 'cm': 0.01, 'mm': 0.001, 'in': 0.0254}
+# Candidate units of a capture (metres per BVH unit), for guess_scale. CMU's captures as
+# converted for 3ds Max (cgspeed's, the most shared) are in inches divided by 0.45.
+UNITS = {'m': 1.0, 'cm': 0.01, 'mm': 0.001, 'in': 0.0254, 'CMU (in / 0.45)': 0.0254 / 0.45}
 # The height a guessed unit aims for: an adult's, in metres.
 _TYPICAL_HEIGHT_M = 1.7
+# Heights of people outside which a capture's unit is likely wrong, in metres.
+HUMAN_HEIGHT_M = (1.2, 2.2)
 
 
 class BvhError(ValueError):
@@ -77,7 +80,10 @@ class Capture:
 
 
 def read_bvh(path: str) -> Bvh:
-    """Read ``path`` with pybvh; every failure becomes one BvhError line naming the file."""
+    """Read ``path`` with pybvh; every failure becomes one BvhError line naming the file.
+
+    :param path: the BVH file.
+    """
     import pybvh
     if not os.path.isfile(path):
         raise BvhError(f'{path}: no such file')
@@ -102,7 +108,10 @@ def read_bvh(path: str) -> Bvh:
 
 
 def rest_offsets(bvh: Bvh) -> np.ndarray:
-    """Return every node's rest position (N, 3) in BVH units and axes, the root at zero."""
+    """Return every node's rest position (N, 3) in BVH units and axes, the root at zero.
+
+    :param bvh: the capture as ``read_bvh`` read it.
+    """
     index = {id(n): i for i, n in enumerate(bvh.nodes)}
     out = np.zeros((len(bvh.nodes), 3))
     for i, node in enumerate(bvh.nodes):
@@ -111,8 +120,23 @@ def rest_offsets(bvh: Bvh) -> np.ndarray:
     return out
 
 
+def height_warning(capture: 'Capture') -> str | None:
+    """Return a line if the capture's rest height is not a person's, else None.
+
+    :param capture: an imported capture (its ``height_m`` and ``scale``).
+    """
+    low, high = HUMAN_HEIGHT_M
+    if low <= capture.height_m <= high:
+        return None
+    return (f'the capture is {capture.height_m:.2f} m tall at {capture.scale:g} m per unit, not '
+            f'a person\'s {low:g}-{high:g} m: give its unit with --scale')
+
+
 def guess_scale(bvh: Bvh) -> tuple[float, str]:
-    """Return (metres per unit, unit name) whose rest skeleton is nearest an adult's height."""
+    """Return (metres per unit, unit name) whose rest skeleton is nearest an adult's height.
+
+    :param bvh: the capture as ``read_bvh`` read it.
+    """
     height = float(np.ptp(rest_offsets(bvh)[:, 1]))
     if height <= 0.0:
         return 1.0, 'm'
@@ -121,7 +145,11 @@ def guess_scale(bvh: Bvh) -> tuple[float, str]:
 
 
 def axis_rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Return rotations (F, 3, 3) by ``angles`` (F,) about a unit ``axis`` (Rodrigues)."""
+    """Return rotations (F, 3, 3) by ``angles`` (F,) about a unit ``axis`` (Rodrigues).
+
+    :param axis: the unit axis, (3,).
+    :param angles: one angle a frame, (F,) in rad.
+    """
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
                   [-axis[1], axis[0], 0.0]])
     s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
@@ -133,6 +161,8 @@ def continuous_angles(angles: np.ndarray) -> np.ndarray:
 
     A capture that wraps at +-pi (179 degrees, then -179) would otherwise be interpolated the
     long way round, through a whole turn of the joint between two samples.
+
+    :param angles: the angles, rad, frames along the first axis.
     """
     return np.unwrap(np.asarray(angles, dtype=float), axis=0)
 
@@ -141,6 +171,8 @@ def continuous_quaternions(quat: np.ndarray) -> np.ndarray:
     """Return (F, 4) quaternions with one sign throughout (q and -q are one rotation).
 
     A flip between frames would read as a jump: interpolation would turn the long way.
+
+    :param quat: one quaternion a frame, (F, 4).
     """
     quat = np.array(quat, dtype=float)
     flips = np.sum(quat[1:] * quat[:-1], axis=1) < 0.0
@@ -202,7 +234,12 @@ def _urdf(bvh, name: str, scale: float) -> tuple[str, list, list]:
 
 
 def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
-    """Convert a capture read by ``read_bvh`` into the URDF and the JointState content."""
+    """Convert a capture read by ``read_bvh`` into the URDF and the JointState content.
+
+    :param bvh: the capture as ``read_bvh`` read it.
+    :param name: the robot's name in the URDF.
+    :param scale: metres per BVH unit; None: ``guess_scale``'s.
+    """
     if scale is None:
         scale, _ = guess_scale(bvh)
     if not (scale > 0 and math.isfinite(scale)):
@@ -224,14 +261,23 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
 
 
 def load_capture(path: str, scale: float | None = None) -> Capture:
-    """Read and convert the BVH file ``path``; the robot is named after the file."""
+    """Read and convert the BVH file ``path``; the robot is named after the file.
+
+    :param path: the BVH file.
+    :param scale: metres per BVH unit; None: ``guess_scale``'s.
+    """
     name = os.path.splitext(os.path.basename(path))[0] or 'capture'
     return convert(read_bvh(path), name, scale)
 
 
 def joint_state_content(capture: Capture, frame: int,
                         world_joint: str = 'world_joint') -> tuple[list, list]:
-    """Return (names, positions) of one frame: every joint, then the root's seven variables."""
+    """Return (names, positions) of one frame: every joint, then the root's seven variables.
+
+    :param capture: the imported capture.
+    :param frame: the frame's index, from 0.
+    :param world_joint: the name of the joint carrying the root's world motion.
+    """
     from ..core.inputs import WORLD_VARIABLES
     names = list(capture.joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [float(v) for v in capture.positions[frame]] + \
@@ -239,6 +285,10 @@ def joint_state_content(capture: Capture, frame: int,
 
 
 def stamps_ns(capture: Capture, start_ns: int) -> np.ndarray:
-    """Return each frame's stamp: ``start_ns`` plus the frame's time at the capture's rate."""
+    """Return each frame's stamp: ``start_ns`` plus the frame's time at the capture's rate.
+
+    :param capture: the imported capture.
+    :param start_ns: the first frame's stamp, ns.
+    """
     return start_ns + np.round(np.arange(capture.frames) * capture.frame_time * 1e9).astype(
         np.int64)

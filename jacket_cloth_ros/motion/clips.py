@@ -107,13 +107,21 @@ def _compose(base, local):
 
 
 def clip_length(name: str) -> float:
+    """Return a clip's length in seconds (the showcase: its clips' together).
+
+    :param name: a name of ``ALL_CLIPS``.
+    """
     if name == 'showcase':
         return sum(CLIPS[n][1] for n in SHOWCASE)
     return CLIPS[name][1]
 
 
 def segment_at(name: str, t: float) -> tuple[str, float, tuple[float, float, float, float]]:
-    """(segment name, local time, root pose at the segment start) of a clip at time t."""
+    """(segment name, local time, root pose at the segment start) of a clip at time t.
+
+    :param name: a name of ``ALL_CLIPS``.
+    :param t: seconds from the clip's start.
+    """
     if name != 'showcase':
         return name, t, (0.0, 0.0, 0.0, 0.0)
     base = (0.0, 0.0, 0.0, 0.0)
@@ -128,7 +136,11 @@ def segment_at(name: str, t: float) -> tuple[str, float, tuple[float, float, flo
 
 
 def pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...]]:
-    """Return joint values {name: value} and the root's world pose as x, y, z, qx, qy, qz, qw."""
+    """Return joint values {name: value} and the root's world pose as x, y, z, qx, qy, qz, qw.
+
+    :param name: a name of ``ALL_CLIPS``.
+    :param t: seconds from the clip's start.
+    """
     if name not in ALL_CLIPS:
         raise ValueError(f'unknown clip {name!r} (clips: {", ".join(ALL_CLIPS)})')
     seg, local_t, base = segment_at(name, t)
@@ -140,10 +152,26 @@ def pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...]]:
 
 def joint_state_content(joint_names: Sequence[str], name: str, t: float,
                         world_joint: str = 'world_joint') -> tuple[list[str], list[float]]:
-    """(names, positions) of a JointState for the clip at time t: every joint plus the root."""
+    """(names, positions) of a JointState for the clip at time t: every joint plus the root.
+
+    :param joint_names: the skeleton's joints, every one given a value.
+    :param name: a name of ``ALL_CLIPS``.
+    :param t: seconds from the clip's start.
+    :param world_joint: the prefix of the root's variables (``world_joint/trans_x`` ...).
+    """
     q, root = pose(name, t)
     names = list(joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
+
+
+def clip_joints(name: str, samples: int = 64) -> set[str]:
+    """Return the joints a clip moves (those its poses name), sampled over its length.
+
+    :param name: a name of ``ALL_CLIPS``.
+    :param samples: poses sampled, evenly over the clip.
+    """
+    length = clip_length(name)
+    return set().union(*(pose(name, length * k / samples)[0] for k in range(samples + 1)))
 
 
 def showcase_highlights() -> list[tuple[float, str]]:

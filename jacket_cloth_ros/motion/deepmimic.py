@@ -64,7 +64,10 @@ def joint_names() -> list:
 
 
 def read_frames(path: str) -> np.ndarray:
-    """Return a clip's frames (F, 44); every failure is one ClipError line naming the file."""
+    """Return a clip's frames (F, 44); every failure is one ClipError line naming the file.
+
+    :param path: the clip's JSON file.
+    """
     if not os.path.isfile(path):
         raise ClipError(f'{path}: no such file')
     try:
@@ -87,14 +90,20 @@ def read_frames(path: str) -> np.ndarray:
 
 
 def frame_time(durations: np.ndarray) -> float:
-    """Return the clip's frame duration: the most common of its frames' (the last may be 0)."""
+    """Return the clip's frame duration: the most common of its frames' (the last may be 0).
+
+    :param durations: each frame's duration, seconds (the clip's first column).
+    """
     steps = durations[:-1] if len(durations) > 1 else durations
     values, counts = np.unique(np.round(steps, 9), return_counts=True)
     return float(values[np.argmax(counts)])
 
 
 def zxy_angles(r: np.ndarray) -> np.ndarray:
-    """Return (..., 3) angles a, b, c with R = Rz(a) Rx(b) Ry(c), b in [-pi/2, pi/2]."""
+    """Return (..., 3) angles a, b, c with R = Rz(a) Rx(b) Ry(c), b in [-pi/2, pi/2].
+
+    :param r: (..., 3, 3) rotations.
+    """
     cb = np.hypot(r[..., 0, 1], r[..., 1, 1])
     b = np.arctan2(r[..., 2, 1], cb)
     a = np.arctan2(-r[..., 0, 1], r[..., 1, 1])
@@ -107,7 +116,10 @@ def zxy_angles(r: np.ndarray) -> np.ndarray:
 
 
 def continuous_zxy(angles: np.ndarray) -> np.ndarray:
-    """Return (F, 3) angles of the same rotations, each frame nearest the frame before."""
+    """Return (F, 3) angles of the same rotations, each frame nearest the frame before.
+
+    :param angles: (F, 3) z, x, y angles per frame, radians.
+    """
     out = np.array(angles, dtype=float)
     for k in range(1, len(out)):
         a, b, c = out[k]
@@ -154,7 +166,13 @@ def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
 
 def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBULLET_SCALING
             ) -> Capture:
-    """Convert a clip's frames (F, 44) into JointState content for ``urdf`` (its text)."""
+    """Convert a clip's frames (F, 44) into JointState content for ``urdf`` (its text).
+
+    :param frames: the clip's frames, (F, 44).
+    :param name: the capture's name.
+    :param urdf: the humanoid's URDF text.
+    :param scale: metres per clip length unit.
+    """
     if not (scale > 0 and math.isfinite(scale)):
         raise ClipError(f'scale must be a positive number, not {scale}')
     if (frames[:, 0] < 0).any():
@@ -179,7 +197,12 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
 
 
 def load_clip(path: str, urdf_path: str, scale: float | None = None) -> Capture:
-    """Read the clip ``path`` and convert it for the humanoid ``urdf_path`` (checked to fit)."""
+    """Read the clip ``path`` and convert it for the humanoid ``urdf_path`` (checked to fit).
+
+    :param path: the clip's JSON file.
+    :param urdf_path: the humanoid's URDF file.
+    :param scale: metres per clip length unit; None: the default, 1 / PYBULLET_SCALING.
+    """
     from ..core.config import read_text
     from ..core.skeleton import skeleton_from
     frames = read_frames(path)

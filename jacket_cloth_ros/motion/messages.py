@@ -20,13 +20,10 @@ def joint_state_message(names: Sequence[str], positions: Sequence[float],
                         stamp_ns: int) -> JointState:
     """Make a ``sensor_msgs.msg.JointState`` with these joints, stamped ``stamp_ns``.
 
-    Args:
-        names: joint names, in the order of ``positions``.
-        positions: one value per name (rad or m).
-        stamp_ns: the header stamp, in nanoseconds.
-
-    Returns:
-        sensor_msgs.msg.JointState: header.stamp, name and position set; no velocity or effort.
+    :param names: joint names, in the order of ``positions``.
+    :param positions: one value per name (rad or m).
+    :param stamp_ns: the header stamp, in nanoseconds.
+    :returns: the message, header.stamp, name and position set; no velocity or effort.
     """
     from sensor_msgs.msg import JointState
     msg = JointState()
@@ -41,17 +38,14 @@ def clip_messages(skeleton: Skeleton, clip: str, rate: float, duration: float, s
                   world_joint: str = 'world_joint') -> Iterator[Tuple[int, object]]:
     """Yield a clip sampled at ``rate`` Hz from ``start_ns``, as JointState messages.
 
-    Args:
-        skeleton: the character whose joints the messages name (its ``joint_names``).
-        clip: a name of ``clips.ALL_CLIPS``.
-        rate: messages per second (Hz).
-        duration: seconds; longer than the clip, the clip loops.
-        start_ns: the first message's stamp, in nanoseconds.
-        world_joint: the prefix of the root's variables (``world_joint/x`` ...).
-
-    Yields:
-        (int, sensor_msgs.msg.JointState): the stamp in nanoseconds and the message, from
-        ``start_ns`` to ``start_ns + duration`` inclusive.
+    :param skeleton: the character whose joints the messages name (its ``joint_names``).
+    :param clip: a name of ``clips.ALL_CLIPS``.
+    :param rate: messages per second (Hz).
+    :param duration: seconds; longer than the clip, the clip loops.
+    :param start_ns: the first message's stamp, in nanoseconds.
+    :param world_joint: the prefix of the root's variables (``world_joint/trans_x`` ...).
+    :returns: (the stamp in nanoseconds, the JointState) each, from ``start_ns`` to
+        ``start_ns + duration`` inclusive.
     """
     n = int(round(duration * rate))
     for k in range(n + 1):

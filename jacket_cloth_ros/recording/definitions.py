@@ -20,7 +20,10 @@ _FIELD = re.compile(r'^\s*([A-Za-z][\w/]*)(?:<=\d+)?(?:\[[^\]]*\])?\s+\w+')
 
 @functools.lru_cache(maxsize=None)
 def message_text(type_name: str) -> str:
-    """Return the .msg text of ``pkg/msg/Type`` (or ``pkg/Type``) as installed."""
+    """Return the .msg text of ``pkg/msg/Type`` (or ``pkg/Type``) as installed.
+
+    :param type_name: the message type, ``pkg/msg/Type`` or ``pkg/Type``.
+    """
     pkg, _, name = _split(type_name)
     path = os.path.join(_share_directory(pkg), 'msg', name + '.msg')
     with open(path, encoding='utf-8') as f:
@@ -45,7 +48,10 @@ def _split(type_name):
 
 
 def dependencies(type_name: str) -> list[str]:
-    """Return the message types a definition uses, as ``pkg/Type``."""
+    """Return the message types a definition uses, as ``pkg/Type``.
+
+    :param type_name: the message type, ``pkg/msg/Type`` or ``pkg/Type``.
+    """
     pkg, _, _ = _split(type_name)
     out = []
     for line in message_text(type_name).splitlines():
@@ -66,7 +72,10 @@ def dependencies(type_name: str) -> list[str]:
 
 @functools.lru_cache(maxsize=None)
 def ros2msg_schema(type_name: str) -> str:
-    """Return the concatenated definition: top level first, then each dependency once."""
+    """Return the concatenated definition: top level first, then each dependency once.
+
+    :param type_name: the top-level message type, ``pkg/msg/Type`` or ``pkg/Type``.
+    """
     parts = [message_text(type_name).rstrip('\n')]
     seen, queue = set(), list(dependencies(type_name))
     while queue:

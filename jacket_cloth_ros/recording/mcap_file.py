@@ -66,9 +66,14 @@ class McapWriter:
     summary (schemas, channels, statistics, chunk and metadata indexes) and the footer.
 
     Messages are packed in the caller's thread. Everything that touches the stream (a closed
-    chunk's compression, CRC and write; the other records) goes through ``run(work, *args)``,
-    which runs it now by default; a recorder can pass one that hands it to a writer thread in
-    order, so the caller never waits for a chunk's compression.
+    chunk's compression, CRC and write; the other records) goes through ``run``.
+
+    :param stream: the binary stream the file is written to.
+    :param compression: the chunks' codec: 'lz4', 'zstd' or '' (none).
+    :param chunk_bytes: the size at which a chunk is closed, bytes.
+    :param run: ``run(work, *args)`` does each piece of stream work; None: at once. A recorder
+        can pass one that hands it to a writer thread in order, so the caller never waits for
+        a chunk's compression.
     """
 
     def __init__(self, stream: BinaryIO, compression: str = 'lz4',
@@ -107,10 +112,21 @@ class McapWriter:
         self._stream.write(self._records.end())
 
     def start(self, profile: str = '', library: str = 'jacket_cloth_ros') -> None:
+        """Write the magic and the header record.
+
+        :param profile: the MCAP profile ('ros2' for ROS 2 messages).
+        :param library: the writer's name, as the header says it.
+        """
         self._run(self._stream.write, MAGIC)
         self._run(self._write_records, Header(profile=profile, library=library))
 
     def register_schema(self, name: str, encoding: str, data: bytes) -> int:
+        """Write a schema record; return its id.
+
+        :param name: the message type (``pkg/msg/Type``).
+        :param encoding: the schema's encoding ('ros2msg').
+        :param data: the schema's definition text, encoded.
+        """
         schema = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
         self._schemas.append(schema)
         self._run(self._write_records, schema)
@@ -118,6 +134,13 @@ class McapWriter:
 
     def register_channel(self, topic: str, message_encoding: str, schema_id: int,
                          metadata: dict[str, str] | None = None) -> int:
+        """Write a channel record; return its id.
+
+        :param topic: the channel's topic.
+        :param message_encoding: its messages' encoding ('cdr').
+        :param schema_id: the id ``register_schema`` gave its type.
+        :param metadata: the channel's metadata (the QoS profiles); None: none.
+        """
         channel = Channel(id=len(self._channels) + 1, topic=topic, schema_id=schema_id,
                           message_encoding=message_encoding, metadata=dict(metadata or {}))
         self._channels.append(channel)
@@ -127,6 +150,14 @@ class McapWriter:
 
     def add_message(self, channel_id: int, log_time: int, data: bytes, publish_time: int,
                     sequence: int = 0) -> None:
+        """Pack a message into the open chunk, closing the chunk once it reaches its size.
+
+        :param channel_id: the id ``register_channel`` gave its topic.
+        :param log_time: when it was recorded, ns.
+        :param data: the serialized message.
+        :param publish_time: when it was published, ns.
+        :param sequence: its sequence number on the channel.
+        """
         offset = self._used
         end = offset + _MESSAGE.size + len(data)
         if end > len(self._chunk):
@@ -158,6 +189,11 @@ class McapWriter:
         return min(s[0] for s in spans), max(s[1] for s in spans)
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        """Write a metadata record (indexed in the summary).
+
+        :param name: the record's name.
+        :param data: its key-value pairs.
+        """
         self._run(self._write_metadata, Metadata(name=name, metadata=dict(data)))
 
     def _write_metadata(self, metadata):

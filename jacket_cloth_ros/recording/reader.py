@@ -5,6 +5,7 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 ``metadata.yaml`` lists the files in order; without it, the folder's ``.mcap`` files by name).
 """
 
+import hashlib
 import os
 import struct
 import zlib
@@ -44,7 +45,10 @@ class Recording:
 
 
 def mcap_files(path: str) -> list[str]:
-    """Return a recording's MCAP files: the file itself, or a bag directory's files in order."""
+    """Return a recording's MCAP files: the file itself, or a bag directory's files in order.
+
+    :param path: the recording, an MCAP file or a bag directory.
+    """
     if not os.path.isdir(path):
         if not os.path.exists(path):
             raise RecordingError(f'{path}: no such file or directory')
@@ -74,7 +78,11 @@ def mcap_files(path: str) -> list[str]:
 
 
 def read_recording(path: str, topics: Collection[str] | None = None) -> Recording:
-    """Every message (optionally of some topics), metadata and topic types of a recording."""
+    """Every message (optionally of some topics), metadata and topic types of a recording.
+
+    :param path: the recording, an MCAP file or a bag directory.
+    :param topics: the topics whose messages are read; None: every topic.
+    """
     out = Recording(path, [])
     for one in mcap_files(path):
         _read_file(one, topics, out)
@@ -92,6 +100,8 @@ def count_messages(path: str) -> tuple[dict[str, int], bool]:
     """Count messages per topic and tell whether the recording is complete, streamed.
 
     An hour of session (gigabytes of /tf and markers) is counted without holding it in memory.
+
+    :param path: the recording, an MCAP file or a bag directory.
     """
     out = Recording(path, _TopicCounter())
     for one in mcap_files(path):
@@ -101,7 +111,11 @@ def count_messages(path: str) -> tuple[dict[str, int], bool]:
 
 def read_messages(path: str,
                   topics: Collection[str] | None = None) -> tuple[list[RecordedMessage], bool]:
-    """All messages (optionally of some topics) in file order; (messages, complete)."""
+    """All messages (optionally of some topics) in file order; (messages, complete).
+
+    :param path: the recording, an MCAP file or a bag directory.
+    :param topics: the topics whose messages are read; None: every topic.
+    """
     rec = read_recording(path, topics)
     return rec.messages, rec.complete
 
@@ -201,3 +215,33 @@ def _damaged(path, error):
 def _recorded(schema, channel, message):
     return RecordedMessage(channel.topic, schema.name if schema else '', message.log_time,
                            message.data)
+
+
+class _Digests(list):
+    """Stands in for Recording.messages: keeps a digest of each message's bytes, not the bytes."""
+
+    def append(self, message):
+        super().append(message_digest(message.data))
+
+
+def message_digest(data: bytes) -> bytes:
+    """Return the digest :func:`message_digests` keeps of a message's bytes.
+
+    :param data: the message's serialized bytes.
+    """
+    return hashlib.blake2b(bytes(data), digest_size=16).digest()
+
+
+def message_digests(path: str, topic: str) -> list[bytes]:
+    """Return a digest of each message on ``topic``, in file order, read as a stream.
+
+    A session's /tf compared message by message without holding it (hours of it are
+    gigabytes).
+
+    :param path: an MCAP file or a rosbag2 bag directory.
+    :param topic: the topic.
+    """
+    out = Recording(path, _Digests())
+    for one in mcap_files(path):
+        _read_file(one, (topic,), out)
+    return list(out.messages)

@@ -48,13 +48,20 @@ def is_bag_folder(path: str | os.PathLike) -> bool:
 
     Any path not ending in ``.mcap`` does, as ``ros2 bag record -o NAME`` makes the folder
     NAME.
+
+    :param path: the recording's path.
     """
     return not os.fspath(path).endswith('.mcap')
 
 
 def qos_profile_yaml(reliable: bool = True, transient_local: bool = False,
                      depth: int = 10) -> str:
-    """``offered_qos_profiles`` in the string form of Jazzy and newer."""
+    """``offered_qos_profiles`` in the string form of Jazzy and newer.
+
+    :param reliable: reliable, else best effort.
+    :param transient_local: transient local (latched), else volatile.
+    :param depth: the history's depth (keep last).
+    """
     profile = {
         'history': 'keep_last', 'depth': depth,
         'reliability': 'reliable' if reliable else 'best_effort',
@@ -68,15 +75,19 @@ def qos_profile_yaml(reliable: bool = True, transient_local: bool = False,
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    ``compression``: a Compression name; zstd, the smallest files, unless told (the node
-    and the replay pass the record_compression parameter).
+    In the background, messages are still packed into the open chunk by the caller. The replay
+    uses it: compression and file writes release the GIL, so they run on the second core. One
+    hand-over per chunk: handing over each message cost the replay more CPU in thread switches
+    than the writing itself. A write error then shows at the next chunk or at ``close()``.
 
-    ``background``: messages are still packed into the open chunk by the caller, but each
-    closed chunk's compression and write (and every other record) is done by a writer thread,
-    in order (the same file). The replay uses it: compression and file writes release the GIL,
-    so they run on the second core. One hand-over per chunk: handing over each message cost
-    the replay more CPU in thread switches than the writing itself. A write error then shows
-    at the next chunk or at ``close()``.
+    :param path: the recording: a ``.mcap`` file, else a bag folder (made here).
+    :param flush_period_ns: the span of stamps (ns) after which the open chunk is closed.
+    :param final_name: the name the recording will have once moved into place, as its bag
+        knows it; None: ``path``'s.
+    :param background: whether each closed chunk's compression and write (and every other
+        record) is done by a writer thread, in order (the same file).
+    :param compression: a Compression name; zstd, the smallest files, unless told (the node
+        and the replay pass the record_compression parameter).
     """
 
     def __init__(self, path: str, flush_period_ns: int = 1_000_000_000,
@@ -146,6 +157,12 @@ class SessionRecorder:
                     self._error = e
 
     def add_topic(self, topic: str, type_name: str, qos_yaml: str | None = None) -> None:
+        """Register a topic's channel (and its type's schema) unless it is registered.
+
+        :param topic: the topic's name.
+        :param type_name: its message type (``pkg/msg/Type``).
+        :param qos_yaml: its ``offered_qos_profiles``; None: ``qos_profile_yaml()``'s.
+        """
         if topic in self._channels:
             return
         if type_name not in self._schemas:
@@ -160,7 +177,12 @@ class SessionRecorder:
         self._qos[topic] = yaml.safe_load(qos_yaml or qos_profile_yaml())
 
     def write(self, topic: str, data: bytes, stamp_ns: int) -> None:
-        """Copy ``data`` into the open chunk (the caller may reuse its buffer)."""
+        """Copy ``data`` into the open chunk (the caller may reuse its buffer).
+
+        :param topic: an added topic.
+        :param data: the CDR-serialised message.
+        :param stamp_ns: its stamp, the log and publish time, ns.
+        """
         channel = self._channels[topic]         # positional: this runs for every message
         self._writer.add_message(channel, stamp_ns, data, stamp_ns, self._writer.counts[channel])
         if self._last_flush is None:
@@ -174,9 +196,16 @@ class SessionRecorder:
                            output_phase: float = 0.0, node_name: str = '') -> None:
         """Add what a replay needs besides the inputs: character, rig, fabrics, parameters.
 
-        In a crowd's recording, one per ``character`` (its name): ``SESSION_CONFIG/<name>``,
-        with the character's ``output_phase`` (SessionPipeline). ``node_name``, if given:
-        what its diagnostics status name starts with (SessionPipeline's), for the replay's.
+        In a crowd's recording, one per character: ``SESSION_CONFIG/<name>``.
+
+        :param urdf: the character's URDF text.
+        :param rig_yaml: the rig file's text.
+        :param fabrics_yaml: the fabrics file's text.
+        :param parameters: the node's parameter values.
+        :param character: in a crowd's recording, the character's name; '' otherwise.
+        :param output_phase: a crowd character's output phase (SessionPipeline).
+        :param node_name: if given, what its diagnostics status name starts with
+            (SessionPipeline's), for the replay's.
         """
         name = f'{SESSION_CONFIG}/{character}' if character else SESSION_CONFIG
         setup = {'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
@@ -188,7 +217,11 @@ class SessionRecorder:
         self._writer.add_metadata(name, setup)
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
-        """Add an MCAP metadata record (a crowd replay copies its characters' set-ups)."""
+        """Add an MCAP metadata record (a crowd replay copies its characters' set-ups).
+
+        :param name: the record's name.
+        :param data: its key-value pairs.
+        """
         self._writer.add_metadata(name, data)
 
     def close(self) -> None:

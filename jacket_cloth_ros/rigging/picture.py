@@ -38,7 +38,14 @@ def _ellipse(center, axes, view):
 
 def draw_rig(rig: 'Rig', up: np.ndarray, forward: np.ndarray, png_path: str,
              title: str = '') -> None:
-    """Draw the rig's front and side views at rest into a PNG."""
+    """Draw the rig's front and side views at rest into a PNG.
+
+    :param rig: the loaded rig.
+    :param up: the character's up direction, in its root frame.
+    :param forward: the direction it faces, in its root frame (its part along ``up`` ignored).
+    :param png_path: the PNG written.
+    :param title: the figure's title; empty: none.
+    """
     sk = rig.skeleton
     links = sk.forward(np.zeros(len(sk.joint_names)))
     virtual = set(virtual_links(sk))

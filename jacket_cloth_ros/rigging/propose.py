@@ -50,14 +50,20 @@ LEFT, RIGHT = {'l', 'left'}, {'r', 'right'}
 
 
 def tokens(name: str) -> list[str]:
-    """Cut a link name into lower-case words: ``mixamorig:LeftUpLeg`` -> mixamorig left up leg."""
+    """Cut a link name into lower-case words: ``mixamorig:LeftUpLeg`` -> mixamorig left up leg.
+
+    :param name: the link's name.
+    """
     spaced = re.sub(r'([a-z])([A-Z])', r'\1 \2', name)
     spaced = re.sub(r'([A-Z]+)([A-Z][a-z])', r'\1 \2', spaced)
     return [t for t in re.split(r'[^A-Za-z]+', spaced.lower()) if t]
 
 
 def side_of(name: str) -> str | None:
-    """Return 'left', 'right' or None from a link name's words."""
+    """Return 'left', 'right' or None from a link name's words.
+
+    :param name: the link's name.
+    """
     words = set(tokens(name))
     if words & LEFT and not words & RIGHT:
         return 'left'
@@ -67,7 +73,11 @@ def side_of(name: str) -> str | None:
 
 
 def name_rank(name: str, part: str) -> int | None:
-    """Return how strongly a name says ``part`` (0 strongest), None if it does not."""
+    """Return how strongly a name says ``part`` (0 strongest), None if it does not.
+
+    :param name: the link's name.
+    :param part: a body part, a key of ``NAMES`` (``thigh``).
+    """
     words = set(tokens(name)) - LEFT - RIGHT
     joined = ''.join(tokens(name))
     for rank, want in enumerate(NAMES[part]):
@@ -109,9 +119,17 @@ class Body:
     choices: list = field(default_factory=list)
 
     def pos(self, link: int) -> np.ndarray:
+        """Return a link's origin at the zero pose, (3,) in the root frame.
+
+        :param link: the link's index.
+        """
         return self.rest[link][:3, 3]
 
     def name(self, link: int) -> str:
+        """Return a link's name.
+
+        :param link: the link's index.
+        """
         return self.skeleton.link_names[link]
 
 
@@ -154,7 +172,10 @@ def _frames(sk):
 
 
 def is_sensor_name(name: str) -> bool:
-    """Tell whether a link name says a sensor frame (``imu_in_torso``, ``rgbd_optical_frame``)."""
+    """Tell whether a link name says a sensor frame (``imu_in_torso``, ``rgbd_optical_frame``).
+
+    :param name: the link's name.
+    """
     return any(t in SENSOR_WORDS or t.endswith(('sensor', 'camera')) for t in tokens(name))
 
 
@@ -166,6 +187,9 @@ def virtual_links(sk: Skeleton, frames: Frames | None = None) -> list[int]:
     is such a frame too (a sensor frame that carries a gripper is part of the arm). A skeleton
     without masses (BVH import, an animation rig) keeps its shapeless end links: they are its
     bones' ends.
+
+    :param sk: the skeleton.
+    :param frames: what its URDF says of each link (masses, shapes); None: read here.
     """
     frames = frames or _frames(sk)
     masses = bool((frames.mass > 0).any())
@@ -292,7 +316,11 @@ def _snap(v, degrees=15.0):
 
 
 def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
-    """Find pelvis, spine, chest, neck, arms and thighs of a skeleton; refuse in one line."""
+    """Find pelvis, spine, chest, neck, arms and thighs of a skeleton; refuse in one line.
+
+    :param sk: the skeleton.
+    :param forward: the direction the character faces, in its root frame; None: inferred.
+    """
     rest = sk.forward(np.zeros(len(sk.joint_names)))
     frames = _frames(sk)
     virtual = virtual_links(sk, frames)
@@ -553,8 +581,11 @@ def propose(sk: Skeleton, forward: list | None = None,
             first_pose: Pose | None = None) -> tuple[dict, list[str], Body]:
     """Return the rig (a mapping for YAML), the lines saying what was chosen and why, the body.
 
-    ``first_pose``: (joint values, the root's world rotation) of a motion's first input; the
-    world's up (gravity, the floor) is then the body's up in that world (issue 35 item 1).
+    :param sk: the skeleton.
+    :param forward: the direction the character faces, (3,) in its root frame; None: inferred.
+    :param first_pose: (joint values, the root's world rotation) of a motion's first input;
+        the world's up (gravity, the floor) is then the body's up in that world (issue 35
+        item 1). None: the URDF's up.
     """
     body = find_body(sk, None if forward is None else np.asarray(forward, float))
     up, fwd, left = body.up, body.forward, body.left
@@ -745,7 +776,13 @@ def _plain(value):
 
 
 def to_yaml(rig: dict, lines: list[str], urdf: str, body: Body) -> str:
-    """Return the rig as commented YAML a user can tune."""
+    """Return the rig as commented YAML a user can tune.
+
+    :param rig: the rig, as ``propose`` returned it.
+    :param lines: what was chosen and why, for the header.
+    :param urdf: the URDF's path, as the header names it.
+    :param body: the body found, for the header's link count and height.
+    """
     head = HEADER.format(urdf=urdf, links=len(body.skeleton.link_names), height=body.height,
                          choices='\n'.join('#   ' + line.strip() for line in lines))
     parts = [head]

@@ -30,45 +30,85 @@ class CdrWriter:
         self.buf = bytearray(_HEADER)
 
     def align(self, n: int) -> None:
+        """Pad with zeros to the next multiple of ``n`` bytes.
+
+        :param n: the alignment, bytes.
+        """
         pad = -(len(self.buf) - 4) % n
         if pad:
             self.buf += bytes(pad)
 
     def u8(self, v: int) -> None:
+        """Add an unsigned byte.
+
+        :param v: the value; taken modulo 256.
+        """
         self.buf.append(int(v) & 0xFF)
 
     def i32(self, v: int) -> None:
+        """Add a signed 32-bit integer, aligned.
+
+        :param v: the value.
+        """
         self.align(4)
         self.buf += struct.pack('<i', v)
 
     def u32(self, v: int) -> None:
+        """Add an unsigned 32-bit integer, aligned.
+
+        :param v: the value.
+        """
         self.align(4)
         self.buf += struct.pack('<I', v)
 
     def f32s(self, values: Sequence[float]) -> None:
+        """Add float32 values, aligned once.
+
+        :param values: the values, in order.
+        """
         self.align(4)
         self.buf += struct.pack(f'<{len(values)}f', *values)
 
     def f64s(self, values: Sequence[float]) -> None:
+        """Add float64 values, aligned once.
+
+        :param values: the values, in order.
+        """
         self.align(8)
         self.buf += struct.pack(f'<{len(values)}d', *values)
 
     def f64_array(self, array: np.ndarray) -> None:
-        """Add a block of float64 (any shape, row-major), aligned once: a sequence's elements."""
+        """Add a block of float64 (any shape, row-major), aligned once: a sequence's elements.
+
+        :param array: the values, any shape, written row-major.
+        """
         self.align(8)
         self.buf += np.ascontiguousarray(array, dtype='<f8').tobytes()
 
     def string(self, s: str) -> None:
+        """Add a string: its length with the terminating zero, the UTF-8 bytes and the zero.
+
+        :param s: the text.
+        """
         b = s.encode()
         self.u32(len(b) + 1)
         self.buf += b
         self.buf.append(0)
 
     def stamp(self, stamp_ns: int) -> None:
+        """Add a builtin_interfaces/Time.
+
+        :param stamp_ns: the time, ns.
+        """
         self.i32(int(stamp_ns // 1_000_000_000))
         self.u32(int(stamp_ns % 1_000_000_000))
 
     def header(self, stamp_ns: int, frame_id: str) -> None:
+        """Add a std_msgs/Header.
+
+        :param stamp_ns: its stamp, ns.
+        :param frame_id: its frame.
+        """
         self.stamp(stamp_ns)
         self.string(frame_id)
 
@@ -82,6 +122,11 @@ def joint_state(stamp_ns: int, names: Sequence[str], positions: Sequence[float],
 
     Padding is zeroed and nothing follows the last field: rclpy's serializer leaves its
     padding uninitialised and appends bytes that strict readers reject.
+
+    :param stamp_ns: the header stamp, ns.
+    :param names: joint names, in the order of ``positions``.
+    :param positions: one value per name (rad or m).
+    :param frame_id: the header frame.
     """
     w = CdrWriter()
     w.header(stamp_ns, frame_id)
@@ -97,10 +142,13 @@ def joint_state(stamp_ns: int, names: Sequence[str], positions: Sequence[float],
 
 
 def parameter_event(stamp_ns: int, node: str, changed: Sequence) -> bytes:
-    """Encode an rcl_interfaces/ParameterEvent with ``changed`` parameters.
+    """Encode an rcl_interfaces/ParameterEvent with changed parameters.
 
-    ``changed`` holds rcl_interfaces/Parameter messages; padding zeroed and nothing after the
-    last field (see :func:`joint_state`).
+    Padding zeroed and nothing after the last field (see :func:`joint_state`).
+
+    :param stamp_ns: the event's stamp, ns.
+    :param node: the full name of the node whose parameters changed.
+    :param changed: the changed rcl_interfaces/Parameter messages.
     """
     w = CdrWriter()
     w.stamp(stamp_ns)
@@ -134,7 +182,15 @@ def parameter_event(stamp_ns: int, node: str, changed: Sequence) -> bytes:
 
 def tf_message(names: Sequence[str], parents: Sequence[str], translations: np.ndarray,
                quaternions: np.ndarray, stamp_ns: int, prefix: str = '') -> bytes:
-    """tf2_msgs/TFMessage: one TransformStamped per bone (field by field; see TfTemplate)."""
+    """tf2_msgs/TFMessage: one TransformStamped per bone (field by field; see TfTemplate).
+
+    :param names: the bones' frame names.
+    :param parents: each bone's parent frame.
+    :param translations: (bones, 3) metres, each bone in its parent's frame.
+    :param quaternions: (bones, 4) x, y, z, w.
+    :param stamp_ns: every transform's stamp, ns.
+    :param prefix: put before every frame name (as robot_state_publisher's ``frame_prefix``).
+    """
     w = CdrWriter()
     w.u32(len(names))
     for name, parent, t, q in zip(names, parents, translations.tolist(), quaternions.tolist()):
@@ -179,6 +235,10 @@ class TfTemplate(_Template):
 
     Each message then only writes its stamps and poses into place instead of hundreds of small
     appends, which were a large share of an input. The bytes equal :func:`tf_message`'s.
+
+    :param names: the bones' frame names.
+    :param parents: each bone's parent frame.
+    :param prefix: put before every frame name (as robot_state_publisher's ``frame_prefix``).
     """
 
     def __init__(self, names: Sequence[str], parents: Sequence[str], prefix: str = ''):
@@ -197,7 +257,12 @@ class TfTemplate(_Template):
         self._pose_at = np.array(poses)
 
     def encode(self, poses: np.ndarray, stamp_ns: int) -> bytes:
-        """``poses``: (bones, 7) translations then quaternions (x, y, z, w)."""
+        """Return the message's bytes with these stamps and poses.
+
+        :param poses: (bones, 7) translations (m) then quaternions (x, y, z, w), each bone in
+            its parent's frame.
+        :param stamp_ns: every transform's stamp, ns.
+        """
         _put_rows(self._f64, self._pose_at, poses)
         return self._bytes(stamp_ns)
 
@@ -221,8 +286,12 @@ def _put_rows(f64, at, rows):
 def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[int, int, int]:
     """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`.
 
-    Returns where its varying fields start: (stamp, pose, points) byte offsets; the scale's
-    three doubles follow the pose's seven.
+    :param w: the writer the marker is appended to.
+    :param m: the marker.
+    :param stamp_ns: its header stamp, ns.
+    :param frame: its header frame.
+    :returns: where its varying fields start: (stamp, pose, points) byte offsets; the scale's
+        three doubles follow the pose's seven.
     """
     w.align(4)
     stamp_at = len(w.buf)
@@ -259,7 +328,12 @@ def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[in
 
 
 def marker_array(markers: 'Sequence[MarkerSpec]', stamp_ns: int, frame: str) -> bytes:
-    """visualization_msgs/MarkerArray, field by field (see MarkerTemplate)."""
+    """visualization_msgs/MarkerArray, field by field (see MarkerTemplate).
+
+    :param markers: the markers with their values.
+    :param stamp_ns: every marker's stamp, ns.
+    :param frame: every marker's frame.
+    """
     w = CdrWriter()
     w.u32(len(markers))
     for m in markers:
@@ -274,6 +348,10 @@ class MarkerTemplate(_Template):
     and the points of those with ``point_rows`` into place instead of encoding field by field
     (mostly small appends, costly in Python). The bytes equal
     :func:`marker_array`'s of the same markers.
+
+    :param layout: the markers, their varying values aside.
+    :param frame: every marker's frame.
+    :param pose_rows: the rows of the pose table fill makes.
     """
 
     def __init__(self, layout: 'Sequence[MarkerSpec]', frame: str, pose_rows: int):
@@ -300,15 +378,21 @@ class MarkerTemplate(_Template):
     def encode(self, fill: Callable[..., None], arguments: tuple, stamp_ns: int) -> bytes:
         """Return the message's bytes with the values ``fill(*arguments, src, dst, doubles)``.
 
-        ``fill`` makes the pose and point tables (as messages.marker_values) and scatters
-        ``doubles[dst] = tables[src]`` (marker_kernel.fill_markers).
+        :param fill: makes the pose and point tables (as messages.marker_values) and scatters
+            ``doubles[dst] = tables[src]`` (marker_kernel.fill_markers).
+        :param arguments: fill's arguments before the template's own.
+        :param stamp_ns: every marker's stamp, ns.
         """
         fill(*arguments, self._src, self._dst, self._f64)
         return self._bytes(stamp_ns)
 
 
 def diagnostic_array(stamp_ns: int, statuses: Sequence[tuple]) -> bytes:
-    """diagnostic_msgs/DiagnosticArray from (level, name, message, hardware_id, {key: value})."""
+    """diagnostic_msgs/DiagnosticArray from (level, name, message, hardware_id, {key: value}).
+
+    :param stamp_ns: the array's stamp, ns.
+    :param statuses: (level, name, message, hardware_id, {key: value}) each.
+    """
     w = CdrWriter()
     w.header(stamp_ns, '')
     w.u32(len(statuses))
@@ -329,7 +413,12 @@ DECODE_ERRORS = (ValueError, struct.error, UnicodeDecodeError)
 
 
 class JointStateContent:
-    """What the simulation reads of a sensor_msgs/JointState: stamp, names, positions."""
+    """What the simulation reads of a sensor_msgs/JointState: stamp, names, positions.
+
+    :param stamp_ns: the header stamp, ns.
+    :param name: the joint names.
+    :param position: one value per name (rad or m).
+    """
 
     __slots__ = ('stamp_ns', 'name', 'position')
 
@@ -351,6 +440,10 @@ class JointStateReader:
         self._names = ()
 
     def read(self, raw: bytes) -> JointStateContent:
+        """Return the stamp, names and positions of a JointState's CDR bytes; ValueError if bad.
+
+        :param raw: the serialized message.
+        """
         raw = bytes(raw)
         if raw[:2] == b'\x00\x00':                 # CDR_BE: not what ROS 2 writes on x86/ARM
             return _joint_state_by_rclpy(raw)
@@ -374,7 +467,11 @@ class JointStateReader:
 
 
 def deserialize(raw: bytes, msg_type: type) -> object:
-    """Deserialize as rclpy does, failing with ValueError on bytes that are no ``msg_type``."""
+    """Deserialize as rclpy does, failing with ValueError on bytes that are no ``msg_type``.
+
+    :param raw: the serialized message.
+    :param msg_type: the message class expected.
+    """
     from rclpy.serialization import deserialize_message
 
     from .cdr_bounds import check_whole

@@ -20,7 +20,11 @@ _SIZES = {'boolean': 1, 'octet': 1, 'char': 1, 'int8': 1, 'uint8': 1,
 
 
 def check_whole(raw: bytes, msg_type: type) -> None:
-    """Raise ValueError unless ``raw`` is CDR long enough for every field of ``msg_type``."""
+    """Raise ValueError unless ``raw`` is CDR long enough for every field of ``msg_type``.
+
+    :param raw: the serialized message.
+    :param msg_type: the message class expected.
+    """
     if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
         raise ValueError('not a CDR message')
     walker = _Walker(raw, '<' if raw[1] == 1 else '>')

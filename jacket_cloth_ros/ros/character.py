@@ -50,7 +50,14 @@ NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
 def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
               period: float = 5.0) -> None:
-    """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``."""
+    """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``.
+
+    :param logger: the node's logger.
+    :param log_times: each code's last warning (monotonic s), updated here.
+    :param code: the kind of warning.
+    :param text: the line.
+    :param period: the least time between two warnings of one code, s.
+    """
     now = time.monotonic()
     if now - log_times.get(code, -1e9) >= period:
         log_times[code] = now
@@ -58,7 +65,10 @@ def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
 
 
 def read_file(path: str) -> str:
-    """Return a text file's content (a character's URDF, rig or fabrics file)."""
+    """Return a text file's content (a character's URDF, rig or fabrics file).
+
+    :param path: the file.
+    """
     with open(path, encoding='utf-8') as f:
         return f.read()
 
@@ -66,10 +76,13 @@ def read_file(path: str) -> str:
 class Character:
     """One character of a jacket node: its set-up, and its pipeline once its URDF is known.
 
-    ``names``: its topics in the graph (``joint_states``, ``robot_description``, ``markers``);
-    ``recorded``: the names its JointStates and markers are recorded under; ``label``: what
-    its log lines start with (its name in a crowd); ``config_name``: the name of its set-up in
-    the recording ('' alone: the single session a replay reads).
+    :param spec: its set-up, as the characters file (or the node's parameters) gives it.
+    :param names: its topics in the graph (``joint_states``, ``robot_description``,
+        ``markers``).
+    :param recorded: the names its JointStates and markers are recorded under.
+    :param label: what its log lines start with (its name in a crowd).
+    :param config_name: the name of its set-up in the recording ('' alone: the single session
+        a replay reads).
     """
 
     def __init__(self, spec: CharacterSpec, names: dict[str, str], recorded: dict[str, str],
@@ -97,11 +110,20 @@ class Character:
         return self.pipeline.sim if self.pipeline else None
 
     def warn(self, logger: 'RcutilsLogger', code: str, text: str, period: float = 5.0) -> None:
-        """One line per kind of bad input of this character per ``period`` seconds."""
+        """One line per kind of bad input of this character per ``period`` seconds.
+
+        :param logger: the node's logger.
+        :param code: the kind of bad input.
+        :param text: the line, after the character's label.
+        :param period: the least time between two lines of one kind, s.
+        """
         throttled(logger, self.log_times, code, self.label + text, period)
 
     def count_lost(self, info: dict) -> None:
-        """Count a gap in a publisher's numbering as JointStates lost before they came."""
+        """Count a gap in a publisher's numbering as JointStates lost before they came.
+
+        :param info: the message's rmw message info (publisher gid, sequence number).
+        """
         seq, gid = info.get('publication_sequence_number'), info.get('publisher_gid')
         if not seq or not gid:
             return
@@ -118,6 +140,10 @@ class Character:
         """Subscribe its robot_description, and fall back on the shipped one after its timeout.
 
         Raw: bytes that are no String reach ``on_description``, which says so, not the executor.
+
+        :param node: the node subscribing.
+        :param on_description: called with (character, raw bytes) when a description comes.
+        :param on_timeout: called with the character when its timeout passes first.
         """
         self.description = node.create_subscription(
             String, self.names['robot_description'], lambda raw: on_description(self, raw),
@@ -127,7 +153,14 @@ class Character:
 
     def attach(self, node: 'Node', pipeline: 'SessionPipeline', index: int, urdf: str,
                markers_wanted: Callable[['Node'], bool]) -> None:
-        """Take its loaded pipeline (``index`` in the node's crowd); stop waiting for a URDF."""
+        """Take its loaded pipeline (``index`` in the node's crowd); stop waiting for a URDF.
+
+        :param node: the node, which makes its markers publisher.
+        :param pipeline: its pipeline, loaded.
+        :param index: its place in the node's CrowdPipeline.
+        :param urdf: the URDF text it was loaded with.
+        :param markers_wanted: tells whether markers due now on a publisher have a reader.
+        """
         self.pipeline, self.index, self.urdf = pipeline, index, urdf
         # The rig and fabrics as loaded, for every recording it joins: the files may change or
         # go while it runs, and a recording must hold what runs.
@@ -150,6 +183,8 @@ class Character:
         """Add its channels and its set-up (character, rig, fabrics, parameters) to a recording.
 
         So a replay needs only the file.
+
+        :param recorder: the node's recording.
         """
         for key in ('joint_states', 'markers'):
             recorder.add_topic(*self.topics[key])
@@ -161,7 +196,8 @@ class Character:
 def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:
     """Return (code, text) of what went wrong with an input, for its throttled warnings.
 
-    ``published``: whether its bones went out on /tf.
+    :param report: what the input did.
+    :param published: whether its bones went out on /tf.
     """
     out = list(report.warnings)
     if report.reset and report.reset != 'first sample':
@@ -197,6 +233,9 @@ class CrowdInputs(Waitable):
     bytes, message info)]; the subscriptions are in a callback group the executor never runs,
     so it does not take them itself. Taking all of them lets ``on_inputs`` process a backlog
     in the same wake-up instead of a wake-up per queued message.
+
+    :param callback_group: the group the waitable itself runs in (the node's default).
+    :param on_inputs: takes the messages of a wake-up, [(character, raw bytes, message info)].
     """
 
     DRAIN = 16                      # the sensor-data queue is 5 deep; more only while taking
@@ -215,6 +254,10 @@ class CrowdInputs(Waitable):
         The subscription is taken here, never by the executor, and has no QoS event handlers
         (2 per character per wake-up); a publisher with incompatible QoS is still warned on
         its own side. Returns the subscription.
+
+        :param node: the node subscribing.
+        :param character: what its messages are handed to ``on_inputs`` with.
+        :param topic: its joint_states topic.
         """
         subscription = node.create_subscription(
             JointState, topic, _never_called, qos_profile_sensor_data, raw=True,
@@ -227,16 +270,28 @@ class CrowdInputs(Waitable):
         pass
 
     def __exit__(self, *exc: object) -> None:
+        """Leave the waitable's context; nothing to release.
+
+        :param exc: the exception's type, value and traceback, if one ended it.
+        """
         pass
 
     def get_num_entities(self) -> NumberOfEntities:
         return NumberOfEntities(len(self._subs))
 
     def add_to_wait_set(self, wait_set: object) -> None:
+        """Add every character's subscription to the executor's wait set.
+
+        :param wait_set: the executor's wait set.
+        """
         for _, handle, _ in self._subs:
             wait_set.add_subscription(handle)
 
     def is_ready(self, wait_set: object) -> bool:
+        """Tell whether any subscription has messages; note which, for ``take_data``.
+
+        :param wait_set: the executor's wait set, after its wait.
+        """
         ready = wait_set.get_ready_entities('subscription')
         if ready:
             ready = set(ready)
@@ -255,6 +310,10 @@ class CrowdInputs(Waitable):
         return taken
 
     async def execute(self, taken: list) -> None:
+        """Hand a wake-up's messages to ``on_inputs``.
+
+        :param taken: what ``take_data`` took, [(character, raw bytes, message info)].
+        """
         self._on_inputs(taken)
 
 

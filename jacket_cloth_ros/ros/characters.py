@@ -78,7 +78,10 @@ def _flat(data: dict, prefix: str = '') -> list[tuple[str, object]]:
 
 
 def load_characters(path: str) -> list[CharacterSpec]:
-    """Read and validate a characters file; a ConfigError names the file and key."""
+    """Read and validate a characters file; a ConfigError names the file and key.
+
+    :param path: the characters file (YAML).
+    """
     data = load_yaml(path)
     top = Section(data, path)
     folder = os.path.dirname(os.path.abspath(path))
@@ -157,6 +160,10 @@ def crowd_slice(characters: list, index: int, count: int) -> list:
 
     Each of K node processes started with the same file takes one slice: together they run
     every character once (sizes differ by at most one).
+
+    :param characters: the file's characters, in its order.
+    :param index: this process's slice, from 0.
+    :param count: how many slices (node processes).
     """
     if count < 1 or not 0 <= index < count:
         raise ConfigError(f'slice {index} of {count}: expected 0 <= slice_index < slice_count')

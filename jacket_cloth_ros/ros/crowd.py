@@ -23,6 +23,10 @@ from .node import JacketClothNode, run
 
 
 def main(args: list[str] | None = None) -> int:
+    """Run the jacket_cloth_crowd node until it is stopped; its exit code.
+
+    :param args: the command line with its ROS arguments; None: the process's.
+    """
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
         prog='jacket_cloth_crowd',

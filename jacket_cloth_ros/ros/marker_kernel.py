@@ -25,7 +25,10 @@ PLANE_SIZE, PLANE_THICKNESS = 2.0, 0.002
 
 
 def shape_count(rig: 'Rig') -> int:
-    """Rows of shape_poses for ``rig``: ellipsoids, three per capsule, planes, the hood."""
+    """Rows of shape_poses for ``rig``: ellipsoids, three per capsule, planes, the hood.
+
+    :param rig: the character's rig.
+    """
     return len(rig.collider_links) + 3 * len(rig.capsule_links) + len(rig.plane_links) + 1
 
 

@@ -53,12 +53,21 @@ class MarkerSpec:
 
 
 def stamp_msg(stamp_ns: int) -> 'Time':
+    """Return a builtin_interfaces/Time message of a time.
+
+    :param stamp_ns: the time, ns.
+    """
     from builtin_interfaces.msg import Time
     return Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
 
 
 def tf_message(bones: 'Bones', stamp_ns: int, prefix: str = '') -> bytes:
-    """One TFMessage with every bone, each a child of an existing skeleton link."""
+    """One TFMessage with every bone, each a child of an existing skeleton link.
+
+    :param bones: the bones, their poses in their parents' frames.
+    :param stamp_ns: every transform's stamp, ns.
+    :param prefix: put before every frame name (as robot_state_publisher's ``frame_prefix``).
+    """
     return tf_template(tuple(bones.names), tuple(bones.parents), prefix).encode(
         bones.poses, stamp_ns)
 
@@ -68,8 +77,10 @@ def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
                 prefix: str) -> cdr.TfTemplate:
     """Return the TFMessage layout of these bones (cdr.TfTemplate); ``encode(poses, stamp_ns)``.
 
-    ``prefix`` goes on bones and parents alike, as robot_state_publisher's ``frame_prefix``
-    goes on every link: two characters with their own prefixes are two trees.
+    :param names: the bones' frame names.
+    :param parents: each bone's parent frame.
+    :param prefix: goes on bones and parents alike, as robot_state_publisher's ``frame_prefix``
+        goes on every link: two characters with their own prefixes are two trees.
     """
     return cdr.TfTemplate(names, tuple(prefix + p for p in parents), prefix)
 
@@ -78,8 +89,11 @@ def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
 def marker_layout(rig: 'Rig', layer_bones: int, reset: bool) -> tuple[MarkerSpec, ...]:
     """Lay out every marker of the rig but its varying values.
 
-    Cloth mesh and seams, colliders, hood pendulum, ``layer_bones`` M1/M2 bones; DELETEALL in
-    each namespace first after a reset.
+    Cloth mesh and seams, colliders, hood pendulum, M1/M2 bones.
+
+    :param rig: the character's rig.
+    :param layer_bones: how many M1/M2 bones.
+    :param reset: whether a DELETEALL goes first in each namespace (after a reset).
     """
     out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
            for ns in MARKER_NAMESPACES] if reset else []
@@ -109,6 +123,8 @@ def marker_values(sim: 'JacketSimulation') -> tuple[np.ndarray, np.ndarray]:
 
     The pose table as marker_kernel.shape_poses makes it; the point table holds the cloth's
     vertices, the hood's anchor and particle, the layer bones' pivots and their tips.
+
+    :param sim: the simulation, after its last step.
     """
     table, rows = _MARKER_TABLE(*_marker_arguments(sim))
     width = marker_kernel.POSE_WIDTH
@@ -129,7 +145,11 @@ def _layer_bones(sim):
 
 
 def marker_specs(sim: 'JacketSimulation', reset: bool = False) -> list[MarkerSpec]:
-    """Return the MarkerArray's markers with their values: what marker_array encodes, readable."""
+    """Return the MarkerArray's markers with their values: what marker_array encodes, readable.
+
+    :param sim: the simulation, after its last step.
+    :param reset: whether a DELETEALL goes first in each namespace (after a reset).
+    """
     poses, points = marker_values(sim)
     out = []
     for m in marker_layout(sim.rig, _layer_bones(sim), reset):
@@ -145,7 +165,13 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False) -> list[MarkerSpe
 
 def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
                  reset: bool = False) -> bytes:
-    """Return the MarkerArray's CDR bytes: its values written into a template laid out once."""
+    """Return the MarkerArray's CDR bytes: its values written into a template laid out once.
+
+    :param sim: the simulation, after its last step.
+    :param stamp_ns: every marker's stamp, ns.
+    :param frame: every marker's frame.
+    :param reset: whether a DELETEALL goes first in each namespace (after a reset).
+    """
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
     return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
 
@@ -159,6 +185,13 @@ def _marker_template(rig, layer_bones, reset, frame):
 
 def diagnostics(stamp_ns: int, node_name: str, values: dict, level: int,
                 message: str) -> bytes:
-    """Encode the node's one DiagnosticArray status at ``level`` (OK, WARN or ERROR)."""
+    """Encode the node's one DiagnosticArray status.
+
+    :param stamp_ns: the array's stamp, ns.
+    :param node_name: the node's name, in the status's name.
+    :param values: the status's key-value pairs.
+    :param level: OK, WARN or ERROR.
+    :param message: the status's one line.
+    """
     status = (level, f'{node_name}: cloth simulation', message, 'jacket_cloth', values)
     return cdr.diagnostic_array(stamp_ns, [status])

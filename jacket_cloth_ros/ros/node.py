@@ -60,12 +60,18 @@ def keep_loaded_out_of_collections() -> None:
 
 
 def tf_publisher(node: Node) -> 'Publisher':
-    """Return ``node``'s /tf publisher (the jacket node's, and its floor's in the lab)."""
+    """Return ``node``'s /tf publisher (the jacket node's, and its floor's in the lab).
+
+    :param node: the node publishing.
+    """
     return node.create_publisher(TFMessage, '/tf', TF_QOS)
 
 
 def diagnostics_publisher(node: Node) -> 'Publisher':
-    """Return ``node``'s /diagnostics publisher, without QoS event handlers."""
+    """Return ``node``'s /diagnostics publisher, without QoS event handlers.
+
+    :param node: the node publishing.
+    """
     return node.create_publisher(DiagnosticArray, '/diagnostics', 10,
                                  event_callbacks=NO_PUB_EVENTS)
 
@@ -73,12 +79,15 @@ def diagnostics_publisher(node: Node) -> 'Publisher':
 class JacketClothNode(Node):
     """Runs the fixed-step jacket and hood simulation of each character on its JointStates.
 
-    ``crowd`` False: ``jacket_cloth_node``, one character whose parameters are the node's
-    (NODE_PARAMETERS and ``fabric.*``, changed live, the wind also by ``~/wind``), its topics
-    relative to the node's namespace. True: ``jacket_cloth_crowd``, the characters of the file
-    in its ``characters`` parameter (CROWD_PARAMETERS), each under its own namespace. Either
-    way every character runs the same code (ros/character.py and :meth:`on_joint_states`).
-    A recording write error stops the recording, not the node.
+    Either way every character runs the same code (ros/character.py and
+    :meth:`on_joint_states`). A recording write error stops the recording, not the node.
+
+    :param crowd: False: ``jacket_cloth_node``, one character whose parameters are the node's
+        (NODE_PARAMETERS and ``fabric.*``, changed live, the wind also by ``~/wind``), its
+        topics relative to the node's namespace. True: ``jacket_cloth_crowd``, the characters
+        of the file in its ``characters`` parameter (CROWD_PARAMETERS), each under its own
+        namespace.
+    :param kwargs: rclpy Node's keyword arguments (context, parameter_overrides...).
     """
 
     def __init__(self, crowd: bool = False, **kwargs: object):
@@ -473,6 +482,8 @@ class JacketClothNode(Node):
         included. Public so a harness can feed the node without DDS, as the lab does. An
         input's latency counts from its info's ``received_timestamp`` (ns, system clock: the
         rmw's receive time, so time queued behind other callbacks is in it), else from now.
+
+        :param batch: (character, raw CDR bytes, rmw message info) of each input, in order.
         """
         now = time.time_ns()
         logger = self.get_logger()
@@ -533,6 +544,10 @@ class JacketClothNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
+    """Run the jacket_cloth_node node until it is stopped; its exit code.
+
+    :param args: the command line with its ROS arguments; None: the process's.
+    """
     argv = sys.argv if args is None else args
     parser = argparse.ArgumentParser(
         prog='jacket_cloth_node',
@@ -546,7 +561,12 @@ def main(args: list[str] | None = None) -> int:
 def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: bool) -> int:
     """Compile the kernels if need be, then spin ``make_node()`` until shutdown; the exit code.
 
-    Shared by jacket_cloth_node and jacket_cloth_crowd (``crowd``: its one call is compiled too).
+    Shared by jacket_cloth_node and jacket_cloth_crowd.
+
+    :param program: the executable's name, which its messages start with.
+    :param make_node: makes the node, after rclpy.init.
+    :param argv: the command line with its ROS arguments.
+    :param crowd: whether the node is a crowd's: its one call is compiled too.
     """
     # A signal before the node runs ends it with one line (jacket_cloth_ros.signals); the
     # kernels are compiled here, before rclpy takes SIGINT: in a callback, Ctrl-C only shut

@@ -94,6 +94,14 @@ CROWD_PARAMETERS = {
 
 def descriptor(name: str, kind: int, rng: tuple | None, read_only: bool,
                text: str) -> ParameterDescriptor:
+    """Return a parameter's descriptor, its range set for a number.
+
+    :param name: the parameter's name.
+    :param kind: its ParameterType.
+    :param rng: its (lowest, highest) value; None: unbounded.
+    :param read_only: whether it is set only at start.
+    :param text: its description.
+    """
     d = ParameterDescriptor(name=name, type=kind, description=text, read_only=read_only)
     if rng is not None and kind == T.PARAMETER_DOUBLE:
         d.floating_point_range = [FloatingPointRange(from_value=float(rng[0]),
@@ -104,7 +112,10 @@ def descriptor(name: str, kind: int, rng: tuple | None, read_only: bool,
 
 
 def fabric_parameters(fabric: Fabric) -> dict[str, tuple]:
-    """``fabric.<field>`` parameters, seeded from a preset; all of them change live."""
+    """``fabric.<field>`` parameters, seeded from a preset; all of them change live.
+
+    :param fabric: the preset whose values are the defaults.
+    """
     out = {}
     for f in fields(Fabric):
         lo, hi = FABRIC_RANGES[f.name]
@@ -116,14 +127,21 @@ def fabric_parameters(fabric: Fabric) -> dict[str, tuple]:
 
 
 def default_values(fabric: Fabric) -> dict[str, object]:
-    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric_preset``."""
+    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric_preset``.
+
+    :param fabric: that preset.
+    """
     values = {name: spec[1] for name, spec in NODE_PARAMETERS.items()}
     values.update({name: spec[1] for name, spec in fabric_parameters(fabric).items()})
     return values
 
 
 def check_value(name: str, value: object) -> str:
-    """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''."""
+    """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''.
+
+    :param name: the parameter's name.
+    :param value: its value, typed.
+    """
     if name in SIM_FIELDS:
         reason = check_sim_value(name, value)
         return f'{name} {reason}' if reason else ''
@@ -139,6 +157,10 @@ def check_value(name: str, value: object) -> str:
 
 
 def sim_params_from(values: dict) -> SimParams:
+    """Return the simulation's settings among the parameters' values.
+
+    :param values: every parameter's value, by name.
+    """
     sim = {k: values[k] for k in SIM_KEYS}
     for name, f in SIM_FIELDS.items():         # arrays (wind, lod_distances) as tuples
         if f.type is tuple:
@@ -147,7 +169,12 @@ def sim_params_from(values: dict) -> SimParams:
 
 
 def unknown_reason(name: str, known: object, node: str) -> str:
-    """Why a parameter given to ``node`` is not taken: a hint for an old name, else unknown."""
+    """Why a parameter given to ``node`` is not taken: a hint for an old name, else unknown.
+
+    :param name: the parameter given.
+    :param known: the node's parameter names.
+    :param node: the node's name.
+    """
     if name in RENAMED:
         return f'parameter {name}: renamed {RENAMED[name]} (set {RENAMED[name]} instead)'
     if '.' in name and name.partition('.')[0] in known:
@@ -156,7 +183,10 @@ def unknown_reason(name: str, known: object, node: str) -> str:
 
 
 def from_recording(values: dict) -> dict:
-    """Return a recording's parameter values under today's names (older files say ``fabric``)."""
+    """Return a recording's parameter values under today's names (older files say ``fabric``).
+
+    :param values: the recorded values, by name.
+    """
     out = dict(values)
     for old, new in RENAMED.items():
         if old in out and not isinstance(out[old], dict):
@@ -169,6 +199,8 @@ def params_file_problem(argv: list[str]) -> str:
 
     A key given twice in one mapping (the second wins in rcl's reader: ``fabric: {...}`` after
     a ``fabric: name``) is refused; a file rcl cannot read is left to rcl's own message.
+
+    :param argv: the command line with its ROS arguments.
     """
     import yaml
 
@@ -201,7 +233,11 @@ def params_file_problem(argv: list[str]) -> str:
 
 
 def fabric_from(preset: Fabric, values: dict) -> Fabric:
-    """Return the preset with every ``fabric.<field>`` value applied."""
+    """Return the preset with every ``fabric.<field>`` value applied.
+
+    :param preset: the fabric preset.
+    :param values: every parameter's value, by name.
+    """
     return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
 
 
@@ -220,7 +256,8 @@ def _as_float(value):
 def parse_override(text: str, known: dict) -> tuple[str, object]:
     """``name:=value`` (as ``--ros-args -p`` takes it) to (name, typed value), validated.
 
-    ``known`` maps parameter names to their current values (their types come from there).
+    :param text: the ``name:=value`` text.
+    :param known: parameter names to their current values (their types come from there).
     """
     import yaml
     name, sep, raw = text.partition(':=')
@@ -242,7 +279,11 @@ def typed_value(name: str, value: object, current: object, where: str,
                 raw: str | None = None) -> object:
     """Return ``value`` for parameter ``name`` typed as its ``current`` value, validated.
 
-    Errors are ValueError starting with ``where``; ``raw`` is the text the value came from.
+    :param name: the parameter's name.
+    :param value: the value given.
+    :param current: its current value, whose type the value must have.
+    :param where: what gave it, which every ValueError starts with.
+    :param raw: the text the value came from, shown in errors; None: the value's repr.
     """
     shown = repr(raw) if raw is not None else repr(value)
     if isinstance(current, bool):

@@ -35,6 +35,11 @@ def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_clo
 
     Inputs (JointState, wind, viewer, parameter changes) and outputs (/tf, markers,
     diagnostics): the node records them all, a replay reads the inputs and writes them all again.
+
+    :param joint_states: the JointState input topic.
+    :param wind: the wind input topic.
+    :param markers: the markers output topic.
+    :param viewer: the viewer input topic.
     """
     return {
         'joint_states': (joint_states, 'sensor_msgs/msg/JointState',
@@ -61,14 +66,21 @@ class SessionPipeline:
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
                  values: dict, node_name: str = DEFAULT_NODE, timing: bool = True,
                  output_phase: float = 0.0):
-        """Set up the simulation; ``output_phase`` staggers markers and diagnostics.
+        """Set up the simulation.
 
-        ``node_name`` starts the diagnostics status name (``<node_name>: cloth simulation``):
-        the node's fully qualified name, and in a crowd the character's name after it.
-
-        After the first of each, they come ``output_phase`` (0 to 0.9) of their period earlier
-        than they would: a crowd gives its characters spread phases, so their markers and
-        diagnostics do not all fall on one input's tick.
+        :param skeleton: the character's skeleton.
+        :param rig: its rig.
+        :param fabrics: the fabric presets by name; the values' ``fabric`` picks one.
+        :param values: the simulation's parameter values by name.
+        :param node_name: starts the diagnostics status name (``<node_name>: cloth
+            simulation``): the node's fully qualified name, and in a crowd the character's
+            name after it.
+        :param timing: whether wall-clock step costs go into the diagnostics (live; not in a
+            replay, whose output file stays byte-identical).
+        :param output_phase: staggers markers and diagnostics: after the first of each, they
+            come this share (0 to 0.9) of their period earlier than they would; a crowd gives
+            its characters spread phases, so their markers and diagnostics do not all fall on
+            one input's tick.
         """
         if not 0.0 <= output_phase <= 0.9:
             raise ValueError(f'output_phase {output_phase} is not in [0, 0.9]')
@@ -114,7 +126,10 @@ class SessionPipeline:
         return fabric_from(self.fabrics[self.values['fabric_preset']], self.values)
 
     def apply(self, changes: dict) -> None:
-        """Parameter changes (name -> value), acting from the next step; never a reset."""
+        """Parameter changes (name -> value), acting from the next step; never a reset.
+
+        :param changes: new values by parameter name.
+        """
         self.values.update(changes)
         if set(changes) & set(SIM_KEYS):
             self.sim.set_params(sim_params_from(self.values))
@@ -126,11 +141,17 @@ class SessionPipeline:
             self._tf = self._tf_template()
 
     def set_viewer(self, position: 'np.ndarray | None') -> None:
-        """Set the viewer's world position for the level of detail, from the next input on."""
+        """Set the viewer's world position for the level of detail, from the next input on.
+
+        :param position: the viewer's world position, (3,) metres; None: no viewer, full detail.
+        """
         self.sim.set_viewer(position)
 
     def note_latency(self, ns: int) -> None:
-        """Note the live node's time from a JointState's arrival to its /tf going out."""
+        """Note the live node's time from a JointState's arrival to its /tf going out.
+
+        :param ns: the time, ns.
+        """
         self._latencies.append(ns)
 
     def note_undecodable(self) -> None:
@@ -139,13 +160,20 @@ class SessionPipeline:
         self._window['dropped'] += 1
 
     def note_lost(self, count: int) -> None:
-        """Count ``count`` JointStates lost before they reached the node."""
+        """Count JointStates lost before they reached the node.
+
+        :param count: how many were lost.
+        """
         self.lost += count
         self._window['lost'] += count
 
     def on_joint_state(self, msg: 'JointStateContent',
                        stamp_ns: int) -> tuple[StepReport, list[tuple[str, bytes]]]:
-        """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...])."""
+        """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...]).
+
+        :param msg: the JointState's content.
+        :param stamp_ns: the input's stamp, ns, which its outputs carry.
+        """
         report = self.sim.process(stamp_ns, msg.name, msg.position)
         return report, self.account(report, stamp_ns)
 
@@ -154,6 +182,9 @@ class SessionPipeline:
 
         Its /tf (:meth:`account_tf`), then its markers and diagnostics when due
         (:meth:`periodic_outputs`).
+
+        :param report: the input's step report.
+        :param stamp_ns: the input's stamp, ns, which its outputs carry.
         """
         return self.account_tf(report, stamp_ns) + self.periodic_outputs(report, stamp_ns)
 
@@ -162,6 +193,9 @@ class SessionPipeline:
 
         The part after the simulation that a listener waits for: a crowd (CrowdPipeline)
         sends every character's /tf before any character's markers and diagnostics.
+
+        :param report: the input's step report.
+        :param stamp_ns: the input's stamp, ns, which its outputs carry.
         """
         self.inputs += 1
         self._window['inputs'] += 1
@@ -194,6 +228,9 @@ class SessionPipeline:
         """Return an accounted input's markers and diagnostics, those that are due.
 
         Right after its :meth:`account_tf`, before the simulation takes another input.
+
+        :param report: the input's step report.
+        :param stamp_ns: the input's stamp, ns, which its outputs carry.
         """
         if not report.accepted:
             return []
@@ -246,7 +283,10 @@ class SessionPipeline:
         return self._world_tf[1].encode(pose[None], stamp_ns)
 
     def diagnostics_now(self, stamp_ns: int) -> bytes:
-        """Diagnostics whatever the stamps: the live node's own rate, when inputs stop."""
+        """Diagnostics whatever the stamps: the live node's own rate, when inputs stop.
+
+        :param stamp_ns: the array's stamp, ns.
+        """
         return self._diagnostics(stamp_ns)
 
     def _viewer_distance(self):
@@ -322,6 +362,9 @@ def quantile(ordered: list, share: float) -> float:
     """Return the ``share`` quantile of sorted numbers, interpolated as numpy's default.
 
     Sorting a list of ints: numpy's percentile was a visible share of a crowd's diagnostics.
+
+    :param ordered: the numbers, sorted ascending.
+    :param share: the quantile, 0 to 1.
     """
     at = (len(ordered) - 1) * share
     lo = int(at)
@@ -334,6 +377,8 @@ def spread_phase(index: int) -> float:
 
     Golden-ratio steps (scaled into [0, 0.9]) spread any number of characters evenly without
     knowing how many will come.
+
+    :param index: the character's place in the crowd, from 0.
     """
     return 0.9 * ((index * 0.6180339887498949) % 1.0)
 
@@ -350,6 +395,8 @@ class CrowdPipeline:
     (jacket_cloth_node) steps its character alone, by its simulation's ``process``: for one
     input the crowd's compiled intake and call cost more than they save, and its kernels
     need not be loaded (they are once a second character comes).
+
+    :param threads: how many threads the crowd's call spreads over (0: all cores).
     """
 
     def __init__(self, threads: int = 0):
@@ -358,7 +405,10 @@ class CrowdPipeline:
         self._names = []            # each character's last name list, as stepped
 
     def add(self, pipeline: SessionPipeline) -> int:
-        """Add a character's pipeline; returns its index."""
+        """Add a character's pipeline; returns its index.
+
+        :param pipeline: a character's pipeline, stepped with the others from now on.
+        """
         self.pipelines.append(pipeline)
         self._names.append(None)
         if len(self.pipelines) == 2:
@@ -369,7 +419,10 @@ class CrowdPipeline:
 
     def on_joint_states(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
             tuple[StepReport, list[tuple[str, bytes]]]]:
-        """Process (character index, JointState) inputs; (report, outputs) of each, in order."""
+        """Process inputs; returns (report, outputs) of each, in order.
+
+        :param inputs: (character index, JointState) each.
+        """
         return [(r, tf + later()) for r, tf, later in self.step_and_tf(inputs)]
 
     def step_and_tf(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
@@ -380,6 +433,8 @@ class CrowdPipeline:
         at once, then calls each ``later``, so the last character's /tf waits for no
         character's markers or diagnostics. An input whose character has another input later
         in the batch has them made after its own round, before its state moves on.
+
+        :param inputs: (character index, JointState) each.
         """
         if len(self.pipelines) == 1:
             return [self._alone(m, k == len(inputs) - 1) for k, (_, m) in enumerate(inputs)]

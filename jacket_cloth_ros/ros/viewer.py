@@ -43,6 +43,9 @@ def read_viewer(raw: bytes, world_frame: str) -> ViewerReading:
     Refuses bytes that are no PointStamped, a ``frame_id`` other than ``world_frame`` (the
     node does not look frames up), a non-finite coordinate, or a point farther than
     ``MAX_DISTANCE_M``.
+
+    :param raw: the message's CDR bytes.
+    :param world_frame: the node's world frame, the only ``frame_id`` taken.
     """
     try:
         msg = cdr.deserialize(raw, PointStamped)
@@ -65,13 +68,19 @@ class Deliveries:
     """Tells a message's first delivery from the same message on another subscription.
 
     A message is known by its publisher, sequence number and source time (rmw message info).
+
+    :param keep: how many recent messages it remembers.
     """
 
     def __init__(self, keep: int = 32):
         self._seen = deque(maxlen=keep)
 
     def first(self, info: dict) -> bool:
-        """Tell whether the message ``info`` describes was not delivered before."""
+        """Tell whether the message ``info`` describes was not delivered before.
+
+        :param info: the message's rmw message info (publisher gid, sequence number, source
+            time).
+        """
         gid = info.get('publisher_gid')
         if isinstance(gid, dict):
             gid = gid.get('data')

@@ -21,8 +21,10 @@ from .pipeline import CrowdPipeline, SessionPipeline
 def kernels_cached(crowd: bool = True) -> bool:
     """Tell whether numba's cache holds the compiled step for the kernel files as they are.
 
-    If not, the next simulation made compiles every kernel, which takes a while. With
-    ``crowd``, the crowd's one call for many characters (jacket_cloth_crowd) counts too.
+    If not, the next simulation made compiles every kernel, which takes a while.
+
+    :param crowd: whether the crowd's one call for many characters (jacket_cloth_crowd) counts
+        too.
     """
     wanted = (step.advance,)
     if crowd:
@@ -36,9 +38,9 @@ def kernels_cached(crowd: bool = True) -> bool:
 def warm_kernels(crowd: bool = True) -> tuple:
     """Load, or compile and cache, every kernel of the node's per-input path.
 
-    With ``crowd``, also the crowd's one call for many characters (jacket_cloth_crowd; a single
-    node leaves it out, its first start needs only its own). Returns (seconds taken, whether
-    they were cached already).
+    :param crowd: whether the crowd's one call for many characters is warmed too
+        (jacket_cloth_crowd; a single node leaves it out, its first start needs only its own).
+    :returns: (seconds taken, whether they were cached already).
     """
     cached = kernels_cached(crowd)
     started = time.perf_counter()

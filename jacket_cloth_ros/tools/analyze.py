@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 
 from ..core.body_proxy import body_proxy, sleeved_links  # noqa: E402
 from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
+from ..recording.reader import message_digest, message_digests  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame  # noqa: E402
 from .session import SessionInput, run_session  # noqa: E402
@@ -40,7 +41,11 @@ REPORTED_PARAMETERS = ('fabric_preset', 'sim_rate', 'stretch_limit', 'fabric.ite
 
 
 class SessionFigures:
-    """Per-input series of one session, gathered while it runs."""
+    """Per-input series of one session, gathered while it runs.
+
+    :param session: the recording's input and set-up.
+    :param moments: how many instants, evenly spread, the filmstrip shows.
+    """
 
     def __init__(self, session: SessionInput, moments: int):
         self.session = session
@@ -49,7 +54,7 @@ class SessionFigures:
         # The node's /tf (a file with its set-up), in the order it was published: the n-th
         # re-simulated /tf must equal the n-th recorded one (stamps can repeat after a reset).
         recording = session.recording
-        self.recorded_tf = [m.data for m in recording.messages if m.topic == '/tf'] \
+        self.recorded_tf = message_digests(recording.path, '/tf') \
             if SESSION_CONFIG in recording.metadata else []
         self.rows = []
         self.worst = {name: [] for name in MEASURES}        # (time s, Worst) per input
@@ -68,6 +73,13 @@ class SessionFigures:
 
     def probe(self, pipeline: 'SessionPipeline', report: 'StepReport', stamp: int,
               outputs: list[tuple[str, bytes]]) -> None:
+        """Take the figures of the state after one input (``run_session``'s probe).
+
+        :param pipeline: the session's pipeline, past the input.
+        :param report: what the input did.
+        :param stamp: the input's stamp, ns.
+        :param outputs: the (key, CDR bytes) messages it gave.
+        """
         sim = pipeline.sim
         if not report.accepted:
             return
@@ -80,7 +92,7 @@ class SessionFigures:
         for data in tf:             # with publish_world_tf, two per input: compare each
             if self.tf_sent < len(self.recorded_tf):
                 self.tf_compared += 1
-                self.tf_equal += self.recorded_tf[self.tf_sent] == data
+                self.tf_equal += self.recorded_tf[self.tf_sent] == message_digest(data)
             self.tf_sent += 1
         rig = sim.rig
         t = (stamp - self.t0) * 1e-9
@@ -110,6 +122,10 @@ class SessionFigures:
             self.frames.append(sim_frame(sim, stamp))
 
     def report(self, pipeline: 'SessionPipeline') -> dict:
+        """Return the session's report.json entry.
+
+        :param pipeline: the session's pipeline, once it has run.
+        """
         a = np.array(self.rows, dtype=float).reshape(-1, 9)
         step_us = a[:, 6][np.isfinite(a[:, 6])]
         values = pipeline.values
@@ -143,7 +159,10 @@ class SessionFigures:
         }
 
     def report_where(self, name: str) -> str:
-        """Say where a measure was worst: vertex (row, column) and collider, if known."""
+        """Say where a measure was worst: vertex (row, column) and collider, if known.
+
+        :param name: a name of ``MEASURES``.
+        """
         m = self._measure(name, self.session.setup.rig.cols)
         parts = ['r{} c{}'.format(*m['vertex'])] if 'vertex' in m else []
         return ' '.join(parts + [m[k] for k in ('collider', 'link') if k in m])
@@ -201,7 +220,10 @@ CHARTS = {
 
 
 def output_names(count: int) -> list[str]:
-    """Return the files ``analyze`` writes into its folder for ``count`` sessions."""
+    """Return the files ``analyze`` writes into its folder for ``count`` sessions.
+
+    :param count: how many sessions.
+    """
     strips = ['filmstrip.png'] if count == 1 else [f'filmstrip_{k}.png'
                                                    for k in range(1, count + 1)]
     worst = ['worst_instant.png'] if count == 1 else [f'worst_instant_{k}.png'
@@ -211,7 +233,13 @@ def output_names(count: int) -> list[str]:
 
 def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None = None,
             moments: int = 6) -> dict:
-    """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir."""
+    """Run each session, write report.json, summary.md, charts and filmstrip(s) to out_dir.
+
+    :param sessions: the sessions, each a recording's input and set-up.
+    :param out_dir: the output folder, made if missing.
+    :param names: each session's name in the summary; None: its recording's file name.
+    :param moments: how many instants each filmstrip shows.
+    """
     os.makedirs(out_dir, exist_ok=True)
     names = names or [os.path.basename(s.recording.path.rstrip('/')) for s in sessions]
     reports, series = [], []
@@ -290,6 +318,8 @@ def summary_line(report: dict) -> str:
 
     Per session: frames, strain and step time, or how many inputs were dropped when none was
     simulated.
+
+    :param report: what ``analyze`` returned.
     """
     parts = []
     for r in report.get('sessions', [report]):
@@ -306,7 +336,10 @@ def summary_line(report: dict) -> str:
 
 
 def target_figures(r: dict) -> str:
-    """Return a session's figures that have targets (issue 19, issue 35), max / p99."""
+    """Return a session's figures that have targets (issue 19, issue 35), max / p99.
+
+    :param r: one session's report (report.json's, or one of its ``sessions``).
+    """
     def pair(name, scale=1.0, digits=3):
         return f'{r[name]["max"] * scale:.{digits}f} / {r[name]["p99"] * scale:.{digits}f}'
     return (f'vertical stretch {pair("vertical_stretch")}, horizontal stretch p99 '

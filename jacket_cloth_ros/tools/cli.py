@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""``jacket_cloth``: the motion source, capture import, the demo and session pictures.
+"""``jacket_cloth``: motion sources, capture import, the demo and session pictures.
 
 Every failure ends in one readable line on stderr and a non-zero exit, never a traceback.
 """
@@ -14,8 +14,10 @@ from typing import TYPE_CHECKING
 
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
-from ..motion.clips import ALL_CLIPS, clip_length, segment_at, showcase_highlights
+from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
+                            showcase_highlights)
 from ..motion.messages import clip_messages
+from .live import SourceError, Stopped, play_live
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.skeleton import Skeleton
@@ -25,18 +27,6 @@ class ToolError(Exception):
     """A failure to report in one line."""
 
 
-class Stopped(Exception):
-    """SIGINT or SIGTERM asked a live command to stop."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(f'stopped by {signal.Signals(signum).name}')
-        self.signum = signum
-
-
-def _stop(signum, frame):
-    raise Stopped(signum)
-
-
 def _skeleton(urdf_path=None):
     from ..core.skeleton import load_skeleton
     path = urdf_path or shipped('character.urdf')
@@ -44,55 +34,52 @@ def _skeleton(urdf_path=None):
 
 
 def cmd_motion(args: argparse.Namespace) -> int:
+    """Play a built-in clip live on joint_states (with its URDF), or write it to a recording.
+
+    :param args: the ``motion`` command's options.
+    """
     skeleton, urdf_path = _skeleton(args.urdf)
+    _check_clip_fits(args.clip, skeleton, urdf_path)
     duration = args.duration if args.duration is not None else clip_length(args.clip)
     if args.output:
         return _motion_to_file(args, skeleton, duration)
-    import rclpy
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from sensor_msgs.msg import JointState
-    from std_msgs.msg import String
-    # Our handlers, not rclpy's: its own shut the context down under a publish (a traceback).
-    # The ROS arguments name, namespace and remap the node (ros2 launch gives __node).
-    try:
-        rclpy.init(args=['jacket_cloth', *args.ros_args],
-                   signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    except RuntimeError as e:           # rcl's RCLError: the text's first sentence is enough
-        raise ToolError(f'--ros-args: {str(e).split(". Error")[0]}') from None
-    previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
-    node = rclpy.create_node('jacket_cloth_motion')
-    try:
-        reliability = ReliabilityPolicy.BEST_EFFORT if args.best_effort else \
-            ReliabilityPolicy.RELIABLE
-        pub = node.create_publisher(JointState, 'joint_states',
-                                    QoSProfile(depth=10, reliability=reliability))
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        # Relative, as robot_state_publisher's: a namespaced node hears its own character.
-        desc = node.create_publisher(String, 'robot_description', latched)
-        with open(urdf_path, encoding='utf-8') as f:
-            desc.publish(String(data=f.read()))
-        # The node subscribes once its character is loaded: wait for it (up to --wait s), so
-        # the clip's first message is not lost, then give discovery a moment to settle.
-        deadline = time.monotonic() + args.wait
-        while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(min(0.3, args.wait))
-        node.get_logger().info(f'playing {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
-        start = node.get_clock().now().nanoseconds
-        wall0 = time.monotonic()
-        for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration, start,
-                                        args.world_joint):
-            delay = wall0 + (stamp - start) * 1e-9 - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            pub.publish(msg)
-        node.get_logger().info(f'played {args.clip!r} for {duration:.1f} s at {args.rate} Hz')
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    with open(urdf_path, encoding='utf-8') as f:
+        urdf = f.read()
+    inputs = ((stamp, msg.name, msg.position) for stamp, msg in clip_messages(
+        skeleton, args.clip, args.rate, duration, 0, args.world_joint))
+    play_live('jacket_cloth_motion', urdf, inputs, args.ros_args, args.best_effort, args.wait,
+              lambda log, verb: log.info(f'{verb} {args.clip!r} for {duration:.1f} s at '
+                                         f'{args.rate} Hz'))
     return 0
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    """Publish a recording's JointStates live at their pace, and its URDF.
+
+    :param args: the ``play`` command's options.
+    """
+    from .play import recorded_inputs
+    urdf, inputs, what = recorded_inputs(args.input, args.topic, args.urdf)
+    if urdf is None:
+        print(f'jacket_cloth play: {args.input} holds no URDF and no --urdf was given: '
+              'robot_description is not published', file=sys.stderr)
+    sent = play_live('jacket_cloth_play', urdf, inputs, args.ros_args, args.best_effort,
+                     args.wait, lambda log, verb: log.info(f'{verb} {what}'))
+    print(f'played {sent} JointState messages of {args.input}')
+    return 0
+
+
+def _check_clip_fits(clip, skeleton, urdf_path):
+    """Refuse a clip none of whose joints the skeleton has; name those it lacks."""
+    moved = clip_joints(clip)
+    missing = sorted(moved - set(skeleton.joint_names))
+    if len(missing) == len(moved):
+        raise ToolError(f'the clip {clip!r} moves joints {", ".join(sorted(moved))}; '
+                        f'{urdf_path} has none of them, so only its root would move (play a '
+                        'recording of this character with `jacket_cloth play`)')
+    if missing:
+        print(f'jacket_cloth motion: {urdf_path} lacks {len(missing)} of the {len(moved)} '
+              f'joints the clip {clip!r} moves: {", ".join(missing)}', file=sys.stderr)
 
 
 def _motion_to_file(args, skeleton, duration):
@@ -114,8 +101,12 @@ def _motion_to_file(args, skeleton, duration):
 
 
 def cmd_import(args: argparse.Namespace) -> int:
-    """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording."""
-    from ..motion.bvh import BvhError, joint_state_content, load_capture, stamps_ns
+    """Turn a BVH capture (or, with --urdf, a DeepMimic clip) into a JointState recording.
+
+    :param args: the ``import`` command's options.
+    """
+    from ..motion.bvh import BvhError, height_warning, joint_state_content, load_capture, \
+        stamps_ns
     from ..motion.deepmimic import ClipError, load_clip
     from ..recording.writer import SessionRecorder, qos_profile_yaml
     from ..ros.cdr import joint_state
@@ -135,6 +126,9 @@ def cmd_import(args: argparse.Namespace) -> int:
             load_capture(args.input, args.scale)
     except (BvhError, ClipError) as e:
         raise ToolError(str(e)) from None
+    warning = None if args.urdf else height_warning(capture)
+    if warning:
+        print(f'jacket_cloth import: {args.input}: {warning}', file=sys.stderr)
     stamps = stamps_ns(capture, int(round(args.start * 1e9)))
     with replacing(args.output, recording=True) as tmp:
         rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
@@ -173,14 +167,26 @@ def _check_output(path, force, inputs=(), recording=False):
 
 
 def cmd_picture(args: argparse.Namespace) -> int:
+    """Draw a filmstrip PNG of a recorded session.
+
+    :param args: the ``picture`` command's options.
+    """
     from ..tools.picture import render_filmstrip
     from .outputs import replacing
     skeleton, _ = _skeleton(args.urdf)
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     rig = load_rig(skeleton, args.rig)
+    gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
+    if gif:
+        _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
     with replacing(args.output) as tmp:
         render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig)
     print(args.output)
+    if gif:
+        from .animation import render_animation
+        with replacing(gif) as tmp:
+            frames = render_animation(args.input, tmp, skeleton, rig)
+        print(f'{gif} ({frames} frames)')
     return 0
 
 
@@ -203,6 +209,10 @@ def _warn_rig(args: argparse.Namespace, lines: list[str]) -> None:
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
+    """Run a recording (a crowd's too) through the simulation again into a new recording.
+
+    :param args: the ``replay`` command's options.
+    """
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
     if _is_crowd(args.input):
@@ -240,6 +250,10 @@ def _replay_crowd(args):
 
 
 def cmd_analyze(args: argparse.Namespace) -> int:
+    """Write the figures, charts and filmstrips of recorded sessions; print the summary line.
+
+    :param args: the ``analyze`` command's options.
+    """
     from .analyze import analyze, output_names, summary_line
     from .outputs import check_output_folder
     if len(args.input) > 1 and not args.compare:
@@ -257,7 +271,10 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    """Node + motion source live over real DDS for the showcase clip, then a filmstrip."""
+    """Node + motion source live over real DDS for the showcase clip, then a filmstrip.
+
+    :param args: the ``demo`` command's options.
+    """
     from ..tools.picture import render_filmstrip
     os.makedirs(args.out, exist_ok=True)
     session = os.path.join(args.out, 'session.mcap')
@@ -303,7 +320,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_rig(args: argparse.Namespace) -> int:
-    """Propose a rig for a URDF: say which links and why, write commented YAML, a picture."""
+    """Propose a rig for a URDF: say which links and why, write commented YAML, a picture.
+
+    :param args: the ``rig`` command's options.
+    """
     import yaml
     from ..core.rig import Rig
     from ..core.skeleton import load_skeleton
@@ -369,6 +389,10 @@ def _vector(text, what):
 
 
 def cmd_warm(args: argparse.Namespace) -> int:
+    """Compile the node's kernels into numba's cache now (or load them); say how long it took.
+
+    :param args: the ``warm`` command's options (none of its own).
+    """
     from ..ros.warm import warm_kernels
     took, cached = warm_kernels()
     print(f'kernels {"loaded from the cache" if cached else "compiled and cached"} in '
@@ -393,6 +417,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help='s to wait for a joint_states subscriber before the clip starts')
     m.add_argument('--force', action='store_true', help='overwrite the output file')
     m.set_defaults(func=cmd_motion)
+    y = sub.add_parser('play', help="publish a recording's JointState live at its pace (and its "
+                       'URDF on robot_description), to drive the node, RViz or Foxglove')
+    y.add_argument('input', help='an MCAP file or a rosbag2 bag directory (MCAP storage)')
+    y.add_argument('--topic', default=None,
+                   help='JointState topic (default: the only one in the file)')
+    y.add_argument('--urdf', default=None,
+                   help='the character for robot_description (default: the recorded one)')
+    y.add_argument('--best-effort', action='store_true', help='publish best effort')
+    y.add_argument('--wait', type=float, default=1.0,
+                   help='s to wait for a joint_states subscriber before the first message')
+    y.set_defaults(func=cmd_play)
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
     d.add_argument('--out', default='out/demo')
     d.add_argument('--domain-id', type=int, default=42,
@@ -404,6 +439,8 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument('--moments', type=int, default=6)
     f.add_argument('--urdf', default=None)
     f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
+    f.add_argument('--animate', action='store_true',
+                   help='also write the session as a GIF beside the picture (OUTPUT.gif)')
     f.add_argument('--force', action='store_true')
     f.set_defaults(func=cmd_picture)
     r = sub.add_parser('replay', help='run a recording through the simulation again')
@@ -473,6 +510,8 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
     """Split ``argv`` into the command's own arguments and the ROS ones (``--ros-args`` ...).
 
     A ROS block runs to a ``--`` or the end, as rcl reads it; there may be several.
+
+    :param argv: the command line, without the program's name.
     """
     own, ros, inside = [], [], False
     for a in argv:
@@ -487,14 +526,18 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run a ``jacket_cloth`` command; a failure is one line on stderr and exit 1.
+
+    :param argv: the arguments, without the program's name; None: the process's.
+    """
     # ROS arguments (ros2 launch adds some to every executable) are for the commands that
-    # start a node, motion and demo; the others have no node to give them to.
+    # start a node, motion, play and demo; the others have no node to give them to.
     own, ros = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(own)
     args.ros_args = ros
     try:
         return args.func(args)
-    except (ToolError, ConfigError, ValueError, OSError) as e:
+    except (ToolError, SourceError, ConfigError, ValueError, OSError) as e:
         print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
         return 1
     except Stopped as e:

@@ -40,12 +40,18 @@ class CrowdCharacter:
 
 
 def is_crowd(recording: Recording) -> bool:
-    """Tell whether a recording is a crowd's (one set-up per character)."""
+    """Tell whether a recording is a crowd's (one set-up per character).
+
+    :param recording: the recording read.
+    """
     return any(name.startswith(PREFIX) for name in recording.metadata)
 
 
 def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
-    """Read a crowd's recording; returns it and its characters by JointState topic."""
+    """Read a crowd's recording; returns it and its characters by JointState topic.
+
+    :param path: the crowd's recording, an MCAP file or a bag folder.
+    """
     recording = read_recording(path)
     characters = {}
     for key, meta in recording.metadata.items():
@@ -83,7 +89,11 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
 
 
 def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], float]:
-    """Write the replay of the crowd recording ``path``; returns (characters, seconds taken)."""
+    """Write the replay of the crowd recording ``path``; returns (characters, seconds taken).
+
+    :param path: the crowd's recording, an MCAP file or a bag folder.
+    :param out_path: the replay's recording, replaced only once it is whole.
+    """
     recording, characters = load_crowd(path)
     with replacing(out_path, recording=True) as tmp:
         recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),

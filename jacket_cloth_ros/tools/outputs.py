@@ -28,10 +28,14 @@ def check_output(path: str | os.PathLike, force: bool, inputs: Iterable[str | No
                  recording: bool = False) -> None:
     """Refuse ``path`` as an output file unless it is safe to write.
 
-    Its folder exists, it is none of ``inputs`` (files, or bag folders it must not be inside)
-    and, if it exists, it is a regular file and ``force`` is set. A ``recording`` not ending
-    in ``.mcap`` is a bag folder (writer.is_bag_folder): if it exists, it must be a bag (with
-    metadata.yaml).
+    Its folder exists, it is none of ``inputs`` and, if it exists, it is a regular file and
+    ``force`` is set.
+
+    :param path: the output file.
+    :param force: whether an existing file may be overwritten.
+    :param inputs: the run's input files, or bag folders it must not be inside; None skipped.
+    :param recording: whether the output is a recording: one not ending in ``.mcap`` is a bag
+        folder (writer.is_bag_folder), which if it exists must be a bag (with metadata.yaml).
     """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
@@ -57,6 +61,11 @@ def check_output_folder(folder: str | os.PathLike, names: Iterable[str], force: 
     """Run ``check_output`` for each of the files ``names`` a tool writes into ``folder``.
 
     The folder is made if missing; if it exists, it must be one.
+
+    :param folder: the output folder.
+    :param names: the file names written into it.
+    :param force: whether existing files may be overwritten.
+    :param inputs: the run's input files or bag folders; None skipped.
     """
     folder = os.fspath(folder)
     if os.path.lexists(folder) and not os.path.isdir(folder):
@@ -88,8 +97,11 @@ def replacing(path: str | os.PathLike, recording: bool = False) -> Iterator[str]
     """Yield a temporary path next to ``path`` to write the output to.
 
     It becomes ``path`` only when the block ends without an error, so a failed run leaves the
-    old file (or none). For a ``recording`` that is a bag folder, the temporary path is a
-    folder's, not yet made.
+    old file (or none).
+
+    :param path: the output file.
+    :param recording: whether the output is a recording: for a bag folder, the temporary path
+        is a folder's, not yet made.
     """
     path = os.fspath(path)
     if recording and is_bag_folder(path):

@@ -59,6 +59,8 @@ def body_link(skeleton: 'Skeleton') -> int:
     """Return the link a picture centres on: the first from the root with two children or more.
 
     The pelvis of a humanoid, below any chain of virtual links carrying its world motion.
+
+    :param skeleton: the character.
     """
     for k in range(len(skeleton.link_names)):
         if np.count_nonzero(skeleton.parent == k) >= 2:
@@ -69,8 +71,11 @@ def body_link(skeleton: 'Skeleton') -> int:
 def in_view(frame: Frame, axes: np.ndarray, centre: int) -> Frame:
     """Return the frame in view coordinates: forward, left, up (``axes``, world) from the centre.
 
-    The centre is link ``centre``'s world position at the frame's moment; the side view draws
-    columns 0 and 2, the front view columns 1 and 2.
+    The side view draws columns 0 and 2, the front view columns 1 and 2.
+
+    :param frame: the frame, its points in the root's frame.
+    :param axes: the world's forward, left and up, as the columns of a 3x3.
+    :param centre: the link whose world position at the frame's moment is the origin.
     """
     root = np.eye(4) if frame.root is None else frame.root
     to_view = axes.T @ root[:3, :3]
@@ -84,7 +89,11 @@ def in_view(frame: Frame, axes: np.ndarray, centre: int) -> Frame:
 
 
 def axis_label(direction: np.ndarray, meaning: str) -> str:
-    """Name a view axis truthfully: the world axis it is, if it is one, and what it means."""
+    """Name a view axis truthfully: the world axis it is, if it is one, and what it means.
+
+    :param direction: the axis, (3,) in the world.
+    :param meaning: what it means (``forward``, ``up``).
+    """
     for k, name in enumerate('xyz'):
         for sign, mark in ((1.0, '+'), (-1.0, '-')):
             if np.allclose(direction, sign * np.eye(3)[k], atol=1e-9):
@@ -94,7 +103,12 @@ def axis_label(direction: np.ndarray, meaning: str) -> str:
 
 def view_limits(skeleton: 'Skeleton', axes: np.ndarray,
                 centre: int) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Return (across, up) limits of a view, from the skeleton's height at its zero pose."""
+    """Return (across, up) limits of a view, from the skeleton's height at its zero pose.
+
+    :param skeleton: the character.
+    :param axes: the world's forward, left and up, as the columns of a 3x3.
+    :param centre: the link the view centres on.
+    """
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))[:, :3, 3]
     height = (rest - rest[centre]) @ axes[:, 2]
     size = max(float(height.max() - height.min()), 0.5)
@@ -103,7 +117,11 @@ def view_limits(skeleton: 'Skeleton', axes: np.ndarray,
 
 
 def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
-    """Return a frame of a running simulation (its current state)."""
+    """Return a frame of a running simulation (its current state).
+
+    :param sim: the simulation.
+    :param stamp_ns: the frame's stamp, ns.
+    """
     rig = sim.rig
     layer = sim.layer
     ref = sim.reference_points(sim.links, layer).reshape(rig.rows, rig.cols, 3)
@@ -121,7 +139,13 @@ def _stamp(msg):
 
 def recorded_frames(mcap_path: str, skeleton: 'Skeleton',
                     rig: 'Rig | None' = None) -> tuple[list[Frame], int]:
-    """Frames at every recorded MarkerArray with a mesh; the skeleton from the nearest input."""
+    """Frames at every recorded MarkerArray with a mesh; the skeleton from the nearest input.
+
+    :param mcap_path: the recording.
+    :param skeleton: its character.
+    :param rig: its rig, for the skinned hem and hood; None: not drawn.
+    :returns: the frames and the first JointState's stamp (ns).
+    """
     messages, _ = read_messages(mcap_path)
     states = [deserialize_message(m.data, JointState) for m in messages
               if m.type_name.endswith('JointState')]
@@ -154,7 +178,13 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton',
 
 def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
          moments: int = 6) -> list[Frame]:
-    """Frames nearest ``times`` (s after t0), or ``moments`` evenly spaced ones."""
+    """Frames nearest ``times`` (s after t0), or ``moments`` evenly spaced ones.
+
+    :param frames: the frames, in time order.
+    :param t0: the recording's start, ns.
+    :param times: the instants, s after ``t0``; None: evenly spaced ones.
+    :param moments: how many evenly spaced frames, without ``times``.
+    """
     if times is None:
         picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
     else:
@@ -163,15 +193,52 @@ def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
     return [frames[k] for k in picks]
 
 
+def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
+              across: tuple[float, float], upward: tuple[float, float]) -> None:
+    """Draw one view of a frame (in view coordinates, see in_view) into ``ax``.
+
+    :param ax: the matplotlib axes.
+    :param frame: the frame, in view coordinates.
+    :param skeleton: its character (the link parents).
+    :param axis: the view coordinate drawn across: 0 side view, 1 front view.
+    :param across: the limits across, metres.
+    :param upward: the limits up, metres.
+    """
+    f = frame
+    for i in range(1, len(f.links)):
+        p = f.links[[skeleton.parent[i], i]]
+        ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
+    ax.add_collection(matplotlib.collections.PolyCollection(
+        f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
+        edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
+    for seg in f.bones:
+        ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
+    ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
+    ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
+    for ref in (f.hem_ref, f.hood_ref):
+        if ref is not None:
+            ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
+    ax.set_xlim(*across)
+    ax.set_ylim(*upward)
+    ax.set_aspect('equal')
+    ax.grid(alpha=0.3)
+    ax.tick_params(labelsize=7)
+
+
 def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]', png_path: str,
                    t0: int, labels: Callable[[int], str] | None = None,
                    title: str | None = None, world_axes: np.ndarray | None = None,
                    columns: Sequence[str] | None = None) -> None:
     """Two rows (side and front view), one column per frame, in the world (see in_view).
 
-    ``skeleton``: one for every frame, or one per frame (a crowd's characters side by side,
-    each column titled by ``columns``). ``world_axes``: the rig's forward, left and up
-    (Rig.world_axes); default x, y, z.
+    :param frames: the frames, one a column.
+    :param skeleton: one for every frame, or one per frame (a crowd's characters side by side).
+    :param png_path: the PNG written.
+    :param t0: the recording's start, ns; columns are titled by their time after it.
+    :param labels: names a frame by its ns after ``t0``, after its time; None: time alone.
+    :param title: the figure's title; None: what the colours show.
+    :param world_axes: the rig's forward, left and up (Rig.world_axes); None: x, y, z.
+    :param columns: each column's title instead of its time; None: times.
     """
     skeletons = list(skeleton) if isinstance(skeleton, (list, tuple)) else [skeleton] * len(
         frames)
@@ -184,25 +251,8 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
     for col, f in enumerate(in_view(f, world_axes, c) for f, c in zip(frames, centres)):
         for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
-            for i in range(1, len(f.links)):
-                p = f.links[[skeletons[col].parent[i], i]]
-                ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
-            ax.add_collection(matplotlib.collections.PolyCollection(
-                f.triangles[:, :, [axis, 2]], facecolor=(0.45, 0.35, 0.25, 0.55),
-                edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
-            for seg in f.bones:
-                ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
-            ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
-            ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
-            for ref in (f.hem_ref, f.hood_ref):
-                if ref is not None:
-                    ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
-            ax.set_xlim(*across)
-            ax.set_ylim(*upward)
-            ax.set_aspect('equal')
-            ax.grid(alpha=0.3)
+            draw_view(ax, f, skeletons[col], axis, across, upward)
             ax.set_xlabel(xlabels[axis], fontsize=8)
-            ax.tick_params(labelsize=7)
             if col == 0:
                 ax.set_ylabel(f'{view} view: {ylabel}', fontsize=8)
             if row == 0 and columns:
@@ -225,8 +275,14 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
                      rig: 'Rig | None' = None) -> list[int]:
     """Draw a filmstrip of a recording; return the stamps drawn.
 
-    At ``times`` (s from its start) or ``moments`` evenly spaced instants; with ``rig``, the
-    skinned pose is drawn too.
+    :param mcap_path: the recording.
+    :param png_path: the PNG written.
+    :param skeleton: its character.
+    :param moments: how many evenly spaced instants, without ``times``.
+    :param labels: names a frame by its ns from the start, after its time; None: time alone.
+    :param title: the figure's title; None: what the colours show.
+    :param times: the instants, s from its start; None: evenly spaced ones.
+    :param rig: its rig: the skinned pose is drawn too; None: not.
     """
     frames, t0 = recorded_frames(mcap_path, skeleton, rig)
     chosen = pick(frames, t0, times, moments)

@@ -19,7 +19,11 @@ if TYPE_CHECKING:           # for the annotations only
 
 
 def replay(session: SessionInput, out_path: str) -> tuple['SessionPipeline', float]:
-    """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken)."""
+    """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken).
+
+    :param session: the recording's input and set-up.
+    :param out_path: the replay's recording, replaced only once it is whole.
+    """
     topics = output_topics(session)
     with replacing(out_path, recording=True) as tmp:     # a failed replay leaves no output
         recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),

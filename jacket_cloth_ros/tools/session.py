@@ -61,7 +61,11 @@ class SessionInput:
 
 
 def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
-    """Return the recording's JointState topic: the one asked for, else the only one there is."""
+    """Return the recording's JointState topic: the one asked for, else the only one there is.
+
+    :param recording: the recording read.
+    :param topic: the topic asked for; None: the recording's only JointState topic.
+    """
     listed = ', '.join(f'{t} ({k or "no schema"})' for t, k in sorted(recording.topics.items()))
     if topic is not None:
         if topic not in recording.topics:
@@ -83,12 +87,36 @@ def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
     return found[0]
 
 
+NO_MESSAGES = ('',)         # a topic filter no message passes: a recording's topics alone
+
+
+def input_topics(recording: Recording, topic: str) -> list[str]:
+    """Return the topics a session's simulation is fed: JointState, parameters, wind, viewer.
+
+    :param recording: the recording (its topics; messages are not needed).
+    :param topic: its JointState topic.
+    """
+    fed = {PARAMETER_EVENT, WIND, VIEWER_TYPE}
+    return [topic] + sorted(t for t, kind in recording.topics.items() if kind in fed)
+
+
 def load_session(path: str, topic: str | None = None, urdf: str | None = None,
                  rig: str | None = None, fabric: str | None = None,
                  overrides: Iterable[str] = ()) -> SessionInput:
-    """Read a recording and settle its set-up: recorded values, then the options given."""
-    recording = read_recording(path)
-    topic = joint_state_topic(recording, topic)
+    """Read a recording and settle its set-up: recorded values, then the options given.
+
+    :param path: the recording, an MCAP file or a bag folder.
+    :param topic: its JointState topic; None: the only one there is.
+    :param urdf: a URDF file instead of the recorded character.
+    :param rig: a rig YAML file instead of the recorded rig.
+    :param fabric: a fabric preset instead of the recorded one.
+    :param overrides: ``name:=value`` parameter settings (``-p``), applied last.
+    """
+    # First its topics, then only what the simulation is fed: a session's /tf and markers
+    # are most of its bytes.
+    listed = read_recording(path, NO_MESSAGES)
+    topic = joint_state_topic(listed, topic)
+    recording = read_recording(path, input_topics(listed, topic))
     recorded = recording.metadata.get(SESSION_CONFIG, {})
     if urdf:        # a file given: its own errors, an empty one too, never the shipped one
         urdf_text = read_text(urdf, 'URDF')
@@ -208,10 +236,13 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
                 timing: bool = False) -> SessionPipeline:
     """Feed a session to a fresh pipeline; return the pipeline.
 
-    ``sink(key, bytes, stamp)`` receives every message the node would record;
-    ``probe(pipeline, report, stamp, outputs)`` sees the state after each input
-    (``report.step_cost_ns`` is the simulation's wall time for it). ``timing`` puts step costs
-    into diagnostics as the live node does; a replay file then differs run to run.
+    :param session: the recording's input and set-up.
+    :param sink: ``sink(key, bytes, stamp)`` receives every message the node would record,
+        stamped in ns.
+    :param probe: ``probe(pipeline, report, stamp, outputs)`` sees the state after each input
+        (``report.step_cost_ns`` is the simulation's wall time for it).
+    :param timing: whether step costs go into diagnostics as the live node does; a replay
+        file then differs run to run.
     """
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
@@ -252,7 +283,10 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
 
 
 def output_topics(session: SessionInput) -> dict[str, tuple[str, str, str]]:
-    """Return the topics a replay writes, named as the node names them (inputs keep theirs)."""
+    """Return the topics a replay writes, named as the node names them (inputs keep theirs).
+
+    :param session: the recording's input and set-up.
+    """
     topics = session_topics(joint_states=session.topic)
     for key, kind in (('wind', WIND), ('viewer', VIEWER_TYPE)):
         for m in session.recording.messages:

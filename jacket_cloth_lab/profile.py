@@ -1,0 +1,253 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Where the time of one input goes: the replay's and the node's per-input path, in stages.
+
+Part of ``bench speed`` (issue 37 item 1). A walk at 60 Hz JointState (two 120 Hz steps each)
+runs through the live node's :class:`SessionPipeline` in this process, as ``replay`` runs it,
+with a timer around each stage:
+
+- decode: the JointState's CDR read (``cdr.JointStateReader``);
+- prepare: the simulation's work before its compiled steps (stamp checks, joint sampling,
+  the level of detail);
+- step: the compiled steps (``physics.step.advance``: pose, colliders, cloth, hard passes);
+- complete: taking the steps' outcome into the simulation;
+- bones: the jacket and hood bones from the cloth;
+- tf: /tf encoded;
+- markers, diagnostics: those messages encoded, when due;
+- record: handing every message to the MCAP recorder (its writer thread's CPU is given apart);
+- take, publish (the node only): each JointState taken from a subscription as the node
+  takes it, and each output handed to rclpy as serialized bytes, on a real DDS context in
+  this process (the inputs are sent before the run, so a take never waits).
+
+Shares are of the main thread's CPU per input; ``other`` is what no stage timer covers (the
+pipeline's accounting between stages). Each timer adds its own small cost to its stage.
+"""
+
+import functools
+import os
+import tempfile
+import time
+from typing import Callable, Dict, List
+
+from jacket_cloth_ros.core.skeleton import Skeleton
+
+INPUT_RATE = 60.0
+STAGES = ('take', 'decode', 'prepare', 'step', 'complete', 'bones', 'tf', 'markers', 'diagnostics',
+          'record', 'publish')
+NODE_ONLY = ('take', 'publish')
+
+
+class StageClock:
+    """Thread CPU time per named stage, summed over the inputs of a run."""
+
+    def __init__(self) -> None:
+        self.ns: Dict[str, int] = {name: 0 for name in STAGES}
+
+    def wrap(self, name: str, function: Callable) -> Callable:
+        """Return ``function`` with its thread CPU time added to stage ``name``.
+
+        :param name: one of :data:`STAGES`.
+        :param function: the callable to time.
+        :returns: the timed callable, taking and returning what ``function`` does.
+        """
+        @functools.wraps(function)
+        def timed(*args, **kwargs):
+            started = time.thread_time_ns()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                self.ns[name] += time.thread_time_ns() - started
+        return timed
+
+
+def _instrumented(pipeline, clock: StageClock) -> None:
+    """Put the stage timers on one pipeline's simulation, /tf encoder and periodic messages."""
+    from jacket_cloth_ros.ros import pipeline as pipeline_module
+    sim = pipeline.sim
+    sim.prepare = clock.wrap('prepare', sim.prepare)
+    sim._advance_kernel = clock.wrap('step', sim._advance_kernel)
+    sim.complete = clock.wrap('complete', sim.complete)
+    sim.bones = clock.wrap('bones', sim.bones)
+    pipeline._tf.encode = clock.wrap('tf', pipeline._tf.encode)
+    pipeline._diagnostics = clock.wrap('diagnostics', pipeline._diagnostics)
+    markers = pipeline_module.messages.marker_array
+    pipeline_module.messages = _MessagesWith(clock.wrap('markers', markers))
+
+
+class _MessagesWith:
+    """The pipeline's ``messages`` module with ``marker_array`` timed (restored by the run)."""
+
+    def __init__(self, marker_array: Callable) -> None:
+        from jacket_cloth_ros.ros import messages
+        self._module = messages
+        self.marker_array = marker_array
+
+    def __getattr__(self, name: str):
+        return getattr(self._module, name)
+
+
+def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = False) -> Dict:
+    """Run a walk through the pipeline with stage timers; return CPU per input by stage.
+
+    :param skeleton: the character (its rig is the shipped proposal, its fabric the default).
+    :param seconds: the session's length; the first half second (resets, first loads) is run
+        but not counted.
+    :param node: add the node's rclpy take and publish (DDS in this process, own domain).
+    :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
+        share of the main thread}, 'writer_thread_us', 'sweeps_per_input',
+        'substeps_per_input'}``.
+    """
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    from jacket_cloth_ros.ros import cdr
+    from jacket_cloth_ros.ros import pipeline as pipeline_module
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
+    fabrics = load_fabrics()
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+                               default_values(fabrics['tweed_jacket']), timing=False)
+    clock = StageClock()
+    messages_module = pipeline_module.messages
+    _instrumented(pipeline, clock)
+    read = clock.wrap('decode', cdr.JointStateReader().read)
+    raws = []
+    for k in range(int(seconds * INPUT_RATE)):
+        names, positions = joint_state_content(skeleton.joint_names, 'walk', k / INPUT_RATE)
+        raws.append(cdr.joint_state(10 ** 10 + round(k * 1e9 / INPUT_RATE), names, positions))
+    skip = int(0.5 * INPUT_RATE)
+    topics = session_topics()
+    ros = _NodeIO(raws, clock) if node else None
+    sweeps = substeps = 0
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            recorder = SessionRecorder(os.path.join(tmp, 'profile.mcap'), background=True)
+            for name, kind, qos in topics.values():
+                recorder.add_topic(name, kind, qos)
+            write = clock.wrap('record', recorder.write)
+            publish = clock.wrap('publish', ros.publish) if ros else None
+            for k, raw in enumerate(raws):
+                if k == skip:
+                    for name in clock.ns:
+                        clock.ns[name] = 0 if name != 'take' else ros.take_ns(skip) if ros else 0
+                    started, cpu = time.thread_time_ns(), time.process_time_ns()
+                    sweeps = substeps = 0
+                if ros:
+                    raw = ros.taken[k]
+                msg = read(raw)
+                report, outputs = pipeline.on_joint_state(msg, msg.stamp_ns)
+                sweeps += report.sweeps
+                substeps += report.substeps
+                write(topics['joint_states'][0], raw, msg.stamp_ns)
+                for key, data in outputs:
+                    write(topics[key][0], data, msg.stamp_ns)
+                    if publish:
+                        publish(key, data)
+            main_ns = time.thread_time_ns() - started
+            recorder.close()
+            all_ns = time.process_time_ns() - cpu
+    finally:
+        pipeline_module.messages = messages_module
+        if ros:
+            ros.close()
+    counted = len(raws) - skip
+    us = {name: ns / counted / 1e3 for name, ns in clock.ns.items()
+          if node or name not in NODE_ONLY}
+    total = main_ns / counted / 1e3 + us.get('take', 0.0)     # the takes ran before the run
+    us['other'] = max(total - sum(us.values()), 0.0)
+    return {'inputs': counted, 'node': node, 'us_per_input': total, 'us': us,
+            'share': {name: v / total for name, v in us.items()},
+            'writer_thread_us': max(all_ns - main_ns, 0) / counted / 1e3,
+            'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted}
+
+
+class _NodeIO:
+    """The node's side of DDS for the profile: inputs taken from a subscription, outputs sent.
+
+    Every input is published and taken before the run, each take timed alone, so the run
+    reads them from memory and a take never waits for DDS.
+    """
+
+    def __init__(self, raws: List[bytes], clock: StageClock) -> None:
+        import rclpy
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import QoSProfile
+        from sensor_msgs.msg import JointState
+        from tf2_msgs.msg import TFMessage
+        from visualization_msgs.msg import MarkerArray
+        self._context = rclpy.Context()
+        rclpy.init(context=self._context, domain_id=60 + os.getpid() % 30)
+        self._node = rclpy.create_node('profile', context=self._context)
+        qos = QoSProfile(depth=len(raws))
+        source = self._node.create_publisher(JointState, 'profile_joint_states', qos)
+        sub = self._node.create_subscription(JointState, 'profile_joint_states',
+                                             lambda _: None, qos, raw=True)
+        kinds = {'tf': TFMessage, 'markers': MarkerArray, 'diagnostics': DiagnosticArray}
+        self._out = {key: self._node.create_publisher(kind, 'profile_' + key, QoSProfile(depth=10))
+                     for key, kind in kinds.items()}
+        _wait(lambda: source.get_subscription_count() > 0, 'the profile\'s own subscription')
+        for raw in raws:
+            source.publish(raw)
+        self.taken: List[bytes] = []
+        self._take_ns: List[int] = []
+        take = sub.handle.take_message
+
+        def one():
+            started = time.thread_time_ns()
+            got = take(JointState, True)
+            if got is not None:
+                self._take_ns.append(time.thread_time_ns() - started)
+                self.taken.append(got[0])
+            return len(self.taken) == len(raws)
+        _wait(one, 'every input back from DDS')
+
+    def take_ns(self, skip: int) -> int:
+        """Return the CPU of the takes from input ``skip`` on, in ns.
+
+        :param skip: the inputs not counted (the run's warm-up).
+        """
+        return sum(self._take_ns[skip:])
+
+    def publish(self, key: str, data: bytes) -> None:
+        """Publish one output's CDR bytes as the node does.
+
+        :param key: ``tf``, ``markers`` or ``diagnostics``.
+        :param data: the message's CDR bytes.
+        """
+        self._out[key].publish(data)
+
+    def close(self) -> None:
+        """Destroy the node and shut its context down."""
+        self._node.destroy_node()
+        self._context.try_shutdown()
+
+
+def _wait(done: Callable[[], bool], what: str, limit_s: float = 30.0) -> None:
+    """Poll ``done`` until it holds; raise naming ``what`` after ``limit_s`` seconds."""
+    deadline = time.monotonic() + limit_s
+    while not done():
+        if time.monotonic() > deadline:
+            raise RuntimeError(f'profile: no {what} in {limit_s:.0f} s')
+        time.sleep(0.001)
+
+
+def summary(profiles: List[Dict]) -> List[str]:
+    """Return markdown lines: one column of CPU and shares per profile.
+
+    :param profiles: :func:`per_input_profile` results (the replay's, the node's).
+    """
+    names = [n for n in STAGES + ('other',) if any(n in p['us'] for p in profiles)]
+    head = ' | '.join(f'{"node" if p["node"] else "replay"} us | share' for p in profiles)
+    lines = ['Where one input\'s CPU goes (main thread; a 60 Hz walk, two 120 Hz steps per '
+             'input):', '', f'| stage | {head} |', '|---|' + '---|---|' * len(profiles)]
+    for name in names:
+        cells = ' | '.join(f'{p["us"].get(name, 0.0):.1f} | {p["share"].get(name, 0.0):.0%}'
+                           for p in profiles)
+        lines.append(f'| {name} | {cells} |')
+    cells = ' | '.join(f'{p["us_per_input"]:.1f} | 100%' for p in profiles)
+    lines.append(f'| all | {cells} |')
+    p = profiles[0]
+    lines += ['', f'The recorder\'s writer thread: {p["writer_thread_us"]:.1f} us per input '
+              f'more. Per input: {p["substeps_per_input"]:.1f} substeps, '
+              f'{p["sweeps_per_input"]:.1f} sweeps.']
+    return lines

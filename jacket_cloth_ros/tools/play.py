@@ -1,0 +1,47 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``jacket_cloth play``: a recording's JointStates live, where ``ros2 bag play`` is absent.
+
+An imported capture or a node's session drives the node, RViz or Foxglove on any machine with
+the wheels: the messages keep their recorded pace and content (names and positions), stamped
+from now, and the character's URDF goes on ``robot_description``.
+"""
+
+from collections.abc import Iterator
+
+from ..core.config import read_text
+from ..recording.reader import RecordingError, read_recording
+from ..recording.writer import SESSION_CONFIG
+from ..ros.cdr import DECODE_ERRORS, JointStateReader
+from .session import NO_MESSAGES, joint_state_topic
+
+
+def recorded_inputs(path: str, topic: str | None = None,
+                    urdf_path: str | None = None) -> tuple[str | None, Iterator, str]:
+    """Read a recording's JointStates for :func:`live.play_live`.
+
+    :param path: an MCAP file or a rosbag2 bag directory.
+    :param topic: the JointState topic; None takes the only one (or ``/joint_states``).
+    :param urdf_path: a URDF file for ``robot_description``; None takes the recorded one.
+    :returns: (URDF text or None, ``(offset_ns, names, positions)`` of each message in file
+        order, offsets from the first header stamp, a line saying what plays).
+    :raises RecordingError: no JointState, or one that does not decode (named by its stamp).
+    """
+    recording = read_recording(path, NO_MESSAGES)
+    topic = joint_state_topic(recording, topic)
+    urdf = read_text(urdf_path, 'URDF') if urdf_path else \
+        recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None
+    messages = read_recording(path, (topic,)).messages
+    if not messages:
+        raise RecordingError(f'{path}: no message on {topic}')
+    reader = JointStateReader()
+    contents = []
+    for m in messages:
+        try:
+            contents.append(reader.read(m.data))
+        except DECODE_ERRORS as e:
+            raise RecordingError(f'{path}: a {topic} message logged at {m.log_time} ns does '
+                                 f'not decode as JointState ({e})') from None
+    first = contents[0].stamp_ns
+    span = (max(c.stamp_ns for c in contents) - first) * 1e-9
+    what = f'{len(contents)} JointStates of {topic} over {span:.1f} s'
+    return urdf, ((c.stamp_ns - first, c.name, c.position) for c in contents), what
