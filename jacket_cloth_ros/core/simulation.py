@@ -563,6 +563,7 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             first = report.reset == 'first sample'
+            at_load = len(self.faults.rig)      # said at load (the node logs them then)
             if first:
                 self.faults.rig += self._turn_up(sample)
             self._reset(sample)
@@ -572,7 +573,8 @@ class JacketSimulation:
             if first:
                 self.faults.rig += self._stretched_at_start()
                 # A code each: the node logs one line per code at most every few seconds.
-                report.warnings += [(f'rig{k}', w) for k, w in enumerate(self.faults.rig)]
+                report.warnings += [(f'rig{k}', w) for k, w in
+                                    enumerate(self.faults.rig[at_load:], at_load)]
             return report, None
         a = self.last
         n = (sample.stamp_ns - self.t_sim) // self.dt_ns

@@ -290,6 +290,8 @@ class JacketClothNode(Node):
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: rename them in the rig (name, below_name)')
         c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
+        for line in pipeline.sim.faults.rig:        # the rig's own, before any input
+            self.get_logger().warning(c.label + line)
         if self.recorder is not None:
             c.add_to_recording(self.recorder)
         keep_loaded_out_of_collections()
