@@ -224,8 +224,8 @@ class JacketSimulation:
         self.bone_set = _bone_set(skeleton, rig)
         self._advance_kernel = FixedTypes(step.advance)
         self._warm_up()
-        # What is wrong with the rig before any input, and at the first one: said with the
-        # first input's warnings (issue 35 item 5).
+        # What is wrong with the rig before any input (the node logs it at load), then at the
+        # first input (with its warnings); the tools print them all (issue 35 item 5).
         self.faults.rig = self._inside_at_rest()
 
     # -- the state, held once in ``state`` --------------------------------------------------
