@@ -240,6 +240,7 @@ def test_a_rig_inside_the_body_or_stretched_at_the_start_is_named(
     said = [text for code, text in report.warnings if code.startswith('rig')]
     assert len({code for code, _ in report.warnings}) == len(report.warnings)
     assert said[0].startswith('the cloth starts stretched ') and ' across at row ' in said[0]
+    assert said[0].endswith('fit cloth.shape.radii and center to the colliders')
     assert sim.faults.rig == [inside] + said
     assert sim.process(10 ** 9 + 16_000_000, *rest_input).warnings == []
 

@@ -624,3 +624,25 @@ def test_a_loaded_node_keeps_what_it_loaded_out_of_full_collections(harness):
     assert len(gc.get_objects(generation=2)) < frozen / 10
     n = h.send_clip('walk', 60.0, 0.25)                       # and it runs on as before
     h.spin_until(lambda: len(h.tf) == n)
+
+
+def test_the_node_names_a_rig_inside_the_body_at_load_and_its_stretch_at_the_first_input(
+        harness, tmp_path, capfd):
+    # Issue 35 item 5: such a rig loaded and ran without a word. Torso and pelvis colliders
+    # 1.6 times the shipped ones (test_core_simulation's case): the load's line, then the first
+    # input's, each once, in the node's log.
+    import yaml
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        rig = yaml.safe_load(f)
+    for collider in rig['colliders'][:2]:
+        collider['radii'] = [r * 1.6 for r in collider['radii']]
+    (tmp_path / 'rig.yaml').write_text(yaml.safe_dump(rig))
+    h = harness(rig_file=str(tmp_path / 'rig.yaml'))
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
+    h.send(names, pos, 500 * 10 ** 9)
+    h.spin_until(lambda: h.c.inputs == 1)
+    h.spin_until(lambda: len(h.tf) >= 1)
+    log = capfd.readouterr().err
+    assert log.count('the cloth starts inside the body: row ') == 1
+    assert log.count('the cloth starts stretched ') == 1 and 'across at row' in log

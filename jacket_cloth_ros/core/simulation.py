@@ -494,18 +494,23 @@ class JacketSimulation:
                 'collider']
 
     def _stretched_at_start(self) -> list[str]:
-        """Say where the cloth, just put on the first input's skinned pose, is stretched."""
+        """Say where the cloth, just put on the first input's skinned pose, is stretched.
+
+        The key to change: the cloth's shape if it starts inside the colliders (they push it
+        out wider), else the M2 skinning's reach where the top row follows the pads.
+        """
         rig, out = self.rig, []
         vs, _, hs, _ = self.edge_strains()
+        inside = bool(self._inside_at_rest())
         for worst, across in ((hs, True), (vs, False)):
             if not worst.value > STRETCHED_AT_START:
                 continue
             row, col = divmod(worst.vertex, rig.cols)
             layer = rig.layer
-            if layer is not None and layer.pads and rig.pin_weight[col] > 0:
+            if not inside and layer is not None and layer.pads and rig.pin_weight[col] > 0:
                 fix = f'lower jacket_bones.upper.skin_radius ({layer.skin_radius:g})'
             else:
-                fix = 'fit cloth.shape.radii and center to the body and its colliders'
+                fix = 'fit cloth.shape.radii and center to the colliders'
             out.append(f'the cloth starts stretched {worst.value:.0%} '
                        f'{"across" if across else "down"} at row {row}, column {col} on the '
                        f'first input: {fix}')
