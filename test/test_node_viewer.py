@@ -13,6 +13,7 @@ from geometry_msgs.msg import PointStamped
 from test_node import _all_finite
 
 from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros.viewer import VIEWER_QOS, read_viewer
 
 TOPIC = '/jacket_cloth_node/viewer'
@@ -126,7 +127,7 @@ def test_a_live_session_near_far_near_replays_byte_for_byte(harness, tmp_path):
     session = load_session(str(path))
     assert [e[2] for e in session.events].count('viewer') == 3
     recorded = {}
-    for m in session.recording.messages:
+    for m in read_messages(session.recording.path)[0]:
         if m.topic in ('/tf', '/jacket_cloth_node/markers'):
             recorded.setdefault(m.topic, []).append(m.data)
     replayed, replay_levels = {'/tf': [], '/jacket_cloth_node/markers': []}, []

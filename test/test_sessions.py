@@ -19,6 +19,7 @@ from mcap_ros2.writer import Writer as Ros2Writer
 
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.recording.definitions import ros2msg_schema
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session, run_session
 
@@ -48,7 +49,8 @@ def test_replay_is_byte_identical_run_after_run(clip, tmp_path):
     with open(tmp_path / 'zstd.mcap', 'rb') as f:
         assert {c.compression for c in make_reader(f).get_summary().chunk_indexes} == {'zstd'}
     again = load_session(str(tmp_path / 'a' / 'out.mcap'))
-    recorded = {m.log_time: m.data for m in again.recording.messages if m.topic == '/tf'}
+    recorded = {m.log_time: m.data for m in read_messages(str(tmp_path / 'a' / 'out.mcap'))[0]
+                if m.topic == '/tf'}
     same = []
     run_session(again, probe=lambda p, r, stamp, outs: same.extend(
         recorded[stamp] == data for key, data in outs if key == 'tf'))
@@ -639,7 +641,7 @@ def test_diagnosticsquantiles_are_numpys_on_lists_of_any_length():
 def test_a_session_is_read_without_its_outputs_and_its_tf_compared_by_digest(tmp_path):
     # Issue 38 item 19: replay and analyze held a whole recording (markers and /tf, most of
     # its bytes) in memory; only what the simulation is fed is read now.
-    from jacket_cloth_ros.recording.reader import message_digest, read_messages
+    from jacket_cloth_ros.recording.reader import message_digest
     from jacket_cloth_ros.tools.analyze import SessionFigures
     from jacket_cloth_ros.tools.session import load_session
     clip, session = tmp_path / 'walk.mcap', tmp_path / 'session.mcap'
