@@ -348,6 +348,33 @@ def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     assert h.node.recorder is not recorder and h.node.recorder.path == other
 
 
+def _service(node, name):
+    """The callback of ``node``'s parameter service ``name`` (the one the executor calls)."""
+    return next(s for s in node.services if s.service_name.endswith('/' + name))
+
+
+def test_a_parameter_request_that_names_nothing_or_no_type_is_refused(harness):
+    # An empty name slipped past rclpy's check (undeclared names are tested for truth) and
+    # was taken; a type number that is no type raised out of the executor: both ended it.
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+    from rcl_interfaces.srv import SetParameters, SetParametersAtomically
+    h = harness()
+    names = set(h.node._parameters)
+    for kind, value in ((1, {'bool_value': True}), (4, {'string_value': 'x'}), (42, {})):
+        msg = ParameterMsg(name='', value=ParameterValue(type=kind, **value))
+        service = _service(h.node, 'set_parameters')
+        result, = service.callback(SetParameters.Request(parameters=[msg]),
+                                   SetParameters.Response()).results
+        assert not result.successful and result.reason, kind
+        service = _service(h.node, 'set_parameters_atomically')
+        result = service.callback(SetParametersAtomically.Request(parameters=[msg]),
+                                  SetParametersAtomically.Response()).result
+        assert not result.successful and result.reason, kind
+    assert set(h.node._parameters) == names
+    n = h.send_clip('idle', 60, 0.1)
+    h.spin_until(lambda: len(h.tf) == n)
+
+
 def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
     # A recording set live took the rig and fabrics from their files again: one edited since
     # start was recorded but not run, one removed killed the node (issue 38).

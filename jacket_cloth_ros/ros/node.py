@@ -38,6 +38,7 @@ from . import cdr
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
+from .parameter_services import guard_parameter_services, shown
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
                          check_value, descriptor, fabric_parameters, params_file_problem,
                          unknown_reason)
@@ -104,6 +105,7 @@ class JacketClothNode(Node):
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        guard_parameter_services(self, self._log_times)
         # The characters first: a parameter or a characters file refused stops the node here.
         if crowd:
             self.characters, urdfs = self._crowd_characters()
@@ -198,6 +200,7 @@ class JacketClothNode(Node):
         for name, spec in CROWD_PARAMETERS.items():
             self._declare(name, spec)
         self._refuse_unknown()
+        self.add_on_set_parameters_callback(self._validate_parameters)
         path = self._p('characters')
         if not path:
             raise ConfigError('parameter characters: give the characters file '
@@ -312,6 +315,10 @@ class JacketClothNode(Node):
     # -- parameters (jacket_cloth_node: its character's) --------------------------------------
     def _validate_parameters(self, params):
         for p in params:
+            # rclpy lets an empty name through as undeclared (its check tests names for truth).
+            if not self.has_parameter(p.name):
+                return SetParametersResult(successful=False,
+                                           reason=f'parameter {shown(p.name)} is not declared')
             if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
                 return SetParametersResult(successful=False,
                                            reason='wind must be 3 finite numbers [x, y, z]')
