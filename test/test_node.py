@@ -520,6 +520,29 @@ def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, 
     assert replayed == recorded
 
 
+def test_an_input_stamped_before_1970_is_recorded_and_replays(harness, tmp_path, capsys):
+    # MCAP times are unsigned: its log time did not pack, the node ended and the file held
+    # no input; a replay of it ended in the same traceback.
+    from mcap.reader import make_reader
+    from jacket_cloth_ros.tools.cli import main
+    path = tmp_path / 'live.mcap'
+    h = harness(record=str(path))
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
+    stamps = [100 * 10 ** 9, -5 * 10 ** 9, -5 * 10 ** 9 + 10 ** 7, 101 * 10 ** 9]
+    for k, stamp in enumerate(stamps):
+        h.send(names, pos, stamp)
+        h.spin_until(lambda: h.c.inputs == k + 1)
+    assert h.node.recorder is not None
+    h.node.close()
+    with open(path, 'rb') as f:
+        logged = [m.log_time for _, c, m in make_reader(f).iter_messages(
+            topics=['/joint_states'], log_time_order=False)]
+    assert logged == [100 * 10 ** 9, 0, 0, 101 * 10 ** 9]
+    capsys.readouterr()
+    assert main(['replay', str(path), '-o', str(tmp_path / 'out.mcap')]) == 0
+    assert 'Traceback' not in capsys.readouterr().err
+
+
 def test_undecodable_wind_and_description_leave_the_node_running(harness):
     """Bytes that are no message on any subscribed topic are dropped with a warning."""
     ctx = Context()

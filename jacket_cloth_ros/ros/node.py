@@ -12,6 +12,7 @@ every character with an input in one compiled call over the cores; a lone charac
 
 import argparse
 import gc
+import struct
 import sys
 import time
 from collections.abc import Callable
@@ -396,7 +397,7 @@ class JacketClothNode(Node):
             return
         try:
             self.recorder.write(topic, data, stamp_ns)
-        except (OSError, ValueError) as e:
+        except (OSError, ValueError, struct.error) as e:
             self.get_logger().error(f'recording stopped: {e}')
             self._close_recorder()
 
