@@ -403,6 +403,63 @@ def test_a_recording_whose_writer_failed_is_closed_with_one_line(harness, tmp_pa
     assert h.node.recorder is None
 
 
+def _recording_status(diags):
+    """(level, recording value, message) of the last diagnostics in ``diags``."""
+    status = diags[-1].status[0]
+    values = {v.key: v.value for v in status.values}
+    return _level(status), values['recording'], status.message
+
+
+def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
+    # They said `recording: <path>` at OK after the file failed to open or a write failed.
+    from diagnostic_msgs.msg import DiagnosticArray
+    full = tmp_path / 'full.mcap'
+    full.symlink_to('/dev/full')                # opens, and every write finds the disk full
+    h = harness(record=str(full), diagnostics_rate=20.0)
+    assert h.node.recorder is None
+    diags = []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    h.spin_until(lambda: len(diags) >= 2)
+    level, recording, message = _recording_status(diags)
+    assert level == 1 and recording.startswith('failed: cannot record to'), recording
+    assert 'recording failed' in message
+    # A good path: OK again, then a write fails (a disk full while recording).
+    path = str(tmp_path / 'session.mcap')
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    count = len(diags)
+    h.spin_until(lambda: len(diags) >= count + 2)
+    assert _recording_status(diags)[:2] == (0, path)
+
+    def full_disk(*args):
+        raise OSError(28, 'No space left on device')
+    h.node.recorder.write = full_disk
+    h.send_clip('idle', 60, 0.1)
+    assert h.node.recorder is None
+    count = len(diags)
+    h.spin_until(lambda: len(diags) >= count + 2)
+    level, recording, message = _recording_status(diags)
+    assert level == 1 and 'No space left' in recording and recording.startswith('failed'), \
+        recording
+
+
+def test_a_recording_that_fails_to_close_at_the_end_is_one_line(tmp_path, capfd):
+    # Ctrl-C: the context is shut down before the node closes its recording, and its error
+    # went to rosout, which was gone: a line of rcl's besides.
+    h = Harness(record=str(tmp_path / 'session.mcap'))
+    try:
+        h.node.recorder._error = OSError(28, 'No space left on device')
+        h.ex.shutdown()
+        capfd.readouterr()
+        rclpy.shutdown(context=h.ctx)
+        h.node.close()
+        lines = capfd.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and 'closed with an error' in lines[0], lines
+        assert lines[0].startswith('jacket_cloth_node: recording ')
+    finally:
+        h.node.destroy_node()
+        h.peer.destroy_node()
+
+
 def test_robot_description_from_the_latched_topic(harness, urdf_text):
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)

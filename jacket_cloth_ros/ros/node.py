@@ -93,7 +93,8 @@ class JacketClothNode(Node):
     """
 
     def __init__(self, crowd: bool = False, **kwargs: object):
-        super().__init__('jacket_cloth_crowd' if crowd else 'jacket_cloth_node', **kwargs)
+        self.program = 'jacket_cloth_crowd' if crowd else 'jacket_cloth_node'
+        super().__init__(self.program, **kwargs)
         self.recorder: 'SessionRecorder | None' = None
         self._viewer = None             # the last accepted ~/viewer: (raw, stamp)
         self._last_stamp = None         # the last accepted input's, for recording after it
@@ -102,6 +103,7 @@ class JacketClothNode(Node):
         self._fabrics = {}              # fabrics file -> its presets
         self._told_compiling = False
         self._record_asked = None       # the record value the open (or failed) file is for
+        self._recording_problem = ''    # why that file is not being written, for diagnostics
         self._every = 1                 # the characters of the file (a crowd slices them)
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
@@ -294,6 +296,7 @@ class JacketClothNode(Node):
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: rename them in the rig (name, below_name)')
         c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
+        pipeline.recording_problem = self._recording_problem
         if self.recorder is not None:
             c.add_to_recording(self.recorder)
         keep_loaded_out_of_collections()
@@ -375,6 +378,7 @@ class JacketClothNode(Node):
     def _open_recorder(self, path):
         self._record_asked = path
         self._close_recorder(say=True)
+        self._recording_failed('')
         if not path:
             return
         try:
@@ -384,6 +388,7 @@ class JacketClothNode(Node):
             self.get_logger().info(f'recording the session to {path}')
         except OSError as e:
             self.recorder = None
+            self._recording_failed(f'cannot record to {path!r} ({e})')
             self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
                                     'recording')
             return
@@ -398,8 +403,16 @@ class JacketClothNode(Node):
         try:
             self.recorder.write(topic, data, stamp_ns)
         except (OSError, ValueError, struct.error) as e:
+            self._recording_failed(f'stopped by a write error ({e})')
             self.get_logger().error(f'recording stopped: {e}')
             self._close_recorder()
+
+    def _recording_failed(self, problem: str) -> None:
+        """Say in each character's diagnostics why the recording asked for is not written."""
+        self._recording_problem = problem
+        for c in self.characters:
+            if c.pipeline is not None:
+                c.pipeline.recording_problem = problem
 
     def _close_recorder(self, say=False):
         """Close the recording, if any; an error its writer met is one line, not the node's end."""
@@ -411,7 +424,12 @@ class JacketClothNode(Node):
             if say:                     # a live switch; at the node's end it goes unsaid
                 self.get_logger().info(f'recording closed: {recorder.path}')
         except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
-            self.get_logger().error(f'recording {recorder.path} closed with an error: {e}')
+            text = f'recording {recorder.path} closed with an error: {e}'
+            self._recording_failed(text.removeprefix('recording '))
+            if self.context.ok():
+                self.get_logger().error(text)
+            else:                       # stopping: rosout is gone, and rcl said so in a line
+                print(f'{self.program}: {text}', file=sys.stderr, flush=True)
 
     def _markers_wanted(self, publisher: 'Publisher') -> bool:
         """Tell whether markers due now have a reader: a subscriber or the recording.

@@ -96,6 +96,9 @@ class SessionPipeline:
         self.undecodable = 0        # JointStates that did not decode (the node counts them)
         self.lost = 0               # JointStates their publisher numbered that never arrived
         self.last_reset_reason = ''
+        # Why the recording the values name is not being written ('' when it is, or none):
+        # the live node's, set when its file fails to open or a write fails.
+        self.recording_problem = ''
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         self._costs = []
@@ -307,6 +310,8 @@ class SessionPipeline:
         if w['dropped'] and not w['accepted']:
             return messages.ERROR, 'every input dropped'
         problems = []
+        if self.recording_problem:
+            problems.append(f'recording failed: {self.recording_problem}')
         if slow:
             problems.append('step cost above one step of real time')
         if w['resets']:
@@ -346,7 +351,8 @@ class SessionPipeline:
             'sim_steps': sim.steps_total,
             'lod_level': sim.lod.level,
             'viewer_distance_m': self._viewer_distance(),
-            'recording': self.values['record'],
+            'recording': (f'failed: {self.recording_problem}' if self.recording_problem
+                          else self.values['record']),
         })
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)
