@@ -375,6 +375,28 @@ def test_a_parameter_request_that_names_nothing_or_no_type_is_refused(harness):
     h.spin_until(lambda: len(h.tf) == n)
 
 
+def test_record_never_overwrites_a_file_at_start_or_live(harness, tmp_path):
+    # An existing .mcap was truncated: a dump of an earlier session's parameters wiped it.
+    old = tmp_path / 'old.mcap'
+    old.write_bytes(b'an earlier session')
+    h = harness(record=str(old))
+    assert h.node.recorder is None and old.read_bytes() == b'an earlier session'
+    path = str(tmp_path / 'new.mcap')
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    recorder = h.node.recorder
+    result = h.node.set_parameters([Parameter('record', value=str(old))])[0]
+    assert not result.successful and 'exists' in result.reason and str(old) in result.reason
+    assert h.node.recorder is recorder and old.read_bytes() == b'an earlier session'
+    # The file being recorded now is the one exception: setting it again keeps it going.
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    assert h.node.recorder is recorder
+    # A bag folder there is refused the same way.
+    (tmp_path / 'bag').mkdir()
+    assert not h.node.set_parameters(
+        [Parameter('record', value=str(tmp_path / 'bag'))])[0].successful
+    assert h.node.recorder is recorder
+
+
 def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
     # A recording set live took the rig and fabrics from their files again: one edited since
     # start was recorded but not run, one removed killed the node (issue 38).
@@ -413,9 +435,7 @@ def _recording_status(diags):
 def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
     # They said `recording: <path>` at OK after the file failed to open or a write failed.
     from diagnostic_msgs.msg import DiagnosticArray
-    full = tmp_path / 'full.mcap'
-    full.symlink_to('/dev/full')                # opens, and every write finds the disk full
-    h = harness(record=str(full), diagnostics_rate=20.0)
+    h = harness(record=str(tmp_path / 'gone' / 'x.mcap'), diagnostics_rate=20.0)
     assert h.node.recorder is None
     diags = []
     h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)

@@ -12,6 +12,7 @@ every character with an input in one compiled call over the cores; a lone charac
 
 import argparse
 import gc
+import os
 import struct
 import sys
 import time
@@ -326,10 +327,17 @@ class JacketClothNode(Node):
             if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
                 return SetParametersResult(successful=False,
                                            reason='wind must be 3 finite numbers [x, y, z]')
-            reason = check_value(p.name, p.value)
+            reason = check_value(p.name, p.value) or self._record_problem(p)
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
+
+    def _record_problem(self, p: Parameter) -> str:
+        """Why ``record`` cannot be set to ``p``'s path: a file or folder there, not ours now."""
+        if p.name != 'record' or not p.value or \
+                (p.value == self._record_asked and self.recorder is not None):
+            return ''
+        return overwrite_problem(p.value)
 
     def _apply_parameters(self, params):
         """Apply valid changes from the next step; they never reset the cloth."""
@@ -380,6 +388,11 @@ class JacketClothNode(Node):
         self._close_recorder(say=True)
         self._recording_failed('')
         if not path:
+            return
+        problem = overwrite_problem(path)
+        if problem:
+            self._recording_failed(problem)
+            self.get_logger().error(f'{problem}; running without recording')
             return
         try:
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
@@ -567,6 +580,18 @@ class JacketClothNode(Node):
             self.diagnostics.publish(out)
             c.diag_wall = now
             self._record(self._topics['diagnostics'][0], out, stamp_ns)
+
+
+def overwrite_problem(path: str) -> str:
+    """Why the node will not record to ``path``: something is there already ('' if not).
+
+    A recording is never overwritten: a dump of an earlier session's parameters holds its
+    ``record``, and starting from it wiped that session.
+    """
+    if os.path.lexists(path):
+        return (f'record: {path!r} exists (the node never overwrites a recording): move it '
+                'or choose another path')
+    return ''
 
 
 def main(args: list[str] | None = None) -> int:
