@@ -499,6 +499,32 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
         rclpy.shutdown(context=ctx)
 
 
+def test_a_urdf_rejected_on_the_topic_is_waited_for_and_a_corrected_one_taken(urdf_text):
+    # After robot_description_timeout the shipped character ran, and the corrected URDF sent
+    # later was ignored (the README said the node keeps waiting).
+    from diagnostic_msgs.msg import DiagnosticArray
+    from test_fuzz import _start_waiting
+    h = Harness.__new__(Harness)
+    _start_waiting(h, robot_description_timeout=0.2, diagnostics_rate=20.0)
+    try:
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        description = h.peer.create_publisher(String, '/robot_description', latched)
+        diags = []
+        h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+        description.publish(String(data=urdf_text.replace('<joint', '<joint parent', 1)))
+        h.spin_until(lambda: h.node.refused['robot_description'] == 1, timeout=30)
+        # Twenty diagnostics at 20 Hz: well past the timeout, and still no character.
+        h.spin_until(lambda: len(diags) >= 20, timeout=30)
+        assert h.c.pipeline is None
+        status = diags[-1].status[0]
+        assert _level(status) == 2 and 'rejected' in status.message, status.message
+        description.publish(String(data=urdf_text.replace('jacket_character', 'corrected')))
+        h.spin_until(lambda: h.c.sim is not None, timeout=30)
+        assert h.c.sim.skeleton.name == 'corrected'
+    finally:
+        h.close()
+
+
 def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
     from mcap.reader import make_reader
     from rclpy.serialization import deserialize_message

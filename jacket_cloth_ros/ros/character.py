@@ -99,6 +99,7 @@ class Character:
         self.subscription = None        # joint_states, once loaded
         self.markers = None             # its markers publisher, once loaded
         self.description = self.fallback = None     # while it waits for its URDF
+        self.waiting = ''               # why it still waits: the URDF its topic gave, refused
         self.reader = cdr.JointStateReader()
         self.inputs = 0
         self.log_times = {}             # its throttled warnings: code -> when last logged

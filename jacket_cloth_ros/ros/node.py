@@ -36,7 +36,7 @@ from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
-from . import cdr
+from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
@@ -257,7 +257,11 @@ class JacketClothNode(Node):
             self._load(c, msg.data, f'the {topic} topic')
         except ConfigError as e:
             self.refused['robot_description'] += 1
-            self.get_logger().error(f'{c.label}{topic} rejected: {e}')
+            # Someone publishes this character's URDF: a corrected one is waited for, not
+            # replaced by the shipped character, and diagnostics say why nothing runs.
+            c.fallback.cancel()
+            c.waiting = f'{topic} rejected: {e}'
+            self.get_logger().error(f'{c.label}{c.waiting}; waiting for a corrected one')
 
     def _use_shipped(self, c):
         c.fallback.cancel()             # once, even if the shipped one fails to load
@@ -572,6 +576,12 @@ class JacketClothNode(Node):
         """Diagnostics of each character whose inputs' own have not gone out for a period."""
         now = time.monotonic()
         for c in self.characters:
+            if c.pipeline is None and c.waiting:
+                out = messages.diagnostics(
+                    self.get_clock().now().nanoseconds, self._diagnostics_owner(c), {},
+                    messages.ERROR, f'no character: {c.waiting}; waiting for a corrected one')
+                self.diagnostics.publish(out)
+                continue
             if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
                 continue
             last = c.sim.last
