@@ -43,6 +43,7 @@ from .characters import CharacterSpec, crowd_slice, load_characters
 from .parameter_services import guard_parameter_services, shown
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
                          check_value, descriptor, fabric_parameters, params_file_problem,
+                         ros_args_problem,
                          unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
@@ -615,6 +616,10 @@ def main(args: list[str] | None = None) -> int:
         description='Jacket and hood secondary motion: subscribes joint_states '
         '(sensor_msgs/JointState), publishes bones on /tf, ~/markers and /diagnostics. '
         'Parameters are set with --ros-args -p name:=value (see README).')
+    problem = ros_args_problem(argv)
+    if problem:                 # rcl's own error is a traceback
+        print(f'jacket_cloth_node: {problem}', file=sys.stderr)
+        return 1
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     return run('jacket_cloth_node', JacketClothNode, argv, crowd=False)
 

@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The node's parameters: names, types, ranges and descriptions in one table."""
 
+import os
+import sys
 from dataclasses import fields
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -179,7 +181,10 @@ def unknown_reason(name: str, known: object, node: str) -> str:
         return f'parameter {name}: renamed {RENAMED[name]} (set {RENAMED[name]} instead)'
     if '.' in name and name.partition('.')[0] in known:
         return f'parameter {name}: {name.partition(".")[0]} is not a group of parameters'
-    return f'parameter {name}: not a parameter of {node} (the README lists them)'
+    import difflib
+    near = difflib.get_close_matches(name, sorted(known), n=1)
+    hint = f'did you mean {near[0]}? ' if near else ''
+    return f'parameter {name}: not a parameter of {node} ({hint}the README lists them)'
 
 
 def from_recording(values: dict) -> dict:
@@ -229,6 +234,55 @@ def params_file_problem(argv: list[str]) -> str:
                     'would keep the last one only)')
         except (OSError, yaml.YAMLError):
             continue
+    return ''
+
+
+def ros_args_problem(argv: list[str]) -> str:
+    """Say which ``--ros-args`` argument rcl cannot parse (it raises a traceback), or ''.
+
+    rcl reads a ``-p`` value as YAML: a URDF given as ``-p robot_description:=...`` often is
+    no YAML, and an empty value (``-p world_joint:=``) is refused too.
+    """
+    ros = argv[argv.index('--ros-args') + 1:] if '--ros-args' in argv else []
+    if not _rcl_refuses(ros):
+        return ''
+    for flag, value in zip(ros, ros[1:]):
+        if flag in ('-p', '--param') and _rcl_refuses([flag, value]):
+            name, _, given = value.partition(':=')
+            if name == 'robot_description':
+                return ('-p robot_description: rcl reads a -p value as YAML, and this URDF is '
+                        'none: publish it on the robot_description topic (as '
+                        'robot_state_publisher does) or set it in a --params-file')
+            return (f'-p {name[:80]}: rcl cannot read ' +
+                    ('an empty value' if not given else f'{given[:40]!r} as a YAML value') +
+                    ' (quote a text value: -p \'name:="text"\')')
+        if flag == '--params-file' and _rcl_refuses([flag, value]):
+            reason = _rcl_refuses([flag, value]).partition('Error: ')[2].partition(', at ')[0]
+            return f'--params-file {value}: rcl cannot read it ({reason or "not a params file"})'
+    reason = _rcl_refuses(ros)
+    reason = reason.partition('Failed to parse ROS arguments: ')[2] or reason
+    return f'--ros-args: rcl cannot read them ({reason.partition(", at ")[0][:200]})'
+
+
+def _rcl_refuses(args: list[str]) -> str:
+    """Return rcl's error for ``--ros-args`` ``args`` on one line, or '' if it takes them.
+
+    Its C side writes lines of its own on the process's stderr (an error string cut): they
+    go to /dev/null while it tries, so the user reads one line.
+    """
+    from rclpy.impl.implementation_singleton import rclpy_implementation as impl
+    from rclpy.utilities import remove_ros_args
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, 'w') as null:
+            os.dup2(null.fileno(), 2)
+        remove_ros_args(['node', '--ros-args', *args])
+    except (impl.RCLInvalidROSArgsError, impl.UnknownROSArgsError) as e:
+        return ' '.join(str(e).split())
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
     return ''
 
 
