@@ -471,6 +471,31 @@ def test_a_live_frame_prefix_change_renames_the_bones_on_the_next_tf(make_sim):
     assert [f.header.frame_id for f in frames] == ['base_link', 'left/base_link']
 
 
+def test_two_sources_on_different_clocks_keep_the_output_rates(make_sim):
+    # Stamps jumping back and forth beyond reset_gap sent markers and diagnostics on every
+    # input (issue 38): each clock keeps its own grid, at the rates set.
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    sim = make_sim()
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(sim.skeleton, sim.rig, fabrics,
+                           default_values(fabrics['tweed_jacket']))
+    counts = {'tf': 0, 'markers': 0, 'diagnostics': 0}
+    for k in range(120):                    # 2 s of each clock, at 60 Hz, interleaved
+        names, pos = joint_state_content(sim.skeleton.joint_names, 'walk', k / 60)
+        for start in (1000 * 10 ** 9, 10 * 10 ** 9):
+            stamp = start + k * 10 ** 9 // 60
+            _, outputs = pipe.on_joint_state(JointStateContent(stamp, names, pos), stamp)
+            for key, _ in outputs:
+                counts[key] += 1
+    assert counts['tf'] == 240
+    assert counts['markers'] <= 2 * (2 * 30 + 1), counts      # 30 Hz on each clock
+    assert counts['diagnostics'] <= 2 * (2 * 1 + 1), counts   # 1 Hz on each clock
+
+
 def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_path):
     # The replay writes through a thread: same records in the same order, so the same bytes.
     from jacket_cloth_ros.recording.writer import SessionRecorder
