@@ -254,6 +254,23 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert h.c.sim.resets == resets
 
 
+def test_a_huge_joint_name_is_cut_in_the_log_and_a_huge_frame_refused(harness, capfd):
+    # A megabyte joint name made a megabyte log line; a megabyte frame_prefix made every /tf
+    # tens of megabytes.
+    h = harness()
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
+    capfd.readouterr()
+    h.send(list(names) + ['j' * 1_000_000], list(pos) + [0.0], 100 * 10 ** 9)
+    h.spin_until(lambda: h.c.inputs == 1 and 'unknown' in h.c.log_times, timeout=30)
+    lines = capfd.readouterr().err.splitlines()
+    assert any('not in the URDF' in line for line in lines)
+    assert max(map(len, lines)) < 2000
+    for name in ('frame_prefix', 'world_frame', 'world_joint'):
+        result = h.node.set_parameters([Parameter(name, value='x' * 1_000_000)])[0]
+        assert not result.successful and 'at most 256' in result.reason, name
+    assert h.node.set_parameters([Parameter('frame_prefix', value='x' * 256)])[0].successful
+
+
 def test_wind_set_live_on_its_topic(harness):
     h = harness()
     h.send_clip('idle', 60, 0.3)

@@ -294,6 +294,8 @@ def test_a_characters_file_is_validated_with_one_line(tmp_path):
              "characters[1].frame_prefix: characters 'a' and 'b' both have 'x/'"),
             ('characters: [{name: a}, {name: b, frame_prefix: a/}]',
              "characters[1].frame_prefix: characters 'a' and 'b' both have 'a/'"),
+            ('characters: [{name: a, frame_prefix: ' + 'x' * 300 + '}]',
+             'frame_prefix is 300 characters long (at most 256)'),
             ('characters: [{name: w, count: 2, frame_prefix: ""}]',
              "characters[0].frame_prefix: characters 'w_0' and 'w_1' both have ''")):
         path.write_text(text)

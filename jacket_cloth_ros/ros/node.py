@@ -38,7 +38,7 @@ from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
-                        input_problems, read_file, throttled)
+                        cut_line, input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
 from .parameter_services import guard_parameter_services, shown
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
@@ -261,8 +261,9 @@ class JacketClothNode(Node):
             # Someone publishes this character's URDF: a corrected one is waited for, not
             # replaced by the shipped character, and diagnostics say why nothing runs.
             c.fallback.cancel()
-            c.waiting = f'{topic} rejected: {e}'
-            self.get_logger().error(f'{c.label}{c.waiting}; waiting for a corrected one')
+            c.waiting = cut_line(f'{topic} rejected: {e}')
+            self.get_logger().error(cut_line(f'{c.label}{c.waiting}; waiting for a corrected '
+                                             'one'))
 
     def _use_shipped(self, c):
         c.fallback.cancel()             # once, even if the shipped one fails to load

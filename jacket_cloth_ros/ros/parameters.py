@@ -69,6 +69,10 @@ NODE_PARAMETERS = {
 }
 
 
+# The longest frame_prefix, world_frame or world_joint taken.
+MAX_NAME = 256
+_NAMES = ('frame_prefix', 'world_frame', 'world_joint')
+
 # Old names: refused with a hint, never taken for another parameter. ``fabric`` was the preset
 # and also the prefix of ``fabric.*``, which ros2 param dump cannot write.
 RENAMED = {'fabric': 'fabric_preset'}
@@ -149,6 +153,9 @@ def check_value(name: str, value: object) -> str:
         return f'{name} {reason}' if reason else ''
     if name == 'record_compression' and str(value).upper() not in Compression.__members__:
         return f'record_compression must be one of {", ".join(Compression.names())}'
+    if name in _NAMES and len(value) > MAX_NAME:
+        # Each /tf carries the prefix once per bone: a megabyte one made each message 68 MB.
+        return f'{name} is {len(value)} characters long (at most {MAX_NAME})'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     if name in ('world_joint', 'world_frame') and not value:
