@@ -213,3 +213,31 @@ def test_default_and_latched_publishers_reach_viewer_and_wind(harness):
         wind.publish(msg)
         h.spin_until(lambda: h.c.sim.params.wind == (k + 1.0, 0.0, 0.0))
     assert h.node.received['wind'] == 2 and h.node.refused['wind'] == 0
+
+
+def test_a_latched_viewer_older_than_the_one_taken_is_not_applied(harness):
+    # A latched publisher's old viewer can be delivered (its history) after a newer one from
+    # a volatile publisher: it moved the viewer back to where it was.
+    from rclpy.qos import DurabilityPolicy
+    h = harness()
+    by_durability = {s.qos_profile.durability: s.callback for s in h.node.subscriptions
+                     if s.topic_name == TOPIC}
+    latched = by_durability[DurabilityPolicy.TRANSIENT_LOCAL]
+    live = by_durability[DurabilityPolicy.VOLATILE]
+
+    def raw(point, sec):
+        msg = _viewer(point)
+        msg.header.stamp.sec = sec
+        return serialize_message(msg)
+
+    def info(publisher):
+        return {'publisher_gid': {'data': [publisher] * 16}, 'publication_sequence_number': 1,
+                'source_timestamp': publisher}
+    live(raw(NEAR, 200), info(1))
+    assert tuple(h.c.viewer) == NEAR
+    latched(raw(FAR, 100), info(2))                 # stale: dropped
+    assert tuple(h.c.viewer) == NEAR
+    latched(raw(FAR, 300), info(3))                 # newer: taken
+    assert tuple(h.c.viewer) == FAR
+    live(raw(NEAR, 50), info(4))                    # live, whatever its stamp
+    assert tuple(h.c.viewer) == NEAR

@@ -475,12 +475,23 @@ class JacketClothNode(Node):
         """
         self._viewer_deliveries = Deliveries()
         for qos in (VIEWER_QOS, VIEWER_LIVE_QOS):
-            self.create_subscription(PointStamped, '~/viewer', self._on_viewer_delivery, qos,
-                                     raw=True, event_callbacks=NO_SUB_EVENTS)
+            latched = qos is VIEWER_QOS
+            self.create_subscription(
+                PointStamped, '~/viewer',
+                lambda raw, info, latched=latched: self._on_viewer_delivery(raw, info, latched),
+                qos, raw=True, event_callbacks=NO_SUB_EVENTS)
         return self.resolve_topic_name('~/viewer')
 
-    def _on_viewer_delivery(self, raw: bytes, info: dict) -> None:
-        """Take a ``~/viewer`` message once, whichever of its subscriptions brings it first."""
+    def _on_viewer_delivery(self, raw: bytes, info: dict, latched: bool = False) -> None:
+        """Take a ``~/viewer`` message once, whichever of its subscriptions brings it first.
+
+        A latched one stamped before the viewer taken is a latched publisher's old message,
+        delivered late (its history): dropped. Its live messages come on the volatile
+        subscription too, so they are taken whatever their stamps.
+        """
+        if latched and self._viewer is not None and \
+                0 < read_viewer(raw, '').stamp_ns < self._viewer[1]:
+            return
         if self._viewer_deliveries.first(info):
             self._on_viewer(raw)
 
