@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 
+from .. import signals
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
 from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
@@ -275,8 +276,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     # The ROS arguments go to both, so a namespace or a remap keeps them talking.
     node = subprocess.Popen(
-        [sys.executable, '-m', 'jacket_cloth_ros.ros.node', *args.ros_args, '--ros-args',
-         '-p', f'record:={session}'])
+        [*signals.node_command(), *args.ros_args, '--ros-args', '-p', f'record:={session}'])
     try:
         time.sleep(2.0)
         if node.poll() is not None:
