@@ -356,6 +356,30 @@ def test_a_params_file_with_a_key_given_twice_is_refused(tmp_path):
     assert params_file_problem(['node', '--ros-args', '--params-file', shipped]) == ''
 
 
+def test_a_params_file_for_another_node_is_refused(tmp_path):
+    # rcl skips a section whose node name does not match, without a word: nothing was set.
+    import subprocess
+    import sys
+    path = tmp_path / 'p.yaml'
+    path.write_text('/other_node:\n  ros__parameters:\n    sim_rate: 240.0\n')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
+    proc = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+                           '--params-file', str(path), '-p', 'robot_description_timeout:=30.0'],
+                          env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1 and len(lines) == 1, proc.stderr
+    assert lines[0] == (f'jacket_cloth_node: --params-file {path}: no section for '
+                        '/jacket_cloth_node (its node names: /other_node; /** is every node)')
+    from jacket_cloth_ros.ros.parameters import params_file_for_another_node
+    for key, matches in (('/**', True), ('jacket_cloth_node', True), ('/*', True),
+                         ('/**/jacket_cloth_node', True), ('/npc1/jacket_cloth_node', False),
+                         ('/jacket_cloth_nod', False), ('other', False)):
+        path.write_text(f'{key}:\n  ros__parameters:\n    sim_rate: 240.0\n')
+        problem = params_file_for_another_node(
+            ['node', '--ros-args', '--params-file', str(path)], '/jacket_cloth_node')
+        assert (problem == '') == matches, key
+
+
 def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     path = str(tmp_path / 's.mcap')
     h = harness(record=path)

@@ -42,8 +42,8 @@ from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdIn
 from .characters import CharacterSpec, crowd_slice, load_characters
 from .parameter_services import guard_parameter_services, shown
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
-                         check_value, descriptor, fabric_parameters, params_file_problem,
-                         ros_args_problem,
+                         check_value, descriptor, fabric_parameters,
+                         params_file_for_another_node, params_file_problem, ros_args_problem,
                          unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
@@ -667,6 +667,10 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
     node = None
     try:
         node = make_node()
+        problem = params_file_for_another_node(argv, node.get_fully_qualified_name())
+        if problem:
+            print(f'{program}: {problem}', file=sys.stderr)
+            return 1
         signals.running()
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

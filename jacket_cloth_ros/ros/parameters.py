@@ -244,6 +244,37 @@ def params_file_problem(argv: list[str]) -> str:
     return ''
 
 
+def params_file_for_another_node(argv: list[str], node: str) -> str:
+    """Say which ``--params-file`` in ``argv`` holds nothing for ``node`` (its full name), or ''.
+
+    rcl applies a file's sections whose node name (wildcards ``*`` and ``**``) matches, and
+    skips the rest without a word: a file written for another node set nothing.
+    """
+    import re
+    import yaml
+    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
+    for flag, path in zip(ros, ros[1:]):
+        if flag != '--params-file':
+            continue
+        try:
+            with open(path, encoding='utf-8') as f:
+                data = yaml.safe_load(f)
+        except (OSError, yaml.YAMLError):
+            continue            # rcl has said what it cannot read
+        keys = [str(k) for k in data] if isinstance(data, dict) else []
+        for key in keys:
+            tokens = [t for t in key.split('/') if t]
+            pattern = ''.join('(/[^/]+)*' if t == '**' else '/[^/]+' if t == '*' else
+                              '/' + re.escape(t) for t in tokens)
+            if re.fullmatch(pattern, node):
+                break
+        else:
+            listed = ', '.join(k[:80] for k in keys[:5]) or 'none'
+            return (f'--params-file {path}: no section for {node} (its node names: {listed}; '
+                    '/** is every node)')
+    return ''
+
+
 def ros_args_problem(argv: list[str]) -> str:
     """Say which ``--ros-args`` argument rcl cannot parse (it raises a traceback), or ''.
 
