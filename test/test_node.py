@@ -271,6 +271,16 @@ def test_a_huge_joint_name_is_cut_in_the_log_and_a_huge_frame_refused(harness, c
     assert h.node.set_parameters([Parameter('frame_prefix', value='x' * 256)])[0].successful
 
 
+def test_a_markers_rate_too_small_for_a_period_is_refused(harness):
+    # Found by the parameter fuzz: 1e-300 Hz is in [0, 240], its period was infinite, and the
+    # next input's markers ended the node.
+    h = harness()
+    result = h.node.set_parameters([Parameter('markers_rate', value=1e-300)])[0]
+    assert not result.successful and 'at least 0.01 Hz' in result.reason
+    n = h.send_clip('walk', 60, 0.2)
+    h.spin_until(lambda: len(h.tf) == n)
+
+
 def test_wind_set_live_on_its_topic(harness):
     h = harness()
     h.send_clip('idle', 60, 0.3)

@@ -69,6 +69,7 @@ NODE_PARAMETERS = {
 }
 
 
+MIN_MARKERS_RATE = 0.01
 # The longest frame_prefix, world_frame or world_joint taken.
 MAX_NAME = 256
 _NAMES = ('frame_prefix', 'world_frame', 'world_joint')
@@ -153,6 +154,9 @@ def check_value(name: str, value: object) -> str:
         return f'{name} {reason}' if reason else ''
     if name == 'record_compression' and str(value).upper() not in Compression.__members__:
         return f'record_compression must be one of {", ".join(Compression.names())}'
+    if name == 'markers_rate' and 0 < value < MIN_MARKERS_RATE:
+        # Its period must be a number of nanoseconds: 1e-300 Hz made it infinite.
+        return f'markers_rate must be 0 (off) or at least {MIN_MARKERS_RATE} Hz'
     if name in _NAMES and len(value) > MAX_NAME:
         # Each /tf carries the prefix once per bone: a megabyte one made each message 68 MB.
         return f'{name} is {len(value)} characters long (at most {MAX_NAME})'
