@@ -271,6 +271,10 @@ def test_a_character_the_shipped_one_does_not_fit_waits_and_the_others_run(tmp_p
         crowd.send({'a': _inputs(skeleton, 'walk', 3)})
         crowd.spin_until(lambda: len(_tf_of(crowd.tf, 'a')) == 3)
         assert crowd.chars['b'].pipeline is None
+        # Its diagnostics say why it runs nothing (issue 38).
+        crowd.spin_until(lambda: any(
+            s.name == '/jacket_cloth_crowd: b: cloth simulation' and 'does not fit' in s.message
+            for d in crowd.diagnostics for s in d.status))
 
 
 def test_a_characters_file_is_validated_with_one_line(tmp_path):

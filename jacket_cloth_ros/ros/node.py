@@ -276,9 +276,9 @@ class JacketClothNode(Node):
             if len(self.characters) == 1:
                 raise                   # the node has nothing else to run: one line, exit 1
             # One character's set-up must not stop the others: it waits for its topic.
-            self.get_logger().error(
-                f'{c.label}no URDF on {c.description.topic_name} yet, and the shipped '
-                f'character does not fit its rig ({e}): waiting for the topic')
+            c.waiting = cut_line(f'no URDF on {c.description.topic_name} yet, and the '
+                                 f'shipped character does not fit its rig ({e})')
+            self.get_logger().error(f'{c.label}{c.waiting}: waiting for the topic')
 
     def _load(self, c, urdf, source):
         if not self._told_compiling and not kernels_cached(crowd=len(self.characters) > 1):
@@ -592,7 +592,7 @@ class JacketClothNode(Node):
             if c.pipeline is None and c.waiting:
                 out = messages.diagnostics(
                     self.get_clock().now().nanoseconds, self._diagnostics_owner(c), {},
-                    messages.ERROR, f'no character: {c.waiting}; waiting for a corrected one')
+                    messages.ERROR, f'no character: {c.waiting}; waiting for its topic')
                 self.diagnostics.publish(out)
                 continue
             if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
