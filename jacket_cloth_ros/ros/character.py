@@ -69,7 +69,10 @@ def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
 
 
 def cut_line(text: str) -> str:
-    """Return ``text`` cut to ``MAX_LINE`` characters, saying so."""
+    """Return ``text`` cut to ``MAX_LINE`` characters, saying so.
+
+    :param text: a log line.
+    """
     return text if len(text) <= MAX_LINE else f'{text[:MAX_LINE]}... (cut)'
 
 

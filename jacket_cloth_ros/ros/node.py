@@ -610,6 +610,8 @@ def overwrite_problem(path: str) -> str:
 
     A recording is never overwritten: a dump of an earlier session's parameters holds its
     ``record``, and starting from it wiped that session.
+
+    :param path: the ``record`` value asked for.
     """
     if os.path.lexists(path):
         return (f'record: {path!r} exists (the node never overwrites a recording): move it '

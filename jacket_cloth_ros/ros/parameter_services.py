@@ -19,14 +19,18 @@ SHOWN_NAME = 80
 
 
 def shown(name: str) -> str:
-    """Return ``name`` as a log line or a reason shows it: quoted, cut to ``SHOWN_NAME``."""
+    """Return ``name`` as a log line or a reason shows it: quoted, cut to ``SHOWN_NAME``.
+
+    :param name: a parameter name from a request.
+    """
     return repr(name) if len(name) <= SHOWN_NAME else f'{name[:SHOWN_NAME]!r}...'
 
 
 def guard_parameter_services(node: 'object', log_times: dict) -> None:
     """Wrap the callback of each of ``node``'s parameter services (rclpy's ParameterService).
 
-    ``log_times``: the node's throttled warnings (ros/character.py's ``throttled``).
+    :param node: the rclpy node whose parameter services are wrapped.
+    :param log_times: the node's throttled warnings (ros/character.py's ``throttled``).
     """
     kinds = (DescribeParameters, GetParameters, GetParameterTypes, ListParameters,
              SetParameters, SetParametersAtomically)

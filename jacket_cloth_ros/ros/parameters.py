@@ -253,6 +253,9 @@ def params_file_for_another_node(argv: list[str], node: str) -> str:
 
     rcl applies a file's sections whose node name (wildcards ``*`` and ``**``) matches, and
     skips the rest without a word: a file written for another node set nothing.
+
+    :param argv: the process's arguments.
+    :param node: the node's full name (``/namespace/name``).
     """
     import re
     import yaml
@@ -284,6 +287,8 @@ def ros_args_problem(argv: list[str]) -> str:
 
     rcl reads a ``-p`` value as YAML: a URDF given as ``-p robot_description:=...`` often is
     no YAML, and an empty value (``-p world_joint:=``) is refused too.
+
+    :param argv: the process's arguments.
     """
     ros = argv[argv.index('--ros-args') + 1:] if '--ros-args' in argv else []
     if not _rcl_refuses(ros):
