@@ -176,7 +176,7 @@ class _NodeIO:
         from tf2_msgs.msg import TFMessage
         from visualization_msgs.msg import MarkerArray
         self._context = rclpy.Context()
-        rclpy.init(context=self._context, domain_id=60 + os.getpid() % 30)
+        rclpy.init(context=self._context, domain_id=170 + os.getpid() % 20)
         self._node = rclpy.create_node('profile', context=self._context)
         qos = QoSProfile(depth=len(raws))
         source = self._node.create_publisher(JointState, 'profile_joint_states', qos)

@@ -82,6 +82,16 @@ def _start(program: str, target: str, ours: bool = True) -> int:
     return main()
 
 
+def node_command() -> list[str]:
+    """Return the command that runs ``jacket_cloth_node`` in this Python, guarded from the start.
+
+    For a tool that starts the node as its child: ``python -m jacket_cloth_ros.ros.node``
+    imports everything before a line of its own runs, so a signal then was a traceback.
+    """
+    return [sys.executable, '-c',
+            'import sys; from jacket_cloth_ros import signals; sys.exit(signals.node())']
+
+
 def node() -> int:
     """``jacket_cloth_node``."""
     return _start('jacket_cloth_node', 'jacket_cloth_ros.ros.node:main')

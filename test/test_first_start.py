@@ -129,3 +129,34 @@ def _wait_for_library(pid, name, timeout=120.0):
                 return
         assert time.monotonic() < deadline, f'{name} never loaded'
         time.sleep(0.005)
+
+
+def test_the_demos_node_is_guarded_from_its_start(tmp_path, monkeypatch):
+    # `jacket_cloth demo` ran its node with `python -m`, which imports everything before the
+    # guard: a Ctrl-C then was a KeyboardInterrupt traceback.
+    import argparse
+    from jacket_cloth_ros.tools import cli
+    started = []
+
+    class Started(Exception):
+        pass
+
+    def popen(command, *args, **kwargs):
+        started.append(command)
+        raise Started
+    monkeypatch.setattr(cli, 'subprocess', argparse.Namespace(Popen=popen))
+    with pytest.raises(Started):
+        cli.cmd_demo(argparse.Namespace(out=str(tmp_path), domain_id=94, ros_args=[]))
+    assert started[0][-3:-1] == ['--ros-args', '-p']
+    node = subprocess.Popen(started[0][:-3], env=dict(os.environ, ROS_DOMAIN_ID='94'),
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_library(node.pid, '_multiarray_umath')
+        node.send_signal(signal.SIGINT)
+        err = node.communicate(timeout=120)[1]
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.wait()
+    assert node.returncode == 130 and 'Traceback' not in err, err
+    assert err.strip().splitlines() == ['jacket_cloth_node: stopped while starting'], err

@@ -244,6 +244,75 @@ def _start_waiting(h, **params):
     h.ex.add_node(h.peer)
 
 
+def _random_parameter(rng, names):
+    """A parameter message: a name the node has or not, any type number, any value or size."""
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+    name = rng.choice([rng.choice(names), rng.choice(names), '', '.', 'fabric.', 'wind.x',
+                       'sim_rte', 'é' * rng.randrange(4), 'x' * rng.randrange(2000),
+                       rng.randbytes(rng.randrange(8)).decode('latin-1')])
+    kind = rng.choice([rng.randrange(10), rng.randrange(10), rng.randrange(256)])
+    size = rng.choice([0, 1, 2, 3, 4, rng.randrange(10_000)])
+    number = rng.choice([0.0, -1.0, 1e-300, 1e308, math.nan, math.inf, rng.uniform(-1e3, 1e3)])
+    whole = rng.choice([0, -1, 1, 2 ** 63 - 1, -2 ** 63, rng.randrange(-10 ** 6, 10 ** 6)])
+    text = rng.choice(['', 'x', 'lz4', 'xpbd', '/abs', 'y' * rng.randrange(3000), 'p.mcap'])
+    value = ParameterValue(
+        type=kind, bool_value=rng.random() < 0.5, integer_value=whole, double_value=number,
+        string_value=text, byte_array_value=[bytes([rng.randrange(256)])] * min(size, 64),
+        bool_array_value=[True] * size, integer_array_value=[whole] * size,
+        double_array_value=[rng.choice([number, 1.0]) for _ in range(size)],
+        string_array_value=[text] * min(size, 16))
+    return ParameterMsg(name=name, value=value)
+
+
+def test_fuzz_parameter_services(harness, tmp_path, monkeypatch):
+    """Every request to the parameter services is answered; each parameter is set or refused.
+
+    Driven in-process through the callbacks the executor calls: what they raise ends a node.
+    """
+    from rcl_interfaces.srv import (DescribeParameters, GetParameters, GetParameterTypes,
+                                    ListParameters, SetParameters, SetParametersAtomically)
+    from test_node import _all_finite
+    monkeypatch.chdir(tmp_path)             # a ``record`` path set at random lands here
+    rng = random.Random(SEED)
+    h = harness()
+    node = h.node
+    services = {s.srv_type: s.callback for s in node.services}
+    declared = {name: p.type_ for name, p in node._parameters.items()}
+    names = list(declared)
+    for _ in _until(SECONDS):
+        kind = rng.choice([SetParameters, SetParameters, SetParametersAtomically,
+                           GetParameters, DescribeParameters, GetParameterTypes, ListParameters])
+        params = [_random_parameter(rng, names) for _ in range(rng.randint(1, 4))]
+        before = {name: node.get_parameter(name).value for name in names}
+        request = kind.Request()
+        if kind in (SetParameters, SetParametersAtomically):
+            request.parameters = params
+        elif kind is ListParameters:
+            request.prefixes, request.depth = [p.name for p in params], rng.randrange(4)
+        else:
+            request.names = [p.name for p in params]
+        response = services[kind](request, kind.Response())
+        case = (SEED, kind.__name__, [(p.name[:40], p.value.type) for p in params])
+        assert isinstance(response, kind.Response), case
+        results = (response.results if kind is SetParameters else
+                   [response.result] * len(params) if kind is SetParametersAtomically else [])
+        assert len(results) in (0, len(params)), case
+        for p, result in zip(params, results):
+            if not result.successful:
+                assert result.reason, case
+        # No name appears or goes, no type changes, and what changed was set successfully.
+        assert {name: p.type_ for name, p in node._parameters.items()} == declared, case
+        if not any(r.successful for r in results):
+            assert {name: node.get_parameter(name).value for name in names} == before, case
+        h.ex.spin_once(timeout_sec=0)
+    # Still running: a clip (the parameters as the fuzz left them) comes out on /tf, finite.
+    node.set_parameters([rclpy.parameter.Parameter('record', value='')])
+    tf_before = len(h.tf)
+    h.send_clip('walk', 60, 0.2, start_s=3000.0)
+    h.spin_until(lambda: len(h.tf) >= tf_before + 1, timeout=30)
+    assert all(_all_finite(tf) for tf in h.tf)
+
+
 @pytest.fixture(scope='module')
 def recordings(tmp_path_factory):
     """A motion file (inputs only) and its replay (every output topic, set-up metadata)."""

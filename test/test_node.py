@@ -21,6 +21,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from jacket_cloth_ros.core.config import ConfigError
 from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros.node import JacketClothNode
 
 
@@ -253,6 +254,33 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert h.c.sim.resets == resets
 
 
+def test_a_huge_joint_name_is_cut_in_the_log_and_a_huge_frame_refused(harness, capfd):
+    # A megabyte joint name made a megabyte log line; a megabyte frame_prefix made every /tf
+    # tens of megabytes.
+    h = harness()
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
+    capfd.readouterr()
+    h.send(list(names) + ['j' * 1_000_000], list(pos) + [0.0], 100 * 10 ** 9)
+    h.spin_until(lambda: h.c.inputs == 1 and 'unknown' in h.c.log_times, timeout=30)
+    lines = capfd.readouterr().err.splitlines()
+    assert any('not in the URDF' in line for line in lines)
+    assert max(map(len, lines)) < 2000
+    for name in ('frame_prefix', 'world_frame', 'world_joint'):
+        result = h.node.set_parameters([Parameter(name, value='x' * 1_000_000)])[0]
+        assert not result.successful and 'at most 256' in result.reason, name
+    assert h.node.set_parameters([Parameter('frame_prefix', value='x' * 256)])[0].successful
+
+
+def test_a_markers_rate_too_small_for_a_period_is_refused(harness):
+    # Found by the parameter fuzz: 1e-300 Hz is in [0, 240], its period was infinite, and the
+    # next input's markers ended the node.
+    h = harness()
+    result = h.node.set_parameters([Parameter('markers_rate', value=1e-300)])[0]
+    assert not result.successful and 'at least 0.01 Hz' in result.reason
+    n = h.send_clip('walk', 60, 0.2)
+    h.spin_until(lambda: len(h.tf) == n)
+
+
 def test_wind_set_live_on_its_topic(harness):
     h = harness()
     h.send_clip('idle', 60, 0.3)
@@ -305,8 +333,11 @@ def test_a_params_key_the_node_does_not_take_is_refused_with_its_reason():
     # rclpy drops an override nobody declares: the old preset name ran tweed_jacket silently.
     assert _start_error(fabric='down_jacket') == \
         'parameter fabric: renamed fabric_preset (set fabric_preset instead)'
-    assert _start_error(sim_rat=240.0) == \
-        'parameter sim_rat: not a parameter of jacket_cloth_node (the README lists them)'
+    assert _start_error(sim_rat=240.0) == ('parameter sim_rat: not a parameter of '
+                                           'jacket_cloth_node (did you mean sim_rate? the '
+                                           'README lists them)')
+    assert _start_error(colour=1.0) == \
+        'parameter colour: not a parameter of jacket_cloth_node (the README lists them)'
     # wind: {x: 1.0} in a params file: a value parameter holds no group.
     assert _start_error(**{'wind.x': 1.0}) == \
         'parameter wind.x: wind is not a group of parameters'
@@ -335,6 +366,30 @@ def test_a_params_file_with_a_key_given_twice_is_refused(tmp_path):
     assert params_file_problem(['node', '--ros-args', '--params-file', shipped]) == ''
 
 
+def test_a_params_file_for_another_node_is_refused(tmp_path):
+    # rcl skips a section whose node name does not match, without a word: nothing was set.
+    import subprocess
+    import sys
+    path = tmp_path / 'p.yaml'
+    path.write_text('/other_node:\n  ros__parameters:\n    sim_rate: 240.0\n')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
+    proc = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
+                           '--params-file', str(path), '-p', 'robot_description_timeout:=30.0'],
+                          env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1 and len(lines) == 1, proc.stderr
+    assert lines[0] == (f'jacket_cloth_node: --params-file {path}: no section for '
+                        '/jacket_cloth_node (its node names: /other_node; /** is every node)')
+    from jacket_cloth_ros.ros.parameters import params_file_for_another_node
+    for key, matches in (('/**', True), ('jacket_cloth_node', True), ('/*', True),
+                         ('/**/jacket_cloth_node', True), ('/npc1/jacket_cloth_node', False),
+                         ('/jacket_cloth_nod', False), ('other', False)):
+        path.write_text(f'{key}:\n  ros__parameters:\n    sim_rate: 240.0\n')
+        problem = params_file_for_another_node(
+            ['node', '--ros-args', '--params-file', str(path)], '/jacket_cloth_node')
+        assert (problem == '') == matches, key
+
+
 def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     path = str(tmp_path / 's.mcap')
     h = harness(record=path)
@@ -345,6 +400,55 @@ def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     other = str(tmp_path / 't.mcap')
     assert h.node.set_parameters([Parameter('record', value=other)])[0].successful
     assert h.node.recorder is not recorder and h.node.recorder.path == other
+
+
+def _service(node, name):
+    """The callback of ``node``'s parameter service ``name`` (the one the executor calls)."""
+    return next(s for s in node.services if s.service_name.endswith('/' + name))
+
+
+def test_a_parameter_request_that_names_nothing_or_no_type_is_refused(harness):
+    # An empty name slipped past rclpy's check (undeclared names are tested for truth) and
+    # was taken; a type number that is no type raised out of the executor: both ended it.
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+    from rcl_interfaces.srv import SetParameters, SetParametersAtomically
+    h = harness()
+    names = set(h.node._parameters)
+    for kind, value in ((1, {'bool_value': True}), (4, {'string_value': 'x'}), (42, {})):
+        msg = ParameterMsg(name='', value=ParameterValue(type=kind, **value))
+        service = _service(h.node, 'set_parameters')
+        result, = service.callback(SetParameters.Request(parameters=[msg]),
+                                   SetParameters.Response()).results
+        assert not result.successful and result.reason, kind
+        service = _service(h.node, 'set_parameters_atomically')
+        result = service.callback(SetParametersAtomically.Request(parameters=[msg]),
+                                  SetParametersAtomically.Response()).result
+        assert not result.successful and result.reason, kind
+    assert set(h.node._parameters) == names
+    n = h.send_clip('idle', 60, 0.1)
+    h.spin_until(lambda: len(h.tf) == n)
+
+
+def test_record_never_overwrites_a_file_at_start_or_live(harness, tmp_path):
+    # An existing .mcap was truncated: a dump of an earlier session's parameters wiped it.
+    old = tmp_path / 'old.mcap'
+    old.write_bytes(b'an earlier session')
+    h = harness(record=str(old))
+    assert h.node.recorder is None and old.read_bytes() == b'an earlier session'
+    path = str(tmp_path / 'new.mcap')
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    recorder = h.node.recorder
+    result = h.node.set_parameters([Parameter('record', value=str(old))])[0]
+    assert not result.successful and 'exists' in result.reason and str(old) in result.reason
+    assert h.node.recorder is recorder and old.read_bytes() == b'an earlier session'
+    # The file being recorded now is the one exception: setting it again keeps it going.
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    assert h.node.recorder is recorder
+    # A bag folder there is refused the same way.
+    (tmp_path / 'bag').mkdir()
+    assert not h.node.set_parameters(
+        [Parameter('record', value=str(tmp_path / 'bag'))])[0].successful
+    assert h.node.recorder is recorder
 
 
 def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
@@ -375,6 +479,61 @@ def test_a_recording_whose_writer_failed_is_closed_with_one_line(harness, tmp_pa
     assert h.node.recorder is None
 
 
+def _recording_status(diags):
+    """(level, recording value, message) of the last diagnostics in ``diags``."""
+    status = diags[-1].status[0]
+    values = {v.key: v.value for v in status.values}
+    return _level(status), values['recording'], status.message
+
+
+def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
+    # They said `recording: <path>` at OK after the file failed to open or a write failed.
+    from diagnostic_msgs.msg import DiagnosticArray
+    h = harness(record=str(tmp_path / 'gone' / 'x.mcap'), diagnostics_rate=20.0)
+    assert h.node.recorder is None
+    diags = []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    h.spin_until(lambda: len(diags) >= 2)
+    level, recording, message = _recording_status(diags)
+    assert level == 1 and recording.startswith('failed: cannot record to'), recording
+    assert 'recording failed' in message
+    # A good path: OK again, then a write fails (a disk full while recording).
+    path = str(tmp_path / 'session.mcap')
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    count = len(diags)
+    h.spin_until(lambda: len(diags) >= count + 2)
+    assert _recording_status(diags)[:2] == (0, path)
+
+    def full_disk(*args):
+        raise OSError(28, 'No space left on device')
+    h.node.recorder.write = full_disk
+    h.send_clip('idle', 60, 0.1)
+    assert h.node.recorder is None
+    count = len(diags)
+    h.spin_until(lambda: len(diags) >= count + 2)
+    level, recording, message = _recording_status(diags)
+    assert level == 1 and 'No space left' in recording and recording.startswith('failed'), \
+        recording
+
+
+def test_a_recording_that_fails_to_close_at_the_end_is_one_line(tmp_path, capfd):
+    # Ctrl-C: the context is shut down before the node closes its recording, and its error
+    # went to rosout, which was gone: a line of rcl's besides.
+    h = Harness(record=str(tmp_path / 'session.mcap'))
+    try:
+        h.node.recorder._error = OSError(28, 'No space left on device')
+        h.ex.shutdown()
+        capfd.readouterr()
+        rclpy.shutdown(context=h.ctx)
+        h.node.close()
+        lines = capfd.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and 'closed with an error' in lines[0], lines
+        assert lines[0].startswith('jacket_cloth_node: recording ')
+    finally:
+        h.node.destroy_node()
+        h.peer.destroy_node()
+
+
 def test_robot_description_from_the_latched_topic(harness, urdf_text):
     ctx = Context()
     rclpy.init(context=ctx, domain_id=DOMAIN_ID)
@@ -392,6 +551,32 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)
+
+
+def test_a_urdf_rejected_on_the_topic_is_waited_for_and_a_corrected_one_taken(urdf_text):
+    # After robot_description_timeout the shipped character ran, and the corrected URDF sent
+    # later was ignored (the README said the node keeps waiting).
+    from diagnostic_msgs.msg import DiagnosticArray
+    from test_fuzz import _start_waiting
+    h = Harness.__new__(Harness)
+    _start_waiting(h, robot_description_timeout=0.2, diagnostics_rate=20.0)
+    try:
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        description = h.peer.create_publisher(String, '/robot_description', latched)
+        diags = []
+        h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+        description.publish(String(data=urdf_text.replace('<joint', '<joint parent', 1)))
+        h.spin_until(lambda: h.node.refused['robot_description'] == 1, timeout=30)
+        # Twenty diagnostics at 20 Hz: well past the timeout, and still no character.
+        h.spin_until(lambda: len(diags) >= 20, timeout=30)
+        assert h.c.pipeline is None
+        status = diags[-1].status[0]
+        assert _level(status) == 2 and 'rejected' in status.message, status.message
+        description.publish(String(data=urdf_text.replace('jacket_character', 'corrected')))
+        h.spin_until(lambda: h.c.sim is not None, timeout=30)
+        assert h.c.sim.skeleton.name == 'corrected'
+    finally:
+        h.close()
 
 
 def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
@@ -454,7 +639,8 @@ def test_a_live_session_replays_to_the_same_bones(harness, tmp_path):
     h.node.close()
     session = load_session(str(path))
     assert session.setup.values['fabric.damping'] != 0.2       # the value at the start
-    recorded = {m.log_time: m.data for m in session.recording.messages if m.topic == '/tf'}
+    recorded = {m.log_time: m.data for m in read_messages(session.recording.path)[0]
+                if m.topic == '/tf'}
     assert len(recorded) == 60
     same = []
     pipeline = run_session(session, probe=lambda p, r, stamp, outs: same.extend(
@@ -483,12 +669,35 @@ def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, 
     assert h.c.pipeline.dropped == 2 and h.c.sim.resets == 2
     h.node.close()
     session = load_session(str(path))
-    recorded = [m.data for m in session.recording.messages if m.topic == '/tf']
+    recorded = [m.data for m in read_messages(session.recording.path)[0] if m.topic == '/tf']
     assert len(recorded) == len(stamps) - 2
     replayed = []
     run_session(session, probe=lambda p, r, stamp, outs: replayed.extend(
         data for key, data in outs if key == 'tf'))
     assert replayed == recorded
+
+
+def test_an_input_stamped_before_1970_is_recorded_and_replays(harness, tmp_path, capsys):
+    # MCAP times are unsigned: its log time did not pack, the node ended and the file held
+    # no input; a replay of it ended in the same traceback.
+    from mcap.reader import make_reader
+    from jacket_cloth_ros.tools.cli import main
+    path = tmp_path / 'live.mcap'
+    h = harness(record=str(path))
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
+    stamps = [100 * 10 ** 9, -5 * 10 ** 9, -5 * 10 ** 9 + 10 ** 7, 101 * 10 ** 9]
+    for k, stamp in enumerate(stamps):
+        h.send(names, pos, stamp)
+        h.spin_until(lambda: h.c.inputs == k + 1)
+    assert h.node.recorder is not None
+    h.node.close()
+    with open(path, 'rb') as f:
+        logged = [m.log_time for _, c, m in make_reader(f).iter_messages(
+            topics=['/joint_states'], log_time_order=False)]
+    assert logged == [100 * 10 ** 9, 0, 0, 101 * 10 ** 9]
+    capsys.readouterr()
+    assert main(['replay', str(path), '-o', str(tmp_path / 'out.mcap')]) == 0
+    assert 'Traceback' not in capsys.readouterr().err
 
 
 def test_undecodable_wind_and_description_leave_the_node_running(harness):
@@ -531,6 +740,7 @@ def _start_node(tmp_path, *params):
 def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
     rig = (tmp_path / 'rig.yaml')
     from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.skeleton import shipped_character_urdf
     with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
         text = f.read()
     assert 'radii: [0.155, 0.195]' in text
@@ -539,6 +749,9 @@ def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
         'sim_rate:=abc': 'sim_rate', 'sim_rate:=1e9': 'sim_rate', 'solver:=bogus': 'solver',
         'record_compression:=bogus': 'record_compression', 'frame_prefix:=/x': 'frame_prefix',
         'wind:=[.nan,0.0,0.0]': 'wind', f'rig_file:={rig}': 'radii',
+        # A misspelt name names the one meant; what rcl cannot parse is one line too.
+        'sim_rte:=240.0': 'did you mean sim_rate?', 'world_joint:=': 'world_joint',
+        'robot_description:=' + shipped_character_urdf(): 'robot_description topic',
     }
     started = {case: _start_node(tmp_path, case, 'robot_description_timeout:=0.0')
                for case in cases}
@@ -549,8 +762,9 @@ def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
             if proc.poll() is None:
                 proc.kill()
         lines = err.strip().splitlines()
-        assert proc.returncode == 1 and len(lines) == 1, (case, err)
-        assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], (case, err)
+        assert proc.returncode == 1 and len(lines) == 1, (case[:80], err)
+        assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], \
+            (case[:80], err)
 
 
 def _level(status):

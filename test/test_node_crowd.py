@@ -271,6 +271,10 @@ def test_a_character_the_shipped_one_does_not_fit_waits_and_the_others_run(tmp_p
         crowd.send({'a': _inputs(skeleton, 'walk', 3)})
         crowd.spin_until(lambda: len(_tf_of(crowd.tf, 'a')) == 3)
         assert crowd.chars['b'].pipeline is None
+        # Its diagnostics say why it runs nothing (issue 38).
+        crowd.spin_until(lambda: any(
+            s.name == '/jacket_cloth_crowd: b: cloth simulation' and 'does not fit' in s.message
+            for d in crowd.diagnostics for s in d.status))
 
 
 def test_a_characters_file_is_validated_with_one_line(tmp_path):
@@ -288,7 +292,16 @@ def test_a_characters_file_is_validated_with_one_line(tmp_path):
             ('characters: [{name: a, parameters: {wind: {x: 1.0}}}]',
              "parameters.'wind.x': not a character's parameter"),
             ('characters: [{name: a, colour: red}]', "unknown key(s) 'colour'"),
-            ('characters: [{name: a, count: 0}]', 'count: 0 is outside [1, 4096]')):
+            ('characters: [{name: a, count: 0}]', 'count: 0 is outside [1, 4096]'),
+            # The same frames on /tf for two characters (issue 38).
+            ('characters: [{name: a, frame_prefix: x/}, {name: b, frame_prefix: x/}]',
+             "characters[1].frame_prefix: characters 'a' and 'b' both have 'x/'"),
+            ('characters: [{name: a}, {name: b, frame_prefix: a/}]',
+             "characters[1].frame_prefix: characters 'a' and 'b' both have 'a/'"),
+            ('characters: [{name: a, frame_prefix: ' + 'x' * 300 + '}]',
+             'frame_prefix is 300 characters long (at most 256)'),
+            ('characters: [{name: w, count: 2, frame_prefix: ""}]',
+             "characters[0].frame_prefix: characters 'w_0' and 'w_1' both have ''")):
         path.write_text(text)
         with pytest.raises(ConfigError, match='^' + str(path).replace('.', r'\.')) as e:
             load_characters(str(path))

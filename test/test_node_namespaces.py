@@ -17,6 +17,7 @@ from visualization_msgs.msg import MarkerArray
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.skeleton import shipped_character_urdf
 from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros.character import LATCHED
 from jacket_cloth_ros.ros.node import JacketClothNode
 
@@ -158,7 +159,7 @@ def test_two_characters_prefixed_as_robot_state_publisher_prefixes_are_two_trees
         _spin_until(ex, lambda: len({s.name for m in diagnostics for s in m.status}) >= 2)
         assert {s.name for m in diagnostics for s in m.status} == owners
     session = load_session(record)
-    recorded = [m.data for m in session.recording.messages if m.topic == '/tf']
+    recorded = [m.data for m in read_messages(session.recording.path)[0] if m.topic == '/tf']
     replayed, diagnostics = [], []
     run_session(session, sink=lambda key, data, stamp: (
         replayed if key == 'tf' else diagnostics if key == 'diagnostics' else []).append(data))

@@ -13,6 +13,7 @@ from geometry_msgs.msg import PointStamped
 from test_node import _all_finite
 
 from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros.viewer import VIEWER_QOS, read_viewer
 
 TOPIC = '/jacket_cloth_node/viewer'
@@ -126,7 +127,7 @@ def test_a_live_session_near_far_near_replays_byte_for_byte(harness, tmp_path):
     session = load_session(str(path))
     assert [e[2] for e in session.events].count('viewer') == 3
     recorded = {}
-    for m in session.recording.messages:
+    for m in read_messages(session.recording.path)[0]:
         if m.topic in ('/tf', '/jacket_cloth_node/markers'):
             recorded.setdefault(m.topic, []).append(m.data)
     replayed, replay_levels = {'/tf': [], '/jacket_cloth_node/markers': []}, []
@@ -212,3 +213,31 @@ def test_default_and_latched_publishers_reach_viewer_and_wind(harness):
         wind.publish(msg)
         h.spin_until(lambda: h.c.sim.params.wind == (k + 1.0, 0.0, 0.0))
     assert h.node.received['wind'] == 2 and h.node.refused['wind'] == 0
+
+
+def test_a_latched_viewer_older_than_the_one_taken_is_not_applied(harness):
+    # A latched publisher's old viewer can be delivered (its history) after a newer one from
+    # a volatile publisher: it moved the viewer back to where it was.
+    from rclpy.qos import DurabilityPolicy
+    h = harness()
+    by_durability = {s.qos_profile.durability: s.callback for s in h.node.subscriptions
+                     if s.topic_name == TOPIC}
+    latched = by_durability[DurabilityPolicy.TRANSIENT_LOCAL]
+    live = by_durability[DurabilityPolicy.VOLATILE]
+
+    def raw(point, sec):
+        msg = _viewer(point)
+        msg.header.stamp.sec = sec
+        return serialize_message(msg)
+
+    def info(publisher):
+        return {'publisher_gid': {'data': [publisher] * 16}, 'publication_sequence_number': 1,
+                'source_timestamp': publisher}
+    live(raw(NEAR, 200), info(1))
+    assert tuple(h.c.viewer) == NEAR
+    latched(raw(FAR, 100), info(2))                 # stale: dropped
+    assert tuple(h.c.viewer) == NEAR
+    latched(raw(FAR, 300), info(3))                 # newer: taken
+    assert tuple(h.c.viewer) == FAR
+    live(raw(NEAR, 50), info(4))                    # live, whatever its stamp
+    assert tuple(h.c.viewer) == NEAR

@@ -19,6 +19,7 @@ from mcap_ros2.writer import Writer as Ros2Writer
 
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.recording.definitions import ros2msg_schema
+from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session, run_session
 
@@ -48,7 +49,8 @@ def test_replay_is_byte_identical_run_after_run(clip, tmp_path):
     with open(tmp_path / 'zstd.mcap', 'rb') as f:
         assert {c.compression for c in make_reader(f).get_summary().chunk_indexes} == {'zstd'}
     again = load_session(str(tmp_path / 'a' / 'out.mcap'))
-    recorded = {m.log_time: m.data for m in again.recording.messages if m.topic == '/tf'}
+    recorded = {m.log_time: m.data for m in read_messages(str(tmp_path / 'a' / 'out.mcap'))[0]
+                if m.topic == '/tf'}
     same = []
     run_session(again, probe=lambda p, r, stamp, outs: same.extend(
         recorded[stamp] == data for key, data in outs if key == 'tf'))
@@ -469,6 +471,31 @@ def test_a_live_frame_prefix_change_renames_the_bones_on_the_next_tf(make_sim):
     assert [f.header.frame_id for f in frames] == ['base_link', 'left/base_link']
 
 
+def test_two_sources_on_different_clocks_keep_the_output_rates(make_sim):
+    # Stamps jumping back and forth beyond reset_gap sent markers and diagnostics on every
+    # input (issue 38): each clock keeps its own grid, at the rates set.
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    sim = make_sim()
+    fabrics = load_fabrics()
+    pipe = SessionPipeline(sim.skeleton, sim.rig, fabrics,
+                           default_values(fabrics['tweed_jacket']))
+    counts = {'tf': 0, 'markers': 0, 'diagnostics': 0}
+    for k in range(120):                    # 2 s of each clock, at 60 Hz, interleaved
+        names, pos = joint_state_content(sim.skeleton.joint_names, 'walk', k / 60)
+        for start in (1000 * 10 ** 9, 10 * 10 ** 9):
+            stamp = start + k * 10 ** 9 // 60
+            _, outputs = pipe.on_joint_state(JointStateContent(stamp, names, pos), stamp)
+            for key, _ in outputs:
+                counts[key] += 1
+    assert counts['tf'] == 240
+    assert counts['markers'] <= 2 * (2 * 30 + 1), counts      # 30 Hz on each clock
+    assert counts['diagnostics'] <= 2 * (2 * 1 + 1), counts   # 1 Hz on each clock
+
+
 def test_background_writer_makes_the_same_file_and_reports_its_errors(clip, tmp_path):
     # The replay writes through a thread: same records in the same order, so the same bytes.
     from jacket_cloth_ros.recording.writer import SessionRecorder
@@ -639,7 +666,7 @@ def test_diagnosticsquantiles_are_numpys_on_lists_of_any_length():
 def test_a_session_is_read_without_its_outputs_and_its_tf_compared_by_digest(tmp_path):
     # Issue 38 item 19: replay and analyze held a whole recording (markers and /tf, most of
     # its bytes) in memory; only what the simulation is fed is read now.
-    from jacket_cloth_ros.recording.reader import message_digest, read_messages
+    from jacket_cloth_ros.recording.reader import message_digest
     from jacket_cloth_ros.tools.analyze import SessionFigures
     from jacket_cloth_ros.tools.session import load_session
     clip, session = tmp_path / 'walk.mcap', tmp_path / 'session.mcap'

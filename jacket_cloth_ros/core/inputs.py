@@ -91,8 +91,10 @@ class InputParser:
                 unknown.append(n)
         warnings = []
         if unknown:
+            # Each name cut: a message's names are any length, a log line must not be.
+            cut = (n if len(n) <= 80 else n[:80] + '...' for n in sorted(unknown)[:5])
             warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
-                             f'{", ".join(sorted(unknown)[:5])}'))
+                             f'{", ".join(cut)}'))
         missing = sorted(set(range(len(index))) - set(joint_to))
         if missing:
             text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])

@@ -179,10 +179,14 @@ class SessionRecorder:
     def write(self, topic: str, data: bytes, stamp_ns: int) -> None:
         """Copy ``data`` into the open chunk (the caller may reuse its buffer).
 
+        Logged at ``stamp_ns``, or at 0 for a stamp before it: MCAP times are unsigned, and a
+        message stamped before 1970 is kept whole (its header holds its own stamp).
+
         :param topic: an added topic.
         :param data: the CDR-serialised message.
         :param stamp_ns: its stamp, the log and publish time, ns.
         """
+        stamp_ns = max(stamp_ns, 0)
         channel = self._channels[topic]         # positional: this runs for every message
         self._writer.add_message(channel, stamp_ns, data, stamp_ns, self._writer.counts[channel])
         if self._last_flush is None:

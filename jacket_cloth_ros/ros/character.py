@@ -48,6 +48,10 @@ NO_PUB_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUB_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 
 
+# A log line about an input is cut to this: what a client sends may be megabytes.
+MAX_LINE = 1000
+
+
 def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
               period: float = 5.0) -> None:
     """Warn ``text`` at most once per ``period`` seconds per ``code`` of ``log_times``.
@@ -61,7 +65,15 @@ def throttled(logger: 'RcutilsLogger', log_times: dict, code: str, text: str,
     now = time.monotonic()
     if now - log_times.get(code, -1e9) >= period:
         log_times[code] = now
-        logger.warning(text)
+        logger.warning(cut_line(text))
+
+
+def cut_line(text: str) -> str:
+    """Return ``text`` cut to ``MAX_LINE`` characters, saying so.
+
+    :param text: a log line.
+    """
+    return text if len(text) <= MAX_LINE else f'{text[:MAX_LINE]}... (cut)'
 
 
 def read_file(path: str) -> str:
@@ -99,6 +111,7 @@ class Character:
         self.subscription = None        # joint_states, once loaded
         self.markers = None             # its markers publisher, once loaded
         self.description = self.fallback = None     # while it waits for its URDF
+        self.waiting = ''               # why it still waits: the URDF its topic gave, refused
         self.reader = cdr.JointStateReader()
         self.inputs = 0
         self.log_times = {}             # its throttled warnings: code -> when last logged

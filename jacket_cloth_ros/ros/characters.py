@@ -96,7 +96,7 @@ def load_characters(path: str) -> list[CharacterSpec]:
             defaults._used.add(k)
     defaults.reject_unknown()
     fabrics_by_file = {}
-    out, names = [], set()
+    out, names, prefixes = [], set(), {}
     for entry in entries:
         name = entry.text('name')
         if not _NAME.fullmatch(name):
@@ -149,6 +149,12 @@ def load_characters(path: str) -> list[CharacterSpec]:
                                                    f'{where}.frame_prefix')
             except ValueError as e:
                 raise ConfigError(str(e)) from None
+            # One prefix, one tree on /tf: two characters would publish the same frames.
+            other = prefixes.setdefault(mine['frame_prefix'], each)
+            if other != each:
+                raise ConfigError(f'{where}.frame_prefix: characters {shown(other)} and '
+                                  f'{shown(each)} both have {shown(mine["frame_prefix"])} (the '
+                                  'same frames on /tf): give each its own')
             out.append(CharacterSpec(each, urdf, rig, fabric_file, mine))
             if len(out) > MAX_CHARACTERS:
                 raise ConfigError(f'{path}: more than {MAX_CHARACTERS} characters')

@@ -20,6 +20,7 @@ import sys
 import rclpy
 
 from .node import JacketClothNode, run
+from .parameters import ros_args_problem
 
 
 def main(args: list[str] | None = None) -> int:
@@ -33,6 +34,10 @@ def main(args: list[str] | None = None) -> int:
         description='Many jacketed characters in one node: each subscribes <name>/joint_states '
         'and publishes its bones on /tf, <name>/jacket_cloth_node/markers and /diagnostics. '
         'Start with --ros-args -p characters:=crowd.yaml (see docs/crowd.md).')
+    problem = ros_args_problem(argv)
+    if problem:                 # rcl's own error is a traceback
+        print(f'jacket_cloth_crowd: {problem}', file=sys.stderr)
+        return 1
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     return run('jacket_cloth_crowd', functools.partial(JacketClothNode, crowd=True), argv,
                crowd=True)

@@ -12,6 +12,8 @@ every character with an input in one compiled call over the cores; a lone charac
 
 import argparse
 import gc
+import os
+import struct
 import sys
 import time
 from collections.abc import Callable
@@ -34,12 +36,14 @@ from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.writer import SessionRecorder
-from . import cdr
+from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
-                        input_problems, read_file, throttled)
+                        cut_line, input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
+from .parameter_services import guard_parameter_services, shown
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
-                         check_value, descriptor, fabric_parameters, params_file_problem,
+                         check_value, descriptor, fabric_parameters,
+                         params_file_for_another_node, params_file_problem, ros_args_problem,
                          unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
@@ -91,7 +95,8 @@ class JacketClothNode(Node):
     """
 
     def __init__(self, crowd: bool = False, **kwargs: object):
-        super().__init__('jacket_cloth_crowd' if crowd else 'jacket_cloth_node', **kwargs)
+        self.program = 'jacket_cloth_crowd' if crowd else 'jacket_cloth_node'
+        super().__init__(self.program, **kwargs)
         self.recorder: 'SessionRecorder | None' = None
         self._viewer = None             # the last accepted ~/viewer: (raw, stamp)
         self._last_stamp = None         # the last accepted input's, for recording after it
@@ -100,10 +105,12 @@ class JacketClothNode(Node):
         self._fabrics = {}              # fabrics file -> its presets
         self._told_compiling = False
         self._record_asked = None       # the record value the open (or failed) file is for
+        self._recording_problem = ''    # why that file is not being written, for diagnostics
         self._every = 1                 # the characters of the file (a crowd slices them)
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
+        guard_parameter_services(self, self._log_times)
         # The characters first: a parameter or a characters file refused stops the node here.
         if crowd:
             self.characters, urdfs = self._crowd_characters()
@@ -198,6 +205,7 @@ class JacketClothNode(Node):
         for name, spec in CROWD_PARAMETERS.items():
             self._declare(name, spec)
         self._refuse_unknown()
+        self.add_on_set_parameters_callback(self._validate_parameters)
         path = self._p('characters')
         if not path:
             raise ConfigError('parameter characters: give the characters file '
@@ -250,7 +258,12 @@ class JacketClothNode(Node):
             self._load(c, msg.data, f'the {topic} topic')
         except ConfigError as e:
             self.refused['robot_description'] += 1
-            self.get_logger().error(f'{c.label}{topic} rejected: {e}')
+            # Someone publishes this character's URDF: a corrected one is waited for, not
+            # replaced by the shipped character, and diagnostics say why nothing runs.
+            c.fallback.cancel()
+            c.waiting = cut_line(f'{topic} rejected: {e}')
+            self.get_logger().error(cut_line(f'{c.label}{c.waiting}; waiting for a corrected '
+                                             'one'))
 
     def _use_shipped(self, c):
         c.fallback.cancel()             # once, even if the shipped one fails to load
@@ -263,9 +276,9 @@ class JacketClothNode(Node):
             if len(self.characters) == 1:
                 raise                   # the node has nothing else to run: one line, exit 1
             # One character's set-up must not stop the others: it waits for its topic.
-            self.get_logger().error(
-                f'{c.label}no URDF on {c.description.topic_name} yet, and the shipped '
-                f'character does not fit its rig ({e}): waiting for the topic')
+            c.waiting = cut_line(f'no URDF on {c.description.topic_name} yet, and the '
+                                 f'shipped character does not fit its rig ({e})')
+            self.get_logger().error(f'{c.label}{c.waiting}: waiting for the topic')
 
     def _load(self, c, urdf, source):
         if not self._told_compiling and not kernels_cached(crowd=len(self.characters) > 1):
@@ -292,6 +305,7 @@ class JacketClothNode(Node):
         c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
         for line in pipeline.sim.faults.rig:        # the rig's own, before any input
             self.get_logger().warning(c.label + line)
+        pipeline.recording_problem = self._recording_problem
         if self.recorder is not None:
             c.add_to_recording(self.recorder)
         keep_loaded_out_of_collections()
@@ -314,13 +328,24 @@ class JacketClothNode(Node):
     # -- parameters (jacket_cloth_node: its character's) --------------------------------------
     def _validate_parameters(self, params):
         for p in params:
+            # rclpy lets an empty name through as undeclared (its check tests names for truth).
+            if not self.has_parameter(p.name):
+                return SetParametersResult(successful=False,
+                                           reason=f'parameter {shown(p.name)} is not declared')
             if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
                 return SetParametersResult(successful=False,
                                            reason='wind must be 3 finite numbers [x, y, z]')
-            reason = check_value(p.name, p.value)
+            reason = check_value(p.name, p.value) or self._record_problem(p)
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
+
+    def _record_problem(self, p: Parameter) -> str:
+        """Why ``record`` cannot be set to ``p``'s path: a file or folder there, not ours now."""
+        if p.name != 'record' or not p.value or \
+                (p.value == self._record_asked and self.recorder is not None):
+            return ''
+        return overwrite_problem(p.value)
 
     def _apply_parameters(self, params):
         """Apply valid changes from the next step; they never reset the cloth."""
@@ -369,7 +394,13 @@ class JacketClothNode(Node):
     def _open_recorder(self, path):
         self._record_asked = path
         self._close_recorder(say=True)
+        self._recording_failed('')
         if not path:
+            return
+        problem = overwrite_problem(path)
+        if problem:
+            self._recording_failed(problem)
+            self.get_logger().error(f'{problem}; running without recording')
             return
         try:
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
@@ -378,6 +409,7 @@ class JacketClothNode(Node):
             self.get_logger().info(f'recording the session to {path}')
         except OSError as e:
             self.recorder = None
+            self._recording_failed(f'cannot record to {path!r} ({e})')
             self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
                                     'recording')
             return
@@ -391,9 +423,17 @@ class JacketClothNode(Node):
             return
         try:
             self.recorder.write(topic, data, stamp_ns)
-        except (OSError, ValueError) as e:
+        except (OSError, ValueError, struct.error) as e:
+            self._recording_failed(f'stopped by a write error ({e})')
             self.get_logger().error(f'recording stopped: {e}')
             self._close_recorder()
+
+    def _recording_failed(self, problem: str) -> None:
+        """Say in each character's diagnostics why the recording asked for is not written."""
+        self._recording_problem = problem
+        for c in self.characters:
+            if c.pipeline is not None:
+                c.pipeline.recording_problem = problem
 
     def _close_recorder(self, say=False):
         """Close the recording, if any; an error its writer met is one line, not the node's end."""
@@ -405,7 +445,12 @@ class JacketClothNode(Node):
             if say:                     # a live switch; at the node's end it goes unsaid
                 self.get_logger().info(f'recording closed: {recorder.path}')
         except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
-            self.get_logger().error(f'recording {recorder.path} closed with an error: {e}')
+            text = f'recording {recorder.path} closed with an error: {e}'
+            self._recording_failed(text.removeprefix('recording '))
+            if self.context.ok():
+                self.get_logger().error(text)
+            else:                       # stopping: rosout is gone, and rcl said so in a line
+                print(f'{self.program}: {text}', file=sys.stderr, flush=True)
 
     def _markers_wanted(self, publisher: 'Publisher') -> bool:
         """Tell whether markers due now have a reader: a subscriber or the recording.
@@ -432,12 +477,23 @@ class JacketClothNode(Node):
         """
         self._viewer_deliveries = Deliveries()
         for qos in (VIEWER_QOS, VIEWER_LIVE_QOS):
-            self.create_subscription(PointStamped, '~/viewer', self._on_viewer_delivery, qos,
-                                     raw=True, event_callbacks=NO_SUB_EVENTS)
+            latched = qos is VIEWER_QOS
+            self.create_subscription(
+                PointStamped, '~/viewer',
+                lambda raw, info, latched=latched: self._on_viewer_delivery(raw, info, latched),
+                qos, raw=True, event_callbacks=NO_SUB_EVENTS)
         return self.resolve_topic_name('~/viewer')
 
-    def _on_viewer_delivery(self, raw: bytes, info: dict) -> None:
-        """Take a ``~/viewer`` message once, whichever of its subscriptions brings it first."""
+    def _on_viewer_delivery(self, raw: bytes, info: dict, latched: bool = False) -> None:
+        """Take a ``~/viewer`` message once, whichever of its subscriptions brings it first.
+
+        A latched one stamped before the viewer taken is a latched publisher's old message,
+        delivered late (its history): dropped. Its live messages come on the volatile
+        subscription too, so they are taken whatever their stamps.
+        """
+        if latched and self._viewer is not None and \
+                0 < read_viewer(raw, '').stamp_ns < self._viewer[1]:
+            return
         if self._viewer_deliveries.first(info):
             self._on_viewer(raw)
 
@@ -535,6 +591,12 @@ class JacketClothNode(Node):
         """Diagnostics of each character whose inputs' own have not gone out for a period."""
         now = time.monotonic()
         for c in self.characters:
+            if c.pipeline is None and c.waiting:
+                out = messages.diagnostics(
+                    self.get_clock().now().nanoseconds, self._diagnostics_owner(c), {},
+                    messages.ERROR, f'no character: {c.waiting}; waiting for its topic')
+                self.diagnostics.publish(out)
+                continue
             if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
                 continue
             last = c.sim.last
@@ -543,6 +605,20 @@ class JacketClothNode(Node):
             self.diagnostics.publish(out)
             c.diag_wall = now
             self._record(self._topics['diagnostics'][0], out, stamp_ns)
+
+
+def overwrite_problem(path: str) -> str:
+    """Why the node will not record to ``path``: something is there already ('' if not).
+
+    A recording is never overwritten: a dump of an earlier session's parameters holds its
+    ``record``, and starting from it wiped that session.
+
+    :param path: the ``record`` value asked for.
+    """
+    if os.path.lexists(path):
+        return (f'record: {path!r} exists (the node never overwrites a recording): move it '
+                'or choose another path')
+    return ''
 
 
 def main(args: list[str] | None = None) -> int:
@@ -556,6 +632,10 @@ def main(args: list[str] | None = None) -> int:
         description='Jacket and hood secondary motion: subscribes joint_states '
         '(sensor_msgs/JointState), publishes bones on /tf, ~/markers and /diagnostics. '
         'Parameters are set with --ros-args -p name:=value (see README).')
+    problem = ros_args_problem(argv)
+    if problem:                 # rcl's own error is a traceback
+        print(f'jacket_cloth_node: {problem}', file=sys.stderr)
+        return 1
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     return run('jacket_cloth_node', JacketClothNode, argv, crowd=False)
 
@@ -591,6 +671,10 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
     node = None
     try:
         node = make_node()
+        problem = params_file_for_another_node(argv, node.get_fully_qualified_name())
+        if problem:
+            print(f'{program}: {problem}', file=sys.stderr)
+            return 1
         signals.running()
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

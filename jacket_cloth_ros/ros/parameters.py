@@ -1,6 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The node's parameters: names, types, ranges and descriptions in one table."""
 
+import os
+import sys
 from dataclasses import fields
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -66,6 +68,11 @@ NODE_PARAMETERS = {
                            'default), zstd (smaller files) or none'),
 }
 
+
+MIN_MARKERS_RATE = 0.01
+# The longest frame_prefix, world_frame or world_joint taken.
+MAX_NAME = 256
+_NAMES = ('frame_prefix', 'world_frame', 'world_joint')
 
 # Old names: refused with a hint, never taken for another parameter. ``fabric`` was the preset
 # and also the prefix of ``fabric.*``, which ros2 param dump cannot write.
@@ -147,6 +154,12 @@ def check_value(name: str, value: object) -> str:
         return f'{name} {reason}' if reason else ''
     if name == 'record_compression' and str(value).upper() not in Compression.__members__:
         return f'record_compression must be one of {", ".join(Compression.names())}'
+    if name == 'markers_rate' and 0 < value < MIN_MARKERS_RATE:
+        # Its period must be a number of nanoseconds: 1e-300 Hz made it infinite.
+        return f'markers_rate must be 0 (off) or at least {MIN_MARKERS_RATE} Hz'
+    if name in _NAMES and len(value) > MAX_NAME:
+        # Each /tf carries the prefix once per bone: a megabyte one made each message 68 MB.
+        return f'{name} is {len(value)} characters long (at most {MAX_NAME})'
     if name == 'frame_prefix' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     if name in ('world_joint', 'world_frame') and not value:
@@ -179,7 +192,10 @@ def unknown_reason(name: str, known: object, node: str) -> str:
         return f'parameter {name}: renamed {RENAMED[name]} (set {RENAMED[name]} instead)'
     if '.' in name and name.partition('.')[0] in known:
         return f'parameter {name}: {name.partition(".")[0]} is not a group of parameters'
-    return f'parameter {name}: not a parameter of {node} (the README lists them)'
+    import difflib
+    near = difflib.get_close_matches(name, sorted(known), n=1)
+    hint = f'did you mean {near[0]}? ' if near else ''
+    return f'parameter {name}: not a parameter of {node} ({hint}the README lists them)'
 
 
 def from_recording(values: dict) -> dict:
@@ -229,6 +245,91 @@ def params_file_problem(argv: list[str]) -> str:
                     'would keep the last one only)')
         except (OSError, yaml.YAMLError):
             continue
+    return ''
+
+
+def params_file_for_another_node(argv: list[str], node: str) -> str:
+    """Say which ``--params-file`` in ``argv`` holds nothing for ``node`` (its full name), or ''.
+
+    rcl applies a file's sections whose node name (wildcards ``*`` and ``**``) matches, and
+    skips the rest without a word: a file written for another node set nothing.
+
+    :param argv: the process's arguments.
+    :param node: the node's full name (``/namespace/name``).
+    """
+    import re
+    import yaml
+    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
+    for flag, path in zip(ros, ros[1:]):
+        if flag != '--params-file':
+            continue
+        try:
+            with open(path, encoding='utf-8') as f:
+                data = yaml.safe_load(f)
+        except (OSError, yaml.YAMLError):
+            continue            # rcl has said what it cannot read
+        keys = [str(k) for k in data] if isinstance(data, dict) else []
+        for key in keys:
+            tokens = [t for t in key.split('/') if t]
+            pattern = ''.join('(/[^/]+)*' if t == '**' else '/[^/]+' if t == '*' else
+                              '/' + re.escape(t) for t in tokens)
+            if re.fullmatch(pattern, node):
+                break
+        else:
+            listed = ', '.join(k[:80] for k in keys[:5]) or 'none'
+            return (f'--params-file {path}: no section for {node} (its node names: {listed}; '
+                    '/** is every node)')
+    return ''
+
+
+def ros_args_problem(argv: list[str]) -> str:
+    """Say which ``--ros-args`` argument rcl cannot parse (it raises a traceback), or ''.
+
+    rcl reads a ``-p`` value as YAML: a URDF given as ``-p robot_description:=...`` often is
+    no YAML, and an empty value (``-p world_joint:=``) is refused too.
+
+    :param argv: the process's arguments.
+    """
+    ros = argv[argv.index('--ros-args') + 1:] if '--ros-args' in argv else []
+    if not _rcl_refuses(ros):
+        return ''
+    for flag, value in zip(ros, ros[1:]):
+        if flag in ('-p', '--param') and _rcl_refuses([flag, value]):
+            name, _, given = value.partition(':=')
+            if name == 'robot_description':
+                return ('-p robot_description: rcl reads a -p value as YAML, and this URDF is '
+                        'none: publish it on the robot_description topic (as '
+                        'robot_state_publisher does) or set it in a --params-file')
+            return (f'-p {name[:80]}: rcl cannot read ' +
+                    ('an empty value' if not given else f'{given[:40]!r} as a YAML value') +
+                    ' (quote a text value: -p \'name:="text"\')')
+        if flag == '--params-file' and _rcl_refuses([flag, value]):
+            reason = _rcl_refuses([flag, value]).partition('Error: ')[2].partition(', at ')[0]
+            return f'--params-file {value}: rcl cannot read it ({reason or "not a params file"})'
+    reason = _rcl_refuses(ros)
+    reason = reason.partition('Failed to parse ROS arguments: ')[2] or reason
+    return f'--ros-args: rcl cannot read them ({reason.partition(", at ")[0][:200]})'
+
+
+def _rcl_refuses(args: list[str]) -> str:
+    """Return rcl's error for ``--ros-args`` ``args`` on one line, or '' if it takes them.
+
+    Its C side writes lines of its own on the process's stderr (an error string cut): they
+    go to /dev/null while it tries, so the user reads one line.
+    """
+    from rclpy.impl.implementation_singleton import rclpy_implementation as impl
+    from rclpy.utilities import remove_ros_args
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, 'w') as null:
+            os.dup2(null.fileno(), 2)
+        remove_ros_args(['node', '--ros-args', *args])
+    except (impl.RCLInvalidROSArgsError, impl.UnknownROSArgsError) as e:
+        return ' '.join(str(e).split())
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
     return ''
 
 

@@ -96,12 +96,17 @@ class SessionPipeline:
         self.undecodable = 0        # JointStates that did not decode (the node counts them)
         self.lost = 0               # JointStates their publisher numbered that never arrived
         self.last_reset_reason = ''
+        # Why the recording the values name is not being written ('' when it is, or none):
+        # the live node's, set when its file fails to open or a write fails.
+        self.recording_problem = ''
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         self._costs = []
         self._latencies = []
-        self._last_marker = None
-        self._last_diag = None
+        # The grid each periodic output is due on, per clock the stamps come on (most recent
+        # first): two sources on different clocks each keep the rate, not every input.
+        self._marker_clocks = []
+        self._diag_clocks = []
         self._finite = False        # the last accounted input's bones (account_tf)
         self._marker_reset = True
         # Asked when markers are due; False: not built this time (the live nodes: no
@@ -236,18 +241,35 @@ class SessionPipeline:
             return []
         out = []
         rate = self.values['markers_rate']
-        if self._finite and rate > 0 and _due(self._last_marker, stamp_ns, rate):
-            self._last_marker = self._phased(self._last_marker, stamp_ns, rate)
+        if self._finite and rate > 0 and self._due(self._marker_clocks, stamp_ns, rate):
             if self.markers_wanted is None or self.markers_wanted():
                 out.append(('markers', messages.marker_array(
                     self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset)))
                 self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
-        if _due(self._last_diag, stamp_ns, self.values['diagnostics_rate']):
-            self._last_diag = self._phased(self._last_diag, stamp_ns,
-                                           self.values['diagnostics_rate'])
+        if self._due(self._diag_clocks, stamp_ns, self.values['diagnostics_rate']):
             out.append(('diagnostics', self._diagnostics(stamp_ns)))
         return out
+
+    def _due(self, clocks: list, stamp_ns: int, rate: float) -> bool:
+        """Tell whether an output at ``rate`` is due at ``stamp_ns``; if so, step its grid.
+
+        ``clocks``: the last due stamp of each clock seen lately, most recent first. A stamp is
+        on the clock it follows most closely (within the reset gap, or two periods); else a
+        stamp ahead of the latest continues it (a gap keeps the phase), and one behind every
+        clock starts a new one, due at once (a restarted source), as does the first.
+        """
+        period = 1e9 / rate
+        span = max(self.values['reset_gap'] * 1e9, 2 * period)
+        ahead = [(stamp_ns - last, k) for k, last in enumerate(clocks)
+                 if 0 <= stamp_ns - last <= span]
+        k = min(ahead)[1] if ahead else 0 if clocks and stamp_ns >= clocks[0] else None
+        last = None if k is None else clocks.pop(k)
+        # 5% slack: stamps rounded to whole ns must not turn every 2nd input into every 3rd.
+        due = last is None or stamp_ns - last >= 0.95 * period
+        clocks.insert(0, self._phased(last, stamp_ns, rate) if due else last)
+        del clocks[_CLOCKS:]
+        return due
 
     def _phased(self, last, stamp_ns, rate):
         """Return the stamp the next period counts from, on this pipeline's grid of periods.
@@ -307,6 +329,8 @@ class SessionPipeline:
         if w['dropped'] and not w['accepted']:
             return messages.ERROR, 'every input dropped'
         problems = []
+        if self.recording_problem:
+            problems.append(f'recording failed: {self.recording_problem}')
         if slow:
             problems.append('step cost above one step of real time')
         if w['resets']:
@@ -347,13 +371,16 @@ class SessionPipeline:
             'sim_steps': sim.steps_total,
             'lod_level': sim.lod.level,
             'viewer_distance_m': self._viewer_distance(),
-            'recording': self.values['record'],
+            'recording': (f'failed: {self.recording_problem}' if self.recording_problem
+                          else self.values['record']),
         })
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)
         return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
 
 
+# Clocks a pipeline's periodic outputs keep a grid for (sources on different clocks).
+_CLOCKS = 4
 # What the inputs since the last diagnostics did, for its level.
 _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
 
@@ -381,11 +408,6 @@ def spread_phase(index: int) -> float:
     :param index: the character's place in the crowd, from 0.
     """
     return 0.9 * ((index * 0.6180339887498949) % 1.0)
-
-
-def _due(last, stamp_ns, rate):
-    # 5% slack: stamps rounded to whole ns must not turn every 2nd input into every 3rd.
-    return last is None or stamp_ns - last >= 0.95e9 / rate or stamp_ns < last
 
 
 class CrowdPipeline:

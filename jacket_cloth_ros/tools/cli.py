@@ -12,6 +12,7 @@ import sys
 import time
 from typing import TYPE_CHECKING
 
+from .. import signals
 from ..core.config import ConfigError, shipped
 from ..core.rig import load_rig
 from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
@@ -70,14 +71,14 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 
 def _check_clip_fits(clip, skeleton, urdf_path):
-    """Refuse a clip none of whose joints the skeleton has; name those it lacks."""
+    """Say in one line which of the clip's joints the skeleton lacks (all: only the root moves)."""
     moved = clip_joints(clip)
     missing = sorted(moved - set(skeleton.joint_names))
     if len(missing) == len(moved):
-        raise ToolError(f'the clip {clip!r} moves joints {", ".join(sorted(moved))}; '
-                        f'{urdf_path} has none of them, so only its root would move (play a '
-                        'recording of this character with `jacket_cloth play`)')
-    if missing:
+        print(f'jacket_cloth motion: the clip {clip!r} moves joints {", ".join(sorted(moved))}; '
+              f'{urdf_path} has none of them, so only its root moves (`jacket_cloth play` '
+              'plays a recording of this character)', file=sys.stderr)
+    elif missing:
         print(f'jacket_cloth motion: {urdf_path} lacks {len(missing)} of the {len(moved)} '
               f'joints the clip {clip!r} moves: {", ".join(missing)}', file=sys.stderr)
 
@@ -288,8 +289,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     # The ROS arguments go to both, so a namespace or a remap keeps them talking.
     node = subprocess.Popen(
-        [sys.executable, '-m', 'jacket_cloth_ros.ros.node', *args.ros_args, '--ros-args',
-         '-p', f'record:={session}'])
+        [*signals.node_command(), *args.ros_args, '--ros-args', '-p', f'record:={session}'])
     try:
         time.sleep(2.0)
         if node.poll() is not None:
@@ -431,7 +431,7 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
     d.add_argument('--out', default='out/demo')
     d.add_argument('--domain-id', type=int, default=42,
-                   help='ROS_DOMAIN_ID if not set (tests use 60-100)')
+                   help='ROS_DOMAIN_ID if not set (tests use 20-123)')
     d.set_defaults(func=cmd_demo)
     f = sub.add_parser('picture', help='filmstrip PNG of a recorded session')
     f.add_argument('input')
