@@ -178,7 +178,7 @@ def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
         'max_vertical_stretch': worst_stretch,
         'hem_offset_end_m': float(np.linalg.norm(sim.x[hem] - ref[hem], axis=1).mean()),
         'resets': sim.resets,
-        'overruns': sim.overruns,
+        'overruns': sim.faults.overruns,
     }
     if nonfinite or not np.isfinite(sim.x).all():
         verdict = 'non-finite'

@@ -137,7 +137,7 @@ def test_no_compiled_function_takes_more_than_ten_parameters():
 
 def test_a_simulation_holds_its_model_tuning_and_state_once(make_sim):
     sim = make_sim()
-    assert len(vars(sim)) <= 21, sorted(vars(sim))     # 21: its faults (issue 35)
+    assert len(vars(sim)) <= 20, sorted(vars(sim))
     # The cloth is the state's very array: a write through either is seen by both and by
     # the compiled step, and assigning one writes into it rather than replacing it.
     x = sim.state.x

@@ -18,7 +18,7 @@ def test_fixed_step_interpolates_and_caps_steps(make_sim, rest_input):
     # A 0.5 s hitch would be 60 steps: capped at 12, the rest skipped, not queued.
     r = sim.process(1_533_333_334, names, pos)
     assert (r.steps, r.skipped_steps) == (12, 48)
-    assert sim.overruns == 1
+    assert sim.faults.overruns == 1
 
 
 def test_same_motion_at_30_60_120_hz_input_agrees_within_1cm(make_sim):

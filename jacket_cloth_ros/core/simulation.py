@@ -153,6 +153,7 @@ class Faults:
     """What a simulation found wrong beyond one input's warnings (issue 35 item 5)."""
 
     nonfinite: int = 0              # inputs whose bones were not finite (check_bones)
+    overruns: int = 0               # inputs whose steps were capped (max_steps_per_input)
     rig: list = field(default_factory=list)     # the rig's, at load and at the first input
 
 
@@ -216,7 +217,6 @@ class JacketSimulation:
         self.resets = 0
         self.faults = Faults()
         self.steps_total = 0
-        self.overruns = 0
         # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
         # new input or reset drops them.
         self.ready_bones = None
@@ -586,7 +586,7 @@ class JacketSimulation:
         cap = self.params.max_steps_per_input
         if n > cap:
             report.skipped_steps = n - cap
-            self.overruns += 1
+            self.faults.overruns += 1
             self.t_sim += (n - cap) * self.dt_ns
             n = cap
         if n <= 0:

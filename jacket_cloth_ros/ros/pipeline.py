@@ -358,7 +358,7 @@ class SessionPipeline:
         self._costs = []
         self._latencies = []
         values.update({
-            'overruns': sim.overruns,
+            'overruns': sim.faults.overruns,
             'resets': sim.resets,
             'nonfinite_inputs': sim.faults.nonfinite,
             'last_reset': self.last_reset_reason,
