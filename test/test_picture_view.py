@@ -98,3 +98,15 @@ def test_a_walk_by_the_urdfs_own_joints_stays_in_frame(tmp_path):
     png = tmp_path / 'strip.png'
     draw_filmstrip(frames, skeleton, str(png), frames[0].stamp_ns, world_axes=rig.world_axes)
     assert png.stat().st_size > 10_000
+
+
+def test_the_input_nearest_a_marker_is_found_by_search_as_by_a_scan():
+    # Issue 38 item 19: a scan of every input per marker made pictures quadratic in length.
+    from jacket_cloth_ros.tools.picture import _nearest
+    rng = np.random.default_rng(7)
+    stamps = np.sort(rng.integers(0, 10 ** 6, 500))
+    stamps[100:110] = stamps[100]                         # a repeated stamp
+    for t in list(rng.integers(-10, 10 ** 6 + 10, 2000)) + [int(stamps[100]), -5, 2 * 10 ** 6]:
+        k = _nearest(stamps, int(t))
+        assert abs(stamps[k] - t) == np.abs(stamps - t).min()
+        assert k == int(np.argmin(np.abs(stamps - t)))      # the first of a tie, as min gives

@@ -32,9 +32,11 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
     :param max_frames: at most this many frames, evenly chosen over the session.
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
-    frames, t0 = recorded_frames(mcap_path, skeleton, rig)
-    if len(frames) > max_frames:
-        frames = [frames[k] for k in np.linspace(0, len(frames) - 1, max_frames).astype(int)]
+
+    def evenly(log_times, t0):
+        n = len(log_times)
+        return range(n) if n <= max_frames else np.linspace(0, n - 1, max_frames).astype(int)
+    frames, t0 = recorded_frames(mcap_path, skeleton, rig, evenly)
     axes_world = WORLD_AXES if rig is None else rig.world_axes
     centre = body_link(skeleton)
     across, upward = view_limits(skeleton, axes_world, centre)

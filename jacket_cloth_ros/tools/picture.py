@@ -33,7 +33,7 @@ from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
-from ..recording.reader import read_messages  # noqa: E402
+from ..recording.reader import read_recording  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
@@ -137,60 +137,96 @@ def _stamp(msg):
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
-def recorded_frames(mcap_path: str, skeleton: 'Skeleton',
-                    rig: 'Rig | None' = None) -> tuple[list[Frame], int]:
-    """Frames at every recorded MarkerArray with a mesh; the skeleton from the nearest input.
+def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = None,
+                    choose: Callable[[np.ndarray, int], Sequence[int]] | None = None
+                    ) -> tuple[list[Frame], int]:
+    """Frames at recorded MarkerArrays with a mesh; the skeleton from the nearest input.
+
+    Only the markers drawn are decoded, and only the markers and inputs are read: decoding
+    every MarkerArray of a long session took minutes, and its /tf is most of its bytes.
 
     :param mcap_path: the recording.
     :param skeleton: its character.
     :param rig: its rig, for the skinned hem and hood; None: not drawn.
+    :param choose: ``choose(log_times, t0)`` gives the indices of the markers to draw, from
+        their log times (ns) and the first JointState's stamp; one without a mesh gives the
+        next that has one. None: every marker.
     :returns: the frames and the first JointState's stamp (ns).
     """
-    messages, _ = read_messages(mcap_path)
+    listed = read_recording(mcap_path, ('',))
+    wanted = [t for t, kind in listed.topics.items()
+              if kind.endswith('MarkerArray') or kind.endswith('JointState')]
+    messages = read_recording(mcap_path, wanted).messages
     states = [deserialize_message(m.data, JointState) for m in messages
               if m.type_name.endswith('JointState')]
+    markers = [m for m in messages if m.type_name.endswith('MarkerArray')]
+    if not markers or not states:
+        raise ValueError(f'{mcap_path}: no markers or JointState to draw')
+    t0 = _stamp(states[0])
+    log_times = np.array([m.log_time for m in markers], dtype=np.int64)
+    chosen = range(len(markers)) if choose is None else choose(log_times, t0)
     parser = InputParser(skeleton)
     sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket')) if rig else None
-    out = []
-    for m in messages:
-        if not m.type_name.endswith('MarkerArray'):
-            continue
-        arr = deserialize_message(m.data, MarkerArray)
-        found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
-        if ('cloth', 0) not in found or ('hood', 0) not in found:
-            continue
-        pts = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
-        bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
-        js = min(states, key=lambda s: abs(_stamp(s) - m.log_time))
-        sample = parser.parse(_stamp(js), js.name, js.position)
-        poses = skeleton.forward(sample.q)
-        frame = Frame(m.log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
-                      poses[:, :3, 3], root=sample.root)
-        if sim is not None:
-            sim.links = poses          # the skinned pose of this skeleton pose
-            skinned = sim_frame(sim, m.log_time)
-            frame.hem_ref, frame.hood_ref = skinned.hem_ref, skinned.hood_ref
-        out.append(frame)
-    if not out or not states:
+    # The input nearest each marker's time, by a search in the sorted stamps: a scan of every
+    # input per marker made a long session's picture quadratic in its length.
+    order = sorted(range(len(states)), key=lambda k: _stamp(states[k]))
+    stamps = np.array([_stamp(states[k]) for k in order], dtype=np.int64)
+    out, drawn = [], set()
+    for first in chosen:
+        for k in range(first, len(markers) if choose else first + 1):   # the next with a mesh
+            if k in drawn:
+                break
+            m = markers[k]
+            frame = _marker_frame(m, states[order[_nearest(stamps, m.log_time)]], parser,
+                                  skeleton, sim)
+            if frame is not None:
+                out.append(frame)
+                drawn.add(k)
+                break
+    if not out:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
-    return out, _stamp(states[0])
+    return out, t0
 
 
-def pick(frames: list[Frame], t0: int, times: Sequence[float] | None = None,
-         moments: int = 6) -> list[Frame]:
-    """Frames nearest ``times`` (s after t0), or ``moments`` evenly spaced ones.
+def _marker_frame(m, js, parser, skeleton, sim):
+    """Return the frame of one recorded MarkerArray, None if it has no cloth mesh or hood."""
+    arr = deserialize_message(m.data, MarkerArray)
+    found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
+    if ('cloth', 0) not in found or ('hood', 0) not in found:
+        return None
+    pts = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+    bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
+    sample = parser.parse(_stamp(js), js.name, js.position)
+    poses = skeleton.forward(sample.q)
+    frame = Frame(m.log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
+                  poses[:, :3, 3], root=sample.root)
+    if sim is not None:
+        sim.links = poses          # the skinned pose of this skeleton pose
+        skinned = sim_frame(sim, m.log_time)
+        frame.hem_ref, frame.hood_ref = skinned.hem_ref, skinned.hood_ref
+    return frame
 
-    :param frames: the frames, in time order.
-    :param t0: the recording's start, ns.
-    :param times: the instants, s after ``t0``; None: evenly spaced ones.
-    :param moments: how many evenly spaced frames, without ``times``.
+
+def _nearest(stamps: np.ndarray, t: int) -> int:
+    """Return the index of the sorted ``stamps`` nearest ``t`` (the first of a tie)."""
+    k = int(np.searchsorted(stamps, t))
+    if k == len(stamps) or (k > 0 and t - stamps[k - 1] <= stamps[k] - t):
+        k = int(np.searchsorted(stamps, stamps[k - 1]))      # a repeated stamp's first
+    return k
+
+
+def moments_at(times: Sequence[float] | None = None,
+               moments: int = 6) -> Callable[[np.ndarray, int], list[int]]:
+    """Return a ``choose`` for :func:`recorded_frames`: the markers nearest ``times``.
+
+    :param times: the instants, s after the first JointState; None: evenly spaced ones.
+    :param moments: how many evenly spaced markers, without ``times``.
     """
-    if times is None:
-        picks = np.linspace(0, len(frames) - 1, moments + 2)[1:-1].astype(int)
-    else:
-        stamps = np.array([f.stamp_ns for f in frames])
-        picks = [int(np.argmin(np.abs(stamps - (t0 + t * 1e9)))) for t in times]
-    return [frames[k] for k in picks]
+    def choose(log_times: np.ndarray, t0: int) -> list[int]:
+        if times is None:
+            return [int(k) for k in np.linspace(0, len(log_times) - 1, moments + 2)[1:-1]]
+        return [int(np.argmin(np.abs(log_times - (t0 + t * 1e9)))) for t in times]
+    return choose
 
 
 def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
@@ -284,8 +320,7 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
     :param times: the instants, s from its start; None: evenly spaced ones.
     :param rig: its rig: the skinned pose is drawn too; None: not.
     """
-    frames, t0 = recorded_frames(mcap_path, skeleton, rig)
-    chosen = pick(frames, t0, times, moments)
+    chosen, t0 = recorded_frames(mcap_path, skeleton, rig, moments_at(times, moments))
     draw_filmstrip(chosen, skeleton, png_path, t0, labels, title,
                    rig.world_axes if rig is not None else None)
     return [f.stamp_ns for f in chosen]
