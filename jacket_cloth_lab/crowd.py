@@ -27,7 +27,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from jacket_cloth_lab import crowd_intake
+from jacket_cloth_lab import crowd_intake, lab_domain
 from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 
 RATE = 120.0
@@ -249,7 +249,7 @@ def tf_batching(n: int = 64, repeat: int = 200) -> dict:
     crowd = TfTemplate([f'c{k}/{b}' for k in range(n) for b in names], ['spine'] * bones * n)
     all_poses = np.tile(poses, (n, 1))
     ctx = rclpy.Context()
-    rclpy.init(context=ctx, domain_id=160)
+    rclpy.init(context=ctx, domain_id=lab_domain('tf_batching'))
     node = rclpy.create_node('tf_batching', context=ctx)
     pub = node.create_publisher(TFMessage, '/tf', TF_QOS)
     node.create_subscription(TFMessage, '/tf', lambda m: None, TF_QOS, raw=True)
@@ -307,7 +307,7 @@ def crowd_bench(skeleton: Skeleton, quick: bool = False, seconds: float | None =
     # At least two diagnostics windows (about 1 s apart) after the warm-up, whatever their
     # phase: 1.5 s gave one now and then, and a run with one window counts as not answering.
     seconds = seconds or (2.5 if quick else 4.0)
-    domain = 140 + os.getpid() % 20       # clear of the tests' domains (20-123)
+    domain = lab_domain('crowd')
     one, every = {0}, set(range(os.cpu_count()))
     out = {'quick': quick, 'cores': os.cpu_count()}
     with tempfile.TemporaryDirectory() as tmp:

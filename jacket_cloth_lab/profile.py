@@ -28,6 +28,7 @@ import tempfile
 import time
 from typing import Callable, Dict, List
 
+from jacket_cloth_lab import lab_domain
 from jacket_cloth_ros.core.skeleton import Skeleton
 
 INPUT_RATE = 60.0
@@ -176,7 +177,7 @@ class _NodeIO:
         from tf2_msgs.msg import TFMessage
         from visualization_msgs.msg import MarkerArray
         self._context = rclpy.Context()
-        rclpy.init(context=self._context, domain_id=170 + os.getpid() % 20)
+        rclpy.init(context=self._context, domain_id=lab_domain('profile'))
         self._node = rclpy.create_node('profile', context=self._context)
         qos = QoSProfile(depth=len(raws))
         source = self._node.create_publisher(JointState, 'profile_joint_states', qos)

@@ -45,7 +45,7 @@ from jacket_cloth_ros.core.skeleton import (
     Skeleton, load_shipped_character, shipped_character_urdf)
 from .accuracy import clip_inputs
 from .bench import rig_at_grid
-from . import profile
+from . import lab_domain, profile
 from .crowd import chart as crowd_chart, crowd_bench, summary as crowd_summary
 
 # The C yardstick beside the repository (never copied in); JACKET_CLOTH_LIMIT names another.
@@ -370,7 +370,7 @@ def node_vs_floor(skeleton: Skeleton, seconds: float, kernel_us: float, record_d
     :param record_dir: where the node records its session (recording on, as the issue sets).
     :param rounds: how many rounds.
     """
-    domain = 190 + os.getpid() % 30
+    domain = lab_domain('crowd')          # the crowd part runs after this one
     node_cmd = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
                 '-p', f'record:={os.path.join(record_dir, "speed_session.mcap")}']
     floor_cmd = [sys.executable, '-m', 'jacket_cloth_lab.floor_node']
@@ -471,7 +471,7 @@ def endurance(skeleton: Skeleton, simulated_s: float, folder: str,
     from jacket_cloth_ros.motion.messages import joint_state_message
     path = os.path.join(folder, 'endurance.mcap')
     ctx = rclpy.Context()
-    rclpy.init(context=ctx, domain_id=161)
+    rclpy.init(context=ctx, domain_id=lab_domain('endurance'))
     urdf = shipped_character_urdf()
     node = JacketClothNode(context=ctx, parameter_overrides=[
         Parameter('record', value=path), Parameter('robot_description', value=urdf)])

@@ -12,18 +12,20 @@ os.environ['JACKET_CLOTH_CHECK_TYPES'] = '1'
 
 
 def _domain_band() -> int:
-    """Return the first of 13 DDS domains of our own (tests add 0 to 12), in 20 to 123.
+    """Return the first of 17 DDS domains of our own, in 20 to 223.
 
     One band per test run and per worker of it (pytest -n), so a demo, another run on the
-    machine or the other worker does not cross talk; the lab's benches use 140 and above.
+    machine or the other worker does not cross talk: tests add 0 to 12, the lab's live
+    parts take 13 to 16 (jacket_cloth_lab.lab_domain).
     """
     run = os.environ.get('PYTEST_XDIST_TESTRUNUID')
     key = int(run[:8], 16) if run else os.getpid()
     worker = int(os.environ.get('PYTEST_XDIST_WORKER', 'gw0')[2:])
-    return 20 + 13 * (2 * (key % 4) + worker % 2)
+    return 20 + 17 * (2 * (key % 6) + worker % 2)
 
 
 DOMAIN_ID = _domain_band()
+os.environ['JACKET_CLOTH_LAB_DOMAIN'] = str(DOMAIN_ID + 13)
 
 from jacket_cloth_ros.core.fabric import load_fabric  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402

@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import pytest
+from conftest import DOMAIN_ID
 
 # In a fresh process on the cache `warm` filled: the node's pipeline on the shipped character,
 # every output of a few inputs, then every kernel's compile misses counted.
@@ -48,7 +49,7 @@ def test_ctrl_c_while_the_node_compiles_is_one_line_and_a_prompt_exit(tmp_path):
     # It compiled inside an executor callback: Ctrl-C shut the context down, the compile ran
     # on for half a minute and the node ended in a traceback.
     # Signalled once it says it compiles: an event, not a guess at how long imports take.
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), ROS_DOMAIN_ID='97')
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path), ROS_DOMAIN_ID=str(DOMAIN_ID + 1))
     node = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros.ros.node'], env=env,
                             stderr=subprocess.PIPE, text=True)
     said = node.stderr.readline()
@@ -71,8 +72,8 @@ def test_a_signal_while_the_node_imports_is_one_line_and_its_exit_code(stop):
     # process (an event: its memory map), so while it imports or starts, never before the
     # entry point's handler is in.
     node = subprocess.Popen([_executable('jacket_cloth_node')],
-                            env=dict(os.environ, ROS_DOMAIN_ID='96'), stderr=subprocess.PIPE,
-                            text=True)
+                            env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2)),
+                            stderr=subprocess.PIPE, text=True)
     try:
         _wait_for_library(node.pid, '_multiarray_umath')
         node.send_signal(stop)
@@ -89,8 +90,8 @@ def test_a_second_ctrl_c_while_the_node_stops_is_ignored():
     # ros2 launch forwards the terminal's Ctrl-C that the node got too: the second one, in the
     # node's clean-up, was a KeyboardInterrupt traceback and exit -2.
     node = subprocess.Popen([_executable('jacket_cloth_node')],
-                            env=dict(os.environ, ROS_DOMAIN_ID='95'), stderr=subprocess.PIPE,
-                            text=True)
+                            env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 3)),
+                            stderr=subprocess.PIPE, text=True)
     try:
         for line in node.stderr:
             if 'from the shipped character' in line:
@@ -145,10 +146,13 @@ def test_the_demos_node_is_guarded_from_its_start(tmp_path, monkeypatch):
         started.append(command)
         raise Started
     monkeypatch.setattr(cli, 'subprocess', argparse.Namespace(Popen=popen))
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN_ID + 4))    # demo sets it for its node
     with pytest.raises(Started):
-        cli.cmd_demo(argparse.Namespace(out=str(tmp_path), domain_id=94, ros_args=[]))
+        cli.cmd_demo(argparse.Namespace(out=str(tmp_path), domain_id=DOMAIN_ID + 4,
+                                        ros_args=[]))
     assert started[0][-3:-1] == ['--ros-args', '-p']
-    node = subprocess.Popen(started[0][:-3], env=dict(os.environ, ROS_DOMAIN_ID='94'),
+    node = subprocess.Popen(started[0][:-3],
+                            env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 4)),
                             stderr=subprocess.PIPE, text=True)
     try:
         _wait_for_library(node.pid, '_multiarray_umath')
