@@ -4,6 +4,7 @@
 import math
 import os
 import reprlib
+import stat
 
 import yaml
 
@@ -75,6 +76,32 @@ def config_dir() -> str:
     except Exception:  # noqa: BLE001 - no ament index: fall through to the clear error below
         pass
     raise ConfigError('cannot find the jacket_cloth_ros config folder')
+
+
+_KINDS = ((stat.S_ISFIFO, 'a FIFO'), (stat.S_ISDIR, 'a folder'), (stat.S_ISCHR, 'a device'),
+          (stat.S_ISBLK, 'a device'), (stat.S_ISSOCK, 'a socket'))
+
+
+def regular_file_or_refuse(path: str | os.PathLike, what: str = '',
+                           must_exist: bool = True) -> None:
+    """Raise ConfigError unless ``path`` is a regular file (or a link to one), never opening it.
+
+    A FIFO blocks its opener until a peer comes, a device or a folder never reads as a file:
+    only os.stat looks at them. ``what`` (e.g. 'rig') starts the one-line message; a missing
+    path is refused only if ``must_exist`` (an output about to be made).
+    """
+    where = f'{what} {os.fspath(path)}' if what else os.fspath(path)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if not must_exist:
+            return
+        raise ConfigError(f'{where}: no such file') from None
+    except OSError as e:
+        raise ConfigError(f'{where}: cannot read ({e.strerror})') from None
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS if test(mode)), 'not a plain file')
+        raise ConfigError(f'{where}: {kind}, not a regular file')
 
 
 def shipped(name: str) -> str:

@@ -6,6 +6,7 @@ A recording is a plain ``.mcap`` file or a rosbag2 bag directory with MCAP stora
 """
 
 import hashlib
+import io
 import os
 import struct
 import zlib
@@ -13,14 +14,34 @@ from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import yaml
-from mcap.reader import make_reader
-from mcap.records import Channel, Message, Metadata, Schema
-from mcap.stream_reader import CRCValidationError, StreamReader
+from mcap.data_stream import ReadDataStream
+from mcap.opcode import Opcode
+from mcap.records import Channel, Metadata, Schema
 
-from ..core.config import MAX_YAML_BYTES, bounded_load
+from ..core.config import MAX_YAML_BYTES, ConfigError, bounded_load, regular_file_or_refuse
+
+try:
+    import lz4.frame
+except ImportError:             # the codecs are optional, as in the mcap package
+    lz4 = None
+try:
+    import zstandard
+except ImportError:
+    zstandard = None
 
 MAGIC = b'\x89MCAP0\r\n'
 _FOOTER_SIZE = 1 + 8 + 8 + 8 + 4        # opcode, length, summary start, offsets start, CRC
+_FOOTER_START = struct.pack('<BQ', Opcode.FOOTER, 20)
+_RECORD_HEAD = struct.Struct('<BQ')     # opcode, length
+_MESSAGE_HEAD = struct.Struct('<HIQQ')  # channel, sequence, log time, publish time
+_CHUNK_FIELDS = struct.Struct('<QQQI')  # start, end, uncompressed size, uncompressed CRC
+# A chunk's records decompressed, and any record read whole: the node's chunks close at a
+# few MB (writer.py); this bounds what a file's claims can make the reader allocate.
+MAX_CHUNK_BYTES = 256 << 20
+MAX_RECORD_BYTES = MAX_CHUNK_BYTES + 4096
+_READ = {Opcode.HEADER, Opcode.SCHEMA, Opcode.CHANNEL, Opcode.MESSAGE, Opcode.CHUNK,
+         Opcode.METADATA, Opcode.DATA_END, Opcode.FOOTER}
+_IN_CHUNKS = {Opcode.SCHEMA, Opcode.CHANNEL, Opcode.MESSAGE}
 
 
 class RecordingError(ValueError):
@@ -74,6 +95,13 @@ def mcap_files(path: str) -> list[str]:
         files = sorted(os.path.join(path, p) for p in os.listdir(path) if p.endswith('.mcap'))
     if not files:
         raise RecordingError(f'{path}: a directory without .mcap files')
+    seen = {}
+    for one in files:           # by real path: a link or ../ naming a listed file again too
+        real = os.path.realpath(one)
+        if real in seen:
+            raise RecordingError(f'{meta}: lists {seen[real]} twice (as {one}); each file of '
+                                 'a bag is read once')
+        seen[real] = one
     return files
 
 
@@ -121,100 +149,230 @@ def read_messages(path: str,
 
 
 def _read_file(path, topics, out):
-    try:
-        f = open(path, 'rb')
-    except OSError as e:
-        raise RecordingError(f'{path}: cannot open ({e.strerror})') from None
+    f = _open_recording(path)
     with f:
+        size = os.fstat(f.fileno()).st_size
         if f.read(8) != MAGIC:
             raise RecordingError(f'{path}: not an MCAP file')
-        f.seek(0)
-        reader = make_reader(f, validate_crcs=True)
+        scan = _Scan(f, size, topics, out)
         try:
-            summary = reader.get_summary()
-        except Exception:  # noqa: BLE001 - no footer or summary (cut short): stream it below
-            summary = None
-        if summary is not None and summary.chunk_indexes:
-            _check_summary_crc(f, path)
-            # A complete file: whatever fails from here on is damage, never "cut short".
-            try:
-                for schema, channel, message in reader.iter_messages(topics=topics,
-                                                                     log_time_order=False):
-                    out.messages.append(_recorded(schema, channel, message))
-                for channel in summary.channels.values():
-                    schema = summary.schemas.get(channel.schema_id)
-                    out.topics[channel.topic] = schema.name if schema else ''
-                for m in reader.iter_metadata():
-                    out.metadata[m.name] = dict(m.metadata)
-            except Exception as e:  # noqa: BLE001 - any kind means the same: a damaged file
-                raise _damaged(path, e) from None
-            return
-        _stream_file(f, path, topics, out)
+            scan.run()
+        except _Short as e:
+            if scan.finished:       # its footer is there: a finished file with a bad length
+                raise RecordingError(f'{path}: damaged file ({e}); nothing read') from None
+            out.complete = False    # a killed writer's file: its readable part is kept
+        except _Damage as e:
+            raise RecordingError(f'{path}: damaged file ({e}); nothing read') from None
 
 
-def _stream_file(f, path, topics, out):
-    """Read the records in order, telling a cut file from a damaged one.
-
-    A read that fails at the end of the file is a cut (a killed writer: its readable part is
-    kept), one that fails before it is damage.
-    """
-    size = os.fstat(f.fileno()).st_size
-    f.seek(0)
-    schemas, channels = {}, {}
+def _open_recording(path):
+    """Open a recording file for reading, refusing what is not a regular file unopened."""
     try:
-        for record in StreamReader(f, skip_magic=False, validate_crcs=True).records:
-            if isinstance(record, Schema):
-                schemas[record.id] = record
-            elif isinstance(record, Channel):
-                channels[record.id] = record
-                schema = schemas.get(record.schema_id)
-                out.topics[record.topic] = schema.name if schema else ''
-            elif isinstance(record, Metadata):
-                out.metadata[record.name] = dict(record.metadata)
-            elif isinstance(record, Message):
-                channel = channels.get(record.channel_id)
-                if channel is not None and (topics is None or channel.topic in topics):
-                    out.messages.append(_recorded(schemas.get(channel.schema_id), channel,
-                                                  record))
-    except Exception as e:  # noqa: BLE001 - a cut and damage raise alike; where tells them apart
-        if f.tell() < size:
-            raise _damaged(path, e) from None
-        out.complete = False
+        regular_file_or_refuse(path, 'recording')
+        return open(path, 'rb')
+    except OSError as e:
+        raise RecordingError(f'{path}: cannot open ({e.strerror})') from None
+    except ConfigError as e:
+        raise RecordingError(str(e)) from None
 
 
-def _check_summary_crc(f, path):
-    """Check the footer's CRC of the summary (MCAP spec); the mcap reader does not check it."""
-    f.seek(-(_FOOTER_SIZE + len(MAGIC)), os.SEEK_END)
-    footer_at = f.tell()
-    summary_start, _, crc = struct.unpack('<QQI', f.read(_FOOTER_SIZE)[9:])
-    if crc == 0 or not 0 < summary_start <= footer_at:
-        return
-    f.seek(summary_start)
-    actual = 0
-    left = footer_at + _FOOTER_SIZE - 4 - summary_start
-    while left > 0:
-        block = f.read(min(left, 1 << 20))
-        if not block:
-            break
-        actual = zlib.crc32(block, actual)
-        left -= len(block)
-    if actual != crc:
-        raise RecordingError(f'{path}: damaged file: its summary fails its CRC check; '
-                             'nothing read')
+class _Short(Exception):
+    """The file ends inside a record."""
 
 
-def _damaged(path, error):
-    if isinstance(error, CRCValidationError):
-        return RecordingError(f'{path}: damaged file: a chunk fails its CRC check (its bytes '
-                              'changed after it was written); nothing read')
+class _Damage(Exception):
+    """A record that no MCAP writer writes; the message is one line."""
+
+
+class _Scan:
+    """One pass over an MCAP file's records, in file order, bounded by the file's bytes.
+
+    Each record's length is checked against the bytes left before anything is read; a chunk
+    is decompressed to its declared size at most, itself at most MAX_CHUNK_BYTES, so the
+    memory beyond the messages kept is a record and a chunk.
+    """
+
+    def __init__(self, f, size, topics, out):
+        self.f, self.size, self.topics, self.out = f, size, topics, out
+        self.crc = zlib.crc32(MAGIC)            # of the data section, then of the summary
+        self.schemas, self.channels = {}, {}
+        self.finished = self._has_footer()
+
+    def _has_footer(self):
+        """Tell whether the file ends as a finished MCAP does: a footer record, the magic."""
+        if self.size < 2 * len(MAGIC) + _FOOTER_SIZE:
+            return False
+        self.f.seek(self.size - len(MAGIC) - _FOOTER_SIZE)
+        tail = self.f.read(_FOOTER_SIZE + len(MAGIC))
+        self.f.seek(len(MAGIC))
+        return tail[-len(MAGIC):] == MAGIC and tail[:9] == _FOOTER_START
+
+    def _read(self, n):
+        data = self.f.read(n)
+        if len(data) < n:
+            raise _Short(f'it ends inside a record at byte {self.f.tell()}')
+        return data
+
+    def _record(self, kinds):
+        """Return (opcode, head, body, offset) of the next record; the body only of ``kinds``.
+
+        Other records are read in blocks for the CRC only.
+        """
+        at = self.f.tell()
+        head = self._read(9)
+        opcode, length = _RECORD_HEAD.unpack(head)
+        if opcode == 0:
+            raise _Damage(f'a record of opcode 0 at byte {at}')
+        if length > self.size - at - 9:
+            raise _Short(f'a record at byte {at} runs past the end of the file')
+        self.crc = zlib.crc32(head, self.crc)
+        if opcode in kinds:
+            if length > MAX_RECORD_BYTES:
+                raise _Damage(f'a record of {length} bytes at byte {at}, over the '
+                              f'{MAX_RECORD_BYTES} one may hold here')
+            body = self._read(length)
+            self.crc = zlib.crc32(body, self.crc)
+            return opcode, head, body, at
+        while length:
+            block = self._read(min(length, 1 << 20))
+            self.crc = zlib.crc32(block, self.crc)
+            length -= len(block)
+        return opcode, head, None, at
+
+    def run(self):
+        """Read the data section into the recording, then check the summary and footer."""
+        first = self.f.read(1)
+        if not first:
+            raise _Short('it ends after its magic')
+        if first != bytes([Opcode.HEADER]):
+            raise _Damage('no header record after its magic')
+        self.f.seek(len(MAGIC))
+        self._record(_READ)
+        while True:
+            before = self.crc
+            opcode, _, body, at = self._record(_READ)
+            if opcode == Opcode.FOOTER:
+                raise _Damage(f'a footer at byte {at} before its data section ends')
+            try:
+                if opcode == Opcode.DATA_END:
+                    expected = struct.unpack_from('<I', body)[0]
+                    break
+                self._take(opcode, body)
+            except (_Damage, _Short):
+                raise
+            except Exception as e:  # noqa: BLE001 - a record that does not parse, of any kind
+                raise _Damage(f'a record at byte {at} does not parse ({_text(e)})') from None
+        if expected and expected != before:
+            raise _Damage('its data section fails its CRC check')
+        self._summary()
+
+    def _summary(self):
+        """Walk the summary's records to the footer; check its offsets, CRC and the end."""
+        start = self.f.tell()
+        self.crc = 0
+        opcode = None
+        while opcode != Opcode.FOOTER:
+            before = self.crc
+            opcode, head, body, at = self._record({Opcode.FOOTER})
+        if len(body) != 20:
+            raise _Damage(f'its footer at byte {at} is {len(body)} bytes, not 20')
+        summary_start, _, crc = struct.unpack('<QQI', body)
+        if summary_start not in (0, start):
+            raise _Damage(f'its footer puts the summary at byte {summary_start}, not {start}')
+        if crc and crc != zlib.crc32(body[:16], zlib.crc32(head, before)):
+            raise _Damage('its summary fails its CRC check')
+        if self.f.read(len(MAGIC) + 1) != MAGIC:
+            raise _Damage('its footer is not followed by the closing magic alone')
+
+    def _take(self, opcode, body):
+        if opcode == Opcode.CHUNK:
+            for inner, record in _chunk_records(body):
+                if inner in _IN_CHUNKS:
+                    self._take(inner, record)
+        elif opcode == Opcode.MESSAGE:
+            channel_id, _, log_time, _ = _MESSAGE_HEAD.unpack_from(body)
+            channel = self.channels.get(channel_id)
+            if channel is not None and (self.topics is None or channel[0] in self.topics):
+                self.out.messages.append(RecordedMessage(channel[0], channel[1], log_time,
+                                                         bytes(body[_MESSAGE_HEAD.size:])))
+        elif opcode == Opcode.SCHEMA:
+            schema = Schema.read(_stream(body))
+            self.schemas[schema.id] = schema.name
+        elif opcode == Opcode.CHANNEL:
+            channel = Channel.read(_stream(body))
+            kind = self.schemas.get(channel.schema_id, '')
+            self.channels[channel.id] = (channel.topic, kind)
+            self.out.topics[channel.topic] = kind
+        elif opcode == Opcode.METADATA:
+            metadata = Metadata.read(_stream(body))
+            self.out.metadata[metadata.name] = dict(metadata.metadata)
+
+
+def _stream(body):
+    return ReadDataStream(io.BytesIO(body))
+
+
+def _text(error):
     text = str(error).strip().splitlines()
-    return RecordingError(f'{path}: damaged file ({text[0] if text else type(error).__name__});'
-                          ' nothing read')
+    return text[0] if text else type(error).__name__
 
 
-def _recorded(schema, channel, message):
-    return RecordedMessage(channel.topic, schema.name if schema else '', message.log_time,
-                           message.data)
+def _chunk_records(body):
+    """Yield (opcode, body) of a chunk's records, decompressed within its declared size."""
+    _, _, declared, crc = _CHUNK_FIELDS.unpack_from(body)
+    at = _CHUNK_FIELDS.size
+    (name_length,) = struct.unpack_from('<I', body, at)
+    compression = bytes(body[at + 4:at + 4 + name_length]).decode()
+    at += 4 + name_length
+    (packed_length,) = struct.unpack_from('<Q', body, at)
+    packed = memoryview(body)[at + 8:at + 8 + packed_length]
+    if len(packed) != packed_length:
+        raise _Damage(f'a chunk holds {len(packed)} bytes where it says {packed_length}')
+    if declared > MAX_CHUNK_BYTES:
+        raise _Damage(f'a chunk says it holds {declared} bytes decompressed, over the '
+                      f'{MAX_CHUNK_BYTES} a recording chunk may hold')
+    raw = _decompress(compression, packed, declared)
+    if len(raw) > declared:
+        raise _Damage(f'a chunk decompresses to more than the {declared} bytes it says')
+    if len(raw) < declared:
+        raise _Damage(f'a chunk decompresses to {len(raw)} bytes where it says {declared}')
+    if crc and zlib.crc32(raw) != crc:
+        raise _Damage('a chunk fails its CRC check (its bytes changed after it was written)')
+    view = memoryview(raw)
+    at = 0
+    while at < declared:
+        if declared - at < 9:
+            raise _Damage('a chunk ends inside a record')
+        opcode, length = _RECORD_HEAD.unpack_from(view, at)
+        if opcode == 0:
+            raise _Damage('a chunk holds a record of opcode 0')
+        if length > declared - at - 9:
+            raise _Damage('a chunk holds a record longer than the chunk')
+        yield opcode, view[at + 9:at + 9 + length]
+        at += 9 + length
+
+
+def _decompress(compression, packed, declared):
+    """Return a chunk's records: at most one byte more than ``declared`` is ever made."""
+    limit = declared + 1
+    if compression == '':
+        return bytes(packed)
+    if compression == 'zstd':
+        if zstandard is None:
+            raise _Damage('a zstd chunk and no zstandard package to read it')
+        try:
+            with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(packed)) as reader:
+                return reader.read(limit) if limit else b''
+        except zstandard.ZstdError as e:
+            raise _Damage(f'a zstd chunk does not decompress ({_text(e)})') from None
+    if compression == 'lz4':
+        if lz4 is None:
+            raise _Damage('an lz4 chunk and no lz4 package to read it')
+        try:
+            return lz4.frame.LZ4FrameDecompressor().decompress(bytes(packed), max_length=limit)
+        except RuntimeError as e:
+            raise _Damage(f'an lz4 chunk does not decompress ({_text(e)})') from None
+    raise _Damage(f'a chunk of unknown compression {compression!r}')
 
 
 class _Digests(list):

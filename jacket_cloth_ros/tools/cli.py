@@ -191,10 +191,10 @@ def cmd_picture(args: argparse.Namespace) -> int:
     return 0
 
 
-def _session(args):
+def _session(args, listed=None):
     from .session import load_session
     session = load_session(args.input, topic=args.topic, urdf=args.urdf, rig=args.rig,
-                           fabric=args.fabric, overrides=args.param or ())
+                           fabric=args.fabric, overrides=args.param or (), listed=listed)
     for line in session.warnings:
         print(f'jacket_cloth {args.command}: warning: {args.input}: {line}', file=sys.stderr)
     if not session.recording.complete:
@@ -216,9 +216,14 @@ def cmd_replay(args: argparse.Namespace) -> int:
     """
     from .replay import replay
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig], recording=True)
-    if _is_crowd(args.input):
+    from ..recording.reader import read_recording
+    from .crowd_replay import is_crowd
+    from .session import NO_MESSAGES
+    # Its topics and set-ups tell a crowd's; then the messages, in one more pass.
+    listed = read_recording(args.input, NO_MESSAGES)
+    if is_crowd(listed):
         return _replay_crowd(args)
-    session = _session(args)
+    session = _session(args, listed)
     pipeline, took = replay(session, args.output)
     sim = pipeline.sim
     _warn_rig(args, sim.faults.rig)
@@ -228,12 +233,6 @@ def cmd_replay(args: argparse.Namespace) -> int:
           f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
           f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
     return 0
-
-
-def _is_crowd(path):
-    from ..recording.reader import read_recording
-    from .crowd_replay import is_crowd
-    return is_crowd(read_recording(path))
 
 
 def _replay_crowd(args):

@@ -102,7 +102,8 @@ def input_topics(recording: Recording, topic: str) -> list[str]:
 
 def load_session(path: str, topic: str | None = None, urdf: str | None = None,
                  rig: str | None = None, fabric: str | None = None,
-                 overrides: Iterable[str] = ()) -> SessionInput:
+                 overrides: Iterable[str] = (),
+                 listed: Recording | None = None) -> SessionInput:
     """Read a recording and settle its set-up: recorded values, then the options given.
 
     :param path: the recording, an MCAP file or a bag folder.
@@ -111,10 +112,11 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     :param rig: a rig YAML file instead of the recorded rig.
     :param fabric: a fabric preset instead of the recorded one.
     :param overrides: ``name:=value`` parameter settings (``-p``), applied last.
+    :param listed: the recording read with ``NO_MESSAGES`` already, if it was.
     """
     # First its topics, then only what the simulation is fed: a session's /tf and markers
     # are most of its bytes.
-    listed = read_recording(path, NO_MESSAGES)
+    listed = listed or read_recording(path, NO_MESSAGES)
     topic = joint_state_topic(listed, topic)
     recording = read_recording(path, input_topics(listed, topic))
     recorded = recording.metadata.get(SESSION_CONFIG, {})

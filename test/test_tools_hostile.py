@@ -1,0 +1,158 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""Hostile files and options for the tools (issue 38): one line, non-zero, bounded work.
+
+Bounds are shown by the check firing (a claim refused before the work it asks for) and by
+counts of bytes read or allocated, never by elapsed time.
+"""
+
+import io
+import struct
+import tracemalloc
+
+import pytest
+
+from jacket_cloth_ros.recording.mcap_file import McapWriter
+from jacket_cloth_ros.recording.reader import (
+    MAGIC, MAX_CHUNK_BYTES, RecordingError, read_recording)
+from jacket_cloth_ros.tools.cli import main
+
+zstandard = pytest.importorskip('zstandard')
+
+
+@pytest.fixture(scope='module')
+def clip(tmp_path_factory):
+    """An input-only session: 1 s of the walk clip at 60 Hz, as the motion tool writes it."""
+    path = tmp_path_factory.mktemp('clip') / 'clip.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '1.0', '-o', str(path)]) == 0
+    return path
+
+
+def _one_line_error(capsys, argv):
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert '\n' not in err and 'Traceback' not in err, err
+    return err
+
+
+def _one_chunk(compression='zstd'):
+    """A finished MCAP of one chunk of three messages; (bytes, the chunk's offset)."""
+    out = io.BytesIO()
+    w = McapWriter(out, compression=compression)
+    w.start(profile='ros2', library='test')
+    schema = w.register_schema('std_msgs/msg/String', 'ros2msg', b'string data')
+    channel = w.register_channel('/t', 'cdr', schema)
+    for i in range(3):
+        w.add_message(channel, 1000 + i, bytes([i]) * 50, 1000 + i)
+    w.finish()
+    data = out.getvalue()
+    return data, data.index(b'\x06', data.index(b'/t'))
+
+
+def _chunk_with(data, at, declared, packed):
+    """``data`` with the chunk at ``at`` declaring ``declared`` bytes and holding ``packed``
+    (its CRC zeroed: only the sizes are on trial)."""
+    head = struct.unpack_from('<BQQQQI', data, at)
+    name = b'zstd'
+    body = (struct.pack('<QQQI', head[2], head[3], declared, 0) + struct.pack('<I', len(name))
+            + name + struct.pack('<Q', len(packed)) + packed)
+    old_length = head[1]
+    # A cut after the chunk: its summary and footer no longer match the offsets, which is not
+    # the trial here; a cut file is read up to where it ends.
+    return data[:at] + struct.pack('<BQ', 0x06, len(body)) + body, at + 9 + old_length
+
+
+def test_a_chunk_claiming_more_than_the_cap_is_refused_before_decompressing(tmp_path):
+    data, at = _one_chunk()
+    path = tmp_path / 'big.mcap'
+    packed = zstandard.ZstdCompressor().compress(b'\x00' * 100)
+    bad, _ = _chunk_with(data, at, 3 << 30, packed)
+    path.write_bytes(bad)
+    with pytest.raises(RecordingError, match=f'says it holds {3 << 30} bytes decompressed, '
+                       f'over the {MAX_CHUNK_BYTES}'):
+        read_recording(str(path))
+
+
+def test_a_chunk_that_decompresses_beyond_its_declared_size_is_refused_within_it(tmp_path):
+    # The frame says 64 MB (as the 107 KB file of issue 38 said 3 GB); the chunk says 1000.
+    frame = io.BytesIO()
+    compressor = zstandard.ZstdCompressor(write_content_size=True)
+    writer = compressor.stream_writer(frame, size=64 << 20, closefd=False)
+    zeros = bytes(1 << 20)
+    for _ in range(64):
+        writer.write(zeros)
+    writer.close()
+    data, at = _one_chunk()
+    bad, _ = _chunk_with(data, at, 1000, frame.getvalue())
+    path = tmp_path / 'bomb.mcap'
+    path.write_bytes(bad)
+    tracemalloc.start()
+    try:
+        with pytest.raises(RecordingError, match='decompresses to more than the 1000 bytes'):
+            read_recording(str(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 8 << 20            # never the 64 MB the frame would make
+
+
+def _bytes_read():
+    with open('/proc/self/io') as f:
+        return int(next(line for line in f if line.startswith('rchar')).split()[1])
+
+
+@pytest.mark.parametrize('header', [False, True])
+def test_magic_and_zeros_is_refused_at_its_first_record(tmp_path, header):
+    data, _ = _one_chunk()
+    head = data[:data.index(b'\x03')] if header else MAGIC      # magic and header record
+    path = tmp_path / 'zeros.mcap'
+    with open(path, 'wb') as f:
+        f.write(head)
+        f.truncate(20 << 20)                 # sparse: 20 MB of zeros after it
+    before = _bytes_read()
+    with pytest.raises(RecordingError, match='opcode 0' if header else 'no header record'):
+        read_recording(str(path))
+    assert _bytes_read() - before < 1 << 20
+
+
+def test_a_finished_file_with_a_damaged_summary_is_refused_not_cut_short(
+        clip, tmp_path, capsys):
+    data = clip.read_bytes()
+    footer = len(data) - 8 - 29
+    summary_start = struct.unpack_from('<Q', data, footer + 9)[0]
+    bad = bytearray(data)
+    bad[summary_start + 1:summary_start + 9] = struct.pack('<Q', 1 << 31)   # a record's length
+    damaged = tmp_path / 'damaged.mcap'
+    damaged.write_bytes(bytes(bad))
+    err = _one_line_error(capsys, ['replay', str(damaged), '-o', str(tmp_path / 'out.mcap')])
+    assert f'{damaged}: damaged file' in err, err
+    # Without its summary and footer (a kill -9 while recording): still replayed, as a cut.
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(data[:summary_start - 13])       # before its DataEnd record
+    assert main(['replay', str(cut), '-o', str(tmp_path / 'out.mcap')]) == 0
+    assert 'cut short' in capsys.readouterr().err
+
+
+def test_replay_reads_the_recording_in_two_passes(clip, tmp_path, monkeypatch):
+    # Its topics and set-up, then its inputs: never a third pass to tell a crowd's.
+    from jacket_cloth_ros.recording import reader
+    files = []
+    original = reader._read_file
+    monkeypatch.setattr(reader, '_read_file',
+                        lambda path, *args: files.append(path) or original(path, *args))
+    assert main(['replay', str(clip), '-o', str(tmp_path / 'out.mcap')]) == 0
+    assert files == [str(clip)] * 2
+
+
+def test_a_bag_listing_one_file_twice_is_refused(clip, tmp_path, capsys):
+    import shutil
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'a.mcap')
+    (bag / 'b.mcap').symlink_to('a.mcap')
+    for listed in (['a.mcap'] * 1000, ['a.mcap', './b.mcap']):
+        (bag / 'metadata.yaml').write_text(
+            'rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
+            f'  relative_file_paths: {listed}\n')
+        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+        assert f'{bag / "metadata.yaml"}: lists ' in err and 'twice' in err, err
