@@ -10,6 +10,7 @@ the tools end in one line and exit 0 or 1), nothing is silent (every message is 
 counted as refused, dropped, undecodable) and nothing is lost (every message sent is seen).
 """
 
+import json
 import math
 import os
 import random
@@ -356,6 +357,64 @@ def test_fuzz_mcap_files_end_in_a_replay_or_one_line(recordings, tmp_path, capsy
         if code == 1:
             assert len(err.splitlines()) == 1 and len(err) < 2000, (SEED, err)
         assert time.process_time() - start < 30, (SEED, 'a replay spun')
+
+
+def _session_setup_cases(rng, setup):
+    """A session set-up record with one to three random changes to its texts and values."""
+    original, setup = setup, dict(setup)
+    for _ in range(rng.randint(1, 3)):
+        key = rng.choice(sorted(setup))
+        pick = rng.random()
+        if pick < 0.1:
+            del setup[key]
+            if not setup:
+                break
+        elif pick < 0.3:
+            setup[key] = mutate(rng, setup[key].encode()).decode('utf-8', 'replace')
+        elif key == 'parameters_json' and setup[key] == original[key]:
+            values = json.loads(setup[key])
+            if rng.random() < 0.5:
+                values[rng.choice(sorted(values))] = _random_value(rng)
+            else:
+                values = _random_value(rng)
+            setup[key] = json.dumps(values)
+        elif key in ('rig_yaml', 'fabrics_yaml') and setup[key] == original[key]:
+            data = yaml.safe_load(setup[key])
+            _mutate_tree(rng, data)
+            setup[key] = yaml.safe_dump(data)
+        else:
+            setup[key] = str(_random_value(rng))
+    return setup
+
+
+def test_fuzz_the_recorded_session_set_up_ends_in_a_replay_or_one_line(
+        recordings, tmp_path, capsys):
+    from jacket_cloth_ros.recording.reader import read_recording
+    from jacket_cloth_ros.recording.writer import (
+        SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
+    rng = random.Random(SEED)
+    full = tmp_path / 'full.mcap'
+    full.write_bytes(recordings[1])
+    recording = read_recording(str(full))
+    inputs = [(m.data, m.log_time) for m in recording.messages if m.topic == '/joint_states']
+    path, out = tmp_path / 'in.mcap', tmp_path / 'out.mcap'
+    for case in _until(SECONDS):
+        setup = _session_setup_cases(rng, recording.metadata[SESSION_CONFIG])
+        if path.exists():
+            path.unlink()
+        rec = SessionRecorder(str(path))
+        rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        rec.add_metadata(SESSION_CONFIG, setup)
+        for data, stamp in inputs:
+            rec.write('/joint_states', data, stamp)
+        rec.close()
+        start = time.process_time()     # CPU, which a loaded machine does not stretch
+        code = main(['replay', str(path), '-o', str(out), '--force'])
+        err = capsys.readouterr().err.strip()
+        assert code in (0, 1) and 'Traceback' not in err, (SEED, err)
+        if code == 1:
+            assert len(err.splitlines()) == 1 and len(err) < 2000, (SEED, err)
+        assert time.process_time() - start < 30, (SEED, 'a replay spun', setup)
 
 
 def _random_value(rng, depth=0):

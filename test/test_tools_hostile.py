@@ -156,3 +156,58 @@ def test_a_bag_listing_one_file_twice_is_refused(clip, tmp_path, capsys):
             f'  relative_file_paths: {listed}\n')
         err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
         assert f'{bag / "metadata.yaml"}: lists ' in err and 'twice' in err, err
+
+
+@pytest.fixture(scope='module')
+def replayed(clip, tmp_path_factory):
+    """The clip's replay: its inputs and the set-up record the node writes."""
+    from jacket_cloth_ros.recording.writer import SESSION_CONFIG
+    path = tmp_path_factory.mktemp('replayed') / 'full.mcap'
+    assert main(['replay', str(clip), '-o', str(path)]) == 0
+    recording = read_recording(str(path))
+    inputs = [(m.data, m.log_time) for m in recording.messages if m.topic == '/joint_states']
+    return inputs, recording.metadata[SESSION_CONFIG]
+
+
+def _with_setup(inputs, setup, path):
+    """A recording of ``inputs`` whose set-up record is ``setup`` (any texts)."""
+    from jacket_cloth_ros.recording.writer import (
+        SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
+    rec = SessionRecorder(str(path))
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    rec.add_metadata(SESSION_CONFIG, setup)
+    for data, stamp in inputs:
+        rec.write('/joint_states', data, stamp)
+    rec.close()
+
+
+def _parameters(setup, **changes):
+    import json
+    values = json.loads(setup['parameters_json'])
+    values.update(changes)
+    return {**setup, 'parameters_json': json.dumps(values)}
+
+
+@pytest.mark.parametrize('change, expected', [
+    (lambda s: _parameters(s, **{'fabric.iterations': 1e9}), 'parameter fabric.iterations'),
+    (lambda s: _parameters(s, **{'fabric.iterations': 10 ** 9}), 'outside [1, 100]'),
+    (lambda s: _parameters(s, **{'fabric.damping': float('nan')}), 'parameter fabric.damping'),
+    (lambda s: _parameters(s, fabric_preset=5), 'parameter fabric_preset'),
+    (lambda s: _parameters(s, wind='x'), 'parameter wind'),
+    (lambda s: _parameters(s, sim_rate=[1]), 'parameter sim_rate'),
+    (lambda s: {**s, 'parameters_json': '[1, 2]'}, 'not a JSON object'),
+    (lambda s: {**s, 'parameters_json': '{'}, 'not JSON'),
+    (lambda s: {**s, 'parameters_json': '[' * 100000}, 'not JSON'),
+    (lambda s: {**s, 'urdf': '<robot'}, 'the recorded URDF'),
+    (lambda s: {**s, 'rig_yaml': '[1]'}, 'the recorded rig'),
+    (lambda s: {**s, 'fabrics_yaml': 'tweed_jacket: {damping: .nan}'}, 'the recorded fabrics'),
+])
+def test_a_recorded_set_up_is_validated_as_files_and_parameters_are(
+        replayed, tmp_path, capsys, change, expected):
+    inputs, setup = replayed
+    path = tmp_path / 'setup.mcap'
+    _with_setup(inputs, change(setup), path)
+    for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
+                 ['analyze', str(path), '--out', str(tmp_path / 'an')]):
+        err = _one_line_error(capsys, argv)
+        assert str(path) in err and expected in err, err

@@ -10,7 +10,6 @@ messages are inputs too: each goes, at its place in the file, to every character
 frame it is in, as the node applied it.
 """
 
-import json
 import os
 import time
 from dataclasses import dataclass
@@ -18,14 +17,15 @@ from dataclasses import dataclass
 from ..core.config import ConfigError, parse_yaml
 from ..core.fabric import fabrics_from_data
 from ..core.rig import Rig
-from ..core.skeleton import Skeleton
+from ..core.skeleton import skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG, SessionRecorder
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values, from_recording
+from ..ros.parameters import default_values
 from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
+from .session import recorded_parameters
 
 PREFIX = SESSION_CONFIG + '/'
 
@@ -59,11 +59,15 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
             continue
         name = key[len(PREFIX):]
         where = f'{path}: {name}'
-        skeleton = Skeleton(meta['urdf'])
+        missing = [k for k in ('urdf', 'rig_yaml', 'fabrics_yaml', 'parameters_json')
+                   if not meta.get(k)]
+        if missing:
+            raise RecordingError(f'{where}: its recorded set-up has no {", ".join(missing)}')
+        skeleton = skeleton_from(meta['urdf'], f'{where} URDF')
         rig = Rig(parse_yaml(meta['rig_yaml'], f'{where} rig'), skeleton, where=f'{where} rig')
         fabrics = fabrics_from_data(parse_yaml(meta['fabrics_yaml'], f'{where} fabrics'),
                                     f'{where} fabrics')
-        recorded = from_recording(json.loads(meta['parameters_json']))
+        recorded = recorded_parameters(meta, f'{where} parameter')
         preset = recorded.get('fabric_preset')
         if preset not in fabrics:
             raise ConfigError(f'{where}: fabric_preset {preset!r} is not a preset')

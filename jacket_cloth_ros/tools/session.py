@@ -11,21 +11,21 @@ the shipped one fits the skeleton.
 import json
 import struct
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from rcl_interfaces.msg import ParameterEvent
 from rclpy.parameter import Parameter
 from rclpy.serialization import deserialize_message
 
-from ..core.config import ConfigError, parse_yaml, read_text, shipped
-from ..core.fabric import fabrics_from_data
+from ..core.config import MAX_YAML_BYTES, ConfigError, parse_yaml, read_text, shipped, shown
+from ..core.fabric import FABRIC_RANGES, Fabric, fabrics_from_data
 from ..core.rig import Rig
 from ..core.simulation import StepReport
 from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values, from_recording, parse_override
+from ..ros.parameters import default_values, from_recording, parse_override, typed_value
 from ..ros.pipeline import DEFAULT_NODE, SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 
@@ -120,27 +120,32 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     topic = joint_state_topic(listed, topic)
     recording = read_recording(path, input_topics(listed, topic))
     recorded = recording.metadata.get(SESSION_CONFIG, {})
+    where = f'{path}: the recorded'
     if urdf:        # a file given: its own errors, an empty one too, never the shipped one
         urdf_text = read_text(urdf, 'URDF')
         skeleton = skeleton_from(urdf_text, f'URDF {urdf}')
+    elif recorded.get('urdf'):
+        urdf_text = recorded['urdf']
+        skeleton = skeleton_from(urdf_text, f'{where} URDF')
     else:
-        urdf_text = recorded.get('urdf') or shipped_character_urdf()
+        urdf_text = shipped_character_urdf()
         skeleton = Skeleton(urdf_text)
     rig_yaml = read_text(rig, 'rig') if rig else recorded.get('rig_yaml') or read_text(
         shipped('jacket_rig.yaml'), 'rig')
-    rig_obj = Rig(parse_yaml(rig_yaml, rig or 'the rig'), skeleton, where=rig or 'rig')
+    rig_where = rig or (f'{where} rig' if recorded.get('rig_yaml') else 'rig')
+    rig_obj = Rig(parse_yaml(rig_yaml, rig_where), skeleton, where=rig_where)
     fabrics_yaml = recorded.get('fabrics_yaml') or read_text(shipped('fabrics.yaml'), 'fabrics')
-    fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, 'fabrics'), 'fabrics')
-    recorded_values = from_recording(json.loads(recorded.get('parameters_json', '{}')))
+    fabrics_where = f'{where} fabrics' if recorded.get('fabrics_yaml') else 'fabrics'
+    fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, fabrics_where), fabrics_where)
+    recorded_values = recorded_parameters(recorded, f'{where} parameter')
     preset = fabric or recorded_values.get('fabric_preset', 'tweed_jacket')
     if preset not in fabrics:
         raise ConfigError(f'fabric {preset!r} is not a preset (presets: {", ".join(fabrics)})')
     values = default_values(fabrics[preset])
     if fabric is None:
-        values.update({k: v for k, v in recorded_values.items() if k in values})
+        values.update(recorded_values)
     else:        # a preset asked for: its fabric.* values, the recording's other parameters
-        values.update({k: v for k, v in recorded_values.items()
-                       if k in values and not k.startswith('fabric')})
+        values.update({k: v for k, v in recorded_values.items() if not k.startswith('fabric')})
         values['fabric_preset'] = preset
     given = dict(parse_override(text, values) for text in overrides)
     chosen = given.get('fabric_preset')
@@ -156,6 +161,27 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     session = SessionInput(recording, topic, _events(recording, topic), setup)
     session.warnings = _check_joints(session)
     return session
+
+
+def recorded_parameters(setup: dict, where: str) -> dict:
+    """Return a set-up record's parameters, each validated as a ``-p`` value (typed_value).
+
+    A recording's set-up is input like any file: its types and ranges are checked as the
+    node's parameters are, and names no node has today are left out. ``where`` starts the
+    one-line errors (``<file>: the recorded parameter``).
+    """
+    text = setup.get('parameters_json', '{}')
+    try:
+        if len(text) > MAX_YAML_BYTES:
+            raise ValueError(f'larger than {MAX_YAML_BYTES} bytes')
+        data = json.loads(text)
+    except (ValueError, RecursionError) as e:
+        raise ConfigError(f'{where}s: not JSON ({shown(str(e))})') from None
+    if not isinstance(data, dict):
+        raise ConfigError(f'{where}s: not a JSON object of names and values')
+    known = default_values(Fabric(**{f.name: FABRIC_RANGES[f.name][0] for f in fields(Fabric)}))
+    return {name: typed_value(name, value, known[name], f'{where} {name}')
+            for name, value in from_recording(data).items() if name in known}
 
 
 def _check_joints(session):
