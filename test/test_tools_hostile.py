@@ -211,3 +211,22 @@ def test_a_recorded_set_up_is_validated_as_files_and_parameters_are(
                  ['analyze', str(path), '--out', str(tmp_path / 'an')]):
         err = _one_line_error(capsys, argv)
         assert str(path) in err and expected in err, err
+
+
+def test_replay_never_writes_over_a_file_of_its_input_bag(clip, tmp_path, capsys):
+    import shutil
+    for how in ('metadata', 'link'):
+        target = tmp_path / f'{how}.mcap'
+        shutil.copy(clip, target)
+        kept = target.read_bytes()
+        bag = tmp_path / f'bag_{how}'
+        bag.mkdir()
+        if how == 'metadata':           # listed as ../metadata.mcap
+            (bag / 'metadata.yaml').write_text(
+                'rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
+                f'  relative_file_paths: [../{target.name}]\n')
+        else:                           # a link in the bag, no metadata.yaml
+            (bag / 'a.mcap').symlink_to(target)
+        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(target), '--force'])
+        assert f'{target} is the input' in err, err
+        assert target.read_bytes() == kept

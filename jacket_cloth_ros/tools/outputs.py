@@ -83,13 +83,29 @@ def _not_an_input(path, inputs):
         if not given or not os.path.exists(given):
             continue
         given = os.fspath(given)
-        if os.path.exists(path) and os.path.samefile(path, given):
-            raise OutputError(f'{path} is the input {given}; write the output elsewhere')
         if os.path.isdir(given) and real.startswith(os.path.join(os.path.realpath(given), '')):
             raise OutputError(f'{path} is inside the input folder {given}; write the output '
                               'elsewhere')
-        if os.path.realpath(given).startswith(os.path.join(real, '')):
-            raise OutputError(f'{path} holds the input {given}; write the output elsewhere')
+        for one in [given, *_bag_files(given)]:
+            if os.path.realpath(one) == real or (os.path.exists(path) and os.path.exists(one)
+                                                 and os.path.samefile(path, one)):
+                raise OutputError(f'{path} is the input {one}; write the output elsewhere')
+            if os.path.realpath(one).startswith(os.path.join(real, '')):
+                raise OutputError(f'{path} holds the input {one}; write the output elsewhere')
+
+
+def _bag_files(given):
+    """Return the files a bag folder's recording is read from.
+
+    Its metadata.yaml may reach outside it (``../x.mcap``) or through links.
+    """
+    if not os.path.isdir(given):
+        return []
+    from ..recording.reader import RecordingError, mcap_files
+    try:
+        return mcap_files(given)
+    except RecordingError:          # the reader says what is wrong with it, in one line
+        return []
 
 
 @contextlib.contextmanager
