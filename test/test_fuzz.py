@@ -417,6 +417,34 @@ def test_fuzz_the_recorded_session_set_up_ends_in_a_replay_or_one_line(
         assert time.process_time() - start < 30, (SEED, 'a replay spun', setup)
 
 
+_EDGES = ['0', '-0', '-5', '1e-12', '0.05', '1', '60', '1000', '1e8', '1e10', '2e9', 'inf',
+          '-inf', 'nan', '1e308', '-1e-308']
+
+
+def test_fuzz_the_tools_number_options_end_in_a_file_or_one_line(tmp_path, capsys):
+    from jacket_cloth_ros.tools.cli import OPTION_RANGES
+    rng = random.Random(SEED)
+    out = tmp_path / 'o.mcap'
+    for case in _until(SECONDS):
+        argv = ['motion', '--clip', 'walk', '-o', str(out), '--force']
+        values = {name: rng.choice(_EDGES) for name in ('start', 'rate', 'duration')
+                  if rng.random() < 0.7}
+        values.setdefault('duration', '0.05')       # a valid run stays short
+        if float(values['duration']) * float(values.get('rate', 60)) > 200:
+            values['duration'] = rng.choice(['1e9', 'inf', '-1', 'nan'])
+        for name, value in values.items():
+            argv.append(f'--{name}={value}')        # '-inf' is no option's name
+        start = time.process_time()     # CPU, which a loaded machine does not stretch
+        code = main(argv)
+        err = capsys.readouterr().err.strip()
+        valid = all(OPTION_RANGES[k][0] <= float(v) <= OPTION_RANGES[k][1]
+                    for k, v in values.items())
+        assert code == (0 if valid else 1), (SEED, argv, err)
+        if code:
+            assert len(err.splitlines()) == 1 and 'is outside' in err, (SEED, argv, err)
+        assert time.process_time() - start < 10, (SEED, argv)
+
+
 def _random_value(rng, depth=0):
     pick = rng.randrange(12)
     if pick == 0:

@@ -230,3 +230,56 @@ def test_replay_never_writes_over_a_file_of_its_input_bag(clip, tmp_path, capsys
         err = _one_line_error(capsys, ['replay', str(bag), '-o', str(target), '--force'])
         assert f'{target} is the input' in err, err
         assert target.read_bytes() == kept
+
+
+_BVH = ('HIERARCHY\nROOT Hips\n{{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
+        'Zrotation Xrotation Yrotation\n  JOINT Spine\n  {{\n    OFFSET {offset}\n'
+        '    CHANNELS 3 Zrotation Xrotation Yrotation\n    End Site\n    {{\n'
+        '      OFFSET 0 10 0\n    }}\n  }}\n}}\nMOTION\nFrames: 3\nFrame Time: {time}\n'
+        + '0 90 0 0 0 0 0 0 0\n' * 3)
+
+
+@pytest.mark.parametrize('offset, time, expected', [
+    ('0 10 0', '0.01', None),
+    ('0 10 0', '1e8', 'Frame Time 1e+08 is outside [0.0001, 1] s'),
+    ('0 10 0', '1e-12', 'Frame Time 1e-12 is outside [0.0001, 1] s'),
+    ('0 nan 0', '0.01', 'the OFFSET of Spine is not three finite numbers'),
+])
+def test_a_bvh_frame_time_or_offset_out_of_range_is_refused(
+        tmp_path, capsys, offset, time, expected):
+    src = tmp_path / 'c.bvh'
+    src.write_text(_BVH.format(offset=offset, time=time))
+    argv = ['import', str(src), '-o', str(tmp_path / 'o.mcap'), '--urdf-out',
+            str(tmp_path / 'c.urdf')]
+    if expected is None:
+        assert main(argv) == 0
+    else:
+        err = _one_line_error(capsys, argv)
+        assert f'{src}: {expected}' in err, err
+
+
+@pytest.mark.parametrize('option, value, expected', [
+    ('--start', '1e10', '--start 1e+10 is outside [0, 2e+09] s'),
+    ('--start', 'inf', '--start inf is outside'), ('--start', '-5', '--start -5 is outside'),
+    ('--start', 'nan', '--start nan is outside'),
+    ('--rate', '0', '--rate 0 is outside [0.1, 1000] Hz'), ('--rate', 'inf', '--rate inf'),
+    ('--rate', '-5', '--rate -5 is outside'), ('--duration', '1e9', '--duration 1e+09'),
+])
+def test_a_motion_number_out_of_range_is_refused(tmp_path, capsys, option, value, expected):
+    out = tmp_path / 'o.mcap'
+    err = _one_line_error(capsys, ['motion', '--clip', 'walk', '-o', str(out), option, value])
+    assert expected in err, err
+    assert not out.exists()
+
+
+def test_import_start_and_picture_analyze_moments_out_of_range_are_refused(
+        clip, tmp_path, capsys):
+    src = tmp_path / 'c.bvh'
+    src.write_text(_BVH.format(offset='0 10 0', time='0.01'))
+    for argv, expected in (
+            (['import', str(src), '-o', str(tmp_path / 'o.mcap'), '--start', '-5'], '--start -5'),
+            (['picture', str(clip), '-o', str(tmp_path / 'p.png'), '--moments', '1000000000'],
+             '--moments 1e+09 is outside [1, 24] frames'),
+            (['analyze', str(clip), '--out', str(tmp_path / 'an'), '--moments', '0'],
+             '--moments 0 is outside')):
+        assert expected in _one_line_error(capsys, argv)

@@ -55,6 +55,11 @@ _TYPICAL_HEIGHT_M = 1.7
 HUMAN_HEIGHT_M = (1.2, 2.2)
 
 
+# Seconds between frames: 10 kHz to 1 Hz. Shorter made stamps repeat (whole ns); longer put
+# a capture's stamps beyond what a header stamp holds.
+FRAME_TIME_RANGE = (1e-4, 1.0)
+
+
 class BvhError(ValueError):
     """A BVH file that cannot be imported; the message is one line naming the file."""
 
@@ -100,10 +105,14 @@ def read_bvh(path: str) -> Bvh:
         raise BvhError(f'{path}: not a readable BVH file ({text})') from None
     if bvh.frame_count < 1:
         raise BvhError(f'{path}: no frames')
-    if not (bvh.frame_time > 0 and math.isfinite(bvh.frame_time)):
-        raise BvhError(f'{path}: bad Frame Time {bvh.frame_time}')
+    low, high = FRAME_TIME_RANGE
+    if not low <= bvh.frame_time <= high:       # NaN too
+        raise BvhError(f'{path}: Frame Time {bvh.frame_time:g} is outside [{low:g}, {high:g}] s')
     if not (np.isfinite(bvh.root_pos).all() and np.isfinite(bvh.joint_angles).all()):
         raise BvhError(f'{path}: a channel value is not a finite number')
+    for node in bvh.nodes:
+        if not np.isfinite(np.asarray(node.offset, dtype=float)).all():
+            raise BvhError(f'{path}: the OFFSET of {node.name} is not three finite numbers')
     return bvh
 
 

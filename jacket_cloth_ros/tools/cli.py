@@ -24,8 +24,28 @@ if TYPE_CHECKING:           # for the annotations only
     from ..core.skeleton import Skeleton
 
 
+# Each number option's allowed range and unit, checked before any work is done: a stamp's
+# seconds fit a header stamp (int32) with a long session after it; moments are frames drawn.
+OPTION_RANGES = {
+    'start': (0.0, 2.0e9, 's'), 'rate': (0.1, 1000.0, 'Hz'), 'duration': (0.0, 3600.0, 's'),
+    'wait': (0.0, 3600.0, 's'), 'moments': (1, 24, 'frames'), 'scale': (1e-6, 1e6, ''),
+}
+
+
 class ToolError(Exception):
     """A failure to report in one line."""
+
+
+def check_numbers(args: argparse.Namespace) -> None:
+    """Refuse a number option outside its range (OPTION_RANGES) in one line naming it.
+
+    :param args: a command's parsed options; those it lacks are not checked.
+    """
+    for name, (low, high, unit) in OPTION_RANGES.items():
+        value = getattr(args, name, None)
+        if value is not None and not low <= value <= high:      # NaN too
+            raise ToolError(f'--{name.replace("_", "-")} {value:g} is outside [{low:g}, '
+                            f'{high:g}]{" " + unit if unit else ""}')
 
 
 def _skeleton(urdf_path=None):
@@ -535,6 +555,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(own)
     args.ros_args = ros
     try:
+        check_numbers(args)
         return args.func(args)
     except (ToolError, SourceError, ConfigError, ValueError, OSError) as e:
         print(f'jacket_cloth {args.command}: {e}', file=sys.stderr)
