@@ -87,16 +87,19 @@ def regular_file_or_refuse(path: str | os.PathLike, what: str = '',
     """Raise ConfigError unless ``path`` is a regular file (or a link to one), never opening it.
 
     A FIFO blocks its opener until a peer comes, a device or a folder never reads as a file:
-    only os.stat looks at them. ``what`` (e.g. 'rig') starts the one-line message; a missing
-    path is refused only if ``must_exist`` (an output about to be made).
+    only os.stat looks at them.
+
+    :param path: the file.
+    :param what: what the file is (e.g. 'rig'), starting the one-line message.
+    :param must_exist: False for an output about to be made: a missing path is fine.
     """
     where = f'{what} {os.fspath(path)}' if what else os.fspath(path)
     try:
         mode = os.stat(path).st_mode
-    except FileNotFoundError:
+    except FileNotFoundError as e:
         if not must_exist:
             return
-        raise ConfigError(f'{where}: no such file') from None
+        raise ConfigError(f'{where}: cannot read ({e.strerror})') from None
     except OSError as e:
         raise ConfigError(f'{where}: cannot read ({e.strerror})') from None
     if not stat.S_ISREG(mode):

@@ -167,8 +167,10 @@ def recorded_parameters(setup: dict, where: str) -> dict:
     """Return a set-up record's parameters, each validated as a ``-p`` value (typed_value).
 
     A recording's set-up is input like any file: its types and ranges are checked as the
-    node's parameters are, and names no node has today are left out. ``where`` starts the
-    one-line errors (``<file>: the recorded parameter``).
+    node's parameters are, and names no node has today are left out.
+
+    :param setup: the set-up metadata record (its ``parameters_json``).
+    :param where: what starts the one-line errors (``<file>: the recorded parameter``).
     """
     text = setup.get('parameters_json', '{}')
     try:
