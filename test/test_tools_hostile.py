@@ -283,3 +283,28 @@ def test_import_start_and_picture_analyze_moments_out_of_range_are_refused(
             (['analyze', str(clip), '--out', str(tmp_path / 'an'), '--moments', '0'],
              '--moments 0 is outside')):
         assert expected in _one_line_error(capsys, argv)
+
+
+def test_a_fifo_or_a_folder_as_an_input_is_refused_unopened(clip, tmp_path, capsys):
+    import os
+    from jacket_cloth_ros.core.config import ConfigError
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.ros.characters import load_characters
+    fifo, folder = tmp_path / 'pipe.mcap', tmp_path / 'folder.yaml'
+    os.mkfifo(fifo)
+    folder.mkdir()
+    out = str(tmp_path / 'o.mcap')
+    for path, kind in ((fifo, 'a FIFO'), (folder, 'a folder')):
+        for argv in (['replay', str(clip), '-o', out, '--rig', str(path)],
+                     ['replay', str(clip), '-o', out, '--urdf', str(path)],
+                     ['import', str(path), '-o', out],
+                     ['picture', str(clip), '-o', str(tmp_path / 'p.png'), '--rig', str(path)],
+                     ['motion', '--urdf', str(path), '-o', out]):
+            err = _one_line_error(capsys, argv)
+            assert f'{path}: {kind}, not a regular file' in err, (argv, err)
+    err = _one_line_error(capsys, ['replay', str(fifo), '-o', out])
+    assert f'{fifo}: a FIFO, not a regular file' in err, err
+    # The node's file parameters load through the same readers.
+    for load in (lambda: load_characters(str(fifo)), lambda: load_rig(None, str(fifo))):
+        with pytest.raises(ConfigError, match='a FIFO, not a regular file'):
+            load()

@@ -136,6 +136,7 @@ def read_text(path: str, what: str) -> str:
     :param path: the file.
     :param what: what kind of file, as errors name it.
     """
+    regular_file_or_refuse(path, what)
     try:
         with open(path, encoding='utf-8') as f:
             return f.read()
@@ -150,6 +151,7 @@ def load_yaml(path: str) -> dict:
 
     :param path: the YAML file.
     """
+    regular_file_or_refuse(path)
     try:
         with open(path, encoding='utf-8') as f:
             data = bounded_load(f.read(MAX_YAML_BYTES + 1))

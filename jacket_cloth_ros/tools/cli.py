@@ -13,7 +13,7 @@ import time
 from typing import TYPE_CHECKING
 
 from .. import signals
-from ..core.config import ConfigError, shipped
+from ..core.config import ConfigError, regular_file_or_refuse, shipped
 from ..core.rig import load_rig
 from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
                             showcase_highlights)
@@ -139,6 +139,8 @@ def cmd_import(args: argparse.Namespace) -> int:
     _check_output(args.output, args.force, [args.input, args.urdf], recording=True)
     if args.urdf_out:
         _check_output(args.urdf_out, args.force, [args.input, args.output])
+    if os.path.lexists(args.input):        # a FIFO would block the first read
+        regular_file_or_refuse(args.input, 'input')
     if not args.urdf and _looks_like_json(args.input):
         raise ToolError(f'{args.input} is JSON, not BVH: a DeepMimic clip needs --urdf (the '
                         "humanoid it moves, pybullet's humanoid.urdf)")
