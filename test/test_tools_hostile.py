@@ -308,3 +308,39 @@ def test_a_fifo_or_a_folder_as_an_input_is_refused_unopened(clip, tmp_path, caps
     for load in (lambda: load_characters(str(fifo)), lambda: load_rig(None, str(fifo))):
         with pytest.raises(ConfigError, match='a FIFO, not a regular file'):
             load()
+
+
+def _chain_urdf(n):
+    links = ''.join(f'<link name="l{i}"/>' for i in range(n))
+    joints = ''.join(f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/>'
+                     f'<child link="l{i}"/><origin xyz="0 0 0.01"/><axis xyz="0 0 1"/>'
+                     '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+                     for i in range(1, n))
+    return f'<robot name="chain">{links}{joints}</robot>'
+
+
+def test_urdf_loading_compares_link_names_a_number_of_times_linear_in_links(monkeypatch):
+    # A list search per link made 40,000 links 18 s: count the name comparisons instead.
+    from urdf_parser_py import urdf
+    from jacket_cloth_ros.core import skeleton as module
+    compared = [0]
+
+    class Name(str):
+        __hash__ = str.__hash__
+
+        def __eq__(self, other):
+            compared[0] += 1
+            return str.__eq__(self, other)
+
+    parse = urdf.URDF.from_xml_string
+
+    def counted(text):
+        robot = parse(text)
+        for joint in robot.joints:
+            joint.child, joint.parent = Name(joint.child), Name(joint.parent)
+        return robot
+    monkeypatch.setattr(module.urdf.URDF, 'from_xml_string', counted)
+    for n in (500, 2000):
+        compared[0] = 0
+        assert len(module.Skeleton(_chain_urdf(n)).link_names) == n
+        assert compared[0] <= 4 * n, (n, compared[0])

@@ -45,14 +45,17 @@ class Skeleton:
         children = {}
         for j in robot.joints:
             children.setdefault(j.parent, []).append(j)
-        # Breadth-first order: a link's parent always comes before it.
+        # Breadth-first order: a link's parent always comes before it. The links placed so far
+        # are a set: a list's search made a long chain quadratic.
         self.link_names = [root]
+        placed = {root}
         parent, joints = [-1], [None]
         i = 0
         while i < len(self.link_names):
             for j in children.get(self.link_names[i], []):
-                if j.child in self.link_names:
+                if j.child in placed:
                     raise ConfigError(f'URDF: link {j.child!r} has two parents')
+                placed.add(j.child)
                 self.link_names.append(j.child)
                 parent.append(i)
                 joints.append(j)
