@@ -344,3 +344,35 @@ def test_urdf_loading_compares_link_names_a_number_of_times_linear_in_links(monk
         compared[0] = 0
         assert len(module.Skeleton(_chain_urdf(n)).link_names) == n
         assert compared[0] <= 4 * n, (n, compared[0])
+
+
+def test_a_file_of_unknown_records_is_refused_after_a_bounded_count(tmp_path):
+    from jacket_cloth_ros.recording.reader import MAX_UNKNOWN_RECORDS
+    data, _ = _one_chunk()
+    head = data[:data.index(b'\x03')]                   # magic and header record
+    path = tmp_path / 'unknown.mcap'
+    path.write_bytes(head + struct.pack('<BQ', 0x80, 0) * (2 * MAX_UNKNOWN_RECORDS))
+    before = _bytes_read()
+    with pytest.raises(RecordingError, match=f'over {MAX_UNKNOWN_RECORDS} records of unknown'):
+        read_recording(str(path))
+    assert _bytes_read() - before < 2 * 9 * MAX_UNKNOWN_RECORDS
+
+
+def test_a_crowd_recordings_set_ups_are_validated_too(replayed, tmp_path, capsys):
+    from jacket_cloth_ros.recording.writer import (
+        SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
+    inputs, setup = replayed
+    for change, expected in (({'urdf': ''}, 'has no urdf'),
+                             (_parameters(setup, **{'fabric.damping': float('nan')}),
+                              'a parameter fabric.damping')):
+        path = tmp_path / 'crowd.mcap'
+        if path.exists():
+            path.unlink()
+        rec = SessionRecorder(str(path))
+        rec.add_topic('/a/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        rec.add_metadata(f'{SESSION_CONFIG}/a', {**setup, **change})
+        for data, stamp in inputs:
+            rec.write('/a/joint_states', data, stamp)
+        rec.close()
+        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+        assert f'{path}: a' in err and expected in err, err

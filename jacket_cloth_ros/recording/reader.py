@@ -42,6 +42,10 @@ MAX_RECORD_BYTES = MAX_CHUNK_BYTES + 4096
 _READ = {Opcode.HEADER, Opcode.SCHEMA, Opcode.CHANNEL, Opcode.MESSAGE, Opcode.CHUNK,
          Opcode.METADATA, Opcode.DATA_END, Opcode.FOOTER}
 _IN_CHUNKS = {Opcode.SCHEMA, Opcode.CHANNEL, Opcode.MESSAGE}
+_KNOWN = set(Opcode)
+# Records of kinds no writer of ours or rosbag2's writes: a few are the MCAP spec's future;
+# a file of nothing else is garbage that would be walked 9 bytes at a time.
+MAX_UNKNOWN_RECORDS = 1 << 16
 
 
 class RecordingError(ValueError):
@@ -196,6 +200,7 @@ class _Scan:
         self.f, self.size, self.topics, self.out = f, size, topics, out
         self.crc = zlib.crc32(MAGIC)            # of the data section, then of the summary
         self.schemas, self.channels = {}, {}
+        self.unknown = 0
         self.finished = self._has_footer()
 
     def _has_footer(self):
@@ -223,6 +228,11 @@ class _Scan:
         opcode, length = _RECORD_HEAD.unpack(head)
         if opcode == 0:
             raise _Damage(f'a record of opcode 0 at byte {at}')
+        if opcode not in _KNOWN:
+            self.unknown += 1
+            if self.unknown > MAX_UNKNOWN_RECORDS:
+                raise _Damage(f'over {MAX_UNKNOWN_RECORDS} records of unknown kinds, the last '
+                              f'at byte {at}')
         if length > self.size - at - 9:
             raise _Short(f'a record at byte {at} runs past the end of the file')
         self.crc = zlib.crc32(head, self.crc)
