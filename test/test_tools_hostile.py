@@ -376,3 +376,22 @@ def test_a_crowd_recordings_set_ups_are_validated_too(replayed, tmp_path, capsys
         rec.close()
         err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
         assert f'{path}: a' in err and expected in err, err
+
+
+@pytest.mark.parametrize('durations, words', [
+    ([1e8, 1e8], 'its frames last 1e+08 s, outside [0.0001, 1] s'),
+    ([1e-4, 1e-4, 1e8, 0], 'resampled every 0.0001 s, would be 1000000000002, over 100000'),
+])
+def test_a_deepmimic_clip_of_absurd_frame_times_is_refused(tmp_path, capsys, durations,
+                                                           words):
+    import json
+    from fetched import fetched
+    from jacket_cloth_ros.motion.deepmimic import read_frames
+    frames = read_frames(fetched('humanoid3d_walk.txt'))[:len(durations)].tolist()
+    for frame, duration in zip(frames, durations):
+        frame[0] = duration
+    clip = tmp_path / 'clip.txt'
+    clip.write_text(json.dumps({'Frames': frames}))
+    err = _one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
+                                   '-o', str(tmp_path / 'o.mcap')])
+    assert words in err, err

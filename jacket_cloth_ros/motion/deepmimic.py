@@ -38,7 +38,7 @@ import os
 import numpy as np
 
 from ..core.transforms import quat_slerp, quat_to_matrix
-from .bvh import Capture, continuous_angles, continuous_quaternions
+from .bvh import FRAME_TIME_RANGE, Capture, continuous_angles, continuous_quaternions
 
 # Each joint of pybullet's humanoid.urdf that a frame moves, in the frame's order, and its
 # count of numbers: 4 for a spherical joint's quaternion, 1 for a revolute joint's angle.
@@ -87,6 +87,9 @@ def read_frames(path: str) -> np.ndarray:
     if not np.isfinite(out).all():
         raise ClipError(f'{path}: a value is not a finite number')
     return out
+
+
+MAX_RESAMPLED = 100_000         # frames of a resampled clip: DeepMimic clips last seconds
 
 
 def frame_time(durations: np.ndarray) -> float:
@@ -180,7 +183,16 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
     dt = frame_time(frames[:, 0])
     if not dt > 0:
         raise ClipError('its frames last 0 s')
+    low, high = FRAME_TIME_RANGE
+    if not low <= dt <= high:
+        raise ClipError(f'its frames last {dt:g} s, outside [{low:g}, {high:g}] s')
     if len(frames) > 1 and np.abs(frames[:-1, 0] - dt).max() > 1e-9:
+        # Resampled at its usual frame time: as many frames as the clip's length needs, at
+        # most MAX_RESAMPLED (a few long frames among short ones could ask for millions).
+        count = float(np.sum(frames[:-1, 0])) / dt
+        if count > MAX_RESAMPLED:
+            raise ClipError(f'its frames, resampled every {dt:g} s, would be {count:.0f}, '
+                            f'over {MAX_RESAMPLED}')
         frames = _resample(frames, dt)
     columns, i = [], 8
     for _, n in LAYOUT:
