@@ -115,6 +115,18 @@ def test_magic_and_zeros_is_refused_at_its_first_record(tmp_path, header):
     assert _bytes_read() - before < 1 << 20
 
 
+def test_replay_and_analyze_of_magic_and_zeros_are_one_line(tmp_path, capsys):
+    path = tmp_path / 'zeros.mcap'
+    with open(path, 'wb') as f:
+        f.write(MAGIC)
+        f.truncate(20 << 20)
+    for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
+                 ['analyze', str(path), '--out', str(tmp_path / 'an')],
+                 ['picture', str(path), '-o', str(tmp_path / 'p.png')]):
+        err = _one_line_error(capsys, argv)
+        assert f'{path}: damaged file (no header record after its magic)' in err, err
+
+
 def test_a_finished_file_with_a_damaged_summary_is_refused_not_cut_short(
         clip, tmp_path, capsys):
     data = clip.read_bytes()
