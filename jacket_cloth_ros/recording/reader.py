@@ -366,13 +366,20 @@ def _decompress(compression, packed, declared):
     """Return a chunk's records: at most one byte more than ``declared`` is ever made."""
     limit = declared + 1
     if compression == '':
-        return bytes(packed)
+        return packed
     if compression == 'zstd':
         if zstandard is None:
             raise _Damage('a zstd chunk and no zstandard package to read it')
         try:
-            with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(packed)) as reader:
-                return reader.read(limit) if limit else b''
+            with zstandard.ZstdDecompressor().stream_reader(
+                    io.BytesIO(packed), read_across_frames=True) as reader:
+                out = bytearray()
+                while len(out) < limit:         # a read may give less than asked
+                    block = reader.read(limit - len(out))
+                    if not block:
+                        break
+                    out += block
+                return out
         except zstandard.ZstdError as e:
             raise _Damage(f'a zstd chunk does not decompress ({_text(e)})') from None
     if compression == 'lz4':
