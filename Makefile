@@ -141,7 +141,7 @@ $(ROBOTS) &: | $(READY)
 	rm -f $(ERD_WHEEL)
 
 test: $(READY) $(AMENT) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
-	$(PY) -m pytest -q -n 2 test
+	$(PY) -m pytest -q -n 2 --dist loadgroup test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).
 bench: $(READY)

@@ -112,3 +112,18 @@ def harness():
     yield make
     for h in made:
         h.close()
+
+
+# Test files with nodes over DDS or live processes: under `pytest -n` (make test) they run one
+# after another on one worker, as they do alone, and the rest of the suite on the other.
+LIVE_FILES = ('test_crowd_processes.py', 'test_first_start.py', 'test_fuzz.py',
+              'test_lab_speed.py', 'test_node.py', 'test_node_crowd.py',
+              'test_node_namespaces.py', 'test_node_viewer.py', 'test_ros2_cli.py',
+              'test_tools.py')
+
+
+def pytest_collection_modifyitems(config, items):
+    """Put the live files' tests in one xdist group (``--dist loadgroup``)."""
+    for item in items:
+        if item.path.name in LIVE_FILES:
+            item.add_marker(pytest.mark.xdist_group('live'))

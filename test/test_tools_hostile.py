@@ -358,6 +358,24 @@ def test_urdf_loading_compares_link_names_a_number_of_times_linear_in_links(monk
         assert compared[0] <= 4 * n, (n, compared[0])
 
 
+def test_a_urdf_over_the_bounds_is_refused_before_it_is_parsed(monkeypatch):
+    # Issue 38 items 5 and 6: 40,000 links stalled every character's /tf for seconds and a
+    # 50 MB URDF blocked the node for half an hour; refused before the parser sees them.
+    from urdf_parser_py import urdf
+    from jacket_cloth_ros.core import skeleton as module
+    from jacket_cloth_ros.core.config import ConfigError
+
+    def never(text):
+        raise AssertionError('parsed')
+    monkeypatch.setattr(module.urdf.URDF, 'from_xml_string', never)
+    with pytest.raises(ConfigError, match=f'URDF: 5000 links, over the {module.MAX_LINKS}'):
+        module.Skeleton(_chain_urdf(5000))
+    big = _chain_urdf(3)[:-len('</robot>')] + ' ' * module.MAX_URDF_CHARS + '</robot>'
+    with pytest.raises(ConfigError, match='characters, over the'):
+        module.Skeleton(big)
+    assert urdf.URDF.from_xml_string is never
+
+
 def test_a_file_of_unknown_records_is_refused_after_a_bounded_count(tmp_path):
     from jacket_cloth_ros.recording.reader import MAX_UNKNOWN_RECORDS
     data, _ = _one_chunk()

@@ -22,6 +22,12 @@ from .transforms import make_transform, rpy_matrix
 _MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
 
 
+# Bounds on a URDF, checked before it is parsed: the largest robots and characters known have
+# about 100 links and 100 kB, and a parse blocks the node for seconds per 10,000 links.
+MAX_URDF_CHARS = 4 * 1024 * 1024
+MAX_LINKS = 2048
+
+
 class Skeleton:
     """Links, joints and forward kinematics of a URDF character.
 
@@ -31,6 +37,12 @@ class Skeleton:
     def __init__(self, urdf_xml: str):
         if not isinstance(urdf_xml, str) or not urdf_xml.strip():
             raise ConfigError('URDF: empty robot description')
+        if len(urdf_xml) > MAX_URDF_CHARS:
+            raise ConfigError(f'URDF: {len(urdf_xml)} characters, over the {MAX_URDF_CHARS} a '
+                              'character may have')
+        links = urdf_xml.count('<link')
+        if links > MAX_LINKS:
+            raise ConfigError(f'URDF: {links} links, over the {MAX_LINKS} a character may have')
         try:
             # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
             with contextlib.redirect_stderr(io.StringIO()):
