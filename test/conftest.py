@@ -122,6 +122,7 @@ LIVE_FILES = ('test_crowd_processes.py', 'test_first_start.py', 'test_fuzz.py',
               'test_tools.py')
 
 
+@pytest.hookimpl(tryfirst=True)      # before xdist reads the groups
 def pytest_collection_modifyitems(config, items):
     """Put the live files' tests in one xdist group (``--dist loadgroup``)."""
     for item in items:

@@ -33,14 +33,13 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
-    # Issue 37's profile: the replay's and the node's input by stage, the step the largest,
-    # the node's DDS take and publish only on the node's side, shares adding up to the whole.
+    # Issue 37's profile: the replay's and the node's input by stage, the node's DDS take and
+    # publish only on the node's side; two steps of the walk's sweeps per 60 Hz input.
     replay, node = results['profile']
-    for p in (replay, node):
-        assert abs(sum(p['share'].values()) - 1.0) < 1e-6, p['share']
-        assert max(p['us'], key=p['us'].get) == 'step', p['us']
-        assert p['sweeps_per_input'] > 0 and p['writer_thread_us'] > 0
-    assert 'take' not in replay['us'] and node['us']['take'] > 0 and node['us']['publish'] > 0
+    stages = {'decode', 'prepare', 'step', 'complete', 'bones', 'tf', 'markers', 'diagnostics',
+              'record', 'other'}
+    assert set(replay['us']) == stages and set(node['us']) == stages | {'take', 'publish'}
+    assert replay['substeps_per_input'] == node['substeps_per_input'] == 2.0
     assert 'Where one input\'s CPU goes' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
@@ -57,7 +56,6 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert set(intake['ratio']) == {'lone process', 'crowd, one name list',
                                     'crowd, a new name list object each message',
                                     'crowd, a list that changes every message'}
-    assert all(v > 0 for v in intake['us'].values())
     assert intake['steady_inputs']['crowd, one name list'] > 0
     assert intake['steady_inputs']['crowd, a list that changes every message'] == 0
     assert 'against a lone simulation' in printed

@@ -374,10 +374,12 @@ def test_a_params_file_for_another_node_is_refused(tmp_path):
     path.write_text('/other_node:\n  ros__parameters:\n    sim_rate: 240.0\n')
     env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
     proc = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args',
-                           '--params-file', str(path), '-p', 'robot_description_timeout:=30.0'],
+                           '--params-file', str(path), '-p', 'robot_description_timeout:=30.0',
+                           '-p', f'record:={tmp_path / "x.mcap"}'],
                           env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 1 and len(lines) == 1, proc.stderr
+    assert not (tmp_path / 'x.mcap').exists()       # refused before anything was opened
     assert lines[0] == (f'jacket_cloth_node: --params-file {path}: no section for '
                         '/jacket_cloth_node (its node names: /other_node; /** is every node)')
     from jacket_cloth_ros.ros.parameters import params_file_for_another_node
@@ -514,6 +516,15 @@ def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
     level, recording, message = _recording_status(diags)
     assert level == 1 and 'No space left' in recording and recording.startswith('failed'), \
         recording
+    # A file whose close fails at a live stop stays told (the stop cleared it at once).
+    path = str(tmp_path / 'second.mcap')
+    assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
+    h.node.recorder._error = OSError(28, 'No space left on device')
+    assert h.node.set_parameters([Parameter('record', value='')])[0].successful
+    count = len(diags)
+    h.spin_until(lambda: len(diags) >= count + 2)
+    level, recording, _ = _recording_status(diags)
+    assert level == 1 and 'closed with an error' in recording, recording
 
 
 def test_a_recording_that_fails_to_close_at_the_end_is_one_line(tmp_path, capfd):

@@ -425,3 +425,18 @@ def test_a_deepmimic_clip_of_absurd_frame_times_is_refused(tmp_path, capsys, dur
     err = _one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
                                    '-o', str(tmp_path / 'o.mcap')])
     assert words in err, err
+
+
+def test_a_file_cut_inside_its_closing_magic_is_cut_short_not_damaged(tmp_path):
+    # A writer killed after its footer, before the last magic bytes, wrote every message.
+    from jacket_cloth_ros.recording.reader import read_messages
+    full = tmp_path / 'walk.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '0.5', '-o', str(full)]) == 0
+    data = full.read_bytes()
+    messages, complete = read_messages(str(full))
+    assert complete and messages
+    for cut in range(1, 8):
+        path = tmp_path / f'cut{cut}.mcap'
+        path.write_bytes(data[:-cut])
+        got, complete = read_messages(str(path))
+        assert not complete and [m.data for m in got] == [m.data for m in messages], cut

@@ -46,6 +46,7 @@ _KNOWN = set(Opcode)
 # Records of kinds no writer of ours or rosbag2's writes: a few are the MCAP spec's future;
 # a file of nothing else is garbage that would be walked 9 bytes at a time.
 MAX_UNKNOWN_RECORDS = 1 << 16
+NO_MESSAGES = ('',)         # a topic filter no message passes: a recording's topics alone
 
 
 class RecordingError(ValueError):
@@ -291,7 +292,10 @@ class _Scan:
             raise _Damage(f'its footer puts the summary at byte {summary_start}, not {start}')
         if crc and crc != zlib.crc32(body[:16], zlib.crc32(head, before)):
             raise _Damage('its summary fails its CRC check')
-        if self.f.read(len(MAGIC) + 1) != MAGIC:
+        tail = self.f.read(len(MAGIC) + 1)
+        if len(tail) < len(MAGIC) and MAGIC.startswith(tail):
+            raise _Short()          # cut inside its closing magic: every message is there
+        if tail != MAGIC:
             raise _Damage('its footer is not followed by the closing magic alone')
 
     def _take(self, opcode, body):

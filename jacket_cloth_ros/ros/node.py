@@ -31,7 +31,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
 
 from .. import signals
-from ..core.config import ConfigError
+from ..core.config import ConfigError, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
@@ -40,7 +40,7 @@ from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         cut_line, input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .parameter_services import guard_parameter_services, shown
+from .parameter_services import guard_parameter_services
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
                          check_value, descriptor, fabric_parameters,
                          params_file_for_another_node, params_file_problem, ros_args_problem,
@@ -97,6 +97,10 @@ class JacketClothNode(Node):
     def __init__(self, crowd: bool = False, **kwargs: object):
         self.program = 'jacket_cloth_crowd' if crowd else 'jacket_cloth_node'
         super().__init__(self.program, **kwargs)
+        # Before anything is opened: a file for another node set nothing (rcl says nothing).
+        problem = params_file_for_another_node(sys.argv, self.get_fully_qualified_name())
+        if problem:
+            raise ConfigError(problem)
         self.recorder: 'SessionRecorder | None' = None
         self._viewer = None             # the last accepted ~/viewer: (raw, stamp)
         self._last_stamp = None         # the last accepted input's, for recording after it
@@ -393,8 +397,8 @@ class JacketClothNode(Node):
     # -- recording ----------------------------------------------------------------------------
     def _open_recorder(self, path):
         self._record_asked = path
-        self._close_recorder(say=True)
-        self._recording_failed('')
+        self._recording_failed('')      # before the close: an error closing the old file stays
+        self._close_recorder(say=True)  # shown until a new file opens
         if not path:
             return
         problem = overwrite_problem(path)
@@ -406,6 +410,7 @@ class JacketClothNode(Node):
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
             for topic, kind, qos in self._topics.values():
                 self.recorder.add_topic(topic, kind, qos)
+            self._recording_failed('')
             self.get_logger().info(f'recording the session to {path}')
         except OSError as e:
             self.recorder = None
@@ -671,10 +676,6 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
     node = None
     try:
         node = make_node()
-        problem = params_file_for_another_node(argv, node.get_fully_qualified_name())
-        if problem:
-            print(f'{program}: {problem}', file=sys.stderr)
-            return 1
         signals.running()
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

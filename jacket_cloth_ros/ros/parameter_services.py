@@ -14,17 +14,6 @@ from rcl_interfaces.srv import (DescribeParameters, GetParameters, GetParameterT
 
 from .character import throttled
 
-# Parameter names are cut to this in a refusal's reason and in log lines.
-SHOWN_NAME = 80
-
-
-def shown(name: str) -> str:
-    """Return ``name`` as a log line or a reason shows it: quoted, cut to ``SHOWN_NAME``.
-
-    :param name: a parameter name from a request.
-    """
-    return repr(name) if len(name) <= SHOWN_NAME else f'{name[:SHOWN_NAME]!r}...'
-
 
 def guard_parameter_services(node: 'object', log_times: dict) -> None:
     """Wrap the callback of each of ``node``'s parameter services (rclpy's ParameterService).

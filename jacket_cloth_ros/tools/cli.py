@@ -451,8 +451,8 @@ def build_parser() -> argparse.ArgumentParser:
     y.set_defaults(func=cmd_play)
     d = sub.add_parser('demo', help='node + motion live, recording and a picture')
     d.add_argument('--out', default='out/demo')
-    d.add_argument('--domain-id', type=int, default=42,
-                   help='ROS_DOMAIN_ID if not set (tests use 20-123)')
+    d.add_argument('--domain-id', type=int, default=232,
+                   help='ROS_DOMAIN_ID if not set (tests use 20-223, the lab 224-231)')
     d.set_defaults(func=cmd_demo)
     f = sub.add_parser('picture', help='filmstrip PNG of a recorded session')
     f.add_argument('input')

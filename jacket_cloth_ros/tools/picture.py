@@ -33,7 +33,7 @@ from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
-from ..recording.reader import read_recording  # noqa: E402
+from ..recording.reader import NO_MESSAGES, read_recording  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
@@ -153,7 +153,7 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = No
         next that has one. None: every marker.
     :returns: the frames and the first JointState's stamp (ns).
     """
-    listed = read_recording(mcap_path, ('',))
+    listed = read_recording(mcap_path, NO_MESSAGES)
     wanted = [t for t, kind in listed.topics.items()
               if kind.endswith('MarkerArray') or kind.endswith('JointState')]
     messages = read_recording(mcap_path, wanted).messages

@@ -9,10 +9,10 @@ from now, and the character's URDF goes on ``robot_description``.
 from collections.abc import Iterator
 
 from ..core.config import read_text
-from ..recording.reader import RecordingError, read_recording
+from ..recording.reader import NO_MESSAGES, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from .session import NO_MESSAGES, joint_state_topic
+from .session import joint_state_topic
 
 
 def recorded_inputs(path: str, topic: str | None = None,

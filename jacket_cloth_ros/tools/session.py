@@ -22,7 +22,7 @@ from ..core.fabric import FABRIC_RANGES, Fabric, fabrics_from_data
 from ..core.rig import Rig
 from ..core.simulation import StepReport
 from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
-from ..recording.reader import Recording, RecordingError, read_recording
+from ..recording.reader import NO_MESSAGES, Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
 from ..ros.parameters import default_values, from_recording, parse_override, typed_value
@@ -85,9 +85,6 @@ def joint_state_topic(recording: Recording, topic: str | None = None) -> str:
         raise RecordingError(f'{recording.path}: several JointState topics ({", ".join(found)});'
                              ' choose one with --topic')
     return found[0]
-
-
-NO_MESSAGES = ('',)         # a topic filter no message passes: a recording's topics alone
 
 
 def input_topics(recording: Recording, topic: str) -> list[str]:
