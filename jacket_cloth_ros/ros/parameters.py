@@ -233,10 +233,7 @@ def params_file_problem(argv: list[str]) -> str:
             seen.add(key)
         return yaml.SafeLoader.construct_mapping(loader, node, deep)
     Strict.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
-    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
-    for flag, path in zip(ros, ros[1:]):
-        if flag != '--params-file':
-            continue
+    for path in _params_files(argv):
         try:
             with open(path, encoding='utf-8') as f:
                 yaml.load(f, Loader=Strict)
@@ -246,6 +243,12 @@ def params_file_problem(argv: list[str]) -> str:
         except (OSError, yaml.YAMLError):
             continue
     return ''
+
+
+def _params_files(argv):
+    """Return the paths of the ``--params-file`` arguments in ``argv``'s ROS arguments."""
+    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
+    return [path for flag, path in zip(ros, ros[1:]) if flag == '--params-file']
 
 
 def params_file_for_another_node(argv: list[str], node: str) -> str:
@@ -259,10 +262,7 @@ def params_file_for_another_node(argv: list[str], node: str) -> str:
     """
     import re
     import yaml
-    ros = argv[argv.index('--ros-args'):] if '--ros-args' in argv else []
-    for flag, path in zip(ros, ros[1:]):
-        if flag != '--params-file':
-            continue
+    for path in _params_files(argv):
         try:
             with open(path, encoding='utf-8') as f:
                 data = yaml.safe_load(f)
