@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Fuzzing: random and mutated CDR on every subscribed topic, MCAP files, YAML set-ups.
+"""Fuzzing: CDR on every topic, parameter services, MCAP files, set-ups, tools, crowds.
 
 Each part runs for a bounded time with a fixed seed, a few seconds in ``make test``. A longer
 run: ``JACKET_CLOTH_FUZZ_SECONDS=600 make test`` (seconds per part), with another seed:
@@ -496,6 +496,41 @@ def test_fuzz_yaml_set_ups_load_or_name_the_file(skeleton):
             assert message.startswith('fuzz.yaml') and '\n' not in message, (SEED, message)
             assert len(message) < 2000, (SEED, message[:300])
         assert time.process_time() - start < 5, (SEED, 'a parse spun', text[:300])
+
+
+def test_fuzz_characters_files_load_or_name_the_file(tmp_path):
+    """A crowd's characters file, mutated: it loads valid characters or one line names it."""
+    import shutil
+
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.ros.characters import load_characters
+    from jacket_cloth_ros.ros.parameters import default_values
+    rng = random.Random(SEED)
+    folder = tmp_path / 'config'
+    shutil.copytree(os.path.dirname(shipped('crowd.yaml')), folder)  # its files beside it
+    with open(shipped('crowd.yaml'), encoding='utf-8') as f:
+        text = f.read()
+    path = folder / 'fuzz.yaml'
+    known = set(default_values(load_fabric('tweed_jacket')))
+    for case in _until(SECONDS):
+        if rng.random() < 0.5:
+            data = yaml.safe_load(text)
+            for _ in range(rng.randint(1, 3)):
+                _mutate_tree(rng, data)
+            path.write_text(yaml.safe_dump(data))
+        else:
+            path.write_bytes(mutate(rng, text.encode()))
+        start = time.process_time()     # CPU, which a loaded machine does not stretch
+        try:
+            characters = load_characters(str(path))
+            for c in characters:        # what loads is a character the node can run
+                assert set(c.values) <= known, (SEED, sorted(set(c.values) - known))
+            prefixes = [c.values['frame_prefix'] for c in characters]
+            assert len(prefixes) == len(set(prefixes)), (SEED, prefixes)
+        except ConfigError as e:
+            message = str(e)
+            assert '\n' not in message and len(message) < 2000, (SEED, message[:300])
+        assert time.process_time() - start < 5, (SEED, 'a load spun')
 
 
 def test_found_by_fuzzing_a_short_message_and_a_huge_quaternion(make_sim, rest_input):
