@@ -119,7 +119,7 @@ def harness():
 LIVE_FILES = ('test_crowd_processes.py', 'test_first_start.py', 'test_fuzz.py',
               'test_lab_speed.py', 'test_node.py', 'test_node_crowd.py',
               'test_node_namespaces.py', 'test_node_viewer.py', 'test_ros2_cli.py',
-              'test_tools.py')
+              'test_tools.py')                      # test_ros2_cli.py: see the Makefile
 
 
 @pytest.hookimpl(tryfirst=True)      # before xdist reads the groups
