@@ -140,12 +140,9 @@ $(ROBOTS) &: | $(READY)
 	    $(ERD_WHEEL) $(ROBOT_URDFS)
 	rm -f $(ERD_WHEEL)
 
-# Two workers, the live test files on one of them (test/conftest.py). The ros2 CLI's tests run
-# after, in one process: `ros2 launch` started from a pytest-xdist worker did not stop on SIGINT
-# (cause not found).
+# Two workers, the live test files one after another on one of them (test/conftest.py).
 test: $(READY) $(AMENT) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
-	$(PY) -m pytest -q -n 2 --dist loadgroup test --ignore=test/test_ros2_cli.py
-	$(PY) -m pytest -q test/test_ros2_cli.py
+	$(PY) -m pytest -q -n 2 --dist loadgroup test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).
 bench: $(READY)

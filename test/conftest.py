@@ -2,11 +2,16 @@
 """Shared fixtures. DDS traffic stays on this machine and in a domain of this test run."""
 
 import os
+import signal
 
 import numpy as np
 import pytest
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+# A shell's background job (`make test &`) starts with SIGINT ignored, and every process a test
+# starts inherits that: `ros2 launch` then never stopped on the tests' Ctrl-C.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 # Every call of a kernel typed once (compiled.FixedTypes) is checked against those types.
 os.environ['JACKET_CLOTH_CHECK_TYPES'] = '1'
 
@@ -119,7 +124,7 @@ def harness():
 LIVE_FILES = ('test_crowd_processes.py', 'test_first_start.py', 'test_fuzz.py',
               'test_lab_speed.py', 'test_node.py', 'test_node_crowd.py',
               'test_node_namespaces.py', 'test_node_viewer.py', 'test_ros2_cli.py',
-              'test_tools.py')                      # test_ros2_cli.py: see the Makefile
+              'test_tools.py')
 
 
 @pytest.hookimpl(tryfirst=True)      # before xdist reads the groups

@@ -64,9 +64,8 @@ class Running:
 
     def __init__(self, domain, *args, cwd=None):
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED='1')
-        # No stdin: under pytest -n it is the worker's channel to pytest, and launch reads it.
-        self.proc = subprocess.Popen([ROS2, *args], env=env, stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        self.proc = subprocess.Popen([ROS2, *args], env=env, stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, text=True,
                                      start_new_session=True, cwd=cwd)
         self.lines, self.seen = queue.Queue(), []
         threading.Thread(target=self._read, daemon=True).start()
