@@ -10,13 +10,12 @@ import struct
 import tracemalloc
 
 import pytest
+import zstandard
 
 from jacket_cloth_ros.recording.mcap_file import McapWriter
 from jacket_cloth_ros.recording.reader import (
     MAGIC, MAX_CHUNK_BYTES, RecordingError, read_recording)
 from jacket_cloth_ros.tools.cli import main
-
-zstandard = pytest.importorskip('zstandard')
 
 
 @pytest.fixture(scope='module')
