@@ -30,6 +30,7 @@ from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
+from .transforms import rotation_between, snapped_to_axis
 
 if TYPE_CHECKING:           # for the annotations only
     from .fabric import Fabric
@@ -460,8 +461,8 @@ class JacketSimulation:
         angle = np.degrees(np.arccos(np.clip(body_up @ up, -1.0, 1.0)))
         if not angle > UP_TOLERANCE_DEG:
             return []
-        new = _snapped(body_up)
-        turn = _turn_between(up, new)
+        new = snapped_to_axis(body_up)
+        turn = rotation_between(up, new)
         colliders = self.model.colliders
         world = colliders.plane_links < 0
         colliders.plane_points[world] = colliders.plane_points[world] @ turn.T
@@ -493,15 +494,16 @@ class JacketSimulation:
                 'pose; widen cloth.shape.radii (or move cloth.shape.center) or shrink that '
                 'collider']
 
-    def _stretched_at_start(self) -> list[str]:
+    def _stretched_at_start(self, inside: bool) -> list[str]:
         """Say where the cloth, just put on the first input's skinned pose, is stretched.
 
         The key to change: the cloth's shape if it starts inside the colliders (they push it
         out wider), else the M2 skinning's reach where the top row follows the pads.
+
+        :param inside: whether the cloth starts inside the colliders (said at load).
         """
         rig, out = self.rig, []
         vs, _, hs, _ = self.edge_strains()
-        inside = bool(self._inside_at_rest())
         for worst, across in ((hs, True), (vs, False)):
             if not worst.value > STRETCHED_AT_START:
                 continue
@@ -576,7 +578,7 @@ class JacketSimulation:
                 report.reset = 'non-finite cloth state'
                 self._reset(sample)
             if first:
-                self.faults.rig += self._stretched_at_start()
+                self.faults.rig += self._stretched_at_start(inside=at_load > 0)
                 # A code each: the node logs one line per code at most every few seconds.
                 report.warnings += [(f'rig{k}', w) for k, w in
                                     enumerate(self.faults.rig[at_load:], at_load)]
@@ -804,30 +806,6 @@ class JacketSimulation:
         rig, c = self.rig, self.model.cloth      # its horizontals: those with a free end
         return (*edge_strain(self.x, rig.vert_a, rig.vert_b, rig.vert_rest),
                 *edge_strain(self.x, c.horiz_a, c.horiz_b, c.horiz_rest))
-
-
-def _snapped(v: np.ndarray) -> np.ndarray:
-    """Return unit ``v`` on the nearest world axis if within 15 degrees of it, else ``v``."""
-    k = int(np.argmax(np.abs(v)))
-    if abs(v[k]) < np.cos(np.radians(15.0)):
-        return v.copy()
-    out = np.zeros(3)
-    out[k] = np.sign(v[k])
-    return out
-
-
-def _turn_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the smallest rotation taking unit ``a`` onto unit ``b`` (a half turn if opposite)."""
-    axis = np.cross(a, b)
-    s, c = np.linalg.norm(axis), float(a @ b)
-    if s < 1e-12:
-        if c > 0:
-            return np.eye(3)
-        axis = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
-        s = 0.0
-    axis = axis / np.linalg.norm(axis)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + s * k + (1 - c) * (k @ k)
 
 
 def _shown(v: np.ndarray) -> str:

@@ -129,3 +129,39 @@ def apply_transform(t: np.ndarray, points: np.ndarray) -> np.ndarray:
     :param points: (N, 3) points.
     """
     return points @ t[:3, :3].T + t[:3, 3]
+
+
+def snapped_to_axis(v: npt.ArrayLike, degrees: float = 15.0) -> np.ndarray:
+    """Return unit ``v``, on the nearest axis if it is within ``degrees`` of one.
+
+    A leaning spine is not a tilted world.
+
+    :param v: a direction, (3,), any length but zero.
+    :param degrees: how far from an axis a direction is taken as that axis.
+    """
+    v = np.asarray(v, float) / np.linalg.norm(v)
+    k = int(np.argmax(np.abs(v)))
+    if abs(v[k]) >= np.cos(np.radians(degrees)):
+        out = np.zeros(3)
+        out[k] = np.sign(v[k])
+        return out
+    return v
+
+
+def rotation_between(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:
+    """Return the smallest rotation taking unit ``a`` onto unit ``b`` (a half turn if opposite).
+
+    :param a: the direction turned, (3,), unit.
+    :param b: where it goes, (3,), unit.
+    """
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    axis = np.cross(a, b)
+    s, c = np.linalg.norm(axis), float(a @ b)
+    if s < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        axis = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+        s = 0.0
+    axis = axis / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + s * k + (1 - c) * (k @ k)

@@ -24,6 +24,7 @@ import yaml
 from ..core.config import ConfigError
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
+from ..core.transforms import snapped_to_axis
 
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
 FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
@@ -301,20 +302,6 @@ def _pick(group, part, sk):
     return group[-1], 'by topology'
 
 
-def _snap(v, degrees=15.0):
-    """Return a unit vector, snapped onto the nearest axis within ``degrees``.
-
-    A leaning spine is not a tilted world.
-    """
-    v = np.asarray(v, float) / np.linalg.norm(v)
-    k = int(np.argmax(np.abs(v)))
-    if abs(v[k]) >= np.cos(np.radians(degrees)):
-        out = np.zeros(3)
-        out[k] = np.sign(v[k])
-        return out
-    return v
-
-
 def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     """Find pelvis, spine, chest, neck, arms and thighs of a skeleton; refuse in one line.
 
@@ -369,7 +356,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
         raise Refusal(f'cannot find two arms at {sk.link_names[chest]!r}')
     arms_roots = sorted(arms_roots, key=lambda c: -reach[c])[:2]
     neck_path = _groups(_main_path(neck_root, kids, reach), rest)
-    up = _snap(tips[neck_path[-1][-1]] - pts[pelvis])
+    up = snapped_to_axis(tips[neck_path[-1][-1]] - pts[pelvis])
     if forward is None:
         fwd, why_fwd = _infer_forward(sk, rest, kids, reach, pelvis, legs[:2], arms_roots, up,
                                       size)
@@ -378,7 +365,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     fwd = fwd - (fwd @ up) * up
     if np.linalg.norm(fwd) < 1e-3:
         raise Refusal('forward is along up: give another forward direction')
-    fwd = _snap(fwd)
+    fwd = snapped_to_axis(fwd)
     left = np.cross(up, fwd)
     body = Body(sk, rest, pelvis, chest, spine, neck_root, {}, {}, {}, up, fwd, left,
                 float(np.ptp(pts @ up)), tips=tips, virtual=virtual)
@@ -699,7 +686,7 @@ def _world_up(body, first_pose):
     neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
     if not np.linalg.norm(neck) > 1e-9:
         return None
-    return _snap(np.asarray(rotation, float) @ neck)
+    return snapped_to_axis(np.asarray(rotation, float) @ neck)
 
 
 def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s, world_up):
