@@ -110,16 +110,27 @@ def mcap_files(path: str) -> list[str]:
     return files
 
 
-def read_recording(path: str, topics: Collection[str] | None = None) -> Recording:
-    """Every message (optionally of some topics), metadata and topic types of a recording.
+def read_recording(path: str, topics: Collection[str] | None = None,
+                   kinds: Collection[str] | None = None) -> Recording:
+    """Every message (optionally of some topics or types), metadata and topic types.
 
     :param path: the recording, an MCAP file or a bag directory.
-    :param topics: the topics whose messages are read; None: every topic.
+    :param topics: topics whose messages are read.
+    :param kinds: message types (``sensor_msgs/msg/JointState``) whose messages are read too.
+        Neither given: every message.
     """
     out = Recording(path, [])
     for one in mcap_files(path):
-        _read_file(one, topics, out)
+        _read_file(one, _wanted(topics, kinds), out)
     return out
+
+
+def _wanted(topics, kinds):
+    """Return whether a message of (topic, type) is read; None: every message."""
+    if topics is None and kinds is None:
+        return None
+    topics, kinds = frozenset(topics or ()), frozenset(kinds or ())
+    return lambda topic, kind: topic in topics or kind in kinds
 
 
 class _TopicCounter(dict):
@@ -153,13 +164,13 @@ def read_messages(path: str,
     return rec.messages, rec.complete
 
 
-def _read_file(path, topics, out):
+def _read_file(path, wanted, out):
     f = _open_recording(path)
     with f:
         size = os.fstat(f.fileno()).st_size
         if f.read(8) != MAGIC:
             raise RecordingError(f'{path}: not an MCAP file')
-        scan = _Scan(f, size, topics, out)
+        scan = _Scan(f, size, wanted, out)
         try:
             scan.run()
         except _Short as e:
@@ -197,8 +208,8 @@ class _Scan:
     memory beyond the messages kept is a record and a chunk.
     """
 
-    def __init__(self, f, size, topics, out):
-        self.f, self.size, self.topics, self.out = f, size, topics, out
+    def __init__(self, f, size, wanted, out):
+        self.f, self.size, self.wanted, self.out = f, size, wanted, out
         self.crc = zlib.crc32(MAGIC)            # of the data section, then of the summary
         self.schemas, self.channels = {}, {}
         self.unknown = 0
@@ -306,7 +317,7 @@ class _Scan:
         elif opcode == Opcode.MESSAGE:
             channel_id, _, log_time, _ = _MESSAGE_HEAD.unpack_from(body)
             channel = self.channels.get(channel_id)
-            if channel is not None and (self.topics is None or channel[0] in self.topics):
+            if channel is not None and (self.wanted is None or self.wanted(*channel)):
                 self.out.messages.append(RecordedMessage(channel[0], channel[1], log_time,
                                                          bytes(body[_MESSAGE_HEAD.size:])))
         elif opcode == Opcode.SCHEMA:
@@ -422,5 +433,5 @@ def message_digests(path: str, topic: str) -> list[bytes]:
     """
     out = Recording(path, _Digests())
     for one in mcap_files(path):
-        _read_file(one, (topic,), out)
+        _read_file(one, _wanted((topic,), None), out)
     return list(out.messages)

@@ -33,12 +33,13 @@ from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
-from ..recording.reader import NO_MESSAGES, read_recording  # noqa: E402
+from ..recording.reader import read_recording  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
     from ..core.skeleton import Skeleton
 
+JOINT_STATE, MARKER_ARRAY = 'sensor_msgs/msg/JointState', 'visualization_msgs/msg/MarkerArray'
 VIEWS = (('side', 0), ('front', 1))     # the view axis drawn across: forward, left
 WORLD_AXES = body_axes([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 'rig')    # z up, x forward
 
@@ -153,13 +154,10 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = No
         next that has one. None: every marker.
     :returns: the frames and the first JointState's stamp (ns).
     """
-    listed = read_recording(mcap_path, NO_MESSAGES)
-    wanted = [t for t, kind in listed.topics.items()
-              if kind.endswith('MarkerArray') or kind.endswith('JointState')]
-    messages = read_recording(mcap_path, wanted).messages
+    messages = read_recording(mcap_path, kinds=(MARKER_ARRAY, JOINT_STATE)).messages
     states = [deserialize_message(m.data, JointState) for m in messages
-              if m.type_name.endswith('JointState')]
-    markers = [m for m in messages if m.type_name.endswith('MarkerArray')]
+              if m.type_name == JOINT_STATE]
+    markers = [m for m in messages if m.type_name == MARKER_ARRAY]
     if not markers or not states:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
     t0 = _stamp(states[0])

@@ -9,10 +9,10 @@ from now, and the character's URDF goes on ``robot_description``.
 from collections.abc import Iterator
 
 from ..core.config import read_text
-from ..recording.reader import NO_MESSAGES, RecordingError, read_recording
+from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from .session import joint_state_topic
+from .session import JOINT_STATE, joint_state_topic
 
 
 def recorded_inputs(path: str, topic: str | None = None,
@@ -26,11 +26,11 @@ def recorded_inputs(path: str, topic: str | None = None,
         order, offsets from the first header stamp, a line saying what plays).
     :raises RecordingError: no JointState, or one that does not decode (named by its stamp).
     """
-    recording = read_recording(path, NO_MESSAGES)
+    recording = read_recording(path, kinds=(JOINT_STATE,))
     topic = joint_state_topic(recording, topic)
     urdf = read_text(urdf_path, 'URDF') if urdf_path else \
         recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None
-    messages = read_recording(path, (topic,)).messages
+    messages = [m for m in recording.messages if m.topic == topic]
     if not messages:
         raise RecordingError(f'{path}: no message on {topic}')
     reader = JointStateReader()
