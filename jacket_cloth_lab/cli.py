@@ -10,6 +10,7 @@ import sys
 from typing import Sequence
 
 from jacket_cloth_ros.core.config import ConfigError
+from .tables import add_parser as add_tables_parser, write_run
 
 PROG = 'python -m jacket_cloth_lab'
 
@@ -86,8 +87,20 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_tables(args: argparse.Namespace) -> int:
+    """Rewrite the docs' figure tables from the benches' results.
+
+    :param args: the ``tables`` command's options.
+    :returns: the exit status: 1 if checking and a table would change.
+    """
+    from .tables import run_tables
+    if not os.path.isdir(args.docs):
+        raise LabError(f'{args.docs}: no such folder')
+    return run_tables(args.docs, args.results, args.check)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """Return the lab's command line: ``stress`` and ``bench``."""
+    """Return the lab's command line: ``stress``, ``bench`` and ``tables``."""
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True)
     st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
@@ -111,6 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
                    choices=('crowd',),
                    help='speed: run this part only (e.g. crowd)')
     b.set_defaults(func=cmd_bench)
+    add_tables_parser(sub).set_defaults(func=cmd_tables)
     return p
 
 
@@ -120,9 +134,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     :param argv: the arguments; None: the process's.
     :returns: the exit status.
     """
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        status = args.func(args)
+        if status == 0 and args.command in ('bench', 'stress'):
+            write_run(args.out, argv)      # the docs' tables say which run their figures are
+        return status
     except (LabError, ConfigError, ValueError, OSError) as e:
         print(f'{PROG} {args.command}: {e}', file=sys.stderr)
         return 1
