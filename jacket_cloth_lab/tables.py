@@ -404,11 +404,11 @@ def rewrite(text: str, results: str, say: Callable[[str], None]) -> str:
         try:
             body = rendered(kind, results)
         except Missing as e:
-            body = None
             say(f'{kind}: kept, the results lack it ({e})')
+            return match[0]
         if body is None:
-            body = match['body']
             say(f'{kind}: kept; run {" and ".join(TABLES[kind].commands)}')
+            return match[0]
         return match[1] + body + match[4]
     return REGION.sub(one, text)
 

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+from doc_tables import rewritten
 from jacket_cloth_lab.stress import run_scene, scenes
 from jacket_cloth_lab.cli import main
 
@@ -42,6 +43,8 @@ def test_stress_command_writes_the_matrix(tmp_path, capsys):
     assert np.isfinite([r['max_offset_m'] for r in rows]).all()
     assert '| scene | hard_pass | none |' in (out / 'stress.md').read_text()
     assert (out / 'stress.png').stat().st_size > 5_000
+    table = rewritten(tmp_path, {'stress': out}, ('stress.matrix',))['stress.matrix']
+    assert '| scene | hard_pass | none |' in table and '| teleport 10 m | holds (' in table
     assert main(['stress', '--out', str(out), '--methods', 'glue']) == 1
     assert 'unknown method' in capsys.readouterr().err
 

@@ -14,6 +14,7 @@ from jacket_cloth_lab import accuracy
 from jacket_cloth_lab.accuracy import SHIPPED, Method
 from jacket_cloth_lab.bench import rig_at_grid
 from jacket_cloth_lab.cli import main
+from doc_tables import rewritten
 
 QUICK_REFERENCE = replace(accuracy.REFERENCE, sim_rate=960.0, iterations=32)
 
@@ -51,6 +52,12 @@ def test_bench_quick_writes_tables_and_pareto_charts(quick_bench):
     rows = results['clips']['walk']['rows']
     assert any(r.get('pareto') for r in rows)
     assert all(r['cost_ms_per_s'] > 0 and np.isfinite(r['hem_rms_m']) for r in rows)
+
+
+def test_bench_quick_writes_the_docs_accuracy_tables(quick_bench, tmp_path):
+    out, _ = quick_bench
+    tables = rewritten(tmp_path, {'bench': out}, ('bench.pareto', 'bench.references'))
+    assert all('\n| walk |' in t for t in tables.values()), tables
 
 
 def test_the_reference_is_converged_by_richardson(quick_bench):

@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 from conftest import DOMAIN_ID
+from doc_tables import rewritten
 
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
@@ -59,6 +60,10 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert intake['steady_inputs']['crowd, one name list'] > 0
     assert intake['steady_inputs']['crowd, a list that changes every message'] == 0
     assert 'against a lone simulation' in printed
+    # The docs' tables of this bench, written from this run.
+    tables = rewritten(tmp_path, {'bench_speed': out}, ('speed.latest', 'crowd.held'))
+    assert '| replay, x real time, 5/10 s sessions |' in tables['speed.latest']
+    assert 'CPU per character-input at 1/4 characters' in tables['crowd.held']
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):

@@ -113,3 +113,7 @@ def test_bench_lod_charts_error_against_distance(tmp_path):
                                                       for row in levels]
     assert all(r['us_per_character_on'] > 0 and r['us_per_character_off'] > 0 for r in crowd)
     assert (tmp_path / 'crowd_lod.png').stat().st_size > 10_000
+    # The docs' tables of this bench, written from this run.
+    from doc_tables import rewritten
+    tables = rewritten(tmp_path, {'bench_lod': tmp_path}, ('lod.latest', 'crowd.lod'))
+    assert '| 60 | 2 |' in tables['lod.latest'] and '| 16 |' in tables['crowd.lod']
