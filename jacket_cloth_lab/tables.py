@@ -386,8 +386,8 @@ def rendered(kind: str, results: str) -> str | None:
             loaded.append(json.load(f))
     runs = '; '.join(f'`{c}`, run {d}' for c, d in dict.fromkeys(
         run_of(p, c) for p, c in zip(paths, table.commands)))
-    return f'From {runs}:\n\n' + \
-        '\n'.join(table.render(loaded)) + '\n'
+    # A line of text right after a table would be read as one more row of it.
+    return f'From {runs}:\n\n' + '\n'.join(table.render(loaded)) + '\n\n'
 
 
 def rewrite(text: str, results: str, say: Callable[[str], None]) -> str:

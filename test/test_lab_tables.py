@@ -116,3 +116,43 @@ def test_a_region_keeps_its_text_without_results_and_an_unknown_kind_is_refused(
     (docs / 'a.md').write_text(kept.replace('lod.latest', 'lod.newest'))
     assert main(['tables', '--docs', str(docs), '--check']) == 1
     assert "unknown table 'lod.newest'" in capsys.readouterr().err
+
+
+def _rung(n, held, cpu=300.0, p99=4000.0):
+    return {'characters': n, 'held': held, 'latency_us_p99': p99, 'answered': 1.0,
+            'cpu_us': cpu, 'rss_mb_per_character': 300.0 / n, 'sent': 480}
+
+
+def test_the_full_runs_parts_render_as_the_quick_run_does_not_give_them():
+    # The parts only a full `bench speed` gives (the node against its floor, the starts, the
+    # yardstick, the crowd's ladders), in the shapes speed.py and crowd.py return.
+    ladder = [12, [_rung(4, True), _rung(8, True), _rung(12, True), _rung(16, False, p99=1e4)]]
+    crowd = {'cores': 2, 'cost': [_rung(1, True), _rung(16, True)],
+             'single_cost': [_rung(1, True, cpu=2000.0)], 'crowd_one_core': ladder,
+             'floor_one_core': [24, [_rung(24, True), {'characters': 28, 'held': False,
+                                                       'not_answering': '27 of 28'}]],
+             'crowd_all_cores': [24, [_rung(24, True), _rung(28, False)]],
+             'crowd_per_core': [32, [_rung(32, True)]],
+             'single_one_core': [2, [_rung(2, True), _rung(4, False)]],
+             'single_all_cores': [4, [_rung(4, True), _rung(8, False)]]}
+    speed = {'kernel': [{'grid': '9x12', 'iterations': 8, 'kernel_ns': 60e3, 'limit_ns': 80e3,
+                         'ratio': 0.75}],
+             'replay': [{'session_s': 15.0, 'replay_s': 0.216, 'realtime_x': 69.4}],
+             'input': {'ratio': 2.5, 'input_us_median': 63.0, 'kernel_us_median': 25.0,
+                       'paced_ratio': 4.0},
+             'endurance': {'windows': [{'simulated_s': 3600.0, 'rss_mb': 227.7,
+                                        'input_us_median': 90.0}],
+                           'inputs': 432000, 'tf': 432000, 'complete': True},
+             'node': {'ratio': 1.55, 'ratios': [1.48, 1.55, 1.57], 'start_s': 1.14,
+                      'latency_windows': [1500.0, 4100.0]},
+             'cold_start_s': 37.5, 'after_warm_s': 1.08, 'crowd': crowd}
+    table = '\n'.join(TABLES['speed.latest'].render([speed]))
+    assert '| 1.55x (rounds 1.48–1.57x) | ≤ 1.5x: not met |' in table
+    assert 'per 120 Hz step 1.50x the yardstick\'s 80.0 µs' in table
+    assert '0 of 2 over a step | under one step (8.3 ms): met |' in table
+    assert '37.50 s with an empty cache' in table and '| 0.75x | ≤ 1.5x: met |' in table
+    held = '\n'.join(TABLES['crowd.held'].render([speed]))
+    assert '| crowd, one core | 12 (300 µs per character-input, p99 4.0 ms) | 16 (' in held
+    assert '| its floor, one core | 24 (' in held and '| 28 (not all answered) |' in held
+    assert '| crowd, 2 threads | 24 (2.00x one core) | 28 (' in held
+    assert '| single-node processes, one core / all | 2 / 4 | 4 / 8 |' in held
