@@ -316,8 +316,8 @@ def stress_matrix(sources: Sequence[Any]) -> list[str]:
         return (f'{r["verdict"]} ({r["max_vertical_stretch"] * 100:.1f} %, '
                 f'{r["max_inside_m"] * 100:.1f} cm)')
     rows = [[scene] + [said(cell[scene, m]) for m in methods] for scene in scenes]
-    return ['Each cell: the verdict (worst vertical stretch at any input, deepest inside a '
-            'collider).', ''] + _table(['scene'] + methods, rows)
+    # The legend in the corner: worst vertical stretch at any input, deepest inside a collider.
+    return _table(['scene: verdict (stretch %, inside cm)'] + methods, rows)
 
 
 def _sessions(report: dict) -> list[dict]:
