@@ -453,6 +453,21 @@ def test_record_never_overwrites_a_file_at_start_or_live(harness, tmp_path):
     assert h.node.recorder is recorder
 
 
+def test_record_refuses_a_file_made_between_its_check_and_its_open(
+        harness, tmp_path, monkeypatch):
+    # The check saw no file, then open(path, 'wb') truncated the one made meanwhile.
+    from jacket_cloth_ros.ros import node
+    h = harness()
+    path = tmp_path / 'made_meanwhile.mcap'
+    monkeypatch.setattr(node, 'overwrite_problem',
+                        lambda p: path.write_bytes(b'an earlier session') and '')
+    assert h.node.set_parameters([Parameter('record', value=str(path))])[0].successful
+    assert h.node.recorder is None and path.read_bytes() == b'an earlier session'
+    assert h.node._recording_problem == (
+        f'record: {str(path)!r} exists (the node never overwrites a recording): move it or '
+        'choose another path')
+
+
 def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
     # A recording set live took the rig and fabrics from their files again: one edited since
     # start was recorded but not run, one removed killed the node (issue 38).

@@ -132,3 +132,15 @@ def test_the_reader_refuses_damage_and_keeps_the_readable_part_of_a_cut(tmp_path
     path.write_bytes(data[:last.chunk_start_offset + last.chunk_length // 2])
     cut = read_recording(str(path))
     assert not cut.complete and 0 < len(cut.messages) < len(sent)
+
+
+def test_the_recorder_never_writes_over_a_file_made_after_any_check(tmp_path):
+    # A check that the path is free, then open(path, 'wb'): a file made in between was lost.
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    for name in ('x.mcap', 'bag'):
+        path = tmp_path / name
+        path.write_bytes(b'made since the check') if name.endswith('.mcap') else path.mkdir()
+        with pytest.raises(FileExistsError):
+            SessionRecorder(str(path))
+    assert (tmp_path / 'x.mcap').read_bytes() == b'made since the check'
+    assert list((tmp_path / 'bag').iterdir()) == []

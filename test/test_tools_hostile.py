@@ -6,6 +6,7 @@ counts of bytes read or allocated, never by elapsed time.
 """
 
 import io
+import os
 import struct
 import tracemalloc
 
@@ -439,3 +440,60 @@ def test_a_file_cut_inside_its_closing_magic_is_cut_short_not_damaged(tmp_path):
         path.write_bytes(data[:-cut])
         got, complete = read_messages(str(path))
         assert not complete and [m.data for m in got] == [m.data for m in messages], cut
+
+
+def test_a_bag_folder_without_metadata_holding_a_file_twice_names_the_folder(
+        clip, tmp_path, capsys):
+    # The line named <bag>/metadata.yaml, a file that is not there.
+    import shutil
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'a.mcap')
+    (bag / 'b.mcap').symlink_to('a.mcap')
+    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    assert 'metadata.yaml' not in err, err
+    assert f'{bag}: holds {bag / "a.mcap"} twice ({bag / "b.mcap"} is a link to it)' in err, err
+
+
+@pytest.mark.parametrize('name, recording', [('out.png', False), ('out.mcap', True),
+                                             ('bag', True)])
+def test_an_output_made_while_a_tool_runs_is_refused_not_overwritten(tmp_path, name,
+                                                                     recording):
+    # The tools checked that the output was free, ran, then renamed over whatever was there.
+    from jacket_cloth_ros.tools.outputs import OutputError, replacing
+    path = tmp_path / name
+    with pytest.raises(OutputError, match=f'^{path} exists \\(use --force to overwrite\\)$'):
+        with replacing(path, recording=recording) as tmp:
+            if name == 'bag':
+                os.mkdir(tmp)
+                path.mkdir()
+                (path / 'theirs').write_text('made while the tool ran')
+            else:
+                with open(tmp, 'w') as f:
+                    f.write('ours')
+                path.write_text('made while the tool ran')
+    kept = path / 'theirs' if name == 'bag' else path
+    assert kept.read_text() == 'made while the tool ran'
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]       # no scratch left
+    with replacing(path, recording=recording, force=True) as tmp:     # --force: replaced
+        if name == 'bag':
+            os.mkdir(tmp)
+        with open(os.path.join(tmp, 'ours') if name == 'bag' else tmp, 'w') as f:
+            f.write('ours')
+    assert (path / 'ours' if name == 'bag' else path).read_text() == 'ours'
+
+
+def test_an_analyze_output_made_while_it_runs_is_refused_not_overwritten(
+        clip, tmp_path, capsys, monkeypatch):
+    from jacket_cloth_ros.tools import analyze
+    out = tmp_path / 'an'
+    original = analyze.analyze
+
+    def and_meanwhile(sessions, out_dir, **kwargs):
+        (out / 'report.json').write_text('made while analyze ran')
+        return original(sessions, out_dir, **kwargs)
+    monkeypatch.setattr(analyze, 'analyze', and_meanwhile)
+    err = _one_line_error(capsys, ['analyze', str(clip), '--out', str(out), '--moments', '2'])
+    assert err.endswith(f'{out / "report.json"} exists (use --force to overwrite)'), err
+    assert (out / 'report.json').read_text() == 'made while analyze ran'
+    assert not [p for p in out.iterdir() if p.name.startswith('.')]

@@ -104,10 +104,17 @@ def mcap_files(path: str) -> list[str]:
     for one in files:           # by real path: a link or ../ naming a listed file again too
         real = os.path.realpath(one)
         if real in seen:
-            raise RecordingError(f'{meta}: lists {seen[real]} twice (as {one}); each file of '
-                                 'a bag is read once')
+            raise RecordingError(_twice(path, meta, seen[real], one))
         seen[real] = one
     return files
+
+
+def _twice(path, meta, first, again):
+    """Say that a bag reaches one file twice, naming what lists it: metadata.yaml or the folder."""
+    if os.path.isfile(meta):
+        return f'{meta}: lists {first} twice (as {again}); each file of a bag is read once'
+    return (f'{path}: holds {first} twice ({again} is a link to it); each file of a bag is '
+            'read once')
 
 
 def read_recording(path: str, topics: Collection[str] | None = None,

@@ -88,11 +88,14 @@ class SessionRecorder:
         record) is done by a writer thread, in order (the same file).
     :param compression: a Compression name; zstd, the smallest files, unless told (the node
         and the replay pass the record_compression parameter).
+    :param exclusive: whether the file must be new, made by an exclusive create (a check
+        before it could not see a file made since); False: ``path`` may be a file the caller
+        made empty for it (a tool's temporary file).
     """
 
     def __init__(self, path: str, flush_period_ns: int = 1_000_000_000,
                  final_name: str | None = None, background: bool = False,
-                 compression: str = 'zstd'):
+                 compression: str = 'zstd', exclusive: bool = True):
         try:            # only recording needs mcap: a node without it runs, unrecorded
             from .mcap_file import McapWriter
         except ImportError as e:
@@ -115,7 +118,7 @@ class SessionRecorder:
         else:
             self._name = final_name or os.path.basename(path)     # as the bag will know it
         try:
-            self._file = open(file_path, 'wb')
+            self._file = open(file_path, 'xb' if exclusive else 'wb')
         except OSError:
             if self._folder is not None:
                 os.rmdir(self._folder)          # no empty bag left to refuse the next try

@@ -403,8 +403,7 @@ class JacketClothNode(Node):
             return
         problem = overwrite_problem(path)
         if problem:
-            self._recording_failed(problem)
-            self.get_logger().error(f'{problem}; running without recording')
+            self._refuse_recording(problem)
             return
         try:
             self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
@@ -412,6 +411,10 @@ class JacketClothNode(Node):
                 self.recorder.add_topic(topic, kind, qos)
             self._recording_failed('')
             self.get_logger().info(f'recording the session to {path}')
+        except FileExistsError:         # made since the check: the exclusive create saw it
+            self.recorder = None
+            self._refuse_recording(_exists(path))
+            return
         except OSError as e:
             self.recorder = None
             self._recording_failed(f'cannot record to {path!r} ({e})')
@@ -422,6 +425,10 @@ class JacketClothNode(Node):
             if c.pipeline is not None:
                 c.add_to_recording(self.recorder)
         self._record_viewer()
+
+    def _refuse_recording(self, problem):
+        self._recording_failed(problem)
+        self.get_logger().error(f'{problem}; running without recording')
 
     def _record(self, topic, data, stamp_ns):
         if self.recorder is None:
@@ -620,10 +627,12 @@ def overwrite_problem(path: str) -> str:
 
     :param path: the ``record`` value asked for.
     """
-    if os.path.lexists(path):
-        return (f'record: {path!r} exists (the node never overwrites a recording): move it '
-                'or choose another path')
-    return ''
+    return _exists(path) if os.path.lexists(path) else ''
+
+
+def _exists(path):
+    return (f'record: {path!r} exists (the node never overwrites a recording): move it or '
+            'choose another path')
 
 
 def main(args: list[str] | None = None) -> int:

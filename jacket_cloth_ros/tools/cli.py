@@ -108,8 +108,9 @@ def _motion_to_file(args, skeleton, duration):
     from ..ros.cdr import joint_state
     from .outputs import replacing
     _check_output(args.output, args.force, [args.urdf], recording=True)
-    with replacing(args.output, recording=True) as tmp:
-        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
+    with replacing(args.output, recording=True, force=args.force) as tmp:
+        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)),
+                              exclusive=False)
         rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
         count = 0
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
@@ -153,15 +154,16 @@ def cmd_import(args: argparse.Namespace) -> int:
     if warning:
         print(f'jacket_cloth import: {args.input}: {warning}', file=sys.stderr)
     stamps = stamps_ns(capture, int(round(args.start * 1e9)))
-    with replacing(args.output, recording=True) as tmp:
-        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)))
+    with replacing(args.output, recording=True, force=args.force) as tmp:
+        rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)),
+                              exclusive=False)
         rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
         for k, stamp in enumerate(stamps):
             names, positions = joint_state_content(capture, k, args.world_joint)
             rec.write('/joint_states', joint_state(int(stamp), names, positions), int(stamp))
         rec.close()
     if args.urdf_out:
-        with replacing(args.urdf_out) as tmp:
+        with replacing(args.urdf_out, force=args.force) as tmp:
             with open(tmp, 'w', encoding='utf-8') as f:
                 f.write(capture.urdf)
     if args.urdf:
@@ -202,12 +204,12 @@ def cmd_picture(args: argparse.Namespace) -> int:
     gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
-    with replacing(args.output) as tmp:
+    with replacing(args.output, force=args.force) as tmp:
         render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig)
     print(args.output)
     if gif:
         from .animation import render_animation
-        with replacing(gif) as tmp:
+        with replacing(gif, force=args.force) as tmp:
             frames = render_animation(args.input, tmp, skeleton, rig)
         print(f'{gif} ({frames} frames)')
     return 0
@@ -246,7 +248,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if is_crowd(listed):
         return _replay_crowd(args)
     session = _session(args, listed)
-    pipeline, took = replay(session, args.output)
+    pipeline, took = replay(session, args.output, args.force)
     sim = pipeline.sim
     _warn_rig(args, sim.faults.rig)
     first, last = session.stamp_range()
@@ -265,7 +267,7 @@ def _replay_crowd(args):
     if given:
         raise ConfigError(f'{args.input} is a crowd\'s recording: it replays with each '
                           f'character\'s recorded set-up ({", ".join(given)} not taken)')
-    characters, took = replay_crowd(args.input, args.output)
+    characters, took = replay_crowd(args.input, args.output, args.force)
     inputs = sum(c.pipeline.inputs for c in characters.values())
     print(f'{args.output}: {len(characters)} characters, {inputs} JointState in {took:.2f} s')
     return 0
@@ -276,7 +278,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 
     :param args: the ``analyze`` command's options.
     """
-    from .analyze import analyze, output_names, summary_line
+    from .analyze import output_names, summary_line
     from .outputs import check_output_folder
     if len(args.input) > 1 and not args.compare:
         raise ToolError('several sessions: add --compare to lay them side by side')
@@ -285,11 +287,32 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     sessions = []
     for path in args.input:
         sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
-    report = analyze(sessions, args.out, moments=args.moments)
+    report = _analyze_into(args.out, args.force, sessions, args.moments)
     for r in report.get('sessions', [report]):
         _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}), r['rig_warnings'])
     print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
+
+
+def _analyze_into(out: str, force: bool, sessions: list, moments: int) -> dict:
+    """Run ``analyze`` into a scratch folder in ``out``, then move its files into ``out``.
+
+    Each file is placed as a tool's single output is (outputs.place): without --force, a file
+    made in ``out`` while the sessions ran is refused, not overwritten.
+    """
+    import shutil
+    import tempfile
+    from .analyze import analyze
+    from .outputs import place
+    os.makedirs(out, exist_ok=True)
+    scratch = tempfile.mkdtemp(prefix='.analyze.', suffix='.partial', dir=out)
+    try:
+        report = analyze(sessions, scratch, moments=moments)
+        for name in sorted(os.listdir(scratch)):
+            place(os.path.join(scratch, name), os.path.join(out, name), force)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    return report
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -362,7 +385,7 @@ def cmd_rig(args: argparse.Namespace) -> int:
         loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
     except ConfigError as e:
         raise ToolError(f'the proposed rig does not load ({e})') from None
-    with replacing(args.output) as tmp:
+    with replacing(args.output, force=args.force) as tmp:
         with open(tmp, 'w', encoding='utf-8') as f:
             f.write(text)
     for line in lines:
@@ -371,7 +394,7 @@ def cmd_rig(args: argparse.Namespace) -> int:
           + (f', up {rig["up"]}' if 'up' in rig else '') + ')')
     if args.picture:
         from ..rigging.picture import draw_rig
-        with replacing(args.picture) as tmp:
+        with replacing(args.picture, force=args.force) as tmp:
             draw_rig(loaded, body.up, body.forward, tmp,
                      title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
         print(f'wrote {args.picture}')

@@ -92,16 +92,18 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
     return recording, characters
 
 
-def replay_crowd(path: str, out_path: str) -> tuple[dict[str, CrowdCharacter], float]:
+def replay_crowd(path: str, out_path: str,
+                 force: bool = False) -> tuple[dict[str, CrowdCharacter], float]:
     """Write the replay of the crowd recording ``path``; returns (characters, seconds taken).
 
     :param path: the crowd's recording, an MCAP file or a bag folder.
     :param out_path: the replay's recording, replaced only once it is whole.
+    :param force: whether a recording at ``out_path`` is replaced.
     """
     recording, characters = load_crowd(path)
-    with replacing(out_path, recording=True) as tmp:
+    with replacing(out_path, recording=True, force=force) as tmp:
         recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),
-                                   background=True, compression='lz4')
+                                   background=True, compression='lz4', exclusive=False)
         try:
             first = next(iter(characters.values()))
             for key in ('tf', 'diagnostics'):

@@ -109,19 +109,22 @@ def _bag_files(given):
 
 
 @contextlib.contextmanager
-def replacing(path: str | os.PathLike, recording: bool = False) -> Iterator[str]:
+def replacing(path: str | os.PathLike, recording: bool = False,
+              force: bool = False) -> Iterator[str]:
     """Yield a temporary path next to ``path`` to write the output to.
 
     It becomes ``path`` only when the block ends without an error, so a failed run leaves the
-    old file (or none).
+    old file (or none). Without ``force``, only if nothing is at ``path`` by then: the check
+    before the run cannot see a file made during it.
 
     :param path: the output file.
     :param recording: whether the output is a recording: for a bag folder, the temporary path
         is a folder's, not yet made.
+    :param force: whether a file (or bag) at ``path`` is replaced.
     """
     path = os.fspath(path)
     if recording and is_bag_folder(path):
-        with _replacing_folder(os.path.normpath(path)) as tmp:
+        with _replacing_folder(os.path.normpath(path), force) as tmp:
             yield tmp
         return
     folder, name = os.path.split(os.path.abspath(path))
@@ -133,28 +136,66 @@ def replacing(path: str | os.PathLike, recording: bool = False) -> Iterator[str]
     try:
         yield tmp
         os.chmod(tmp, 0o666 & ~_UMASK)
-        os.replace(tmp, path)
+        place(tmp, path, force)
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)
 
 
+def place(tmp: str, path: str, force: bool) -> None:
+    """Move the finished file ``tmp`` to ``path``; without ``force``, only to a free name.
+
+    The name is taken by an exclusive create first, so a file made there since the check is
+    refused, never replaced; the rename then replaces only that empty file of ours.
+
+    :param tmp: the finished output, in ``path``'s folder.
+    :param path: the output file.
+    :param force: whether a file at ``path`` is replaced.
+    """
+    if not force:
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except FileExistsError:
+            raise OutputError(f'{path} exists (use --force to overwrite)') from None
+    try:
+        os.replace(tmp, path)
+    except OSError:
+        if not force:
+            os.remove(path)             # the empty file that took the name
+        raise
+
+
 @contextlib.contextmanager
-def _replacing_folder(path):
+def _replacing_folder(path, force):
     """Do ``replacing`` for a bag folder: written under a fresh name, then swapped in."""
     parent, name = os.path.split(os.path.abspath(path))
     scratch = tempfile.mkdtemp(prefix=f'.{name}.', suffix='.partial', dir=parent)
     tmp = os.path.join(scratch, name)
     try:
         yield tmp
-        old = os.path.join(scratch, name + '.old')
-        if os.path.lexists(path):
-            os.rename(path, old)
+        if force:
+            _swap_folder(tmp, path, os.path.join(scratch, name + '.old'))
+            return
+        try:                # taken by an empty folder of ours, which the rename replaces
+            os.mkdir(path)
+        except FileExistsError:
+            raise OutputError(f'{path} exists (use --force to overwrite)') from None
         try:
             os.rename(tmp, path)
         except OSError:
-            if os.path.lexists(old):
-                os.rename(old, path)            # the old bag stays where it was
+            os.rmdir(path)
             raise
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _swap_folder(tmp, path, old):
+    """Put the folder ``tmp`` at ``path``; a bag there goes to ``old`` (back, if that fails)."""
+    if os.path.lexists(path):
+        os.rename(path, old)
+    try:
+        os.rename(tmp, path)
+    except OSError:
+        if os.path.lexists(old):
+            os.rename(old, path)            # the old bag stays where it was
+        raise

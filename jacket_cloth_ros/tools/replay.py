@@ -18,17 +18,21 @@ if TYPE_CHECKING:           # for the annotations only
     from ..ros.pipeline import SessionPipeline
 
 
-def replay(session: SessionInput, out_path: str) -> tuple['SessionPipeline', float]:
+def replay(session: SessionInput, out_path: str,
+           force: bool = False) -> tuple['SessionPipeline', float]:
     """Write the replay of ``session`` to ``out_path``; returns (pipeline, seconds taken).
 
     :param session: the recording's input and set-up.
     :param out_path: the replay's recording, replaced only once it is whole.
+    :param force: whether a recording at ``out_path`` is replaced.
     """
     topics = output_topics(session)
-    with replacing(out_path, recording=True) as tmp:     # a failed replay leaves no output
+    # A failed replay leaves no output.
+    with replacing(out_path, recording=True, force=force) as tmp:
         recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),
                                    background=True,
-                                   compression=session.setup.values['record_compression'])
+                                   compression=session.setup.values['record_compression'],
+                                   exclusive=False)
         try:
             for name, kind, qos in topics.values():
                 recorder.add_topic(name, kind, qos)
