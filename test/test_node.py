@@ -468,6 +468,39 @@ def test_record_refuses_a_file_made_between_its_check_and_its_open(
         'choose another path')
 
 
+class _FillingFile:
+    """The recorder's file on a disk that fills after ``room`` bytes: what fits, then ENOSPC."""
+
+    def __init__(self, file, room):
+        self.file, self.room = file, room
+
+    def write(self, data):
+        free = self.room - self.file.tell()
+        if free <= 0:
+            raise OSError(28, 'No space left on device')
+        return self.file.write(bytes(data)[:free])
+
+    def __getattr__(self, name):
+        return getattr(self.file, name)
+
+
+def test_a_disk_filling_while_recording_leaves_a_finished_file(harness, tmp_path):
+    # The chunk being written when the disk filled was lost, and the file had no end.
+    from jacket_cloth_ros.recording.reader import read_recording
+    path = tmp_path / 'session.mcap'
+    h = harness(record=str(path))
+    writer = h.node.recorder._writer
+    writer._stream = _FillingFile(writer._stream, writer._stream.tell() + 600_000)
+    h.send_clip('idle', 60, 6.0)
+    h.spin_until(lambda: h.node.recorder is None)
+    assert 'closed on a full disk: a finished file without its last' in \
+        h.node._recording_problem, h.node._recording_problem
+    recording = read_recording(str(path))
+    assert recording.complete
+    inputs = [m for m in recording.messages if m.topic == '/joint_states']
+    assert len(inputs) > 60
+
+
 def test_a_rig_file_gone_after_start_is_still_what_a_recording_holds(harness, tmp_path):
     # A recording set live took the rig and fabrics from their files again: one edited since
     # start was recorded but not run, one removed killed the node (issue 38).

@@ -1,7 +1,9 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Our MCAP writer against the mcap package's readers, which check every CRC they meet."""
 
+import errno
 import io
+import random
 import struct
 import zlib
 
@@ -132,6 +134,137 @@ def test_the_reader_refuses_damage_and_keeps_the_readable_part_of_a_cut(tmp_path
     path.write_bytes(data[:last.chunk_start_offset + last.chunk_length // 2])
     cut = read_recording(str(path))
     assert not cut.complete and 0 < len(cut.messages) < len(sent)
+
+
+class _SmallDisk(io.BytesIO):
+    """A file on a disk of ``room`` bytes, written as a raw file is: what fits, then ENOSPC."""
+
+    def __init__(self, room):
+        super().__init__()
+        self.room = room
+
+    def write(self, data):
+        free = self.room - max(self.tell(), len(self.getvalue()))
+        if free <= 0 and len(data):
+            raise OSError(errno.ENOSPC, 'No space left on device')
+        return super().write(bytes(data)[:free])
+
+
+def _filled(room, flush_every=100, count=1000):
+    """Messages of incompressible bytes until the disk of ``room`` bytes is full, then finish.
+
+    Returns (writer, the file's bytes, messages sent, messages in chunks written before the
+    write that found no room).
+    """
+    rng = random.Random(38)
+    disk = _SmallDisk(room)
+    w = McapWriter(disk, compression='zstd')
+    w.start(profile='ros2', library='test')
+    channel = w.register_channel('/t', 'cdr', w.register_schema('s/msg/S', 'ros2msg', b'x'))
+    sent, before = [], None
+    for i in range(count):
+        data = rng.randbytes(1000)
+        w.add_message(channel, 1000 + i, data, 1000 + i, sequence=i)
+        sent.append(data)
+        if (i + 1) % flush_every == 0:
+            try:
+                w.flush()
+            except OSError as e:
+                assert e.errno == errno.ENOSPC
+                before = i + 1 - flush_every
+                break
+    w.finish()
+    return w, disk.getvalue(), sent, before
+
+
+def test_a_full_disk_keeps_what_fits_of_the_chunk_it_filled_in_and_ends_the_file(tmp_path):
+    # The chunk being written when the disk filled was lost whole, and the file had no end:
+    # now it is cut back, written in pieces as far as the room goes, and the summary follows.
+    from jacket_cloth_ros.recording.reader import read_recording
+    w, data, sent, before = _filled(room=360_000)
+    assert before is not None and before < len(sent)
+    got = [(m.sequence, m.data) for _, _, m in SeekingReader(
+        io.BytesIO(data), validate_crcs=True).iter_messages()]
+    assert len(got) + w.unwritten == len(sent) and len(got) > before + 20, (len(got), before)
+    assert got == [(i, sent[i]) for i in range(len(got))]
+    summary = SeekingReader(io.BytesIO(data)).get_summary()
+    assert summary.statistics.message_count == len(got)
+    path = tmp_path / 'full.mcap'
+    path.write_bytes(data)
+    recording = read_recording(str(path))
+    assert recording.complete and len(recording.messages) == len(got)
+
+
+def _two_chunks(disk):
+    """A writer on ``disk`` whose first chunk of 100 incompressible messages is written."""
+    rng = random.Random(38)
+    w = McapWriter(disk, compression='zstd')
+    w.start(profile='ros2', library='test')
+    channel = w.register_channel('/t', 'cdr', w.register_schema('s/msg/S', 'ros2msg', b'x'))
+    for i in range(200):
+        w.add_message(channel, 1000 + i, rng.randbytes(1000), 1000 + i)
+        if i == 99:
+            w.flush()
+    return w
+
+
+def test_a_disk_without_room_for_the_end_leaves_a_file_cut_at_a_whole_record(tmp_path):
+    # Not even the summary fits: the file stops at its last whole chunk, read as a cut one.
+    from jacket_cloth_ros.recording.reader import read_recording
+    room = len(_two_chunks(_SmallDisk(10 ** 9))._stream.getvalue()) + 10
+    disk = _SmallDisk(room)
+    w = _two_chunks(disk)
+    with pytest.raises(OSError) as raised:
+        w.finish()
+    assert raised.value.errno == errno.ENOSPC and w.unwritten == 100
+    path = tmp_path / 'cut.mcap'
+    path.write_bytes(disk.getvalue())
+    assert len(disk.getvalue()) == room - 10
+    recording = read_recording(str(path))
+    assert not recording.complete and len(recording.messages) == 100
+
+
+_FILLED_BY_THE_KERNEL = '''
+import random, resource, signal, sys
+from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)     # the write fails with EFBIG instead
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[2]), int(sys.argv[2])))
+rec = SessionRecorder(sys.argv[1], flush_period_ns=100, compression='lz4')
+rec.add_topic('/t', 'std_msgs/msg/String', qos_profile_yaml())
+rng = random.Random(38)
+for i in range(1000):
+    try:
+        rec.write('/t', rng.randbytes(1000), 1000 + i)
+    except OSError as e:
+        print('stopped at', i + 1, e.errno)
+        break
+rec.close()
+print('unwritten', rec.unwritten)
+'''
+
+
+def test_a_recording_whose_file_reaches_the_kernels_limit_is_finished(tmp_path):
+    # A real file and the kernel's own refusal (a file size limit: EFBIG, as a full disk's
+    # ENOSPC), through the recorder's unbuffered file.
+    import subprocess
+    import sys
+    from mcap.reader import make_reader
+    from jacket_cloth_ros.recording.reader import read_recording
+    path = tmp_path / 'limited.mcap'
+    done = subprocess.run([sys.executable, '-c', _FILLED_BY_THE_KERNEL, str(path), '300000'],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.split('\n')
+    stopped, unwritten = int(lines[0].split()[2]), int(lines[1].split()[1])
+    assert lines[0].split()[3] == str(errno.EFBIG) and unwritten > 0
+    recording = read_recording(str(path))
+    assert recording.complete and len(recording.messages) == stopped - unwritten
+    assert len(recording.messages) > 250            # the chunks before, and pieces of the last
+    with open(path, 'rb') as f:
+        reader = make_reader(f, validate_crcs=True)
+        assert sum(1 for _ in reader.iter_messages()) == len(recording.messages)
+        meta = {m.name: m.metadata for m in reader.iter_metadata()}
+    assert f'message_count: {len(recording.messages)}' in meta['rosbag2']['serialized_metadata']
 
 
 def test_the_recorder_never_writes_over_a_file_made_after_any_check(tmp_path):

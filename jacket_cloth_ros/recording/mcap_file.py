@@ -8,10 +8,12 @@ field through a BytesIO, which made the recording a large share of each replayed
 the file layout is the library's; only messages and their chunk are packed here.
 """
 
+import errno
 import struct
 import tempfile
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from typing import BinaryIO
 
 from mcap.data_stream import RecordBuilder
@@ -34,6 +36,42 @@ _MESSAGE = struct.Struct('<BQHIQQ')         # opcode, length, channel, sequence,
 _CHUNK_HEAD = struct.Struct('<BQQQQI')      # opcode, length, start, end, size, crc
 _FOOTER_HEAD = struct.Struct('<BQQQ')
 _FIRST_CHUNK_BUFFER = 1 << 20               # grows (doubling) to the largest chunk seen
+# A write that fails for these found no room: the file is rolled back to its last whole record
+# and what did not fit is kept for finish(), which writes as much of it as the room allows.
+NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+# The pieces a chunk the disk had no room for is written in at the end: small, so that most of
+# what fits is kept, and each one dropped whole when the summary needs its room.
+PIECE_BYTES = 16 * 1024
+
+
+def no_room(error: BaseException) -> bool:
+    """Tell whether ``error`` is a write that found the disk (or the quota) full.
+
+    :param error: the exception a write raised.
+    :returns: True for ENOSPC, EDQUOT and EFBIG.
+    """
+    return isinstance(error, OSError) and error.errno in NO_ROOM
+
+
+@dataclass
+class _Held:
+    """A chunk's records the file had no room for: written in pieces by finish()."""
+
+    raw: bytes
+    indexes: dict                   # channel id -> [(log time, offset in raw), ...]
+    start: int
+    end: int
+
+
+@dataclass
+class _Written:
+    """A chunk in the file: where it starts, its ChunkIndex record, what it holds."""
+
+    at: int
+    index_record: bytes
+    counts: dict = field(default_factory=dict)     # channel id -> its messages in the chunk
+    start: int = 0
+    end: int = 0
 
 
 def _compressor(name):
@@ -92,7 +130,11 @@ class McapWriter:
         self._chunk_count = 0
         self._metadata_indexes = []
         self.counts = {}                        # channel id -> its messages so far
-        self._start = self._end = None          # log times of the closed chunks' messages
+        # What the file holds (the writing side's): what the summary states.
+        self._in_file = {}                      # channel id -> its messages written
+        self._file_range = None                 # (first, last) log time written
+        self._held = []                         # chunks the file had no room for, in order
+        self.unwritten = 0                      # messages finish() found no room for
         # Chunk buffers are kept and reused: a fresh bytearray grown message by message cost
         # the live node 4.6 page faults per input (its pages, mapped anew each second). A
         # buffer goes back to ``_spare`` once its chunk is written (list append, pop: atomic).
@@ -109,7 +151,19 @@ class McapWriter:
     def _write_records(self, *records):
         for record in records:
             record.write(self._records)
-        self._stream.write(self._records.end())
+        with self._whole():
+            self._put(self._records.end())
+
+    def _put(self, data):
+        """Write all of ``data``: a raw file may take part of it per call."""
+        with memoryview(data) as view:
+            while view:
+                done = self._stream.write(view)
+                view = view[len(view) if done is None else done:]
+
+    def _whole(self):
+        """Roll the file back to where it is now if the block's writes find no room."""
+        return _RollBack(self._stream)
 
     def start(self, profile: str = '', library: str = 'jacket_cloth_ros') -> None:
         """Write the magic and the header record.
@@ -180,14 +234,6 @@ class McapWriter:
         if end > self._chunk_bytes:
             self._close_chunk()
 
-    def time_range(self) -> tuple[int, int] | None:
-        """(first, last) log time of the messages so far, or None before the first."""
-        spans = [s for s in ((self._start, self._end), (self._chunk_start, self._chunk_end))
-                 if s[0] is not None]
-        if not spans:
-            return None
-        return min(s[0] for s in spans), max(s[1] for s in spans)
-
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         """Write a metadata record (indexed in the summary).
 
@@ -199,9 +245,11 @@ class McapWriter:
     def _write_metadata(self, metadata):
         offset = self._stream.tell()
         metadata.write(self._records)
-        self._metadata_indexes.append(
-            MetadataIndex(offset=offset, length=self._records.count, name=metadata.name))
-        self._stream.write(self._records.end())
+        length = self._records.count
+        with self._whole():
+            self._put(self._records.end())
+        self._metadata_indexes.append(MetadataIndex(offset=offset, length=length,
+                                                    name=metadata.name))
 
     def flush(self) -> None:
         """Close the chunk in progress (if any) into the file and flush the stream."""
@@ -212,58 +260,143 @@ class McapWriter:
         if self._chunk_start is None:
             return
         start, end = self._chunk_start, self._chunk_end
-        self._start, self._end = self.time_range()
-        self._run(self._write_chunk, self._chunk, self._used, self._index, start, end)
+        try:
+            self._run(self._write_chunk, self._chunk, self._used, self._index, start, end)
+        except OSError as e:
+            if no_room(e):
+                self._new_chunk()       # that one is held: it is not written twice
+            raise
         self._new_chunk()
 
     def _write_chunk(self, buffer, used, message_indexes, start, end):
         with memoryview(buffer) as view, view[:used] as raw:
-            self._write_chunk_records(raw, message_indexes, start, end)
+            if self._held:              # after one that found no room: in order, at finish
+                self._held.append(_Held(bytes(raw), message_indexes, start, end))
+            else:
+                try:
+                    self._commit(self._write_chunk_records(raw, message_indexes, start, end))
+                except OSError as e:
+                    if not no_room(e):
+                        raise
+                    self._held.append(_Held(bytes(raw), message_indexes, start, end))
+                    raise
         self._spare.append(buffer)
 
+    def _commit(self, written):
+        """Count a chunk written as the file's: its index entry, messages and times."""
+        self._chunk_index_file.write(written.index_record)
+        self._chunk_count += 1
+        for channel_id, n in written.counts.items():
+            self._in_file[channel_id] = self._in_file.get(channel_id, 0) + n
+        self._file_range = _span(self._file_range, (written.start, written.end))
+
     def _write_chunk_records(self, raw, message_indexes, start, end):
+        """Write a chunk and its message indexes, whole or (on no room) not at all."""
         packed = self._compress(raw) if self._compress else raw
         compression = self._compression.encode()
         at = self._stream.tell()
         length = 8 + 8 + 8 + 4 + 4 + len(compression) + 8 + len(packed)
-        self._stream.write(_CHUNK_HEAD.pack(Opcode.CHUNK, length, start, end, len(raw),
-                                            zlib.crc32(raw)))
-        self._stream.write(struct.pack('<I', len(compression)) + compression)
-        self._stream.write(struct.pack('<Q', len(packed)))
-        self._stream.write(packed)
-        indexes_at = self._stream.tell()
+        head = (_CHUNK_HEAD.pack(Opcode.CHUNK, length, start, end, len(raw), zlib.crc32(raw))
+                + struct.pack('<I', len(compression)) + compression
+                + struct.pack('<Q', len(packed)))
+        indexes_at = at + len(head) + len(packed)
         offsets = {}
         indexes = bytearray()
         for channel_id, records in message_indexes.items():
             offsets[channel_id] = indexes_at + len(indexes)
             indexes += _message_index(channel_id, records)
-        self._stream.write(indexes)
+        with self._whole():
+            self._put(head)
+            self._put(packed)
+            self._put(indexes)
         ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=at,
             chunk_length=9 + length, message_index_offsets=offsets,
             message_index_length=len(indexes), compression=self._compression,
             compressed_size=len(packed), uncompressed_size=len(raw)).write(self._records)
-        self._chunk_index_file.write(self._records.end())
-        self._chunk_count += 1
+        return _Written(at, self._records.end(),
+                        {c: len(records) for c, records in message_indexes.items()}, start, end)
 
-    def finish(self) -> None:
+    def finish(self, closing: Callable[[dict, tuple], dict] | None = None) -> None:
         """Write the last chunk, the summary and the footer (through ``run``, after all else).
 
-        The stream stays open.
-        """
-        self._close_chunk()
-        first, last = self.time_range() or (0, 0)
-        statistics = Statistics(
-            message_count=sum(self.counts.values()), schema_count=len(self._schemas),
-            channel_count=len(self._channels), attachment_count=0,
-            metadata_count=0, chunk_count=0, message_start_time=first,
-            message_end_time=last, channel_message_counts=dict(self.counts))
-        self._run(self._write_summary, statistics)
+        If the disk filled, what it had no room for is written in pieces as far as the room
+        goes, then the end; pieces are given up, last first, until the end fits. The file
+        then ends as a finished one, and ``unwritten`` counts the messages not in it. With no
+        room even for the end, the file is left at its last whole record (a cut file) and the
+        error raised. The stream stays open.
 
-    def _write_summary(self, statistics):
-        # The chunk and metadata counts are the writer side's: complete only here.
-        statistics.chunk_count = self._chunk_count
-        statistics.metadata_count = len(self._metadata_indexes)
+        :param closing: ``closing(counts, (first, last))`` gives the metadata records written
+            just before the summary ({name: {key: value}}), from the messages the file holds:
+            channel id -> count, and their first and last log times.
+        """
+        try:
+            self._close_chunk()
+        except OSError as e:
+            if not no_room(e):
+                raise
+        self._run(self._write_end, closing or (lambda counts, span: {}))
+
+    def _write_end(self, closing):
+        pieces = self._write_held()
+        while True:
+            at, metadata = self._stream.tell(), len(self._metadata_indexes)
+            try:
+                self._write_closing(pieces, closing)
+                break
+            except OSError as e:
+                if not no_room(e):
+                    raise
+                del self._metadata_indexes[metadata:]
+                _rollback(self._stream, at)
+                if not pieces:
+                    self.unwritten = self._unwritten(pieces)
+                    raise
+                _rollback(self._stream, pieces.pop().at)     # its room for the summary's
+        self.unwritten = self._unwritten(pieces)
+        self._held = []
+        self._chunk_index_file.close()
+
+    def _write_held(self):
+        """Write the held chunks in pieces until one finds no room; the pieces written."""
+        pieces = []
+        for held in self._held:
+            for piece in _pieces(held, PIECE_BYTES):
+                try:
+                    pieces.append(self._write_chunk_records(*piece))
+                except OSError as e:
+                    if not no_room(e):
+                        raise
+                    return pieces
+        return pieces
+
+    def _unwritten(self, pieces):
+        """Count the messages finish() found no room for."""
+        written = sum(self._in_file.values()) + sum(sum(p.counts.values()) for p in pieces)
+        return sum(self.counts.values()) - written
+
+    def _write_closing(self, pieces, closing):
+        """Write the closing metadata, the summary and the footer, counting ``pieces`` in."""
+        counts = dict(self._in_file)
+        span = self._file_range
+        for piece in pieces:
+            for channel_id, n in piece.counts.items():
+                counts[channel_id] = counts.get(channel_id, 0) + n
+            span = _span(span, (piece.start, piece.end))
+        counts = {c.id: counts.get(c.id, 0) for c in self._channels}
+        first, last = span or (0, 0)
+        for name, data in closing(counts, (first, last)).items():
+            self._write_metadata(Metadata(name=name, metadata=dict(data)))
+        statistics = Statistics(
+            message_count=sum(counts.values()), schema_count=len(self._schemas),
+            channel_count=len(self._channels), attachment_count=0,
+            metadata_count=len(self._metadata_indexes),
+            chunk_count=self._chunk_count + len(pieces), message_start_time=first,
+            message_end_time=last, channel_message_counts=counts)
+        with self._whole():
+            self._write_summary(statistics, b''.join(p.index_record for p in pieces))
+
+    def _write_summary(self, statistics, more_chunk_indexes):
         self._write_records(DataEnd(data_section_crc=0))
         summary_start = self._stream.tell()
         offsets = []
@@ -272,9 +405,9 @@ class McapWriter:
         def put(data):
             nonlocal crc
             crc = zlib.crc32(data, crc)
-            self._stream.write(data)
+            self._put(data)
 
-        def group(opcode, records=(), spilled=None):
+        def group(opcode, records=(), spilled=None, more=b''):
             begin = self._stream.tell()
             for record in records:
                 record.write(self._records)
@@ -283,15 +416,15 @@ class McapWriter:
                 spilled.seek(0)
                 while block := spilled.read(1 << 20):
                     put(block)
+            put(more)
             offsets.append(SummaryOffset(group_opcode=opcode, group_start=begin,
                                          group_length=self._stream.tell() - begin))
 
         group(Opcode.SCHEMA, self._schemas)
         group(Opcode.CHANNEL, self._channels)
         group(Opcode.STATISTICS, [statistics])
-        group(Opcode.CHUNK_INDEX, spilled=self._chunk_index_file)
+        group(Opcode.CHUNK_INDEX, spilled=self._chunk_index_file, more=more_chunk_indexes)
         group(Opcode.METADATA_INDEX, self._metadata_indexes)
-        self._chunk_index_file.close()
         offsets_start = self._stream.tell()
         for offset in offsets:
             offset.write(self._records)
@@ -299,4 +432,54 @@ class McapWriter:
         crc = zlib.crc32(_FOOTER_HEAD.pack(Opcode.FOOTER, 20, summary_start, offsets_start), crc)
         self._write_records(Footer(summary_start=summary_start,
                                    summary_offset_start=offsets_start, summary_crc=crc))
-        self._stream.write(MAGIC)
+        self._put(MAGIC)
+
+
+def _span(span, more):
+    """The (first, last) log times of ``span`` and ``more`` together; ``span`` may be None."""
+    if span is None:
+        return more
+    return min(span[0], more[0]), max(span[1], more[1])
+
+
+def _pieces(held: _Held, size: int) -> Iterator[tuple]:
+    """Split a held chunk into chunks of about ``size`` bytes of records, in record order.
+
+    Each is (records, message indexes, first, last log time), as a chunk is written.
+    """
+    where = {}                              # offset in the chunk -> (channel id, log time)
+    for channel_id, records in held.indexes.items():
+        for log_time, offset in records:
+            where[offset] = (channel_id, log_time)
+    begin = 0
+    indexes, times = {}, []
+    at = 0
+    while at < len(held.raw):
+        channel_id, log_time = where[at]
+        indexes.setdefault(channel_id, []).append((log_time, at - begin))
+        times.append(log_time)
+        at += 9 + struct.unpack_from('<Q', held.raw, at + 1)[0]
+        if at - begin >= size or at >= len(held.raw):
+            yield held.raw[begin:at], indexes, min(times), max(times)
+            begin, indexes, times = at, {}, []
+
+
+def _rollback(stream, at):
+    """Cut ``stream`` back to ``at`` (a record's start), the room it took given back."""
+    stream.truncate(at)
+    stream.seek(at)
+
+
+class _RollBack:
+    """A block whose writes are whole or none: on no room, the file is cut back to its start."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __enter__(self):
+        self._at = self._stream.tell()
+
+    def __exit__(self, kind, error, trace):
+        if error is not None and no_room(error):
+            _rollback(self._stream, self._at)
+        return False

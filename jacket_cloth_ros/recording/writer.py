@@ -118,7 +118,9 @@ class SessionRecorder:
         else:
             self._name = final_name or os.path.basename(path)     # as the bag will know it
         try:
-            self._file = open(file_path, 'xb' if exclusive else 'wb')
+            # Unbuffered: a write the disk has no room for is cut back to the record before
+            # it (mcap_file), which a buffer's unwritten tail would make unknowable.
+            self._file = open(file_path, 'xb' if exclusive else 'wb', buffering=0)
         except OSError:
             if self._folder is not None:
                 os.rmdir(self._folder)          # no empty bag left to refuse the next try
@@ -231,16 +233,26 @@ class SessionRecorder:
         """
         self._writer.add_metadata(name, data)
 
+    @property
+    def unwritten(self) -> int:
+        """How many messages the disk had no room for at the close (0 but on a full disk)."""
+        return self._writer.unwritten
+
     def close(self) -> None:
+        """Complete the file: the last chunk, the rosbag2 metadata, the summary.
+
+        On a full disk, what was written before stays readable and the file ends as a finished
+        one if its end fits (``unwritten`` then counts the messages left out); if not even
+        that fits, the file is cut at its last whole record and the error raised.
+        """
         if self._closed:
             return
         self._closed = True
-        metadata = None
+        metadata = []
         try:
             if self._error is None:
-                metadata = self._bag_metadata()
-                self._writer.add_metadata('rosbag2', {'serialized_metadata': metadata})
-                self._writer.finish()
+                self._writer.finish(lambda counts, span: {'rosbag2': {
+                    'serialized_metadata': _last(metadata, self._bag_metadata(counts, span))}})
         finally:
             if self._thread is not None:
                 self._queue.put(None)
@@ -250,11 +262,12 @@ class SessionRecorder:
             raise self._error
         if self._folder is not None:
             with open(os.path.join(self._folder, 'metadata.yaml'), 'w', encoding='utf-8') as f:
-                f.write(metadata)
+                f.write(metadata[-1])
 
-    def _bag_metadata(self):
-        start, last = self._writer.time_range() or (0, 0)
-        counts = {t: self._writer.counts[c] for t, c in self._channels.items()}
+    def _bag_metadata(self, in_file, span):
+        """The rosbag2 metadata of the messages the file holds (channel id -> count)."""
+        start, last = span
+        counts = {t: in_file.get(c, 0) for t, c in self._channels.items()}
         # rosbag2's version 9: the QoS profiles as a list, and the files with their ranges.
         meta = {'rosbag2_bagfile_information': {
             'version': 9,
@@ -277,3 +290,9 @@ class SessionRecorder:
             'custom_data': {}, 'ros_distro': os.environ.get('ROS_DISTRO', 'kilted'),
         }}
         return yaml.safe_dump(meta, sort_keys=False)
+
+
+def _last(kept: list, text: str) -> str:
+    """Keep ``text`` as the last of ``kept`` and return it (the end may be written twice)."""
+    kept.append(text)
+    return text

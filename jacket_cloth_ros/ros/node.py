@@ -454,15 +454,23 @@ class JacketClothNode(Node):
             return
         try:
             recorder.close()
-            if say:                     # a live switch; at the node's end it goes unsaid
-                self.get_logger().info(f'recording closed: {recorder.path}')
         except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
-            text = f'recording {recorder.path} closed with an error: {e}'
-            self._recording_failed(text.removeprefix('recording '))
-            if self.context.ok():
-                self.get_logger().error(text)
-            else:                       # stopping: rosout is gone, and rcl said so in a line
-                print(f'{self.program}: {text}', file=sys.stderr, flush=True)
+            self._say_closed(f'recording {recorder.path} closed with an error: {e}')
+            return
+        if recorder.unwritten:
+            self._say_closed(f'recording {recorder.path} closed on a full disk: a finished '
+                             f'file without its last {recorder.unwritten} messages, which '
+                             'had no room')
+        elif say:                       # a live switch; at the node's end it goes unsaid
+            self.get_logger().info(f'recording closed: {recorder.path}')
+
+    def _say_closed(self, text):
+        """Say why a recording closed short, in diagnostics and in one line."""
+        self._recording_failed(text.removeprefix('recording '))
+        if self.context.ok():
+            self.get_logger().error(text)
+        else:                           # stopping: rosout is gone, and rcl said so in a line
+            print(f'{self.program}: {text}', file=sys.stderr, flush=True)
 
     def _markers_wanted(self, publisher: 'Publisher') -> bool:
         """Tell whether markers due now have a reader: a subscriber or the recording.
