@@ -497,3 +497,29 @@ def test_an_analyze_output_made_while_it_runs_is_refused_not_overwritten(
     assert err.endswith(f'{out / "report.json"} exists (use --force to overwrite)'), err
     assert (out / 'report.json').read_text() == 'made while analyze ran'
     assert not [p for p in out.iterdir() if p.name.startswith('.')]
+
+
+def test_a_picture_holds_the_markers_it_draws_not_the_sessions(tmp_path):
+    # Every MarkerArray's bytes were held to draw six: a long session's picture took as much
+    # memory as its markers. Now the peak is about a chunk and the frames drawn.
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import load_skeleton
+    from jacket_cloth_ros.recording.reader import count_messages
+    from jacket_cloth_ros.tools.picture import MARKER_ARRAY, moments_at, recorded_frames
+    clip = tmp_path / 'clip.mcap'
+    session = tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'showcase', '--duration', '40', '-o', str(clip)]) == 0
+    assert main(['replay', str(clip), '-o', str(session), '-p',
+                 'record_compression:=none']) == 0
+    sizes = [len(m.data) for m in read_recording(str(session), kinds=(MARKER_ARRAY,)).messages]
+    skeleton = load_skeleton(shipped('character.urdf'))
+    tracemalloc.start()
+    try:
+        frames, _ = recorded_frames(str(session), skeleton, load_rig(skeleton),
+                                    moments_at(None, 3))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(frames) == 3 and len(sizes) > 50
+    assert peak < sum(sizes) / 4, (peak, sum(sizes), count_messages(str(session)))

@@ -10,7 +10,7 @@ import io
 import os
 import struct
 import zlib
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 
 import yaml
@@ -138,6 +138,33 @@ def _wanted(topics, kinds):
         return None
     topics, kinds = frozenset(topics or ()), frozenset(kinds or ())
     return lambda topic, kind: topic in topics or kind in kinds
+
+
+class _Handed:
+    """Stands in for Recording.messages: hands each message on and keeps none."""
+
+    def __init__(self, take):
+        self.append = take
+
+
+def each_message(path: str, take: Callable[[RecordedMessage], None],
+                 topics: Collection[str] | None = None,
+                 kinds: Collection[str] | None = None) -> Recording:
+    """Hand each message (optionally of some topics or types) to ``take``, in file order.
+
+    Nothing is held here: a caller keeps what it needs of a session hours long.
+
+    :param path: the recording, an MCAP file or a bag directory.
+    :param take: called with each RecordedMessage read.
+    :param topics: topics whose messages are read.
+    :param kinds: message types whose messages are read too. Neither given: every message.
+    :returns: the recording's metadata, topics and completeness, with no messages.
+    """
+    out = Recording(path, _Handed(take))
+    for one in mcap_files(path):
+        _read_file(one, _wanted(topics, kinds), out)
+    out.messages = []
+    return out
 
 
 class _TopicCounter(dict):

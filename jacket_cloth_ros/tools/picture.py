@@ -15,6 +15,7 @@ body link (the first link from the root with two children or more: the pelvis) a
 so a character that walks away, by the world joint or by the URDF's own joints, stays in frame.
 """
 
+import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -25,7 +26,6 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from ..core.fabric import load_fabric  # noqa: E402
@@ -33,7 +33,8 @@ from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
 from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
-from ..recording.reader import read_recording  # noqa: E402
+from ..recording.reader import each_message  # noqa: E402
+from ..ros.cdr import DECODE_ERRORS, JointStateReader  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
@@ -134,17 +135,15 @@ def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
                  ref[-1].copy(), np.array([anchor, rest]), sim.root.copy())
 
 
-def _stamp(msg):
-    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-
-
 def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = None,
                     choose: Callable[[np.ndarray, int], Sequence[int]] | None = None
                     ) -> tuple[list[Frame], int]:
     """Frames at recorded MarkerArrays with a mesh; the skeleton from the nearest input.
 
-    Only the markers drawn are decoded, and only the markers and inputs are read: decoding
-    every MarkerArray of a long session took minutes, and its /tf is most of its bytes.
+    Two passes over the markers and inputs, holding only what is drawn: the first keeps each
+    marker's log time and each input's stamp, the second decodes the markers chosen and keeps
+    the inputs nearest them. Every marker's bytes held at once made a long session's picture
+    as large in memory as its markers; decoding them all took minutes.
 
     :param mcap_path: the recording.
     :param skeleton: its character.
@@ -154,53 +153,148 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = No
         next that has one. None: every marker.
     :returns: the frames and the first JointState's stamp (ns).
     """
-    messages = read_recording(mcap_path, kinds=(MARKER_ARRAY, JOINT_STATE)).messages
-    states = [deserialize_message(m.data, JointState) for m in messages
-              if m.type_name == JOINT_STATE]
-    markers = [m for m in messages if m.type_name == MARKER_ARRAY]
-    if not markers or not states:
+    times = _Times(mcap_path)
+    if not times.markers or not times.inputs:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
-    t0 = _stamp(states[0])
-    log_times = np.array([m.log_time for m in markers], dtype=np.int64)
-    chosen = range(len(markers)) if choose is None else choose(log_times, t0)
+    log_times = np.array(times.markers, dtype=np.int64)
+    t0 = times.inputs[0]
+    chosen = range(len(log_times)) if choose is None else \
+        [int(k) for k in choose(log_times, t0)]
+    picked = _Picked(mcap_path, chosen, len(log_times), walk=choose is not None,
+                     inputs=[times.nearest(t) for t in log_times[list(chosen)]])
+    drawn = picked.drawn()
+    picked.read_inputs({times.nearest(picked.markers[k][0]) for k in drawn})
     parser = InputParser(skeleton)
     sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket')) if rig else None
-    # The input nearest each marker's time, by a search in the sorted stamps: a scan of every
-    # input per marker made a long session's picture quadratic in its length.
-    order = sorted(range(len(states)), key=lambda k: _stamp(states[k]))
-    stamps = np.array([_stamp(states[k]) for k in order], dtype=np.int64)
-    out, drawn = [], set()
-    for first in chosen:
-        for k in range(first, len(markers) if choose else first + 1):   # the next with a mesh
-            if k in drawn:
-                break
-            m = markers[k]
-            frame = _marker_frame(m, states[order[_nearest(stamps, m.log_time)]], parser,
-                                  skeleton, sim)
-            if frame is not None:
-                out.append(frame)
-                drawn.add(k)
-                break
+    out = []
+    for k in drawn:
+        log_time, points = picked.markers[k]
+        out.append(_frame(log_time, points, picked.inputs[times.nearest(log_time)], parser,
+                          skeleton, sim))
     if not out:
         raise ValueError(f'{mcap_path}: no markers or JointState to draw')
     return out, t0
 
 
-def _marker_frame(m, js, parser, skeleton, sim):
-    """Return the frame of one recorded MarkerArray, None if it has no cloth mesh or hood."""
-    arr = deserialize_message(m.data, MarkerArray)
+class _Times:
+    """The first pass: each marker's log time and each input's stamp, in file order."""
+
+    def __init__(self, path):
+        self.path = path
+        self.markers, self.inputs = [], []
+        self._reader = JointStateReader()
+        each_message(path, self._take, kinds=(MARKER_ARRAY, JOINT_STATE))
+        # The input nearest a time, by a search in the sorted stamps: a scan of every input
+        # per marker made a long session's picture quadratic in its length.
+        stamps = np.array(self.inputs, dtype=np.int64)
+        self._order = np.argsort(stamps, kind='stable')
+        self._sorted = stamps[self._order]
+
+    def _take(self, m):
+        if m.type_name == MARKER_ARRAY:
+            self.markers.append(m.log_time)
+        else:
+            self.inputs.append(_read_input(self._reader, m, self.path).stamp_ns)
+
+    def nearest(self, t: int) -> int:
+        """Return the ordinal (in file order) of the input whose stamp is nearest ``t``.
+
+        :param t: a time, ns.
+        :returns: the input's index among the inputs, in file order.
+        """
+        return int(self._order[_nearest(self._sorted, int(t))])
+
+
+class _Picked:
+    """The second pass: the chosen markers' points (the next with a mesh for one without)."""
+
+    def __init__(self, path, chosen, count, walk, inputs):
+        self.path = path
+        self.chosen = list(chosen)
+        self.markers = {}               # marker index -> (log time, points by (ns, id))
+        self.inputs = {}                # input ordinal -> JointStateContent
+        self._resolved = {}             # position in chosen -> the marker index drawn for it
+        self._waiting = {}              # marker index -> positions in chosen waiting there
+        for position, k in enumerate(self.chosen):
+            self._waiting.setdefault(k, []).append(position)
+        self._count, self._walk = count, walk
+        self._wanted = set(inputs)
+        self._reader = JointStateReader()
+        self._marker = self._input = 0
+        each_message(path, self._take, kinds=(MARKER_ARRAY, JOINT_STATE))
+
+    def _take(self, m):
+        if m.type_name != MARKER_ARRAY:
+            if self._input in self._wanted:
+                self.inputs[self._input] = _read_input(self._reader, m, self.path)
+            self._input += 1
+            return
+        k, self._marker = self._marker, self._marker + 1
+        positions = self._waiting.pop(k, None)
+        if not positions:
+            return
+        points = _marker_points(m.data)
+        if points is not None:
+            self.markers[k] = (m.log_time, points)
+            self._resolved.update((p, k) for p in positions)
+        elif self._walk and k + 1 < self._count:
+            self._waiting.setdefault(k + 1, []).extend(positions)
+
+    def drawn(self) -> list[int]:
+        """Return the marker indices drawn, in the order chosen, each once."""
+        out, seen = [], set()
+        for position in range(len(self.chosen)):
+            k = self._resolved.get(position)
+            if k is not None and k not in seen:
+                out.append(k)
+                seen.add(k)
+        return out
+
+    def read_inputs(self, ordinals: set[int]) -> None:
+        """Read the inputs of ``ordinals`` not kept yet, in one more pass only if any.
+
+        A marker drawn in place of a chosen one without a mesh may be nearest another input.
+
+        :param ordinals: the inputs' indices among the inputs, in file order.
+        """
+        missing = ordinals - set(self.inputs)
+        if not missing:
+            return
+        count = itertools.count()
+
+        def take(m):
+            k = next(count)
+            if k in missing:
+                self.inputs[k] = _read_input(self._reader, m, self.path)
+        each_message(self.path, take, kinds=(JOINT_STATE,))
+
+
+def _read_input(reader, m, path):
+    try:
+        return reader.read(m.data)
+    except DECODE_ERRORS as e:
+        raise ValueError(f'{path}: a {m.topic} JointState that does not decode ({e})') from None
+
+
+def _marker_points(data):
+    """Return the points of a recorded MarkerArray by (ns, id); None without cloth and hood."""
+    arr = deserialize_message(data, MarkerArray)
     found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
     if ('cloth', 0) not in found or ('hood', 0) not in found:
         return None
-    pts = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+    return {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+
+
+def _frame(log_time, pts, js, parser, skeleton, sim):
+    """Return the frame of a marker's points, the skeleton posed by the input ``js``."""
     bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
-    sample = parser.parse(_stamp(js), js.name, js.position)
+    sample = parser.parse(js.stamp_ns, js.name, js.position)
     poses = skeleton.forward(sample.q)
-    frame = Frame(m.log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
+    frame = Frame(log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
                   poses[:, :3, 3], root=sample.root)
     if sim is not None:
         sim.links = poses          # the skinned pose of this skeleton pose
-        skinned = sim_frame(sim, m.log_time)
+        skinned = sim_frame(sim, log_time)
         frame.hem_ref, frame.hood_ref = skinned.hem_ref, skinned.hood_ref
     return frame
 
