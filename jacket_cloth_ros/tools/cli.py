@@ -243,7 +243,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from ..recording.reader import read_recording
     from .crowd_replay import is_crowd
     from .session import NO_MESSAGES
-    # Its topics and set-ups tell a crowd's; then the messages, in one more pass.
+    # Its topics and set-ups tell a crowd's and which inputs to keep; then the messages, in
+    # one more pass. One pass would hold every JointState topic's inputs until the set-up
+    # records, which may come anywhere in the file, said which are wanted.
     listed = read_recording(args.input, NO_MESSAGES)
     if is_crowd(listed):
         return _replay_crowd(args)
