@@ -277,3 +277,20 @@ def test_the_recorder_never_writes_over_a_file_made_after_any_check(tmp_path):
             SessionRecorder(str(path))
     assert (tmp_path / 'x.mcap').read_bytes() == b'made since the check'
     assert list((tmp_path / 'bag').iterdir()) == []
+
+
+def test_chunk_indexes_the_temporary_folder_has_no_room_for_wait_in_memory():
+    # The summary's chunk index waits in a temporary file, often on the recording's disk.
+    out = io.BytesIO()
+    w = McapWriter(out, compression='lz4')
+    w._chunk_index_file = _SmallDisk(150)           # room for one record and a part
+    w.start(profile='ros2', library='test')
+    channel = w.register_channel('/t', 'cdr', w.register_schema('s/msg/S', 'ros2msg', b'x'))
+    for i in range(50):
+        w.add_message(channel, 1000 + i, bytes([i]) * 100, 1000 + i, sequence=i)
+        if i % 10 == 9:
+            w.flush()
+    w.finish()
+    reader = SeekingReader(io.BytesIO(out.getvalue()), validate_crcs=True)
+    assert len(reader.get_summary().chunk_indexes) == 5
+    assert [m.sequence for _, _, m in reader.iter_messages()] == list(range(50))

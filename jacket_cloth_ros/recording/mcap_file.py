@@ -126,7 +126,10 @@ class McapWriter:
         self._channels = []
         # The summary's chunk index, one record a chunk, waits in an unnamed temporary file
         # until finish(): held in memory, it grew a long session's node without bound.
-        self._chunk_index_file = tempfile.TemporaryFile()
+        # Unbuffered, so that a record the temporary folder's disk has no room for is cut back
+        # whole: it and the ones after it wait in ``_index_tail`` instead.
+        self._chunk_index_file = tempfile.TemporaryFile(buffering=0)
+        self._index_tail = []
         self._chunk_count = 0
         self._metadata_indexes = []
         self.counts = {}                        # channel id -> its messages so far
@@ -274,21 +277,38 @@ class McapWriter:
                 self._held.append(_Held(bytes(raw), message_indexes, start, end))
             else:
                 try:
-                    self._commit(self._write_chunk_records(raw, message_indexes, start, end))
+                    written = self._write_chunk_records(raw, message_indexes, start, end)
                 except OSError as e:
                     if not no_room(e):
                         raise
                     self._held.append(_Held(bytes(raw), message_indexes, start, end))
                     raise
+                self._commit(written)
         self._spare.append(buffer)
 
     def _commit(self, written):
         """Count a chunk written as the file's: its index entry, messages and times."""
-        self._chunk_index_file.write(written.index_record)
+        self._spill(written.index_record)
         self._chunk_count += 1
         for channel_id, n in written.counts.items():
             self._in_file[channel_id] = self._in_file.get(channel_id, 0) + n
         self._file_range = _span(self._file_range, (written.start, written.end))
+
+    def _spill(self, record):
+        """Keep a chunk's index record for the summary: in the temporary file while it has room."""
+        if not self._index_tail:
+            spill = self._chunk_index_file
+            at = spill.tell()
+            try:
+                with memoryview(record) as view:
+                    while view:
+                        view = view[spill.write(view):]
+                return
+            except OSError as e:
+                if not no_room(e):
+                    raise
+                _rollback(spill, at)
+        self._index_tail.append(record)
 
     def _write_chunk_records(self, raw, message_indexes, start, end):
         """Write a chunk and its message indexes, whole or (on no room) not at all."""
@@ -394,7 +414,8 @@ class McapWriter:
             chunk_count=self._chunk_count + len(pieces), message_start_time=first,
             message_end_time=last, channel_message_counts=counts)
         with self._whole():
-            self._write_summary(statistics, b''.join(p.index_record for p in pieces))
+            self._write_summary(statistics, b''.join(
+                self._index_tail + [p.index_record for p in pieces]))
 
     def _write_summary(self, statistics, more_chunk_indexes):
         self._write_records(DataEnd(data_section_crc=0))
