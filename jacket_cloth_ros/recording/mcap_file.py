@@ -457,7 +457,7 @@ class McapWriter:
 
 
 def _span(span, more):
-    """The (first, last) log times of ``span`` and ``more`` together; ``span`` may be None."""
+    """Return the (first, last) log times of ``span`` and ``more`` together (``span``: or None)."""
     if span is None:
         return more
     return min(span[0], more[0]), max(span[1], more[1])

@@ -265,7 +265,7 @@ class SessionRecorder:
                 f.write(metadata[-1])
 
     def _bag_metadata(self, in_file, span):
-        """The rosbag2 metadata of the messages the file holds (channel id -> count)."""
+        """Return the rosbag2 metadata of the messages the file holds (channel id -> count)."""
         start, last = span
         counts = {t: in_file.get(c, 0) for t, c in self._channels.items()}
         # rosbag2's version 9: the QoS profiles as a list, and the files with their ranges.
