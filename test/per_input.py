@@ -7,6 +7,7 @@ rigs (test_mocap_targets, test_rig_on_captures, test_public_humanoid, test_deepm
 
 import numpy as np
 
+from jacket_cloth_ros.core.body_proxy import body_proxy, sleeved_links
 from jacket_cloth_ros.core.measures import collider_labels, depth_inside
 from jacket_cloth_ros.tools.session import run_session
 
@@ -14,13 +15,17 @@ from jacket_cloth_ros.tools.session import run_session
 def measure_every_input(loaded, keep_x: bool = False) -> dict:
     """Replay ``loaded`` (tools.session.load_session) and measure the cloth after each input.
 
-    Returns numpy arrays ``vertical_stretch``, ``horizontal_stretch``, ``inside_m`` (and
-    ``x``, the cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
+    Returns numpy arrays ``vertical_stretch``, ``horizontal_stretch``, ``inside_m`` (the rig's
+    colliders), ``body_inside_m`` (the body proxy, every vertex, as analyze's) (and ``x``, the
+    cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
     counts ``published`` (inputs that put bones on /tf) and ``inputs``. Every input must be
     accepted and leave a finite cloth.
     """
     labels = collider_labels(loaded.setup.rig)
-    series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [], 'x': []}
+    body = body_proxy(loaded.setup.skeleton, sleeved_links(loaded.setup.rig))
+    everywhere = np.ones(loaded.setup.rig.n, dtype=bool)
+    series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [],
+              'body_inside_m': [], 'x': []}
     resets, published = [], 0
 
     def probe(pipeline, report, stamp, outputs):
@@ -35,6 +40,8 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
         series['horizontal_stretch'].append(hs.value)
         series['inside_m'].append(depth_inside(sim.x, sim.rig.free,
                                                sim.collider_frames(sim.links), labels).value)
+        series['body_inside_m'].append(depth_inside(sim.x, everywhere, body.posed(sim.links),
+                                                    body.labels).value)
         if keep_x:
             series['x'].append(sim.x.copy())
 

@@ -24,11 +24,14 @@ import yaml
 from ..core.config import ConfigError
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
-from ..core.transforms import snapped_to_axis
+from ..core.transforms import rpy_matrix, snapped_to_axis
 
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
 FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
 ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bone is along it
+# A bone collider's radius as a share of the height: a thigh's for a person, thicker than the
+# body proxy's bones (core.body_proxy, a knee's), so cloth the colliders hold is outside those.
+BONE_COLLIDER_SHARE = 0.04
 
 #  Words of sensor and virtual frames (an IMU, a camera, a lidar): never a part of the body.
 SENSOR_WORDS = {'imu', 'camera', 'cam', 'lidar', 'laser', 'sensor', 'gyro', 'gyrometer',
@@ -118,6 +121,7 @@ class Body:
     tips: np.ndarray | None = None      # (L,3) where each link's body ends (_tips)
     virtual: list = field(default_factory=list)   # sensor and virtual frames, left out
     choices: list = field(default_factory=list)
+    ankles: dict = field(default_factory=dict)      # side -> the link at the ankle
 
     def pos(self, link: int) -> np.ndarray:
         """Return a link's origin at the zero pose, (3,) in the root frame.
@@ -498,6 +502,7 @@ def _leg(body, root, kids, reach):
         why_s = 'the other leg'
     body.thighs[side] = thigh
     body.knees[side] = rest[groups[min(i + 1, len(groups) - 1)][0]][:3, 3]
+    body.ankles[side] = groups[min(i + 2, len(groups) - 1)][0]
     body.choices.append(Choice(f'{side} thigh', sk.link_names[thigh],
                                f'first long bone of the leg chain, {why}; {side} {why_s}'))
 
@@ -603,11 +608,13 @@ def propose(sk: Skeleton, forward: list | None = None,
         lines.append(f'{"cloth radii":>15}: from the <collision> shapes of '
                      + ', '.join(with_shapes))
     else:
-        # Wide enough for the shoulders and for fleshy thighs below (0.19 of their length,
-        # wider than their colliders), whichever is wider.
+        # Wide enough for the shoulders and for fleshy thighs below (0.19 of their length), and
+        # clear of the leg bones' colliders, whichever is wider.
         hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
-        ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s)
-        rx = 0.8 * ry
+        clear = BONE_COLLIDER_SHARE * body.height + 0.015 * s
+        side_reach, front_reach = _leg_reach(body)
+        ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s, side_reach + clear)
+        rx = max(0.8 * ry, front_reach + clear)
         lines.append(f'{"cloth radii":>15}: from the shoulder and hip widths ({2 * sh_half:.2f}, '
                      f'{2 * hip_half:.2f} m; no primitive <collision> shape on the torso)')
     rows = 10
@@ -671,7 +678,7 @@ def propose(sk: Skeleton, forward: list | None = None,
         rig['world_up'] = _r(world_up)
         lines.append(f'{"world up":>15}: {_r(world_up)} (pelvis to neck at the motion\'s '
                      'first pose, in its world)')
-    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, thigh_len, s,
+    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s,
                                        up if world_up is None else world_up)
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
@@ -689,40 +696,127 @@ def _world_up(body, first_pose):
     return snapped_to_axis(np.asarray(rotation, float) @ neck)
 
 
-def _colliders(body, shape_link, top_h, rx, ry, thigh_len, s, world_up):
+def _colliders(body, shape_link, top_h, rx, ry, s, world_up):
     """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some.
 
-    The floor is square to ``world_up``.
+    With the shapes, the links carrying the other leg bones the jacket hangs over add theirs,
+    and a leg bone their shapes leave bare or far thinner than a bone collider gets a capsule
+    (issue 35: the minimal cylinders of a robot cover half a thigh). The
+    floor is square to ``world_up``.
     """
     shapes = urdf_shapes(body.skeleton.urdf_xml)
     wanted = [body.pelvis, shape_link, body.chest, body.thighs['left'], body.thighs['right']]
     wanted = list(dict.fromkeys(wanted))
     floor = {'name': 'floor', 'type': 'plane', 'link': 'world', 'point': [0.0, 0.0, 0.0],
              'normal': _r(world_up)}
+    radius = round(BONE_COLLIDER_SHARE * body.height, 3)
     if all(body.name(k) in shapes for k in wanted):
-        return ({'from_urdf': [body.name(k) for k in wanted], 'add': [floor]},
-                'from the URDF <collision> shapes of ' + ', '.join(body.name(k) for k in wanted))
+        # The torso's shapes hold its bones; the legs' are checked.
+        bones = [b for b in _hung_over_bones(body) if b[1] not in body.spine]
+        wanted += [k for _, k, _, _ in bones if body.name(k) in shapes and k not in wanted]
+        bare = [b for b in bones if not _covered(body, shapes, wanted, b[2], b[3], radius / 2)]
+        names = [body.name(k) for k in wanted]
+        why = 'from the URDF <collision> shapes of ' + ', '.join(names)
+        if bare:
+            why += '; a capsule over ' + ', '.join(b[0] for b in bare) + ' (bare or thin)'
+        return {'from_urdf': names, 'add': [_bone_capsule(body, b, radius) for b in bare]
+                + [floor]}, why
     P, up = body.pos, body.up
     pelvis = P(body.pelvis)
     torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward) \
         * body.forward
-    # Torso and thighs thinner than the flesh: when the character sits bent forward, colliders
-    # the size of the body meet and leave the front of the jacket no room outside them all.
+    # The torso thinner than the flesh: when the character sits bent forward, colliders the
+    # size of the body meet and leave the front of the jacket no room outside them all.
     out = [_ellipsoid(body, 'torso', shape_link, torso_c, [0.8 * (rx - 0.02 * s),
                                                            ry - 0.02 * s, 0.22 * s]),
            _ellipsoid(body, 'pelvis', body.pelvis, pelvis - 0.03 * s * up,
                       [0.13 * s, 0.9 * ry, 0.14 * s])]
-    for side in ('left', 'right'):
-        k = body.thighs[side]
-        knee = body.knees[side]
-        bone = knee - P(k)
-        out.append({'name': f'{side[0]}_thigh', 'type': 'capsule', 'link': body.name(k),
-                    'a': _r(_in_link(body, k, P(k) + 0.07 * bone)),
-                    'b': _r(_in_link(body, k, P(k) + 0.82 * bone)),
-                    'radius': round(0.13 * thigh_len, 3)})
+    out += [_bone_capsule(body, bone, radius) for bone in _hung_over_bones(body)]
     out.append(floor)
-    return out, 'sized from bone lengths (no primitive <collision> shape on ' + ', '.join(
-        body.name(k) for k in wanted if body.name(k) not in shapes) + ')'
+    return out, ('an ellipsoid on the torso and the pelvis, a capsule over each spine and leg '
+                 'bone down to the ankles (no primitive <collision> shape on ' + ', '.join(
+                     body.name(k) for k in wanted if body.name(k) not in shapes) + ')')
+
+
+def _bone_capsule(body, bone, radius):
+    """Return a capsule collider over a bone of ``_hung_over_bones``, on the link carrying it."""
+    name, link, a, b = bone
+    return {'name': name, 'type': 'capsule', 'link': body.name(link),
+            'a': _r(_in_link(body, link, a)), 'b': _r(_in_link(body, link, b)), 'radius': radius}
+
+
+def _covered(body, shapes, links, a, b, depth):
+    """Tell whether the links' shapes hold the bone a-b (root frame) at least ``depth`` deep.
+
+    Sampled between its ends, which the neighbouring bones' shapes hold.
+    """
+    for t in (0.1, 0.3, 0.5, 0.7, 0.9):
+        p = a + t * (b - a)
+        if not any(_deep_inside(s.as_collider(''), _in_link(body, k, p), depth)
+                   for k in links for s in shapes.get(body.name(k), [])):
+            return False
+    return True
+
+
+def _deep_inside(entry, p, depth):
+    """Tell whether a point (the collider's link frame) is ``depth`` inside a collider entry."""
+    if entry['type'] == 'capsule':
+        a, b = np.asarray(entry['a']), np.asarray(entry['b'])
+        ab = b - a
+        t = np.clip((p - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        return float(np.linalg.norm(p - a - t * ab)) <= entry['radius'] - depth
+    shrunk = np.asarray(entry['radii']) - depth
+    if (shrunk <= 0).any():
+        return False
+    q = rpy_matrix(np.radians(entry['rpy_deg'])).T @ (p - np.asarray(entry['center']))
+    return float(np.linalg.norm(q / shrunk)) <= 1.0
+
+
+def _chain(body, end):
+    """Return the links from the pelvis down to ``end``, each the parent of the next."""
+    out, k = [], end
+    while k >= 0 and k != body.pelvis:
+        out.append(k)
+        k = body.skeleton.parent[k]
+    return [body.pelvis] + out[::-1]
+
+
+def _hung_over_bones(body):
+    """Return the bones the jacket hangs over: (name, link carrying it, start, end), root frame.
+
+    The spine's from the pelvis to the chest, and each leg's from the pelvis to the ankle, the
+    shin too (a knee lifted in a stride or a seated shin meets the hem). A bone shorter than a
+    bone collider's radius is left to its neighbours' rounded ends.
+    """
+    shortest = BONE_COLLIDER_SHARE * body.height
+    out = []
+    chains = [('spine', 'spine', body.chest)] + [(side[0], side, body.ankles[side])
+                                                 for side in ('left', 'right')]
+    for prefix, side, end in chains:
+        links = _chain(body, end)
+        phase, counts = ('spine' if side == 'spine' else 'hip'), {}
+        for parent, child in zip(links, links[1:]):
+            if parent == body.thighs.get(side):
+                phase = 'thigh'
+            a, b = body.pos(parent), body.pos(child)
+            if phase == 'thigh' and np.linalg.norm(a - body.knees[side]) < SAME_PLACE:
+                phase = 'shin'
+            if np.linalg.norm(b - a) < shortest:
+                continue
+            counts[phase] = counts.get(phase, 0) + 1
+            name = phase if side == 'spine' else f'{prefix}_{phase}'
+            out.append((name + (f'_{counts[phase]}' if counts[phase] > 1 else ''), parent, a, b))
+    return out
+
+
+def _leg_reach(body):
+    """Return how far the leg bones above the knees reach from the pelvis, sideways and ahead."""
+    pelvis = body.pos(body.pelvis)
+    points = [body.pos(k) for side in ('left', 'right') for k in _chain(body, body.ankles[side])
+              if (body.pos(k) - pelvis) @ body.up >= (body.knees[side] - pelvis) @ body.up]
+    points += [body.knees[side] for side in ('left', 'right')]
+    d = np.array(points) - pelvis
+    return float(np.abs(d @ body.left).max()), float(np.abs(d @ body.forward).max())
 
 
 def _ellipsoid(body, name, link, center, radii):
