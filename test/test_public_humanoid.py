@@ -82,7 +82,9 @@ def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_pat
     rig = yaml.safe_load(rig_path.read_text())
     assert rig['up'] == [0.0, 1.0, 0.0] and rig['forward'] == [1.0, 0.0, 0.0]
     assert 'by the names' in out                       # no toe links: left_ and right_ say it
-    assert rig['colliders']['from_urdf'] == ['root', 'chest', 'left_hip', 'right_hip']
+    # The knees' capsules too: a kicking or seated shin meets the hem (issue 35 item 3).
+    assert rig['colliders']['from_urdf'] == ['root', 'chest', 'left_hip', 'right_hip',
+                                             'left_knee', 'right_knee']
     assert rig['colliders']['add'][0]['normal'] == [0.0, 1.0, 0.0]
     loaded = Rig(rig, load_skeleton(urdf))
     by_name = {c.name: c for c in loaded.capsules}
@@ -107,6 +109,8 @@ def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
     assert vertical.max() <= 0.10 and np.percentile(vertical, 99) <= 0.03
     assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003
     assert horizontal.max() <= 0.10 and np.percentile(horizontal, 99) <= 0.10
+    body = s['body_inside_m']                   # issue 35: inside its every shape
+    assert body.max() <= 0.01 and np.percentile(body, 99) <= 0.003
     # Seated (3 to 4 s), the thighs part the front edges of the hem: each is outboard of its
     # thigh (the hips are 0.34 to the side, z is the right), not caught between the thighs.
     rig = loaded.setup.rig

@@ -141,9 +141,9 @@ SHAPES = {
 }
 
 
-def _with_collisions(text):
-    for link, geometry in SHAPES.items():
-        z = {'base_link': 0.0, 'spine': 0.12, 'chest': 0.1}.get(link, -0.22)
+def _with_collisions(text, shapes=None, thigh_z=-0.22):
+    for link, geometry in (shapes or SHAPES).items():
+        z = {'base_link': 0.0, 'spine': 0.12, 'chest': 0.1}.get(link, thigh_z)
         col = (f'<collision><origin xyz="0 0 {z}" rpy="0 0 0"/><geometry>{geometry}'
                '</geometry></collision>')
         text, n = re.subn(rf'<link name="{link}"\s*/>', f'<link name="{link}">{col}</link>',
@@ -210,13 +210,33 @@ def test_a_urdf_without_primitive_shapes_cannot_give_colliders():
 def test_the_proposal_uses_the_urdf_shapes_for_colliders_and_cloth_size():
     sk, rig, lines, body = _rig_of(_with_collisions(_text(shipped('character.urdf'))))
     assert rig['colliders']['from_urdf'] == ['base_link', 'spine', 'chest', 'l_thigh', 'r_thigh']
-    assert rig['colliders']['add'][0]['type'] == 'plane'
+    # The shins have no shape: a capsule over each, whole length (issue 35 item 3).
+    *shins, floor = rig['colliders']['add']
+    assert floor['type'] == 'plane' and [c['name'] for c in shins] == ['l_shin', 'r_shin']
+    assert shins[0]['link'] == 'l_shin' and shins[0]['a'] == [0.0, 0.0, 0.0]
     # The box on the spine is 0.34 m wide, the thighs' cylinders reach 0.1 + 0.08 m to the
     # side: the cloth clears the wider by 2 cm (scaled by height), or its hem starts inside.
     assert rig['cloth']['shape']['radii'][1] == pytest.approx(0.18 + 0.02 * body.height / 1.75,
                                                               abs=2e-3)
     assert 'from the <collision> shapes' in ' '.join(lines)
     Rig(yaml.safe_load(to_yaml(rig, lines, 'c.urdf', body)), sk)
+
+
+def test_a_thigh_shape_far_thinner_than_the_bone_gets_a_capsule_over_the_whole_bone():
+    # Issue 35 item 3: Unitree H1's 5 cm thigh cylinders cover half the thigh, and the hem went
+    # through the rest. Here the thighs' cylinders are 2 cm thick and cover their top half.
+    thin = dict(SHAPES, l_thigh='<cylinder radius="0.02" length="0.22"/>',
+                r_thigh='<cylinder radius="0.02" length="0.22"/>')
+    text = _with_collisions(_text(shipped('character.urdf')), thin, thigh_z=-0.11)
+    sk, rig, lines, body = _rig_of(text)
+    added = {c['name']: c for c in rig['colliders']['add']}
+    rest = sk.forward(np.zeros(len(sk.joint_names)))
+    knee = np.linalg.solve(rest[sk.link('l_thigh')], rest[sk.link('l_shin')][:, 3])[:3]
+    assert added['l_thigh']['link'] == 'l_thigh' and np.allclose(added['l_thigh']['b'], knee,
+                                                                 atol=1e-3)
+    assert added['l_thigh']['radius'] == pytest.approx(0.04 * body.height, abs=1e-3)
+    assert {'r_thigh', 'l_shin', 'r_shin'} <= set(added)
+    assert 'a capsule over l_thigh' in ' '.join(lines)
 
 
 # --- a skeleton that is not Z-up: the orientation keys -------------------------------------
