@@ -171,7 +171,7 @@ def _talos_swing(t):
 
 
 def _romeo_swing(t):
-    """Romeo's joint values: arms lowered from its zero pose (ahead) and swinging, legs stepping."""
+    """Romeo's joint values: arms lowered from its zero pose (ahead), swinging; legs stepping."""
     w = 2 * np.pi * t / 1.2
     q = {'TrunkYaw': 0.2 * np.sin(w)}
     for side, sign in (('L', 1), ('R', -1)):
@@ -267,4 +267,3 @@ def test_the_other_skeletons_keep_their_choices(name, tmp_path):
     else:
         path = fetched(name)
     assert _chosen(propose(load_skeleton(path))[1]) == KEPT[name]
-
