@@ -181,9 +181,21 @@ def _romeo_swing(t):
     return q
 
 
-# Each robot's walk and the height of its pelvis above the floor.
+def _jvrc_swing(t):
+    """JVRC-1's joint values: the waist turning, arms swinging, elbows bending, legs stepping."""
+    w = 2 * np.pi * t / 1.2
+    q = {'WAIST_Y': 0.2 * np.sin(w)}
+    for side, sign in (('L', 1), ('R', -1)):
+        q[f'{side}_SHOULDER_P'] = 0.5 * sign * np.sin(w)
+        q[f'{side}_ELBOW_P'] = -0.6 - 0.4 * np.sin(w)           # its elbow bends below 0
+        q[f'{side}_HIP_P'] = -0.35 * sign * np.sin(w)
+        q[f'{side}_KNEE'] = 0.3 + 0.3 * np.sin(w + sign)
+    return q
+
+
+# Each robot's walk and the height of its root link above the floor.
 WALKS = {'g1_29dof_rev_1_0.urdf': (_g1_swing, 0.78), 'talos_full_v2.urdf': (_talos_swing, 1.08),
-         'romeo.urdf': (_romeo_swing, 0.88)}
+         'romeo.urdf': (_romeo_swing, 0.88), 'jvrc1.urdf': (_jvrc_swing, 0.76)}
 
 
 def write_walk(urdf, path):

@@ -32,6 +32,7 @@ ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bon
 # A bone collider's radius as a share of the height: a thigh's for a person, thicker than the
 # body proxy's bones (core.body_proxy, a knee's), so cloth the colliders hold is outside those.
 BONE_COLLIDER_SHARE = 0.04
+TORSO_GAP = 0.02            # m at 1.75 m tall: the top row outside a robot's torso box
 
 #  Words of sensor and virtual frames (an IMU, a camera, a lidar): never a part of the body.
 SENSOR_WORDS = {'imu', 'camera', 'cam', 'lidar', 'laser', 'sensor', 'gyro', 'gyrometer',
@@ -120,6 +121,7 @@ class Body:
     height: float
     tips: np.ndarray | None = None      # (L,3) where each link's body ends (_tips)
     virtual: list = field(default_factory=list)   # sensor and virtual frames, left out
+    frames: 'Frames | None' = None      # masses and inertias (_frames)
     choices: list = field(default_factory=list)
     ankles: dict = field(default_factory=dict)      # side -> the link at the ankle
 
@@ -144,16 +146,17 @@ class Refusal(ConfigError):
 
 @dataclass
 class Frames:
-    """What the URDF says of each link beyond the kinematics: mass, centre of mass, shapes."""
+    """What the URDF says of each link beyond the kinematics: mass, inertia, shapes."""
 
     mass: np.ndarray                    # (L,) kg; 0 when none is given
     com: np.ndarray                     # (L,3) centre of mass in the link's frame
     shaped: np.ndarray                  # (L,) bool: a <visual> or <collision>
+    inertia: np.ndarray | None = None   # (L,3,3) about the centre of mass, the link's axes
 
 
 def _frames(sk):
     n = len(sk.link_names)
-    out = Frames(np.zeros(n), np.zeros((n, 3)), np.zeros(n, bool))
+    out = Frames(np.zeros(n), np.zeros((n, 3)), np.zeros(n, bool), np.zeros((n, 3, 3)))
     try:
         robot = ElementTree.fromstring(sk.urdf_xml.rstrip('\0 \r\n\t'))
     except ElementTree.ParseError:
@@ -169,11 +172,27 @@ def _frames(sk):
             origin = link.find('inertial/origin')
             if origin is not None:
                 out.com[k] = [float(v) for v in origin.get('xyz', '0 0 0').split()]
+            out.inertia[k] = _inertia(link)
         except ValueError:
             continue                      # no use for a bad inertial: the link is as if without
-    bad = ~np.isfinite(out.mass) | ~np.isfinite(out.com).all(axis=1)
-    out.mass[bad], out.com[bad] = 0.0, 0.0
+    bad = ~np.isfinite(out.mass) | ~np.isfinite(out.com).all(axis=1) \
+        | ~np.isfinite(out.inertia).all(axis=(1, 2))
+    out.mass[bad], out.com[bad], out.inertia[bad] = 0.0, 0.0, 0.0
     return out
+
+
+def _inertia(link):
+    """Return a URDF link's inertia tensor in its frame (zeros without one)."""
+    tensor = link.find('inertial/inertia')
+    if tensor is None:
+        return np.zeros((3, 3))
+    g = {key: float(tensor.get(key, 0)) for key in ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz')}
+    i = np.array([[g['ixx'], g['ixy'], g['ixz']], [g['ixy'], g['iyy'], g['iyz']],
+                  [g['ixz'], g['iyz'], g['izz']]])
+    origin = link.find('inertial/origin')
+    rpy = [float(v) for v in origin.get('rpy', '0 0 0').split()] if origin is not None else [0] * 3
+    r = rpy_matrix(np.array(rpy))
+    return r @ i @ r.T
 
 
 def is_sensor_name(name: str) -> bool:
@@ -372,7 +391,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
     fwd = snapped_to_axis(fwd)
     left = np.cross(up, fwd)
     body = Body(sk, rest, pelvis, chest, spine, neck_root, {}, {}, {}, up, fwd, left,
-                float(np.ptp(pts @ up)), tips=tips, virtual=virtual)
+                float(np.ptp(pts @ up)), tips=tips, virtual=virtual, frames=frames)
     nk, why = _pick(neck_path[0] if len(neck_path[0]) > 1 else [neck_root], 'neck', sk)
     body.neck = nk
     body.choices += [
@@ -602,6 +621,7 @@ def propose(sk: Skeleton, forward: list | None = None,
     # The thighs too: a hem narrower than their shapes would start inside them.
     torso_links = body.spine + [body.thighs['left'], body.thighs['right']]
     depth, width, with_shapes = _torso_extent(body, torso_links)
+    ahead = 0.0                         # the cloth's centre ahead of the spine
     if with_shapes:
         ry = width + 0.02 * s
         rx = depth + 0.02 * s
@@ -613,13 +633,26 @@ def propose(sk: Skeleton, forward: list | None = None,
         hip_half = abs((P(body.thighs['left']) - P(body.thighs['right'])) @ left) / 2
         clear = BONE_COLLIDER_SHARE * body.height + 0.015 * s
         side_reach, front_reach = _leg_reach(body)
-        ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s, side_reach + clear)
-        rx = max(0.8 * ry, front_reach + clear)
-        lines.append(f'{"cloth radii":>15}: from the shoulder and hip widths ({2 * sh_half:.2f}, '
-                     f'{2 * hip_half:.2f} m; no primitive <collision> shape on the torso)')
+        torso = _inertia_torso(body, shape_link)
+        if torso is None:
+            ry = max(1.03 * sh_half, hip_half + 0.19 * thigh_len + 0.015 * s,
+                     side_reach + clear)
+            rx = max(0.8 * ry, front_reach + clear)
+            lines.append(f'{"cloth radii":>15}: from the shoulder and hip widths '
+                         f'({2 * sh_half:.2f}, {2 * hip_half:.2f} m; no primitive <collision> '
+                         'shape on the torso)')
+        else:
+            # A robot's shoulders can stand out from its torso (TALOS's by 14 cm): the torso's
+            # own mass says how wide and deep it is; the top row sits a few cm outside it.
+            depth, width, ahead = torso
+            ry = max(width + TORSO_GAP * s, side_reach + clear)
+            rx = max(depth + TORSO_GAP * s, front_reach + abs(ahead) + clear)
+            lines.append(f'{"cloth radii":>15}: from the torso\'s inertia (a box '
+                         f'{2 * depth:.2f} m deep, {2 * width:.2f} m wide; no primitive '
+                         '<collision> shape on the torso) and the legs\' bones')
     rows = 10
     spacing = (top_h - hem_h) / (rows - 1)
-    spine_line = P(shape_link) + ((top_h - (P(shape_link) - pelvis) @ up)) * up
+    spine_line = P(shape_link) + ((top_h - (P(shape_link) - pelvis) @ up)) * up + ahead * fwd
     center = _in_link(body, shape_link, spine_line)
     shape = {'link': body.name(shape_link), 'center': _r(center), 'radii': _r([rx, ry]),
              'flare': round(0.006 * s, 4), 'opening_deg': 50, 'row_spacing': round(spacing, 4)}
@@ -678,7 +711,7 @@ def propose(sk: Skeleton, forward: list | None = None,
         rig['world_up'] = _r(world_up)
         lines.append(f'{"world up":>15}: {_r(world_up)} (pelvis to neck at the motion\'s '
                      'first pose, in its world)')
-    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s,
+    rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s, ahead,
                                        up if world_up is None else world_up)
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
@@ -696,7 +729,7 @@ def _world_up(body, first_pose):
     return snapped_to_axis(np.asarray(rotation, float) @ neck)
 
 
-def _colliders(body, shape_link, top_h, rx, ry, s, world_up):
+def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
     """Return colliders: the URDF's shapes on pelvis, torso and thighs if all have some.
 
     With the shapes, the links carrying the other leg bones the jacket hangs over add theirs,
@@ -723,8 +756,8 @@ def _colliders(body, shape_link, top_h, rx, ry, s, world_up):
                 + [floor]}, why
     P, up = body.pos, body.up
     pelvis = P(body.pelvis)
-    torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward) \
-        * body.forward
+    torso_c = pelvis + (top_h - 0.02 * s) * up + ((P(shape_link) - pelvis) @ body.forward
+                                                  + ahead) * body.forward
     # The torso thinner than the flesh: when the character sits bent forward, colliders the
     # size of the body meet and leave the front of the jacket no room outside them all.
     out = [_ellipsoid(body, 'torso', shape_link, torso_c, [0.8 * (rx - 0.02 * s),
@@ -807,6 +840,36 @@ def _hung_over_bones(body):
             name = phase if side == 'spine' else f'{prefix}_{phase}'
             out.append((name + (f'_{counts[phase]}' if counts[phase] > 1 else ''), parent, a, b))
     return out
+
+
+def _inertia_torso(body, shape_link):
+    """Return the torso's half-depth and half-width, and how far ahead of the spine it is.
+
+    Each spine link above the pelvis with a mass is the uniform box of its inertia, its sides
+    along forward, left and up (from the moments about those axes); None when no link gives
+    one at least a tenth of the height.
+    """
+    frames, centre = body.frames, body.pos(shape_link)
+    if frames is None or frames.inertia is None:
+        return None
+    axes = _body_frame(body)
+    boxes = []
+    for k in body.spine[1:]:
+        mass = frames.mass[k]
+        if mass <= 0:
+            continue
+        rotation = body.rest[k][:3, :3]
+        moments = np.diag(axes.T @ rotation @ frames.inertia[k] @ rotation.T @ axes)
+        sides = np.sqrt(np.clip(6 * (moments.sum() - 2 * moments) / mass, 0.0, None))
+        if np.isfinite(sides).all() and sides.max() >= 0.1 * body.height:
+            com = rotation @ frames.com[k] + body.pos(k) - centre
+            boxes.append((mass, com @ body.forward, sides[0] / 2, abs(com @ body.left)
+                          + sides[1] / 2))
+    if not boxes:
+        return None
+    ahead = max(boxes)[1]                   # the heaviest box's centre: the torso's
+    depth = max(abs(at - ahead) + half for _, at, half, _ in boxes)
+    return depth, max(b[3] for b in boxes), ahead
 
 
 def _leg_reach(body):
