@@ -7,6 +7,8 @@ its torso, a head fixed to the torso whose frame sits at the waist, upper arm an
 cut in two by a twist joint), PAL TALOS (Apache-2.0; an IMU, an RGB-D camera and its optical
 frames, force-torque frames at the wrists, numbered arm links) and Aldebaran Romeo (BSD; IMU,
 camera, touch and foot-pressure frames). JVRC-1 and the other skeletons keep their choices.
+Each robot walks in its proposed jacket, measured inside its rig's colliders and inside the
+body proxy (issue 35 item 3).
 """
 
 import os

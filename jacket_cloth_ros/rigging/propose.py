@@ -10,8 +10,9 @@ straight bone halfway along it joining the two; left and right come from the nam
 (REP-120 ``l_``, Mixamo ``mixamorig:Left``, Unreal ``_l``, SMPL ``L_``) or else from the side
 they are on. Names also choose between links that sit at one place (a clavicle and an upper
 arm, three links of one ball joint). Sizes come from the links' URDF ``<collision>`` shapes
-when they have primitives, else from bone lengths. Positions and vectors are written in each
-link's frame, so the rig fits whatever the link axes are.
+when they have primitives, else from a robot torso's inertia or from bone lengths; the M10
+colliders cover every spine and leg bone the jacket hangs over (issue 35 item 3). Positions
+and vectors are written in each link's frame, so the rig fits whatever the link axes are.
 """
 
 import re
