@@ -281,3 +281,22 @@ def test_the_other_skeletons_keep_their_choices(name, tmp_path):
     else:
         path = fetched(name)
     assert _chosen(propose(load_skeleton(path))[1]) == KEPT[name]
+
+
+def test_a_robots_jacket_is_sized_from_its_torso_not_its_shoulders():
+    # Issue 35 item 3: the top row sits on the torso. TALOS's upper arms hang 0.29 m from its
+    # spine; the inertia of torso_2_link is that of a box 0.41 m wide and 0.25 m deep, its
+    # centre 4.6 cm behind the spine. Sized from the shoulders, the cloth was 0.61 m wide and
+    # 0.48 m deep around the arms; now it sits 2 cm outside that box, between the arms.
+    sk = load_skeleton(fetched('talos_full_v2.urdf'))
+    rig, lines, body = propose(sk)
+    rest = sk.forward(np.zeros(len(sk.joint_names)))
+    shape = rig['cloth']['shape']
+    depth, width = shape['radii']
+    gap = 0.02 * body.height / 1.75
+    assert width == pytest.approx(0.203 + gap, abs=0.005)
+    assert depth == pytest.approx(0.125 + gap, abs=0.01)
+    assert shape['center'][0] == pytest.approx(-0.046, abs=0.005)
+    shoulder = rest[sk.link('arm_left_3_link')][1, 3]
+    assert width < shoulder - 0.05                     # the upper arms hang outside it
+    assert any("from the torso's inertia" in line for line in lines)
