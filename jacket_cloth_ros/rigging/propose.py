@@ -848,7 +848,7 @@ def _inertia_torso(body, shape_link):
 
     Each spine link above the pelvis with a mass is the uniform box of its inertia, its sides
     along forward, left and up (from the moments about those axes); None when no link gives
-    one at least a tenth of the height.
+    one at least a tenth of the height. A box over half the height is a placeholder inertia.
     """
     frames, centre = body.frames, body.pos(shape_link)
     if frames is None or frames.inertia is None:
@@ -862,7 +862,7 @@ def _inertia_torso(body, shape_link):
         rotation = body.rest[k][:3, :3]
         moments = np.diag(axes.T @ rotation @ frames.inertia[k] @ rotation.T @ axes)
         sides = np.sqrt(np.clip(6 * (moments.sum() - 2 * moments) / mass, 0.0, None))
-        if np.isfinite(sides).all() and sides.max() >= 0.1 * body.height:
+        if np.isfinite(sides).all() and 0.1 * body.height <= sides.max() <= 0.5 * body.height:
             com = rotation @ frames.com[k] + body.pos(k) - centre
             boxes.append((mass, com @ body.forward, sides[0] / 2, abs(com @ body.left)
                           + sides[1] / 2))
