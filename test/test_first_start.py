@@ -37,7 +37,7 @@ def test_after_warm_the_node_path_compiles_nothing(tmp_path):
          'print(kernels_cached())'], env=env, capture_output=True, text=True, timeout=120)
     assert empty.stdout.strip() == 'False', empty.stderr     # a fresh install: not cached
     warm = subprocess.run([sys.executable, '-m', 'jacket_cloth_ros', 'warm'], env=env,
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, timeout=1800)
     assert warm.returncode == 0 and 'compiled and cached' in warm.stdout, warm.stderr
     after = subprocess.run([sys.executable, '-c', _NODE_PATH], env=env, capture_output=True,
                            text=True, timeout=300)
