@@ -177,3 +177,31 @@ def test_a_y_up_urdf_driven_in_a_z_up_world_gets_gravity_from_that_world(tmp_pat
     assert 'write world_up: [0, 0, 1] in the rig' in line
     report = json.loads((tmp_path / 'out' / 'report.json').read_text())
     assert report['rig_warnings'] == [line.split(f'{session}: ', 1)[1]]
+
+
+def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
+    # Issue 35 items 1 and 4: the views took up from the rig's `up` (the body's, in the URDF
+    # root frame: [0, 1, 0]), so in a Z-up world the character lay on its side in every
+    # picture, and the views were fitted to the zero pose along that axis.
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.tools.picture import body_link, in_view, moments_at, recorded_frames
+    from jacket_cloth_ros.tools.picture import view_limits
+    urdf = fetched('humanoid.urdf')
+    sk = load_skeleton(urdf)
+    session, rig_path, out = tmp_path / 's.mcap', tmp_path / 'rig.yaml', tmp_path / 'r.mcap'
+    write_sit_down_z_up(sk, session)
+    assert main(['rig', '--urdf', urdf, '-o', str(rig_path), '--motion', str(session)]) == 0
+    assert main(['replay', str(session), '-o', str(out), '--urdf', urdf, '--rig',
+                 str(rig_path)]) == 0
+    rig = load_rig(sk, str(rig_path))
+    axes = rig.view_axes()
+    assert np.allclose(axes[:, 2], [0, 0, 1]) and np.allclose(axes.T @ axes, np.eye(3))
+    assert np.allclose(rig.view_axes([0, 1, 0]), rig.world_axes)    # the body's own up
+    frames, _ = recorded_frames(str(out), sk, rig, moments_at(None, 3))
+    frames = [in_view(f, axes, body_link(sk)) for f in frames]
+    neck = sk.link('neck')
+    for f in frames:                         # the neck above the pelvis, in the world's up
+        assert f.links[neck, 2] > 0.2 * rig.height_m, f.links[neck]
+    across, upward = view_limits(frames)
+    assert upward[0] < min(f.links[:, 2].min() for f in frames)
+    assert upward[1] > max(f.links[neck, 2] for f in frames)

@@ -21,7 +21,7 @@ import numpy.typing as npt
 from .bone_layer import BoneLayer, layer_model
 from .bundles import ClothModel, ColliderModel, Model, flags, floats, ints
 from .config import ConfigError, Section, load_yaml, shipped, shown
-from .transforms import apply_transform, invert_transform, rpy_matrix
+from .transforms import apply_transform, invert_transform, rotation_between, rpy_matrix
 
 if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
@@ -258,6 +258,18 @@ class Rig:
         if section is not None and section.has('rpy_deg'):
             return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
         return _clean(self._rest[link][:3, :3].T @ self.world_axes)
+
+    def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
+        """Return the world's forward, left and up as columns: the views' axes.
+
+        The body's axes (``up``, ``forward``: the URDF root frame's) turned so that up is the
+        world's, where a world joint turns the root (a Y-up URDF driven in a Z-up world).
+
+        :param world_up: the world's up, (3,) unit; None: the rig's ``world_up``.
+        :returns: (3, 3), forward, left and up as columns.
+        """
+        up = self.world_up if world_up is None else np.asarray(world_up, float)
+        return rotation_between(self.up, up) @ self.world_axes
 
     def _load_regions(self, cloth, where):
         """Per-region multipliers of the fabric's damping, wind, world share and M11 bound.

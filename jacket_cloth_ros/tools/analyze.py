@@ -65,6 +65,7 @@ class SessionFigures:
         self.frames = []
         self.worst_frames = {}          # measure -> (value, frame) at its worst input so far
         self.reset_reasons = []
+        self.axes = setup.rig.view_axes()      # the views' forward, left and up
         self.tf_compared = 0
         self.tf_equal = 0
         self.nonfinite = 0
@@ -246,6 +247,8 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
     for name, session in zip(names, sessions):
         figures = SessionFigures(session, moments)
         pipeline = run_session(session, probe=figures.probe)
+        # The views' up is the world's as the simulation found it at the first input.
+        figures.axes = session.setup.rig.view_axes(pipeline.sim.model.cloth.up)
         reports.append(figures.report(pipeline))
         series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
         strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'
@@ -253,7 +256,7 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
             draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
                            'bones (navy); dashed blue: skinned hem and hood',
-                           world_axes=session.setup.rig.world_axes)
+                           world_axes=figures.axes)
         reports[-1]['filmstrip'] = strip if figures.frames else None
         worst = 'worst_instant.png' if len(sessions) == 1 else \
             f'worst_instant_{len(reports)}.png'
@@ -379,4 +382,4 @@ def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: 
         labels[frame.stamp_ns - figures.t0] = f'\nworst {title} {value:.2g}\n{where}'
     draw_filmstrip(frames, skeleton, path, figures.t0, labels=lambda dt: labels.get(dt, ''),
                    title=f'{name}: the worst instants; dashed blue: skinned hem and hood',
-                   world_axes=figures.session.setup.rig.world_axes)
+                   world_axes=figures.axes)

@@ -37,16 +37,17 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
         n = len(log_times)
         return range(n) if n <= max_frames else np.linspace(0, n - 1, max_frames).astype(int)
     frames, t0 = recorded_frames(mcap_path, skeleton, rig, evenly)
-    axes_world = WORLD_AXES if rig is None else rig.world_axes
+    axes_world = WORLD_AXES if rig is None else rig.view_axes()
     centre = body_link(skeleton)
-    across, upward = view_limits(skeleton, axes_world, centre)
+    frames = [in_view(f, axes_world, centre) for f in frames]
+    across, upward = view_limits(frames)
     labels = (axis_label(axes_world[:, 0], 'forward'), axis_label(axes_world[:, 1], 'left'))
     fig, axes = plt.subplots(1, 2, figsize=(6.4, 4.6))
     spans = np.diff([f.stamp_ns for f in frames]) * 1e-9
     fps = 1.0 / float(np.median(spans)) if len(spans) and np.median(spans) > 0 else 10.0
 
     def draw(k):
-        f = in_view(frames[k], axes_world, centre)
+        f = frames[k]
         for ax, (view, axis) in zip(axes, VIEWS):
             ax.cla()
             draw_view(ax, f, skeleton, axis, across, upward)

@@ -103,16 +103,15 @@ def axis_label(direction: np.ndarray, meaning: str) -> str:
     return f'{meaning} (m)'
 
 
-def view_limits(skeleton: 'Skeleton', axes: np.ndarray,
-                centre: int) -> tuple[tuple[float, float], tuple[float, float]]:
-    """Return (across, up) limits of a view, from the skeleton's height at its zero pose.
+def view_limits(frames: Sequence[Frame]) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Return (across, up) limits of the views, from the skeletons' heights in the frames.
 
-    :param skeleton: the character.
-    :param axes: the world's forward, left and up, as the columns of a 3x3.
-    :param centre: the link the view centres on.
+    Measured in the world, as the frames are drawn: a URDF whose links are not Z-up, or one a
+    world joint turns, is fitted all the same.
+
+    :param frames: the frames in view coordinates (in_view).
     """
-    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))[:, :3, 3]
-    height = (rest - rest[centre]) @ axes[:, 2]
+    height = np.concatenate([f.links[:, 2] for f in frames])
     size = max(float(height.max() - height.min()), 0.5)
     return ((-0.42 * size, 0.42 * size),
             (float(height.min()) - 0.05 * size, float(height.max()) + 0.35 * size))
@@ -365,18 +364,19 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
     :param t0: the recording's start, ns; columns are titled by their time after it.
     :param labels: names a frame by its ns after ``t0``, after its time; None: time alone.
     :param title: the figure's title; None: what the colours show.
-    :param world_axes: the rig's forward, left and up (Rig.world_axes); None: x, y, z.
+    :param world_axes: the world's forward, left and up (Rig.view_axes); None: x, y, z.
     :param columns: each column's title instead of its time; None: times.
     """
     skeletons = list(skeleton) if isinstance(skeleton, (list, tuple)) else [skeleton] * len(
         frames)
     world_axes = WORLD_AXES if world_axes is None else world_axes
     centres = [body_link(s) for s in skeletons]
-    across, upward = view_limits(skeletons[0], world_axes, centres[0])
+    frames = [in_view(f, world_axes, c) for f, c in zip(frames, centres)]
+    across, upward = view_limits(frames)
     xlabels = (axis_label(world_axes[:, 0], 'forward'), axis_label(world_axes[:, 1], 'left'))
     ylabel = axis_label(world_axes[:, 2], 'up')
     fig, axes = plt.subplots(2, len(frames), figsize=(2.6 * len(frames), 7.2), squeeze=False)
-    for col, f in enumerate(in_view(f, world_axes, c) for f, c in zip(frames, centres)):
+    for col, f in enumerate(frames):
         for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
             draw_view(ax, f, skeletons[col], axis, across, upward)
@@ -414,5 +414,5 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
     """
     chosen, t0 = recorded_frames(mcap_path, skeleton, rig, moments_at(times, moments))
     draw_filmstrip(chosen, skeleton, png_path, t0, labels, title,
-                   rig.world_axes if rig is not None else None)
+                   rig.view_axes() if rig is not None else None)
     return [f.stamp_ns for f in chosen]
