@@ -337,9 +337,17 @@ def analyze_targets(sources: Sequence[Any]) -> list[str]:
                          str(r['inputs']), f'{vs["max"] * 100:.2f} / {vs["p99"] * 100:.2f}',
                          f'{hs["max"] * 100:.1f} / {hs["p99"] * 100:.1f}',
                          f'{ins["max"] * 1e3:.0f} / {ins["p99"] * 1e3:.0f}',
+                         _body_inside(r),
                          f'{r["resets"]} ({"; ".join(r["reset_reasons"])})'])
     return _table(('session', 'inputs', 'vertical stretch % max / p99',
-                   'horizontal stretch % max / p99', 'inside mm max / p99', 'resets'), rows)
+                   'horizontal stretch % max / p99', 'inside mm max / p99',
+                   'inside the body mm max / p99', 'resets'), rows)
+
+
+def _body_inside(report: dict) -> str:
+    """Return analyze's ``body_inside_m`` as max / p99 in mm (a report from before it: n/a)."""
+    body = report.get('body_inside_m')
+    return 'n/a' if body is None else f'{body["max"] * 1e3:.1f} / {body["p99"] * 1e3:.1f}'
 
 
 SPEED = 'bench_speed/speed.json'

@@ -67,14 +67,15 @@ def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
 
 def test_the_body_proxy_sees_what_the_rigs_colliders_do_not(tmp_path, capsys):
     # Issue 35 item 4: inside_m is measured against the rig's own colliders; a rig without
-    # thigh colliders gave 0 mm inside while the hem went through the thighs. body_inside_m
+    # leg colliders gave 0 mm inside while the hem went through the thighs. body_inside_m
     # measures against every link's body (here the shipped character's bone capsules).
     import yaml
     from jacket_cloth_ros.core.config import shipped
     from jacket_cloth_ros.tools.cli import main
     with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
         rig = yaml.safe_load(f)
-    rig['colliders'] = [c for c in rig['colliders'] if c['name'] not in ('l_thigh', 'r_thigh')]
+    rig['colliders'] = [c for c in rig['colliders']
+                        if c['name'] not in ('l_thigh', 'r_thigh', 'l_shin', 'r_shin')]
     (tmp_path / 'rig.yaml').write_text(yaml.safe_dump(rig))
     clip = tmp_path / 'clip.mcap'
     assert main(['motion', '--clip', 'run', '--duration', '2', '-o', str(clip)]) == 0
