@@ -496,7 +496,8 @@ def test_an_analyze_output_made_while_it_runs_is_refused_not_overwritten(
     err = _one_line_error(capsys, ['analyze', str(clip), '--out', str(out), '--moments', '2'])
     assert err.endswith(f'{out / "report.json"} exists (use --force to overwrite)'), err
     assert (out / 'report.json').read_text() == 'made while analyze ran'
-    assert not [p for p in out.iterdir() if p.name.startswith('.')]
+    # All or nothing: no new chart beside someone else's report, and no scratch left.
+    assert [p.name for p in out.iterdir()] == ['report.json']
 
 
 def test_a_picture_holds_the_markers_it_draws_not_the_sessions(tmp_path):

@@ -299,19 +299,19 @@ def cmd_analyze(args: argparse.Namespace) -> int:
 def _analyze_into(out: str, force: bool, sessions: list, moments: int) -> dict:
     """Run ``analyze`` into a scratch folder in ``out``, then move its files into ``out``.
 
-    Each file is placed as a tool's single output is (outputs.place): without --force, a file
-    made in ``out`` while the sessions ran is refused, not overwritten.
+    The files are placed all or none (outputs.place_all): without --force, a file made in
+    ``out`` while the sessions ran is refused, not overwritten, and nothing new is left beside it.
     """
     import shutil
     import tempfile
     from .analyze import analyze
-    from .outputs import place
+    from .outputs import place_all
     os.makedirs(out, exist_ok=True)
     scratch = tempfile.mkdtemp(prefix='.analyze.', suffix='.partial', dir=out)
     try:
         report = analyze(sessions, scratch, moments=moments)
-        for name in sorted(os.listdir(scratch)):
-            place(os.path.join(scratch, name), os.path.join(out, name), force)
+        names = sorted(os.listdir(scratch))
+        place_all(scratch, names, [os.path.join(out, name) for name in names], force)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     return report

@@ -152,17 +152,36 @@ def place(tmp: str, path: str, force: bool) -> None:
     :param path: the output file.
     :param force: whether a file at ``path`` is replaced.
     """
-    if not force:
-        try:
-            os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
-        except FileExistsError:
-            raise OutputError(f'{path} exists (use --force to overwrite)') from None
+    place_all(os.path.dirname(tmp), [os.path.basename(tmp)], [path], force)
+
+
+def place_all(folder: str, names: list[str], paths: list[str], force: bool) -> None:
+    """Move finished files to their paths, all or (a path taken, without ``force``) none.
+
+    Every name is taken by an exclusive create before any file moves, so a refusal leaves
+    no new file beside an old one.
+
+    :param folder: the folder the finished files are in, on the paths' file system.
+    :param names: their names in ``folder``.
+    :param paths: where each goes.
+    :param force: whether files at those paths are replaced.
+    """
+    claimed = []
     try:
-        os.replace(tmp, path)
-    except OSError:
         if not force:
-            os.remove(path)             # the empty file that took the name
-        raise
+            for path in paths:
+                try:
+                    os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+                except FileExistsError:
+                    raise OutputError(f'{path} exists (use --force to overwrite)') from None
+                claimed.append(path)
+        for name, path in zip(names, paths):
+            os.replace(os.path.join(folder, name), path)
+            if path in claimed:
+                claimed.remove(path)
+    finally:
+        for path in claimed:            # the empty files that took names, never filled
+            os.remove(path)
 
 
 @contextlib.contextmanager
