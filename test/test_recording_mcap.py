@@ -294,3 +294,30 @@ def test_chunk_indexes_the_temporary_folder_has_no_room_for_wait_in_memory():
     reader = SeekingReader(io.BytesIO(out.getvalue()), validate_crcs=True)
     assert len(reader.get_summary().chunk_indexes) == 5
     assert [m.sequence for _, _, m in reader.iter_messages()] == list(range(50))
+
+
+def test_a_bag_closed_on_a_full_disk_has_no_metadata_yaml_rather_than_a_cut_one(
+        tmp_path, monkeypatch):
+    # Review: the salvage filled the disk up to the summary, then metadata.yaml found no room
+    # and was left empty, and the reader refused the whole folder although its .mcap was
+    # finished. Without one, the folder is read from its .mcap file.
+    import builtins
+    from jacket_cloth_ros.recording import writer
+    from jacket_cloth_ros.recording.reader import read_recording
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    bag = tmp_path / 'bag'
+    rec = SessionRecorder(str(bag))
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    for k in range(50):
+        rec.write('/joint_states', joint_state(k * 1_000_000, ['a'], [0.1 * k]), k * 1_000_000)
+
+    def full(path, mode='r', *args, **kwargs):
+        if str(path).endswith('metadata.yaml'):
+            builtins.open(path, mode, *args, **kwargs).close()       # made, then no room
+            raise OSError(errno.ENOSPC, 'No space left on device')
+        return builtins.open(path, mode, *args, **kwargs)
+    monkeypatch.setattr(writer, 'open', full, raising=False)
+    rec.close()
+    assert rec.metadata_lost and not (bag / 'metadata.yaml').exists()
+    assert len(read_recording(str(bag)).messages) == 50

@@ -8,7 +8,6 @@ field through a BytesIO, which made the recording a large share of each replayed
 the file layout is the library's; only messages and their chunk are packed here.
 """
 
-import errno
 import struct
 import tempfile
 import zlib
@@ -21,6 +20,8 @@ from mcap.opcode import Opcode
 from mcap.records import (
     Channel, ChunkIndex, DataEnd, Footer, Header, Metadata, MetadataIndex,
     Schema, Statistics, SummaryOffset)
+
+from .disk import no_room
 
 try:
     import lz4.frame
@@ -36,21 +37,9 @@ _MESSAGE = struct.Struct('<BQHIQQ')         # opcode, length, channel, sequence,
 _CHUNK_HEAD = struct.Struct('<BQQQQI')      # opcode, length, start, end, size, crc
 _FOOTER_HEAD = struct.Struct('<BQQQ')
 _FIRST_CHUNK_BUFFER = 1 << 20               # grows (doubling) to the largest chunk seen
-# A write that fails for these found no room: the file is rolled back to its last whole record
-# and what did not fit is kept for finish(), which writes as much of it as the room allows.
-NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 # The pieces a chunk the disk had no room for is written in at the end: small, so that most of
 # what fits is kept, and each one dropped whole when the summary needs its room.
 PIECE_BYTES = 16 * 1024
-
-
-def no_room(error: BaseException) -> bool:
-    """Tell whether ``error`` is a write that found the disk (or the quota) full.
-
-    :param error: the exception a write raised.
-    :returns: True for ENOSPC, EDQUOT and EFBIG.
-    """
-    return isinstance(error, OSError) and error.errno in NO_ROOM
 
 
 @dataclass

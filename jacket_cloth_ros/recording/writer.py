@@ -17,6 +17,7 @@ import yaml
 
 from ..core.choices import Choice
 from .definitions import ros2msg_schema
+from .disk import no_room
 
 SESSION_CONFIG = 'jacket_cloth_session'     # the MCAP metadata record of a session's setup
 _FOREVER = {'sec': 9223372036, 'nsec': 854775807}
@@ -140,6 +141,7 @@ class SessionRecorder:
         self._flush_period = flush_period_ns
         self._last_flush = None
         self._closed = False
+        self.metadata_lost = False      # a bag closed on a full disk without metadata.yaml
 
     def _do(self, work, *args):
         """Run ``work`` now, or hand it to the writer thread (in order)."""
@@ -261,8 +263,24 @@ class SessionRecorder:
         if self._error is not None:
             raise self._error
         if self._folder is not None:
-            with open(os.path.join(self._folder, 'metadata.yaml'), 'w', encoding='utf-8') as f:
-                f.write(metadata[-1])
+            self._write_bag_metadata(metadata[-1])
+
+    def _write_bag_metadata(self, text):
+        """Write the bag's metadata.yaml; on a full disk, none rather than a part of one.
+
+        A metadata.yaml cut short makes the whole folder unreadable, while a bag without one
+        is read from its .mcap file, which is finished by then.
+        """
+        path = os.path.join(self._folder, 'metadata.yaml')
+        try:
+            with open(path, 'w', encoding='utf-8') as f:
+                f.write(text)
+        except OSError as e:
+            if os.path.exists(path):
+                os.remove(path)
+            if not no_room(e):
+                raise
+            self.metadata_lost = True
 
     def _bag_metadata(self, in_file, span):
         """Return the rosbag2 metadata of the messages the file holds (channel id -> count)."""

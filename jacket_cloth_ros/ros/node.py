@@ -35,6 +35,7 @@ from ..core.config import ConfigError, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
+from ..recording.disk import no_room
 from ..recording.writer import SessionRecorder
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
@@ -437,7 +438,8 @@ class JacketClothNode(Node):
             self.recorder.write(topic, data, stamp_ns)
         except (OSError, ValueError, struct.error) as e:
             self._recording_failed(f'stopped by a write error ({e})')
-            self.get_logger().error(f'recording stopped: {e}')
+            if not no_room(e):          # a full disk: the close says what was kept, in one line
+                self.get_logger().error(f'recording stopped: {e}')
             self._close_recorder()
 
     def _recording_failed(self, problem: str) -> None:
@@ -457,10 +459,12 @@ class JacketClothNode(Node):
         except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
             self._say_closed(f'recording {recorder.path} closed with an error: {e}')
             return
-        if recorder.unwritten:
+        if recorder.unwritten or recorder.metadata_lost:
             self._say_closed(f'recording {recorder.path} closed on a full disk: a finished '
                              f'file without its last {recorder.unwritten} messages, which '
-                             'had no room')
+                             'had no room' + (', and without metadata.yaml (it is read from '
+                                              'its .mcap file)' if recorder.metadata_lost
+                                              else ''))
         elif say:                       # a live switch; at the node's end it goes unsaid
             self.get_logger().info(f'recording closed: {recorder.path}')
 
