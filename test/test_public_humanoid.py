@@ -185,12 +185,14 @@ def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
     # picture, and the views were fitted to the zero pose along that axis.
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.tools.picture import body_link, in_view, moments_at, recorded_frames
-    from jacket_cloth_ros.tools.picture import view_limits
+    from jacket_cloth_ros.tools.picture import view_axes_of, view_limits
     urdf = fetched('humanoid.urdf')
     sk = load_skeleton(urdf)
     session, rig_path, out = tmp_path / 's.mcap', tmp_path / 'rig.yaml', tmp_path / 'r.mcap'
     write_sit_down_z_up(sk, session)
     assert main(['rig', '--urdf', urdf, '-o', str(rig_path), '--motion', str(session)]) == 0
+    plain_path = tmp_path / 'plain.yaml'
+    assert main(['rig', '--urdf', urdf, '-o', str(plain_path)]) == 0
     assert main(['replay', str(session), '-o', str(out), '--urdf', urdf, '--rig',
                  str(rig_path)]) == 0
     rig = load_rig(sk, str(rig_path))
@@ -198,6 +200,11 @@ def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
     assert np.allclose(axes[:, 2], [0, 0, 1]) and np.allclose(axes.T @ axes, np.eye(3))
     assert np.allclose(rig.view_axes([0, 1, 0]), rig.world_axes)    # the body's own up
     frames, _ = recorded_frames(str(out), sk, rig, moments_at(None, 3))
+    # A rig without world_up (the plain proposal) is drawn in the world the body shows, as the
+    # simulation turns its up at the first input.
+    plain = load_rig(sk, str(plain_path))
+    assert plain.view_axes()[:, 2].tolist() == [0, 1, 0]
+    assert np.allclose(view_axes_of(frames, plain), axes)
     frames = [in_view(f, axes, body_link(sk)) for f in frames]
     neck = sk.link('neck')
     for f in frames:                         # the neck above the pelvis, in the world's up

@@ -21,7 +21,8 @@ import numpy.typing as npt
 from .bone_layer import BoneLayer, layer_model
 from .bundles import ClothModel, ColliderModel, Model, flags, floats, ints
 from .config import ConfigError, Section, load_yaml, shipped, shown
-from .transforms import apply_transform, invert_transform, rotation_between, rpy_matrix
+from .transforms import (apply_transform, invert_transform, rotation_between, rpy_matrix,
+                         snapped_to_axis)
 
 if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
@@ -156,6 +157,11 @@ def _clean(rotation):
     return np.where(rotation == 0.0, 0.0, rotation)
 
 
+# The body's up (root link to the hood's link) at the first input further than this (deg) from
+# the rig's world up: the world's up is taken from the body (issue 35 item 1).
+UP_TOLERANCE_DEG = 45.0
+
+
 class Rig:
     """A validated rig fitted to a skeleton.
 
@@ -258,6 +264,29 @@ class Rig:
         if section is not None and section.has('rpy_deg'):
             return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
         return _clean(self._rest[link][:3, :3].T @ self.world_axes)
+
+    def up_in_world(self, positions: np.ndarray, root_rotation: np.ndarray,
+                    up: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """Return the world's up as the body shows it, where that is far from ``up``.
+
+        The body's up is the root link to the hood's link in the world. Further than
+        UP_TOLERANCE_DEG from ``up`` (a Y-up URDF driven in a Z-up world with a rig whose
+        world up is the URDF's), the world's up is the body's snapped onto a world axis.
+
+        :param positions: the link origins (L, 3) in the root's frame, at a pose.
+        :param root_rotation: the root's rotation in the world, (3, 3).
+        :param up: the world's up as taken so far, (3,) unit.
+        :returns: (the world's up, the body's up, the angle between it and ``up`` in
+            degrees), or None where the body agrees with ``up``.
+        """
+        neck = positions[self.hood.link] - positions[0]
+        if not np.linalg.norm(neck) > 1e-9:
+            return None
+        body_up = np.asarray(root_rotation, float) @ neck / np.linalg.norm(neck)
+        angle = float(np.degrees(np.arccos(np.clip(body_up @ np.asarray(up, float), -1.0, 1.0))))
+        if not angle > UP_TOLERANCE_DEG:
+            return None
+        return snapped_to_axis(body_up), body_up, angle
 
     def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
         """Return the world's forward, left and up as columns: the views' axes.

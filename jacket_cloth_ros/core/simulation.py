@@ -30,7 +30,7 @@ from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
-from .transforms import rotation_between, snapped_to_axis
+from .transforms import rotation_between
 
 if TYPE_CHECKING:           # for the annotations only
     from .fabric import Fabric
@@ -46,9 +46,6 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 DESIGN_RATE = 120.0
 # The reset reason of an input whose bones were not finite (check_bones).
 NONFINITE_BONES = 'non-finite bones'
-# The body's up (root link to the hood's link) at the first input further than this (deg) from
-# the rig's world up: the world's up is taken from the body (issue 35 item 1).
-UP_TOLERANCE_DEG = 45.0
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
 # The cloth stretched more than this share at the first input is named (issue 19's target).
@@ -447,21 +444,17 @@ class JacketSimulation:
         """Check the rig's world up against the body's in the world at the first input.
 
         The body's up is the root link to the hood's link, as the input poses them. Further
-        than UP_TOLERANCE_DEG from it (a Y-up URDF driven in a Z-up world with a rig whose
+        than rig.UP_TOLERANCE_DEG from it (a Y-up URDF driven in a Z-up world with a rig whose
         world up is the URDF's), the world's up becomes the body's (snapped onto a world axis
         within 15 degrees): gravity and the planes fixed in the world turn with it, and the
         line says the rig's key that does it.
         """
         links = self.skeleton.forward(sample.q)
         rig, up = self.rig, self.model.cloth.up
-        neck = links[rig.hood.link][:3, 3] - links[0][:3, 3]
-        if not np.linalg.norm(neck) > 1e-9:
+        turned = rig.up_in_world(links[:, :3, 3], sample.root[:3, :3], up)
+        if turned is None:
             return []
-        body_up = sample.root[:3, :3] @ neck / np.linalg.norm(neck)
-        angle = np.degrees(np.arccos(np.clip(body_up @ up, -1.0, 1.0)))
-        if not angle > UP_TOLERANCE_DEG:
-            return []
-        new = snapped_to_axis(body_up)
+        new, body_up, angle = turned
         turn = rotation_between(up, new)
         colliders = self.model.colliders
         world = colliders.plane_links < 0

@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .picture import (VIEWS, WORLD_AXES, axis_label, body_link, draw_view, in_view, plt,
-                      recorded_frames, view_limits)
+from .picture import (VIEWS, axis_label, body_link, draw_view, in_view, plt, recorded_frames,
+                      view_axes_of, view_limits)
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
@@ -37,7 +37,7 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
         n = len(log_times)
         return range(n) if n <= max_frames else np.linspace(0, n - 1, max_frames).astype(int)
     frames, t0 = recorded_frames(mcap_path, skeleton, rig, evenly)
-    axes_world = WORLD_AXES if rig is None else rig.view_axes()
+    axes_world = view_axes_of(frames, rig)
     centre = body_link(skeleton)
     frames = [in_view(f, axes_world, centre) for f in frames]
     across, upward = view_limits(frames)

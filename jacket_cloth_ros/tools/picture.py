@@ -103,6 +103,24 @@ def axis_label(direction: np.ndarray, meaning: str) -> str:
     return f'{meaning} (m)'
 
 
+def view_axes_of(frames: Sequence[Frame], rig: 'Rig | None') -> np.ndarray:
+    """Return the views' forward, left and up: the world's, as the simulation takes it.
+
+    The rig's ``world_up``, or the body's up in the world at the first frame where that is far
+    from it (Rig.up_in_world, as the simulation turns its up at the first input).
+
+    :param frames: the frames drawn, their points in the root's frame.
+    :param rig: the rig; None: x forward, z up.
+    """
+    if rig is None:
+        return WORLD_AXES
+    up = rig.world_up
+    if frames and frames[0].root is not None:
+        turned = rig.up_in_world(frames[0].links, frames[0].root[:3, :3], up)
+        up = up if turned is None else turned[0]
+    return rig.view_axes(up)
+
+
 def view_limits(frames: Sequence[Frame]) -> tuple[tuple[float, float], tuple[float, float]]:
     """Return (across, up) limits of the views, from the skeletons' heights in the frames.
 
@@ -413,6 +431,5 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
     :param rig: its rig: the skinned pose is drawn too; None: not.
     """
     chosen, t0 = recorded_frames(mcap_path, skeleton, rig, moments_at(times, moments))
-    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title,
-                   rig.view_axes() if rig is not None else None)
+    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title, view_axes_of(chosen, rig))
     return [f.stamp_ns for f in chosen]
