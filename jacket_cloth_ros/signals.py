@@ -31,6 +31,20 @@ def _on_signal(signum: int, frame: object) -> None:
         raise KeyboardInterrupt
 
 
+def _unraisable(what: object) -> None:
+    """Drop llvmlite's finaliser complaint once a signal stops the program; pass on the rest.
+
+    A Ctrl-C while numba loads or compiles a kernel cuts an llvmlite object short in its
+    making; its ``__del__`` then fails and Python prints that traceback as the program ends.
+
+    :param what: the ``sys.unraisablehook`` argument.
+    """
+    where = getattr(getattr(what, 'object', None), '__module__', None) or ''
+    if _now['phase'] == STOPPING and where.startswith('llvmlite.'):
+        return
+    sys.__unraisablehook__(what)
+
+
 def guard(program: str) -> None:
     """Take SIGINT and SIGTERM for ``program``, starting: from now on a signal stops it cleanly.
 
@@ -39,6 +53,7 @@ def guard(program: str) -> None:
     :param program: the executable's name, which the line starts with.
     """
     _now.update(program=program, phase=STARTING, doing='starting')
+    sys.unraisablehook = _unraisable
     for signum in _SIGNALS:
         signal.signal(signum, _on_signal)
 

@@ -164,3 +164,24 @@ def test_the_demos_node_is_guarded_from_its_start(tmp_path, monkeypatch):
             node.wait()
     assert node.returncode == 130 and 'Traceback' not in err, err
     assert err.strip().splitlines() == ['jacket_cloth_node: stopped while starting'], err
+
+
+def test_llvmlites_finaliser_complaint_is_dropped_only_once_a_signal_stops_the_program(
+        capsys, monkeypatch):
+    # Ctrl-C while numba loaded a kernel, under a CPU hog: `ros2 launch` showed llvmlite's
+    # "Exception ignored in: ObjectRef.__del__" traceback as the node ended.
+    from jacket_cloth_ros import signals
+    monkeypatch.setattr(sys, 'unraisablehook', signals._unraisable)
+
+    def complaint(module):
+        def __del__(self):
+            raise AttributeError('cut short in its making')
+        __del__.__module__ = module
+        ref = type('ObjectRef', (), {'__del__': __del__})()
+        del ref                                     # its finaliser fails: an unraisable
+        return capsys.readouterr().err
+    monkeypatch.setitem(signals._now, 'phase', signals.STOPPING)
+    assert complaint('llvmlite.binding.ffi') == ''
+    assert 'cut short' in complaint('jacket_cloth_ros.ros.node')          # ours: shown
+    monkeypatch.setitem(signals._now, 'phase', signals.RUNNING)            # not stopping
+    assert 'cut short' in complaint('llvmlite.binding.ffi')
