@@ -394,8 +394,12 @@ def rendered(kind: str, results: str) -> str | None:
             loaded.append(json.load(f))
     runs = '; '.join(f'`{c}`, run {d}' for c, d in dict.fromkeys(
         run_of(p, c) for p, c in zip(paths, table.commands)))
+    try:
+        lines = table.render(loaded)
+    except (KeyError, IndexError, TypeError) as e:
+        raise Missing(f'results of another shape ({type(e).__name__}: {e})') from None
     # A line of text right after a table would be read as one more row of it.
-    return f'From {runs}:\n\n' + '\n'.join(table.render(loaded)) + '\n\n'
+    return f'From {runs}:\n\n' + '\n'.join(lines) + '\n\n'
 
 
 def rewrite(text: str, results: str, say: Callable[[str], None]) -> str:

@@ -643,7 +643,7 @@ def propose(sk: Skeleton, forward: list | None = None,
                          f'({2 * sh_half:.2f}, {2 * hip_half:.2f} m; no primitive <collision> '
                          'shape on the torso)')
         else:
-            # A robot's shoulders can stand out from its torso (TALOS's by 14 cm): the torso's
+            # A robot's shoulders can stand well out of its torso (TALOS's do): the torso's
             # own mass says how wide and deep it is; the top row sits a few cm outside it.
             depth, width, ahead = torso
             ry = max(width + TORSO_GAP * s, side_reach + clear)
