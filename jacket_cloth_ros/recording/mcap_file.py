@@ -147,11 +147,8 @@ class McapWriter:
             self._put(self._records.end())
 
     def _put(self, data):
-        """Write all of ``data``: a raw file may take part of it per call."""
-        with memoryview(data) as view:
-            while view:
-                done = self._stream.write(view)
-                view = view[len(view) if done is None else done:]
+        """Write all of ``data`` to the file."""
+        _write_all(self._stream, data)
 
     def _whole(self):
         """Roll the file back to where it is now if the block's writes find no room."""
@@ -286,17 +283,13 @@ class McapWriter:
     def _spill(self, record):
         """Keep a chunk's index record for the summary: in the temporary file while it has room."""
         if not self._index_tail:
-            spill = self._chunk_index_file
-            at = spill.tell()
             try:
-                with memoryview(record) as view:
-                    while view:
-                        view = view[spill.write(view):]
+                with _RollBack(self._chunk_index_file):
+                    _write_all(self._chunk_index_file, record)
                 return
             except OSError as e:
                 if not no_room(e):
                     raise
-                _rollback(spill, at)
         self._index_tail.append(record)
 
     def _write_chunk_records(self, raw, message_indexes, start, end):
@@ -472,6 +465,14 @@ def _pieces(held: _Held, size: int) -> Iterator[tuple]:
         if at - begin >= size or at >= len(held.raw):
             yield held.raw[begin:at], indexes, min(times), max(times)
             begin, indexes, times = at, {}, []
+
+
+def _write_all(stream, data):
+    """Write all of ``data``: a raw file may take part of it per call."""
+    with memoryview(data) as view:
+        while view:
+            done = stream.write(view)
+            view = view[len(view) if done is None else done:]
 
 
 def _rollback(stream, at):
