@@ -65,7 +65,6 @@ class SessionFigures:
         self.frames = []
         self.worst_frames = {}          # measure -> (value, frame) at its worst input so far
         self.reset_reasons = []
-        self.axes = setup.rig.view_axes()      # the views' forward, left and up
         self.tf_compared = 0
         self.tf_equal = 0
         self.nonfinite = 0
@@ -248,7 +247,7 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
         figures = SessionFigures(session, moments)
         pipeline = run_session(session, probe=figures.probe)
         # The views' up is the world's as the simulation found it at the first input.
-        figures.axes = session.setup.rig.view_axes(pipeline.sim.model.cloth.up)
+        axes = session.setup.rig.view_axes(pipeline.sim.model.cloth.up)
         reports.append(figures.report(pipeline))
         series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
         strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'
@@ -256,12 +255,12 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
             draw_filmstrip(figures.frames, session.setup.skeleton, os.path.join(out_dir, strip),
                            figures.t0, title=f'{name}: jacket (brown), hood (orange), jacket '
                            'bones (navy); dashed blue: skinned hem and hood',
-                           world_axes=figures.axes)
+                           world_axes=axes)
         reports[-1]['filmstrip'] = strip if figures.frames else None
         worst = 'worst_instant.png' if len(sessions) == 1 else \
             f'worst_instant_{len(reports)}.png'
         if figures.worst_frames:
-            _draw_worst(figures, session.setup.skeleton, os.path.join(out_dir, worst), name)
+            _draw_worst(figures, session.setup.skeleton, os.path.join(out_dir, worst), name, axes)
         reports[-1]['worst_instant'] = worst if figures.worst_frames else None
     for chart, (columns, title) in CHARTS.items():
         _series_chart(os.path.join(out_dir, chart), series, columns, title)
@@ -369,7 +368,8 @@ def _max_p99(measure, scale, unit):
     return text + (f" ({', '.join(where)})" if where else '')
 
 
-def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: str) -> None:
+def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: str,
+                axes: np.ndarray) -> None:
     """Draw the worst instants: the longest vertical edge, the deepest vertex in a collider.
 
     Side and front views at each of those inputs, the skinned pose dashed.
@@ -382,4 +382,4 @@ def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: 
         labels[frame.stamp_ns - figures.t0] = f'\nworst {title} {value:.2g}\n{where}'
     draw_filmstrip(frames, skeleton, path, figures.t0, labels=lambda dt: labels.get(dt, ''),
                    title=f'{name}: the worst instants; dashed blue: skinned hem and hood',
-                   world_axes=figures.axes)
+                   world_axes=axes)
