@@ -147,57 +147,53 @@ def test_g1s_rig_says_which_frames_it_left_out(tmp_path, capsys):
     assert 'sensor' in ignored and 'd435_link' in ignored and 'mid360_link' in ignored
 
 
-def _g1_swing(t):
-    """G1's joint values: arms swinging, elbows bending, forearms rolling, legs stepping."""
-    w = 2 * np.pi * t / 1.2
-    q = {'waist_yaw_joint': 0.2 * np.sin(w)}
-    for side, sign in (('left', 1), ('right', -1)):
-        q[f'{side}_shoulder_pitch_joint'] = 0.5 * sign * np.sin(w)
-        q[f'{side}_elbow_joint'] = 0.6 + 0.4 * np.sin(w)
-        q[f'{side}_wrist_roll_joint'] = 0.8 * np.sin(w)
-        q[f'{side}_hip_pitch_joint'] = -0.35 * sign * np.sin(w)
-        q[f'{side}_knee_joint'] = 0.3 + 0.3 * np.sin(w + sign)
-    return q
+# A joint's swing in a walk: name with {s} for the side, offset, amplitude, whether the
+# amplitude takes the side's sign (arms and legs in counter-phase), whether the phase does.
+Swing = tuple[str, float, float, bool, bool]
 
 
-def _talos_swing(t):
-    """TALOS's joint values: the torso turning, elbows bending, forearms rolling, legs stepping."""
-    w = 2 * np.pi * t / 1.2
-    q = {'torso_1_joint': 0.2 * np.sin(w)}
-    for side, sign in (('left', 1), ('right', -1)):
-        q[f'arm_{side}_4_joint'] = -0.6 - 0.4 * np.sin(w)         # its elbow bends below 0
-        q[f'arm_{side}_5_joint'] = 0.8 * np.sin(w)
-        q[f'leg_{side}_3_joint'] = -0.35 * sign * np.sin(w)
-        q[f'leg_{side}_4_joint'] = 0.3 + 0.3 * np.sin(w + sign)
-    return q
+def _swinging(waist, sides, joints):
+    """Return ``t`` -> joint values: the waist turning and ``joints`` swinging, one 1.2 s stride.
+
+    :param waist: the joint turning the trunk.
+    :param sides: the left and the right side's name in the joint names.
+    :param joints: each swinging joint (Swing).
+    """
+    def pose(t):
+        w = 2 * np.pi * t / 1.2
+        q = {waist: 0.2 * np.sin(w)}
+        for side, sign in zip(sides, (1, -1)):
+            for name, offset, amplitude, signed, leads in joints:
+                q[name.format(s=side)] = offset + amplitude * (sign if signed else 1) * np.sin(
+                    w + (sign if leads else 0))
+        return q
+    return pose
 
 
-def _romeo_swing(t):
-    """Romeo's joint values: arms lowered from its zero pose (ahead), swinging; legs stepping."""
-    w = 2 * np.pi * t / 1.2
-    q = {'TrunkYaw': 0.2 * np.sin(w)}
-    for side, sign in (('L', 1), ('R', -1)):
-        q[f'{side}ShoulderPitch'] = 1.4 + 0.5 * sign * np.sin(w)
-        q[f'{side}HipPitch'] = -0.35 * sign * np.sin(w)
-        q[f'{side}KneePitch'] = 0.3 + 0.3 * np.sin(w + sign)
-    return q
+# Legs stepping: the hip swings, the knee bends ahead of it.
+def _legs(hip, knee):
+    return [(hip, 0.0, -0.35, True, False), (knee, 0.3, 0.3, False, True)]
 
 
-def _jvrc_swing(t):
-    """JVRC-1's joint values: the waist turning, arms swinging, elbows bending, legs stepping."""
-    w = 2 * np.pi * t / 1.2
-    q = {'WAIST_Y': 0.2 * np.sin(w)}
-    for side, sign in (('L', 1), ('R', -1)):
-        q[f'{side}_SHOULDER_P'] = 0.5 * sign * np.sin(w)
-        q[f'{side}_ELBOW_P'] = -0.6 - 0.4 * np.sin(w)           # its elbow bends below 0
-        q[f'{side}_HIP_P'] = -0.35 * sign * np.sin(w)
-        q[f'{side}_KNEE'] = 0.3 + 0.3 * np.sin(w + sign)
-    return q
-
-
-# Each robot's walk and the height of its root link above the floor.
-WALKS = {'g1_29dof_rev_1_0.urdf': (_g1_swing, 0.78), 'talos_full_v2.urdf': (_talos_swing, 1.08),
-         'romeo.urdf': (_romeo_swing, 0.88), 'jvrc1.urdf': (_jvrc_swing, 0.76)}
+# Each robot's walk (arms swinging, elbows bending, forearms rolling where it has the joints;
+# an elbow that bends below 0 swings below 0; Romeo's arms lowered from its zero pose, which
+# holds them ahead) and the height of its root link above the floor.
+WALKS = {
+    'g1_29dof_rev_1_0.urdf': (_swinging('waist_yaw_joint', ('left', 'right'), [
+        ('{s}_shoulder_pitch_joint', 0.0, 0.5, True, False),
+        ('{s}_elbow_joint', 0.6, 0.4, False, False),
+        ('{s}_wrist_roll_joint', 0.0, 0.8, False, False),
+        *_legs('{s}_hip_pitch_joint', '{s}_knee_joint')]), 0.78),
+    'talos_full_v2.urdf': (_swinging('torso_1_joint', ('left', 'right'), [
+        ('arm_{s}_4_joint', -0.6, -0.4, False, False), ('arm_{s}_5_joint', 0.0, 0.8, False, False),
+        *_legs('leg_{s}_3_joint', 'leg_{s}_4_joint')]), 1.08),
+    'romeo.urdf': (_swinging('TrunkYaw', ('L', 'R'), [
+        ('{s}ShoulderPitch', 1.4, 0.5, True, False), *_legs('{s}HipPitch', '{s}KneePitch')]),
+        0.88),
+    'jvrc1.urdf': (_swinging('WAIST_Y', ('L', 'R'), [
+        ('{s}_SHOULDER_P', 0.0, 0.5, True, False), ('{s}_ELBOW_P', -0.6, -0.4, False, False),
+        *_legs('{s}_HIP_P', '{s}_KNEE')]), 0.76),
+}
 
 
 def write_walk(urdf, path):
