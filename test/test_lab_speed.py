@@ -14,7 +14,7 @@ from doc_tables import rewritten
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_lab.floor_node import kernel_stepper
-from jacket_cloth_lab.speed import _cpu_s, _cpu_ticks, captured_steps, endurance
+from jacket_cloth_lab.speed import _cpu_s, _cpu_ticks, captured_steps, endurance, targets
 from jacket_cloth_lab.cli import main
 
 
@@ -34,6 +34,11 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
+    # Issue 37's targets, each with its verdict: the 5 s replay's share of the kernel-only
+    # limit and the kernel against the yardstick (when it sits beside this checkout).
+    said = {t['figure']: t for t in results['targets']}
+    assert said['replay / kernel-only limit, sessions of 5 s to 15 s']['met'] in (True, False)
+    assert "Issue 37's targets" in printed
     # Issue 37's profile: the replay's and the node's input by stage, the node's DDS take and
     # publish only on the node's side; two steps of the walk's sweeps per 60 Hz input.
     replay, node = results['profile']
@@ -66,6 +71,34 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     tables = rewritten(tmp_path, {'bench_speed': out}, ('speed.latest', 'crowd.held'))
     assert '| replay, x real time, 5/10 s sessions |' in tables['speed.latest']
     assert 'CPU per character-input at 1/4 characters' in tables['crowd.held']
+
+
+def _results(replay_s, kernel_ratios, node_ratio=1.1, latency_us=(2000.0,)):
+    """A bench run's figures: 120 Hz steps of a 100 us kernel, replays of 5 and 15 s."""
+    ratio = sorted(kernel_ratios)[len(kernel_ratios) // 2]
+    return {'input': {'kernel_us_median': 100.0},
+            'replay': [{'session_s': s, 'replay_s': t} for s, t in replay_s],
+            'kernel': [{'grid': '9x12', 'iterations': 8, 'ratio': ratio,
+                        'ratios': list(kernel_ratios)}],
+            'node': {'ratio': node_ratio, 'ratios': [node_ratio],
+                     'latency_windows': list(latency_us)}}
+
+
+def test_issue_37s_targets_are_judged_on_the_runs_own_figures():
+    # The kernel-only limit of a 15 s session: 1800 steps of 100 us, 0.18 s.
+    met = {t['figure'].split(',')[0]: t['met'] for t in targets(_results(
+        [(5.0, 0.06 / 0.5), (15.0, 0.18 / 0.8)], [0.7, 0.8, 0.9]))}
+    assert met == {'replay / kernel-only limit': True, 'live node CPU per JointState / floor '
+                   'with its kernel': True, 'latency p99': True, 'kernel / C yardstick': True}
+    missed = targets(_results([(5.0, 0.06 / 0.49), (15.0, 0.18 / 0.79)], [0.5, 0.81, 0.9],
+                              node_ratio=1.21, latency_us=(2000.0, 9000.0)))
+    assert [t['met'] for t in missed] == [False, False, False, False, False]
+    # One kernel run is not the median of three, however fast; a run without the yardstick or
+    # a session length judges nothing.
+    one = targets(_results([(30.0, 1.0)], [0.5]))
+    assert [t['met'] for t in one if t['figure'].startswith('kernel')] == [False]
+    assert [t['met'] for t in one if '5 s to 15 s' in t['figure']] == [None]
+    assert targets({}) == []
 
 
 def test_endurance_keeps_every_input_and_memory_flat(skeleton, tmp_path):
