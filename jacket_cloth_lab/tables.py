@@ -23,6 +23,8 @@ import shlex
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
+from . import profile
+
 PROG = 'python -m jacket_cloth_lab'
 REGION = re.compile(r'(<!-- lab: (?P<kind>[\w.]+) -->\n)(?P<body>.*?)(<!-- /lab -->)', re.S)
 RUN_FILE = 'run.json'
@@ -143,6 +145,14 @@ def speed_latest(sources: Sequence[Any]) -> list[str]:
     steal = ', '.join(f'{k} {v:.0f} %' for k, v in s.get('steal_percent', {}).items())
     return _table(('figure', 'latest', 'target'), rows) + (
         ['', f'CPU steal while each part ran: {steal}.'] if steal else [])
+
+
+def speed_profile(sources: Sequence[Any]) -> list[str]:
+    """Return where one input's CPU goes, by stage, on the replay's and the node's path.
+
+    :param sources: speed.json.
+    """
+    return profile.summary(_part(sources[0], 'profile'))
 
 
 def lod_latest(sources: Sequence[Any]) -> list[str]:
@@ -341,6 +351,7 @@ BENCH = ('bench/bench.json',), (f'{PROG} bench --out out/bench',)
 LOD_RUN = f'{PROG} bench lod --out out/bench_lod'
 TABLES: dict[str, Table] = {
     'speed.latest': Table((SPEED,), (SPEED_RUN,), speed_latest),
+    'speed.profile': Table((SPEED,), (SPEED_RUN,), speed_profile),
     'lod.latest': Table(('bench_lod/lod.json',), (LOD_RUN,), lod_latest),
     'crowd.lod': Table(('bench_lod/crowd_lod.json',), (LOD_RUN,), crowd_lod),
     'crowd.held': Table((SPEED,), (SPEED_RUN,), crowd_held),

@@ -68,7 +68,9 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert intake['steady_inputs']['crowd, a list that changes every message'] == 0
     assert 'against a lone simulation' in printed
     # The docs' tables of this bench, written from this run.
-    tables = rewritten(tmp_path, {'bench_speed': out}, ('speed.latest', 'crowd.held'))
+    tables = rewritten(tmp_path, {'bench_speed': out}, ('speed.latest', 'speed.profile',
+                                                        'crowd.held'))
+    assert '| step |' in tables['speed.profile'] and '| publish |' in tables['speed.profile']
     assert '| replay, x real time, 5/10 s sessions |' in tables['speed.latest']
     assert 'CPU per character-input at 1/4 characters' in tables['crowd.held']
 
