@@ -36,6 +36,11 @@ PENDULUM = ((60.0, 120.0, 240.0), (10.0, 60.0, 120.0, 170.0))   # rates (Hz) x a
 
 
 QUICK_CONVERGENCE = {'sweeps': (8, 16, 32), 'rates': (240.0, 480.0, 960.0)}
+# The default's rivals: those that hold every stress scene (M12) at one step per 120 Hz, timed
+# against it in turns. The sweep times each method once, so the host's drift between two runs
+# is in their cost ratio; in turns it reaches every method alike.
+RIVALS = (Method('gauss_seidel', 'hard_pass', 16), Method('xpbd', 'hard_pass', 8))
+ROUNDS = 5
 
 
 def reference_methods(quick: bool = False) -> tuple[Method, Method]:
@@ -56,8 +61,8 @@ def sweep(quick: bool = False) -> list[Method]:
     """
     if quick:
         return [SHIPPED, Method('gauss_seidel', 'none'), Method('gauss_seidel', 'hard_pass', 2),
-                Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2), Method('xpbd', 'hard_pass'),
-                replace(SHIPPED, sim_rate=60.0)]
+                Method('xpbd', 'none'), Method('xpbd', 'none', 4, 2),
+                replace(SHIPPED, sim_rate=60.0)] + list(RIVALS)
     out = []
     for solver, limit in FAMILIES:
         for it in (1, 2, 4, 8, 16):
@@ -157,7 +162,11 @@ def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CL
             rows[fixed[i]]['pareto'] = True
         for i in pareto_front([rows[i] for i in fixed], _gs_error):
             rows[fixed[i]]['pareto_gs'] = True
-        out['clips'][clip] = {'richardson': richardson, 'gs_richardson': gs_richardson,
+        say(f'{clip}: the default against its rivals, in turns')
+        out['clips'][clip] = {'head_to_head': head_to_head(
+                                  skeleton, rig, fabric, inputs, (SHIPPED,) + RIVALS,
+                                  2 if quick else ROUNDS),
+                              'richardson': richardson, 'gs_richardson': gs_richardson,
                               'references_apart': accuracy.compare(gs_ref, ref),
                               'gs_convergence': accuracy.convergence(
                                   skeleton, rig, fabric, inputs, gs_method, best=gs_check,
@@ -174,6 +183,29 @@ def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CL
     out['rig_detail'] = rig_detail(skeleton, fabric, clips[:1] if quick else clips, seconds,
                                    ref_method, quick, say)
     return out
+
+
+def head_to_head(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[accuracy.Input],
+                 methods: Sequence[Method], rounds: int) -> dict:
+    """Time methods in turns on one clip; each one's cost against the first's.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset.
+    :param inputs: the clip's JointStates.
+    :param methods: the methods; the first is what the others are compared with.
+    :param rounds: how many turns each method runs.
+    :returns: ``{'rounds', 'cost_ms_per_s': {label: [one per round]}, 'vs_first': {label:
+        median over rounds of its cost / the first's in that round}}``.
+    """
+    cost = {m.label: [] for m in methods}
+    for _ in range(rounds):
+        for m in methods:
+            cost[m.label].append(accuracy.run(skeleton, rig, fabric, m, inputs).cost_ms_per_s)
+    first = cost[methods[0].label]
+    return {'rounds': rounds, 'cost_ms_per_s': cost,
+            'vs_first': {label: float(np.median(np.divide(c, first)))
+                         for label, c in cost.items()}}
 
 
 def rig_detail(skeleton: Skeleton, fabric: Fabric, clips: Sequence[str], seconds: float,

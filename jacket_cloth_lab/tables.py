@@ -244,31 +244,37 @@ def _mm(value: float) -> str:
     return f'{value * 1e3:.1f}'
 
 
-XPBD_PEER = 'XPBD+hard_pass it8 sub1 120 Hz'     # the default's rival at its budget
-
-
 def bench_references(sources: Sequence[Any]) -> list[str]:
-    """Return per clip the two references apart and both methods' hem error against each.
+    """Return per clip the two references apart, and the default's and its rivals' hem error.
+
+    Each rival's cost is against the default's, the two timed in turns (``head_to_head``).
 
     :param sources: bench.json.
     """
     s = sources[0]
-    rows = []
+    rows, rivals = [], []
     for clip, data in s['clips'].items():
         apart, check = data['references_apart'], data['gs_richardson']
-        default, peer = _row_of(data, s['default']), _row_of(data, XPBD_PEER)
-        rows.append([clip, f'{apart["cloth_rms_m"] * 100:.2f} / {apart["cloth_max_m"] * 100:.2f}',
-                     f'{apart["hem_rms_m"] * 100:.2f} / {apart["hem_max_m"] * 100:.2f}',
-                     _mm(check['cloth_rms_m']),
-                     f'{_mm(default["hem_rms_m"])} / {_mm(default["vs_gs"]["hem_rms_m"])}',
-                     f'{_mm(peer["hem_rms_m"])} / {_mm(peer["vs_gs"]["hem_rms_m"])}',
-                     f'{peer["cost_ms_per_s"] / default["cost_ms_per_s"]:.2f}x'])
+        turns = data['head_to_head']
+        rivals = [label for label in turns['vs_first'] if label != s['default']]
+        default = _row_of(data, s['default'])
+        row = [clip, f'{apart["cloth_rms_m"] * 100:.2f} / {apart["cloth_max_m"] * 100:.2f}',
+               f'{apart["hem_rms_m"] * 100:.2f} / {apart["hem_max_m"] * 100:.2f}',
+               _mm(check['cloth_rms_m']),
+               f'{_mm(default["hem_rms_m"])} / {_mm(default["vs_gs"]["hem_rms_m"])}']
+        for label in rivals:
+            peer = _row_of(data, label)
+            row.append(f'{_mm(peer["hem_rms_m"])} / {_mm(peer["vs_gs"]["hem_rms_m"])}; '
+                       f'{turns["vs_first"][label]:.2f}x')
+        rows.append(row)
+    rounds = turns['rounds']
     return [f'Clips of {s["clip_seconds"]:g} s; references {s["reference"]} and '
-            f'{s["gs_reference"]}:', ''] + _table((
+            f'{s["gs_reference"]}; each rival\'s cost over the default\'s is the median of '
+            f'{rounds} rounds run in turns:', ''] + _table((
                 'clip', 'references apart: every vertex RMS / max (cm)', 'hem RMS / max (cm)',
                 'GS reference vs its finer run, every vertex RMS (mm)',
-                'default hem RMS vs XPBD / GS ref (mm)', 'XPBD+hard_pass 8 vs XPBD / GS ref (mm)',
-                'its cost / the default\'s'), rows)
+                f'default ({s["default"]}) hem RMS vs XPBD / GS ref (mm)',
+                *(f'{label}: the same; cost / the default\'s' for label in rivals)), rows)
 
 
 def bench_pareto(sources: Sequence[Any]) -> list[str]:

@@ -58,6 +58,19 @@ def test_bench_quick_writes_the_docs_accuracy_tables(quick_bench, tmp_path):
     out, _ = quick_bench
     tables = rewritten(tmp_path, {'bench': out}, ('bench.pareto', 'bench.references'))
     assert all('\n| walk |' in t for t in tables.values()), tables
+    # Each rival's cost is against the default's, timed in turns (the median of the rounds).
+    assert 'XPBD+hard_pass it8 sub1 120 Hz: the same; cost / the default\'s' in tables[
+        'bench.references']
+
+
+def test_the_defaults_rivals_are_timed_in_turns_against_it(quick_bench):
+    _, results = quick_bench
+    turns = results['clips']['walk']['head_to_head']
+    assert list(turns['vs_first']) == [results['default'], 'GS+hard_pass it16 sub1 120 Hz',
+                                       'XPBD+hard_pass it8 sub1 120 Hz']
+    assert turns['vs_first'][results['default']] == 1.0
+    assert all(len(c) == turns['rounds'] == 2 and min(c) > 0
+               for c in turns['cost_ms_per_s'].values())
 
 
 def test_the_reference_is_converged_by_richardson(quick_bench):
