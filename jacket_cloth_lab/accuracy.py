@@ -216,6 +216,30 @@ def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
                  np.array(kinetic), np.array(step_ns), sweeps, steps)
 
 
+def cost_ms_per_s(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
+                  inputs: Sequence[Input]) -> float:
+    """Return a run's cost as :attr:`Trace.cost_ms_per_s` measures it, and nothing else.
+
+    The same runs as :func:`run` (the same simulation and inputs, so the same work) without
+    the figures taken between inputs, for timing a method again.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset; its sweeps are the method's.
+    :param method: solver, stretch limit and budget.
+    :param inputs: the JointStates fed, the first a reset.
+    """
+    sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
+                           method.params())
+    step_ns = []
+    for k, (stamp, names, pos) in enumerate(inputs):
+        t0 = time.thread_time_ns()
+        sim.process(stamp, names, pos)
+        if k:
+            step_ns.append(time.thread_time_ns() - t0)
+    return float(np.median(step_ns)) * 1e-6 * CLIP_RATE
+
+
 def finer(method: Method) -> Method:
     """Return the run that checks a reference: half the step (Gauss-Seidel: twice the sweeps too).
 

@@ -41,6 +41,11 @@ QUICK_CONVERGENCE = {'sweeps': (8, 16, 32), 'rates': (240.0, 480.0, 960.0)}
 # is in their cost ratio; in turns it reaches every method alike.
 RIVALS = (Method('gauss_seidel', 'hard_pass', 16), Method('xpbd', 'hard_pass', 8))
 ROUNDS = 5
+# Each method of the sweep is timed this many times, round-robin over the sweep, with nothing
+# but the simulation between inputs, and its cost is the median: timed once, the slow phases of
+# this host (the kernel at 1.6x for a second or so) fell on some methods and not others, and
+# 16 sweeps cost 0.59-2.35x one sweep by clip.
+COST_ROUNDS = 3
 
 
 def reference_methods(quick: bool = False) -> tuple[Method, Method]:
@@ -153,10 +158,15 @@ def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CL
         ref, richardson = accuracy.reference(skeleton, rig, fabric, inputs, ref_method)
         gs_ref, gs_richardson, gs_check = accuracy.reference(skeleton, rig, fabric, inputs,
                                                              gs_method, keep_check=True)
-        rows = []
-        for method in sweep(quick) + auto_methods(quick):
-            trace = accuracy.run(skeleton, rig, fabric, method, inputs)
-            rows.append(accuracy.metrics(trace, ref, gs_ref))
+        methods = sweep(quick) + auto_methods(quick)
+        rows = [accuracy.metrics(accuracy.run(skeleton, rig, fabric, m, inputs), ref, gs_ref)
+                for m in methods]
+        costs = [[] for _ in methods]       # the runs above took figures between inputs
+        for _ in range(2 if quick else COST_ROUNDS):
+            for m, cost in zip(methods, costs):
+                cost.append(accuracy.cost_ms_per_s(skeleton, rig, fabric, m, inputs))
+        for row, cost in zip(rows, costs):
+            row['cost_ms_per_s'], row['cost_rounds'] = float(np.median(cost)), cost
         fixed = [i for i, r in enumerate(rows) if not r['tolerance_m']]
         for i in pareto_front([rows[i] for i in fixed]):
             rows[fixed[i]]['pareto'] = True
@@ -201,7 +211,7 @@ def head_to_head(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[
     cost = {m.label: [] for m in methods}
     for _ in range(rounds):
         for m in methods:
-            cost[m.label].append(accuracy.run(skeleton, rig, fabric, m, inputs).cost_ms_per_s)
+            cost[m.label].append(accuracy.cost_ms_per_s(skeleton, rig, fabric, m, inputs))
     first = cost[methods[0].label]
     return {'rounds': rounds, 'cost_ms_per_s': cost,
             'vs_first': {label: float(np.median(np.divide(c, first)))

@@ -52,6 +52,9 @@ def test_bench_quick_writes_tables_and_pareto_charts(quick_bench):
     rows = results['clips']['walk']['rows']
     assert any(r.get('pareto') for r in rows)
     assert all(r['cost_ms_per_s'] > 0 and np.isfinite(r['hem_rms_m']) for r in rows)
+    # Each method's cost is the median of its rounds, timed round-robin over the sweep.
+    assert all(len(r['cost_rounds']) == 2 and r['cost_ms_per_s'] == np.median(r['cost_rounds'])
+               for r in rows)
 
 
 def test_bench_quick_writes_the_docs_accuracy_tables(quick_bench, tmp_path):
