@@ -216,8 +216,8 @@ def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
                  np.array(kinetic), np.array(step_ns), sweeps, steps)
 
 
-def cost_ms_per_s(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
-                  inputs: Sequence[Input]) -> float:
+def timed_cost(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
+               inputs: Sequence[Input]) -> float:
     """Return a run's cost as :attr:`Trace.cost_ms_per_s` measures it, and nothing else.
 
     The same runs as :func:`run` (the same simulation and inputs, so the same work) without
@@ -228,6 +228,7 @@ def cost_ms_per_s(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
     :param fabric: the fabric preset; its sweeps are the method's.
     :param method: solver, stretch limit and budget.
     :param inputs: the JointStates fed, the first a reset.
+    :returns: the median input's CPU time at the input rate, ms per simulated second.
     """
     sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
                            method.params())

@@ -42,9 +42,9 @@ QUICK_CONVERGENCE = {'sweeps': (8, 16, 32), 'rates': (240.0, 480.0, 960.0)}
 RIVALS = (Method('gauss_seidel', 'hard_pass', 16), Method('xpbd', 'hard_pass', 8))
 ROUNDS = 5
 # Each method of the sweep is timed this many times, round-robin over the sweep, with nothing
-# but the simulation between inputs, and its cost is the median: timed once, the slow phases of
-# this host (the kernel at 1.6x for a second or so) fell on some methods and not others, and
-# 16 sweeps cost 0.59-2.35x one sweep by clip.
+# but the simulation between inputs, and its cost is the fastest: the host's slow phases (the
+# kernel at up to 1.6x for seconds) only add time, and timed once they fell on some methods
+# and not others.
 COST_ROUNDS = 3
 
 
@@ -161,12 +161,10 @@ def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CL
         methods = sweep(quick) + auto_methods(quick)
         rows = [accuracy.metrics(accuracy.run(skeleton, rig, fabric, m, inputs), ref, gs_ref)
                 for m in methods]
-        costs = [[] for _ in methods]       # the runs above took figures between inputs
-        for _ in range(2 if quick else COST_ROUNDS):
-            for m, cost in zip(methods, costs):
-                cost.append(accuracy.cost_ms_per_s(skeleton, rig, fabric, m, inputs))
-        for row, cost in zip(rows, costs):
-            row['cost_ms_per_s'], row['cost_rounds'] = float(np.median(cost)), cost
+        # The runs above took figures between inputs; these time the simulation alone.
+        costs = in_turns(skeleton, rig, fabric, inputs, methods, 2 if quick else COST_ROUNDS)
+        for row, cost in zip(rows, costs.values()):
+            row['cost_ms_per_s'], row['cost_rounds'] = min(cost), cost
         fixed = [i for i, r in enumerate(rows) if not r['tolerance_m']]
         for i in pareto_front([rows[i] for i in fixed]):
             rows[fixed[i]]['pareto'] = True
@@ -195,6 +193,25 @@ def bench(clips: Sequence[str] = CLIPS, quick: bool = False, seconds: float = CL
     return out
 
 
+def in_turns(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[accuracy.Input],
+             methods: Sequence[Method], rounds: int) -> dict[str, list[float]]:
+    """Time methods round-robin on one clip: each round runs every method once.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    :param fabric: the fabric preset.
+    :param inputs: the clip's JointStates.
+    :param methods: the methods, each label once.
+    :param rounds: how many rounds.
+    :returns: label -> its cost (ms per simulated s) in each round.
+    """
+    cost = {m.label: [] for m in methods}
+    for _ in range(rounds):
+        for m in methods:
+            cost[m.label].append(accuracy.timed_cost(skeleton, rig, fabric, m, inputs))
+    return cost
+
+
 def head_to_head(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[accuracy.Input],
                  methods: Sequence[Method], rounds: int) -> dict:
     """Time methods in turns on one clip; each one's cost against the first's.
@@ -208,10 +225,7 @@ def head_to_head(skeleton: Skeleton, rig: Rig, fabric: Fabric, inputs: Sequence[
     :returns: ``{'rounds', 'cost_ms_per_s': {label: [one per round]}, 'vs_first': {label:
         median over rounds of its cost / the first's in that round}}``.
     """
-    cost = {m.label: [] for m in methods}
-    for _ in range(rounds):
-        for m in methods:
-            cost[m.label].append(accuracy.cost_ms_per_s(skeleton, rig, fabric, m, inputs))
+    cost = in_turns(skeleton, rig, fabric, inputs, methods, rounds)
     first = cost[methods[0].label]
     return {'rounds': rounds, 'cost_ms_per_s': cost,
             'vs_first': {label: float(np.median(np.divide(c, first)))

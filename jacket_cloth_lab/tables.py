@@ -110,8 +110,8 @@ def speed_latest(sources: Sequence[Any]) -> list[str]:
     """
     s = sources[0]
     kernel, replay, pipe = _part(s, 'kernel'), _part(s, 'replay'), _part(s, 'input')
-    rows = [[t['figure'], t['measured'], _met(t['met'], t['target'])]
-            for t in _part(s, 'targets')]
+    rows = [[t['figure'], t['measured'], t['target'] + ': not measured' if t['met'] is None
+             else _met(t['met'], t['target'])] for t in _part(s, 'targets')]
     ref = [k for k in kernel if k['grid'] == '9x12' and k['iterations'] == 8 and 'limit_ns' in k]
     per_step = [r['replay_s'] / (r['session_s'] * 120.0) * 1e6 for r in replay]
     said = _span([r['realtime_x'] for r in replay], '.0f', 'x')
@@ -151,6 +151,7 @@ def speed_profile(sources: Sequence[Any]) -> list[str]:
     """Return where one input's CPU goes, by stage, on the replay's and the node's path.
 
     :param sources: speed.json.
+    :returns: the table's lines and a line on the recorder's thread and the sweeps.
     """
     return profile.summary(_part(sources[0], 'profile'))
 
@@ -252,11 +253,12 @@ def bench_references(sources: Sequence[Any]) -> list[str]:
     :param sources: bench.json.
     """
     s = sources[0]
-    rows, rivals = [], []
+    rows, rivals, rounds = [], [], 0
     for clip, data in s['clips'].items():
         apart, check = data['references_apart'], data['gs_richardson']
         turns = data['head_to_head']
         rivals = [label for label in turns['vs_first'] if label != s['default']]
+        rounds = turns['rounds']
         default = _row_of(data, s['default'])
         row = [clip, f'{apart["cloth_rms_m"] * 100:.2f} / {apart["cloth_max_m"] * 100:.2f}',
                f'{apart["hem_rms_m"] * 100:.2f} / {apart["hem_max_m"] * 100:.2f}',
@@ -267,7 +269,6 @@ def bench_references(sources: Sequence[Any]) -> list[str]:
             row.append(f'{_mm(peer["hem_rms_m"])} / {_mm(peer["vs_gs"]["hem_rms_m"])}; '
                        f'{turns["vs_first"][label]:.2f}x')
         rows.append(row)
-    rounds = turns['rounds']
     return [f'Clips of {s["clip_seconds"]:g} s; references {s["reference"]} and '
             f'{s["gs_reference"]}; each rival\'s cost over the default\'s is the median of '
             f'{rounds} rounds run in turns:', ''] + _table((
