@@ -567,6 +567,10 @@ class JacketClothNode(Node):
 
         :param batch: (character, raw CDR bytes, rmw message info) of each input, in order.
         """
+        with signals.uninterrupted():       # an input's /tf goes out, then it is recorded
+            self._joint_states(batch)
+
+    def _joint_states(self, batch):
         now = time.time_ns()
         logger = self.get_logger()
         entries = []
