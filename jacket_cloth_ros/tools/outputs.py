@@ -166,7 +166,7 @@ def place_all(folder: str, names: list[str], paths: list[str], force: bool) -> N
     :param paths: where each goes.
     :param force: whether files at those paths are replaced.
     """
-    claimed = []
+    claimed = set()
     try:
         if not force:
             for path in paths:
@@ -174,11 +174,10 @@ def place_all(folder: str, names: list[str], paths: list[str], force: bool) -> N
                     os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
                 except FileExistsError:
                     raise OutputError(f'{path} exists (use --force to overwrite)') from None
-                claimed.append(path)
+                claimed.add(path)
         for name, path in zip(names, paths):
             os.replace(os.path.join(folder, name), path)
-            if path in claimed:
-                claimed.remove(path)
+            claimed.discard(path)
     finally:
         for path in claimed:            # the empty files that took names, never filled
             os.remove(path)
