@@ -23,7 +23,7 @@ import shlex
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
-from . import profile
+from . import host_probe, profile
 
 PROG = 'python -m jacket_cloth_lab'
 REGION = re.compile(r'(<!-- lab: (?P<kind>[\w.]+) -->\n)(?P<body>.*?)(<!-- /lab -->)', re.S)
@@ -154,6 +154,14 @@ def speed_profile(sources: Sequence[Any]) -> list[str]:
     :returns: the table's lines and a line on the recorder's thread and the sweeps.
     """
     return profile.summary(_part(sources[0], 'profile'))
+
+
+def speed_host(sources: Sequence[Any]) -> list[str]:
+    """Return what the host slows with the kernel, measure by measure.
+
+    :param sources: speed.json.
+    """
+    return host_probe.summary(_part(sources[0], 'host'))
 
 
 def lod_latest(sources: Sequence[Any]) -> list[str]:
@@ -359,6 +367,7 @@ LOD_RUN = f'{PROG} bench lod --out out/bench_lod'
 TABLES: dict[str, Table] = {
     'speed.latest': Table((SPEED,), (SPEED_RUN,), speed_latest),
     'speed.profile': Table((SPEED,), (SPEED_RUN,), speed_profile),
+    'speed.host': Table((SPEED,), (SPEED_RUN,), speed_host),
     'lod.latest': Table(('bench_lod/lod.json',), (LOD_RUN,), lod_latest),
     'crowd.lod': Table(('bench_lod/crowd_lod.json',), (LOD_RUN,), crowd_lod),
     'crowd.held': Table((SPEED,), (SPEED_RUN,), crowd_held),

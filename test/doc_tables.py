@@ -15,7 +15,7 @@ DOCS = os.path.join(os.path.dirname(__file__), '..', 'docs')
 
 # Which test file hands which results here: test_lab_tables checks every kind is covered.
 COVERED = {'speed.latest': 'test_lab_speed.py', 'speed.profile': 'test_lab_speed.py',
-           'crowd.held': 'test_lab_speed.py',
+           'crowd.held': 'test_lab_speed.py', 'speed.host': 'test_lab_speed.py',
            'lod.latest': 'test_lod.py', 'crowd.lod': 'test_lod.py',
            'bench.pareto': 'test_lab_accuracy.py', 'bench.references': 'test_lab_accuracy.py',
            'stress.matrix': 'test_lab.py', 'analyze.clips': 'test_lab_tables.py',

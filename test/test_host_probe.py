@@ -1,0 +1,104 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""The host probe of ``bench speed``: which passes count as timed on a quiet host.
+
+The kernel's speed here follows phases of the shared host that the C yardstick does not
+(jacket_cloth_lab/host_probe.py); the probe's readings decide which kernel passes count.
+"""
+
+import shutil
+
+import pytest
+
+from jacket_cloth_lab import host_probe, speed
+from jacket_cloth_lab.host_probe import LOOPS, phases, quiet_between, summary
+
+
+def test_a_pass_is_quiet_only_with_both_readings_near_the_lowest():
+    # The lowest reading of all is 1.0: under 1.5 on both sides counts, 1.5 or more on either
+    # side is the slow phase.
+    assert quiet_between([(1.0, 1.2), (1.2, 1.6), (1.6, 1.0), (1.49, 1.1)]) == [
+        True, False, False, True]
+
+
+class _ScriptedHost:
+    """A host whose phase cycles quiet, quiet, slow, slow, one phase per kernel pass.
+
+    The kernel pass takes 50 us quiet and 90 us slow; the probe after a pass reads 1 ms
+    quiet and 2 ms slow; the yardstick always takes 100 us.
+    """
+
+    CYCLE = (False, False, True, True)
+
+    def __init__(self):
+        self.passes = 0
+
+    def kernel_step_ns(self, steps, repeat=1):
+        self.slow = self.CYCLE[self.passes % len(self.CYCLE)]
+        self.passes += 1
+        return 90e3 if self.slow else 50e3
+
+    def read(self):
+        return 2.0 if getattr(self, 'slow', False) else 1.0
+
+    def step_ns(self, cols, rows, iterations, steps=0):
+        return {'step_ns_median': 100e3, 'constraints': 545}
+
+
+def test_the_kernel_is_compared_with_the_yardstick_over_the_quiet_passes_only(monkeypatch):
+    host = _ScriptedHost()
+    monkeypatch.setattr(speed, 'kernel_step_ns', host.kernel_step_ns)
+    got = speed.in_rounds([()], host, 9, 12, 8, probe=host)
+    # Only a quiet pass after a quiet one counts: one in four; each round runs until 20 count.
+    assert got['quiet'] == [True] * speed.KERNEL_TARGET['rounds']
+    assert got['quiet_passes'] == [speed.ROUND_REPEATS] * speed.KERNEL_TARGET['rounds']
+    assert got['kernel_ns'] == 50e3 and got['ratio'] == 0.5
+    assert all(ns is not None and ns > 50e3 for ns in got['slow_kernel_ns'])
+    # Without the probe every pass counts, the slow ones too.
+    plain = speed.in_rounds([()], _ScriptedHost(), 9, 12, 8)
+    assert 'quiet' not in plain and max(plain['ratios']) == 0.9
+
+
+def test_item_4_says_how_many_passes_the_probe_found_quiet():
+    row = {'grid': '9x12', 'iterations': 8, 'ratio': 0.6, 'ratios': [0.6, 0.9, 0.6, 0.6],
+           'quiet': [True, False, True, True], 'passes': [40, 200, 30, 25],
+           'quiet_passes': [20, 3, 20, 20], 'slow_kernel_ns': [80e3, 90e3, None, 85e3],
+           'limit_rounds_ns': [100e3] * 4}
+    [target] = speed.targets({'kernel': [row]})
+    assert target['met'] is True
+    assert 'median of 3 rounds timed on a quiet host' in target['figure']
+    assert '63 of 295 passes with the probe quiet, the others 0.80–0.90x' in target['measured']
+    # Fewer quiet rounds than the target needs: not measured, whatever the ratio.
+    row['quiet'] = [True, False, False, False]
+    assert speed.targets({'kernel': [row]})[0]['met'] is None
+
+
+class _ScriptedLoops:
+    """Loops whose times follow a scripted kernel (patterned) or stay put (the others)."""
+
+    def __init__(self):
+        self.k = 0
+
+    def kernel_us(self):
+        self.k += 1
+        return 80.0 if self.k % 3 == 0 else 47.0
+
+    def loop_ms(self, name):
+        return (2.5 if self.k % 3 == 0 else 1.0) if name == 'patterned' else 1.2
+
+
+def test_phases_say_which_loops_slow_with_the_kernel():
+    host = _ScriptedLoops()
+    got = phases(host, host.kernel_us, rounds=30, pause_s=0.0)
+    m = got['measures']
+    assert set(m) == {'kernel', 'python', *LOOPS}
+    assert m['patterned']['with_kernel'] == pytest.approx(1.0)
+    assert m['dependent']['with_kernel'] is None        # it never moved: no correlation
+    assert m['kernel']['spread'] == pytest.approx(80.0 / 47.0)
+    assert any('branches only their history predicts' in line for line in summary(got))
+
+
+@pytest.mark.skipif(shutil.which('cc') is None, reason='no C compiler (cc) to build the probe')
+def test_the_probe_builds_and_times_each_loop():
+    probe = host_probe.host_probe()
+    assert probe.read() > 0.0
+    assert all(probe.loop_ms(name) > 0.0 for name in LOOPS)
