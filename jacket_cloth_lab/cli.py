@@ -48,7 +48,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     :returns: the exit status.
     """
     folders = {'speed': 'out/bench_speed', 'lod': 'out/bench_lod'}
-    args.out = args.out or folders.get(args.what, 'out/bench')
+    # One part of bench speed goes beside the whole run's files, not over them.
+    part = f'_{args.only}' if args.what == 'speed' and args.only else ''
+    args.out = args.out or folders.get(args.what, 'out/bench') + part
     if args.what == 'speed':
         from .speed import main as speed_main
         return speed_main(args)

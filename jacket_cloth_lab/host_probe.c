@@ -2,7 +2,7 @@
  *
  * Small loops that tell what the shared host slows (jacket_cloth_lab/host_probe.py). Each
  * returns its own time in ms. patterned: branches that only their history predicts (a fixed
- * pattern of 64); dependent: one chain of integer operations; divisions: one chain of
+ * pattern); dependent: one chain of integer operations; divisions: one chain of
  * divisions; independent: eight independent multiply-add chains. */
 #include <time.h>
 

@@ -3,12 +3,13 @@
 
 On this machine the kernel, its parts and the Python interpreter run at two speeds about
 1.7x apart, in phases from milliseconds to seconds, with no CPU steal, while the C yardstick
-keeps its speed. :func:`phases` times the kernel between small C loops (``host_probe.c``),
-round after round, and says which of them slow with it: a loop whose branches only their
-history predicts does, one chain of dependent operations (the kind of work that bounds the
-yardstick's step) does not. The first is the probe: a pass of the kernel with the probe slow
-on either side ran in the slow phase (:func:`quiet_between`), so the kernel is compared with
-the yardstick on a quiet host, as issue 37 asks, not by the luck of the phase.
+nearly keeps its speed. :func:`phases` times the kernel between small C loops
+(``host_probe.c``), round after round, and says which of them slow with it: a loop whose
+branches only their history predicts does, one chain of dependent operations (the kind of
+work that bounds the yardstick's step) does not. The first is the probe: a pass of the kernel
+with the probe slow on either side (:func:`quiet`) is taken as run in the slow phase and left
+out, so the kernel is compared with the yardstick on a quiet host, as issue 37 asks. The
+probe only correlates with the kernel's phase: some passes left out were fast.
 """
 
 import ctypes
@@ -18,7 +19,7 @@ import shutil
 import subprocess
 import tempfile
 import time
-from typing import Callable, Sequence
+from typing import Callable
 
 import numpy as np
 
@@ -55,20 +56,26 @@ class HostProbe:
         return self._lib.patterned()
 
 
-def host_probe() -> HostProbe | None:
-    """Return the probe built here, or None where no C compiler is found."""
-    return HostProbe() if shutil.which('cc') else None
+def build_probe() -> HostProbe | None:
+    """Return the probe built here, or None where no C compiler is found or it fails."""
+    if not shutil.which('cc'):
+        return None
+    try:
+        return HostProbe()
+    except (subprocess.CalledProcessError, OSError):
+        return None
 
 
-def quiet_between(readings: Sequence[tuple[float, float]]) -> list[bool]:
-    """Tell of each timed pass whether the host was quiet on both sides of it.
+def quiet(pair: tuple[float, float], lowest: float) -> bool:
+    """Tell whether the host was quiet on both sides of a timed pass.
 
-    :param readings: the probe before and after each pass (:meth:`HostProbe.read`).
-    :returns: per pass, whether both readings are under :data:`SLOW_AT` times the lowest
-        reading of all.
+    :param pair: the probe before and after the pass (:meth:`HostProbe.read`), ms.
+    :param lowest: the lowest reading to judge by, ms.
+    :returns: whether both readings are under :data:`SLOW_AT` times ``lowest``.
     """
-    lowest = min(min(pair) for pair in readings)
-    return [max(pair) < SLOW_AT * lowest for pair in readings]
+    if not lowest > 0.0:
+        raise ValueError(f'the host probe read {lowest} ms: no clock to judge by')
+    return max(pair) < SLOW_AT * lowest
 
 
 def python_loop_ms(n: int = 20000) -> float:

@@ -45,8 +45,7 @@ from jacket_cloth_ros.core.skeleton import (
     Skeleton, load_shipped_character, shipped_character_urdf)
 from .accuracy import clip_inputs
 from .bench import rig_at_grid
-from .host_probe import HostProbe, host_probe, phases, quiet_between
-from . import host_probe as host, lab_domain, profile
+from . import host_probe, lab_domain, profile
 from .crowd import chart as crowd_chart, crowd_bench, summary as crowd_summary
 
 # The C yardstick beside the repository (never copied in); JACKET_CLOTH_LIMIT names another.
@@ -66,6 +65,9 @@ KERNEL_TARGET = {'grid': '9x12', 'iterations': 8, 'rounds': 9, 'fewest_rounds': 
 ROUND_REPEATS = 20                 # passes over the captured states in one kernel round
 ROUND_STEPS = 1000                 # yardstick steps in one round: about as long
 MOST_PASSES = 200                  # kernel passes a round may run for its quiet ones
+MOST_ROUNDS = 2 * KERNEL_TARGET['rounds']   # rounds a run may take for enough quiet ones
+PHASE_STATES = 20                  # captured states in one kernel measurement of host_phases
+PHASE_YARDSTICK_STEPS = 210        # yardstick steps in one of its measurements there
 # The replay's share of its kernel-only limit, by the shortest session it applies to: a short
 # session also pays the set-up once.
 REPLAY_TARGETS = ((5.0, 0.5), (15.0, 0.8))
@@ -176,7 +178,7 @@ def kernel_step_ns(steps: Sequence[tuple], repeat: int = 3) -> float:
 def kernel_vs_limit(skeleton: Skeleton, grids: Sequence[tuple[int, int]] = GRIDS,
                     iterations: Sequence[int] = ITERATIONS,
                     yardstick: Yardstick | None = None,
-                    probe: HostProbe | None = None) -> list[dict]:
+                    probe: host_probe.HostProbe | None = None) -> list[dict]:
     """Time the kernel on each grid and sweep count, against the yardstick's if built.
 
     The target's grid and sweeps (:data:`KERNEL_TARGET`) are timed in rounds that alternate
@@ -212,26 +214,29 @@ def kernel_vs_limit(skeleton: Skeleton, grids: Sequence[tuple[int, int]] = GRIDS
 
 
 def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: int,
-              iterations: int, probe: HostProbe | None = None) -> dict:
+              iterations: int, probe: host_probe.HostProbe | None = None) -> dict:
     """Time kernel and yardstick in alternating rounds, both pinned to one CPU.
 
     With the probe, a kernel round is timed in short passes over the states, each between two
-    probe readings: a pass counts only with the host quiet on both sides of it (judged over
-    the whole run, host_probe.quiet_between), and a round runs passes until
-    :data:`ROUND_REPEATS` of them count or :data:`MOST_PASSES` ran. A round with fewer than
-    half its passes counted is a round in the slow phase. The yardstick's speed does not
-    follow the phases.
+    probe readings, and a pass counts only with the host quiet on both sides of it
+    (host_probe.quiet, against the lowest reading so far); a round runs passes until
+    :data:`ROUND_REPEATS` of them count or :data:`MOST_PASSES` ran, and is a quiet round if
+    half of ROUND_REPEATS count. Every round is judged again against the run's lowest reading
+    (a run that began in the slow phase counted slow passes at first), and rounds go on until
+    enough are quiet or :data:`MOST_ROUNDS` ran. The yardstick's speed hardly follows the
+    phases.
 
     :param steps: ``cloth_step``'s arguments, one tuple per captured state.
     :param yardstick: the built C yardstick.
     :param cols: the grid's vertex columns.
     :param nrows: the grid's vertex rows.
     :param iterations: sweeps per step.
-    :param probe: the host probe; None: every round counts.
+    :param probe: the host probe; None: nine rounds, every one counts.
     :returns: the median counted round's ``kernel_ns``, ``limit_ns`` and ``ratio``, every
         round's (``kernel_rounds_ns``, ``limit_rounds_ns``, ``ratios``; with the probe
-        ``quiet``, ``passes`` and ``quiet_passes``, and ``slow_kernel_ns``, the median of each
-        round's passes in the slow phase, None without any) and the ``cpu``.
+        ``quiet``, ``passes``, ``quiet_passes`` and ``slow_kernel_ns``, the median of the
+        round's passes not counted, None without any), ``counted`` (``quiet rounds``, or
+        ``every round`` where none was quiet or there was no probe) and the ``cpu``.
     """
     allowed = os.sched_getaffinity(0)
     cpu = min(allowed)
@@ -239,7 +244,9 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
     passes, limit = [], []                  # passes: per round, (ns, probe before, after)
     lowest = float('inf')
     try:
-        for _ in range(KERNEL_TARGET['rounds']):
+        while len(passes) < KERNEL_TARGET['rounds'] or (
+                probe and len(passes) < MOST_ROUNDS
+                and sum(_judged(passes, lowest)[3]) < KERNEL_TARGET['rounds']):
             if probe is None:
                 passes.append([(kernel_step_ns(steps, repeat=ROUND_REPEATS), 0.0, 0.0)])
             else:
@@ -249,7 +256,7 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
                     after = probe.read()
                     mine.append((took, before, after))
                     lowest = min(lowest, before, after)
-                    counted += max(before, after) < host.SLOW_AT * lowest
+                    counted += host_probe.quiet((before, after), lowest)
                     before = after
                 passes.append(mine)
             ref = yardstick.step_ns(cols, nrows, iterations, steps=ROUND_STEPS)
@@ -259,21 +266,14 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
     out = {'limit_rounds_ns': limit, 'cpu': cpu, 'limit_constraints': ref['constraints']}
     if probe is None:
         kernel = [mine[0][0] for mine in passes]
-        counted = range(len(kernel))
+        counted = list(range(len(kernel)))
     else:
-        quiet = iter(quiet_between([(b, a) for mine in passes for _, b, a in mine]))
-        kernel, slow, out['passes'], out['quiet_passes'] = [], [], [], []
-        for mine in passes:
-            flags = [next(quiet) for _ in mine]
-            fast = [ns for (ns, _, _), q in zip(mine, flags) if q]
-            late = [ns for (ns, _, _), q in zip(mine, flags) if not q]
-            kernel.append(float(np.median(fast or late)))
-            slow.append(float(np.median(late)) if late else None)
-            out['passes'].append(len(mine))
-            out['quiet_passes'].append(len(fast))
-        out['quiet'] = [2 * q >= ROUND_REPEATS for q in out['quiet_passes']]
-        out['slow_kernel_ns'] = slow
-        counted = [k for k, q in enumerate(out['quiet']) if q] or range(len(kernel))
+        kernel, out['slow_kernel_ns'], out['quiet_passes'], out['quiet'] = _judged(passes,
+                                                                                   lowest)
+        out['passes'] = [len(mine) for mine in passes]
+        counted = [k for k, q in enumerate(out['quiet']) if q]
+    out['counted'] = 'quiet rounds' if probe and counted else 'every round'
+    counted = counted or list(range(len(kernel)))
     ratios = [k / y for k, y in zip(kernel, limit)]
     out.update(ratios=ratios, kernel_rounds_ns=kernel,
                kernel_ns=float(np.median([kernel[k] for k in counted])),
@@ -282,24 +282,46 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
     return out
 
 
-def host_phases(skeleton: Skeleton, probe: HostProbe, rounds: int,
+def _judged(passes, lowest):
+    """Judge each round's passes against ``lowest``.
+
+    Returns per round: its kernel (the median of its counted passes, else of all), the median
+    of the others, how many counted, and whether it is quiet.
+    """
+    kernel, slow, counts, quiet = [], [], [], []
+    for mine in passes:
+        fast = [ns for ns, before, after in mine if host_probe.quiet((before, after), lowest)]
+        late = [ns for ns, before, after in mine
+                if not host_probe.quiet((before, after), lowest)]
+        kernel.append(float(np.median(fast or late)))
+        slow.append(float(np.median(late)) if late else None)
+        counts.append(len(fast))
+        quiet.append(2 * len(fast) >= ROUND_REPEATS)
+    return kernel, slow, counts, quiet
+
+
+def host_phases(skeleton: Skeleton, probe: host_probe.HostProbe, rounds: int,
                 yardstick: Yardstick | None = None) -> dict:
     """Run host_probe.phases with the kernel (and the yardstick) at the target's grid and sweeps.
+
+    Each kernel measurement is the median step over the first captured states, short enough
+    for many rounds.
 
     :param skeleton: the shipped character.
     :param probe: the built host probe.
     :param rounds: how many rounds.
     :param yardstick: the built C yardstick; None: not measured.
+    :returns: what host_probe.phases returns.
     """
     cols, nrows = (int(n) for n in KERNEL_TARGET['grid'].split('x'))
     it = KERNEL_TARGET['iterations']
     fabric = load_fabric('tweed_jacket').with_values(iterations=it)
-    steps = captured_steps(skeleton, rig_at_grid(skeleton, cols, nrows), fabric)[:20]
-    # 210 steps: ten in each of the yardstick's 21 timed blocks, about as long as the kernel's.
-    ref = (lambda: yardstick.step_ns(cols, nrows, it, steps=210)['step_ns_median'] * 1e-3
-           ) if yardstick else None
-    return phases(probe, lambda: kernel_step_ns(steps, repeat=1) * 1e-3, rounds,
-                  yardstick_us=ref)
+    steps = captured_steps(skeleton, rig_at_grid(skeleton, cols, nrows), fabric)[:PHASE_STATES]
+    # About as many yardstick steps as the kernel's measurement, over its timed blocks.
+    ref = (lambda: yardstick.step_ns(cols, nrows, it, steps=PHASE_YARDSTICK_STEPS)[
+        'step_ns_median'] * 1e-3) if yardstick else None
+    return host_probe.phases(probe, lambda: kernel_step_ns(steps, repeat=1) * 1e-3, rounds,
+                             yardstick_us=ref)
 
 
 def input_vs_kernel(skeleton: Skeleton, seconds: float = 10.0, paced_s: float = 3.0) -> dict:
@@ -660,7 +682,7 @@ def run(quick: bool, out_dir: str, say: Callable[[str], None] = print,
     yardstick = Yardstick(source) if source and not quick else None
     results = {'quick': quick, 'limit': source or 'not found (../shared/limit/cloth_ref.c)'}
     steal = results['steal_percent'] = {}
-    probe = host_probe()
+    probe = host_probe.build_probe()
 
     def section(key, title, measure):
         if only and key != only:
@@ -751,8 +773,11 @@ def targets(results: dict) -> list[dict]:
     return rows
 
 
-def _kernel_target(r):
-    """Item 4's row: the median of the rounds on a quiet host, where a probe sorted them."""
+def _kernel_target(r: dict) -> dict:
+    """Return item 4's row: the median of the rounds on a quiet host, where a probe sorted them.
+
+    :param r: the kernel part's row at the target's grid and sweeps (:func:`in_rounds`).
+    """
     runs = r.get('ratios', [r['ratio']] if 'ratio' in r else [])
     quiet = r.get('quiet')
     counted = [x for x, q in zip(runs, quiet) if q] if quiet else runs
@@ -763,8 +788,10 @@ def _kernel_target(r):
     if quiet is not None:
         slow = [ns / y for ns, y in zip(r['slow_kernel_ns'], r['limit_rounds_ns']) if ns]
         said += (f'; {sum(r["quiet_passes"])} of {sum(r["passes"])} passes with the probe '
-                 'quiet' + (f', the others {min(slow):.2f}–{max(slow):.2f}x' if slow else ''))
-    which = 'rounds timed on a quiet host' if quiet is not None else 'rounds'
+                 'quiet' + (f', the passes not counted {min(slow):.2f}–{max(slow):.2f}x'
+                            if slow else ''))
+    which = (f'rounds timed on a quiet host (of {len(runs)})' if quiet is not None
+             else 'rounds')
     return {'figure': f'kernel / C yardstick, {r["grid"]} at {r["iterations"]} sweeps, '
             f'median of {len(counted)} {which}',
             'measured': said if enough or not runs else said + ', too few rounds',
@@ -793,16 +820,17 @@ def summary(results: dict) -> str:
                   for t in results['targets']]
         lines += ['']
     if 'host' in results:
-        lines += host.summary(results['host']) + ['']
+        lines += host_probe.summary(results['host']) + ['']
     k = results.get('kernel', [])
     if k:
         lines += ['## Kernel against the C yardstick (one step, same grid and iterations)', '',
                   '| grid | constraints | iterations | kernel us | yardstick us | ratio |',
                   '|---|---|---|---|---|---|']
     for r in k:
+        gated = ', quiet rounds' if r.get('counted') == 'quiet rounds' else ''
         lines.append(f'| {r["grid"]} | {r["constraints"]} | {r["iterations"]} | '
                      f'{r["kernel_ns"] / 1e3:.1f} | '
-                     + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x |' if 'ratio' in r
+                     + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x{gated} |' if 'ratio' in r
                         else 'n/a | n/a |'))
     if 'profile' not in results:         # --only a part
         crowd = crowd_summary(results['crowd']) if 'crowd' in results else []
