@@ -111,7 +111,15 @@ class Running:
             os.killpg(self.proc.pid, signal.SIGINT)
         else:
             self.proc.send_signal(signal.SIGINT)
-        code = self.proc.wait(timeout=timeout)
+        try:
+            code = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            # What it printed says which process hung: launch, or the node it waits for.
+            deadline = time.monotonic() + 1.0
+            while self._next(deadline) is not None:
+                pass
+            raise AssertionError(f'still running {timeout} s after SIGINT:\n{self.output()}'
+                                 ) from None
         deadline = time.monotonic() + timeout
         while self._next(deadline) is not None:
             pass
