@@ -171,6 +171,12 @@ def deepest_inside(sim: JacketSimulation) -> float:
                         collider_labels(sim.rig)).value
 
 
+def _simulation(skeleton, rig, fabric, method):
+    """Return a fresh simulation of ``method``: its sweeps on the fabric, its parameters."""
+    return JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
+                            method.params())
+
+
 def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
         inputs: Sequence[Input]) -> Trace:
     """Feed ``inputs`` to a fresh simulation with ``method``; the Trace of what it did.
@@ -181,8 +187,7 @@ def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
     :param method: solver, stretch limit and budget.
     :param inputs: the JointStates fed, the first a reset.
     """
-    sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
-                           method.params())
+    sim = _simulation(skeleton, rig, fabric, method)
     edges = edge_classes(rig)
     hem, cloth, hood, inside, kinetic, step_ns = [], [], [], [], [], []
     strain = {k: [] for k in edges}
@@ -230,8 +235,7 @@ def timed_cost(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
     :param inputs: the JointStates fed, the first a reset.
     :returns: the median input's CPU time at the input rate, ms per simulated second.
     """
-    sim = JacketSimulation(skeleton, rig, fabric.with_values(iterations=method.iterations),
-                           method.params())
+    sim = _simulation(skeleton, rig, fabric, method)
     step_ns = []
     for k, (stamp, names, pos) in enumerate(inputs):
         t0 = time.thread_time_ns()

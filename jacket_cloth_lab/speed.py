@@ -246,7 +246,7 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
     try:
         while len(passes) < KERNEL_TARGET['rounds'] or (
                 probe and len(passes) < MOST_ROUNDS
-                and sum(_judged(passes, lowest)[3]) < KERNEL_TARGET['rounds']):
+                and sum(map(_quiet_round, _flags(passes, lowest))) < KERNEL_TARGET['rounds']):
             if probe is None:
                 passes.append([(kernel_step_ns(steps, repeat=ROUND_REPEATS), 0.0, 0.0)])
             else:
@@ -282,6 +282,17 @@ def in_rounds(steps: Sequence[tuple], yardstick: Yardstick, cols: int, nrows: in
     return out
 
 
+def _flags(passes, lowest):
+    """Return, per round, whether each of its passes counts against ``lowest``."""
+    return [[host_probe.quiet((before, after), lowest) for _, before, after in mine]
+            for mine in passes]
+
+
+def _quiet_round(flags):
+    """Tell whether a round is quiet: half of ROUND_REPEATS of its passes count."""
+    return 2 * sum(flags) >= ROUND_REPEATS
+
+
 def _judged(passes, lowest):
     """Judge each round's passes against ``lowest``.
 
@@ -289,14 +300,13 @@ def _judged(passes, lowest):
     of the others, how many counted, and whether it is quiet.
     """
     kernel, slow, counts, quiet = [], [], [], []
-    for mine in passes:
-        fast = [ns for ns, before, after in mine if host_probe.quiet((before, after), lowest)]
-        late = [ns for ns, before, after in mine
-                if not host_probe.quiet((before, after), lowest)]
+    for mine, flags in zip(passes, _flags(passes, lowest)):
+        fast = [ns for (ns, _, _), q in zip(mine, flags) if q]
+        late = [ns for (ns, _, _), q in zip(mine, flags) if not q]
         kernel.append(float(np.median(fast or late)))
         slow.append(float(np.median(late)) if late else None)
         counts.append(len(fast))
-        quiet.append(2 * len(fast) >= ROUND_REPEATS)
+        quiet.append(_quiet_round(flags))
     return kernel, slow, counts, quiet
 
 
@@ -682,7 +692,7 @@ def run(quick: bool, out_dir: str, say: Callable[[str], None] = print,
     yardstick = Yardstick(source) if source and not quick else None
     results = {'quick': quick, 'limit': source or 'not found (../shared/limit/cloth_ref.c)'}
     steal = results['steal_percent'] = {}
-    probe = host_probe.build_probe()
+    probe = host_probe.build_probe() if only in (None, 'host', 'kernel') else None
 
     def section(key, title, measure):
         if only and key != only:

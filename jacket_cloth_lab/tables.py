@@ -99,7 +99,7 @@ def _part(results: dict, key: str) -> Any:
 
 
 def _met(ok: bool | None, target: str) -> str:
-    return target if ok is None else f'{target}: {"met" if ok else "not met"}'
+    return f'{target}: {"not measured" if ok is None else "met" if ok else "not met"}'
 
 
 def speed_latest(sources: Sequence[Any]) -> list[str]:
@@ -110,8 +110,8 @@ def speed_latest(sources: Sequence[Any]) -> list[str]:
     """
     s = sources[0]
     kernel, replay, pipe = _part(s, 'kernel'), _part(s, 'replay'), _part(s, 'input')
-    rows = [[t['figure'], t['measured'], t['target'] + ': not measured' if t['met'] is None
-             else _met(t['met'], t['target'])] for t in _part(s, 'targets')]
+    rows = [[t['figure'], t['measured'], _met(t['met'], t['target'])]
+            for t in _part(s, 'targets')]
     ref = [k for k in kernel if k['grid'] == '9x12' and k['iterations'] == 8 and 'limit_ns' in k]
     per_step = [r['replay_s'] / (r['session_s'] * 120.0) * 1e6 for r in replay]
     said = _span([r['realtime_x'] for r in replay], '.0f', 'x')

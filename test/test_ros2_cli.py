@@ -115,15 +115,17 @@ class Running:
             code = self.proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             # What it printed says which process hung: launch, or the node it waits for.
-            deadline = time.monotonic() + 1.0
-            while self._next(deadline) is not None:
-                pass
+            self._drain(1.0)
             raise AssertionError(f'still running {timeout} s after SIGINT:\n{self.output()}'
                                  ) from None
-        deadline = time.monotonic() + timeout
+        self._drain(timeout)
+        return code
+
+    def _drain(self, seconds):
+        """Read what the command printed until its output ends or ``seconds`` pass."""
+        deadline = time.monotonic() + seconds
         while self._next(deadline) is not None:
             pass
-        return code
 
     def output(self):
         return ''.join(self.seen)
