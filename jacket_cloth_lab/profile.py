@@ -20,6 +20,10 @@ with a timer around each stage:
 
 Shares are of the main thread's CPU per input; ``other`` is what no stage timer covers (the
 pipeline's accounting between stages). Each timer adds its own small cost to its stage.
+
+The bare kernel's step is timed just before and after the run, as the replay's kernel-only
+limit is (``speed.replay_scaling``), so the summary can say how far the simulation alone, with
+no output at all, is from that limit: the bound every whole input path stays under.
 """
 
 import functools
@@ -95,8 +99,10 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     :param node: add the node's rclpy take and publish (DDS in this process, own domain).
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
         share of the main thread}, 'writer_thread_us', 'sweeps_per_input',
-        'substeps_per_input'}``.
+        'substeps_per_input', 'kernel_step_us', 'steps_per_input'}``; ``kernel_step_us`` is
+        the bare kernel's median step at the shipped grid, timed beside the run.
     """
+    from jacket_cloth_lab import speed      # speed imports this module
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.motion.clips import joint_state_content
@@ -106,8 +112,8 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
     fabrics = load_fabrics()
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
-                               default_values(fabrics['tweed_jacket']), timing=False)
+    values = default_values(fabrics['tweed_jacket'])
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
     clock = StageClock()
     messages_module = pipeline_module.messages
     _instrumented(pipeline, clock)
@@ -119,6 +125,9 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     skip = int(0.5 * INPUT_RATE)
     topics = session_topics()
     ros = _NodeIO(raws, clock) if node else None
+    steps = speed.captured_steps(skeleton, speed.rig_at_grid(skeleton, 9, 12),
+                                 fabrics['tweed_jacket'])
+    kernel_before = speed.kernel_step_ns(steps, repeat=speed.ROUND_REPEATS)
     sweeps = substeps = 0
     try:
         with tempfile.TemporaryDirectory() as tmp:
@@ -151,6 +160,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
         pipeline_module.messages = messages_module
         if ros:
             ros.close()
+    kernel_after = speed.kernel_step_ns(steps, repeat=speed.ROUND_REPEATS)
     counted = len(raws) - skip
     us = {name: ns / counted / 1e3 for name, ns in clock.ns.items()
           if node or name not in NODE_ONLY}
@@ -159,7 +169,9 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     return {'inputs': counted, 'node': node, 'us_per_input': total, 'us': us,
             'share': {name: v / total for name, v in us.items()},
             'writer_thread_us': max(all_ns - main_ns, 0) / counted / 1e3,
-            'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted}
+            'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted,
+            'kernel_step_us': (kernel_before + kernel_after) / 2e3,
+            'steps_per_input': values['sim_rate'] / INPUT_RATE}
 
 
 class _NodeIO:
@@ -251,4 +263,21 @@ def summary(profiles: List[Dict]) -> List[str]:
     lines += ['', f'The recorder\'s writer thread: {p["writer_thread_us"]:.1f} us per input '
               f'more. Per input: {p["substeps_per_input"]:.1f} substeps, '
               f'{p["sweeps_per_input"]:.1f} sweeps.']
-    return lines
+    return lines + _limit_lines(p)
+
+
+# The stages a replay with no output at all would still run for each input.
+SIMULATION_ONLY = ('decode', 'prepare', 'step', 'complete')
+
+
+def _limit_lines(p: Dict) -> List[str]:
+    """Return the lines setting a profile against its kernel-only limit (none in older runs)."""
+    if 'kernel_step_us' not in p:
+        return []
+    limit = p['kernel_step_us'] * p['steps_per_input']
+    alone = sum(p['us'][name] for name in SIMULATION_ONLY)
+    return ['', f'The kernel-only limit beside this run: {limit:.1f} us per input (the bare '
+            f'kernel\'s {p["kernel_step_us"]:.1f} us step, {p["steps_per_input"]:g} an '
+            f'input). The step stage is {p["us"]["step"] / limit:.2f}x it; decode to '
+            f'complete, the simulation with no output, is at {limit / alone:.2f} of it; the '
+            f'whole main thread at {limit / p["us_per_input"]:.2f}.']

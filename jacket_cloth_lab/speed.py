@@ -842,10 +842,11 @@ def summary(results: dict) -> str:
                      f'{r["kernel_ns"] / 1e3:.1f} | '
                      + (f'{r["limit_ns"] / 1e3:.1f} | {r["ratio"]:.2f}x{gated} |' if 'ratio' in r
                         else 'n/a | n/a |'))
-    if 'profile' not in results:         # --only a part
+    if 'profile' in results:
+        lines += [''] + profile.summary(results['profile'])
+    if 'input' not in results:           # --only a part
         crowd = crowd_summary(results['crowd']) if 'crowd' in results else []
         return '\n'.join(lines + crowd) + '\n'
-    lines += [''] + profile.summary(results['profile'])
     i = results['input']
     lines += ['', f'Pipeline per JointState (120 Hz in, 120 Hz steps): median '
               f'{i["input_us_median"]:.0f} us CPU, kernel {i["kernel_us_median"]:.0f} us: '

@@ -57,6 +57,10 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert set(replay['us']) == stages and set(node['us']) == stages | {'take', 'publish'}
     assert replay['substeps_per_input'] == node['substeps_per_input'] == 2.0
     assert 'Where one input\'s CPU goes' in printed
+    # Set against the bare kernel timed beside it: how far the simulation alone, with no
+    # output, is from the replay's kernel-only limit (the bound issue 37's item 2 meets).
+    assert replay['kernel_step_us'] > 0 and replay['steps_per_input'] == 2.0
+    assert 'decode to complete, the simulation with no output, is at' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
     crowd = results['crowd']
