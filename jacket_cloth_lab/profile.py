@@ -22,8 +22,9 @@ Shares are of the main thread's CPU per input; ``other`` is what no stage timer 
 pipeline's accounting between stages). Each timer adds its own small cost to its stage.
 
 The bare kernel's step is timed just before and after the run, as the replay's kernel-only
-limit is (``speed.replay_scaling``), so the summary can say how far the simulation alone, with
-no output at all, is from that limit: the bound every whole input path stays under.
+limit is (``speed.replay_scaling``; wall time of back-to-back steps, where the stages are the
+thread's CPU), so the summary can say how far the simulation alone, with no output at all, is
+from that limit: a bound on what any replay with these stages can reach.
 """
 
 import functools
@@ -263,21 +264,30 @@ def summary(profiles: List[Dict]) -> List[str]:
     lines += ['', f'The recorder\'s writer thread: {p["writer_thread_us"]:.1f} us per input '
               f'more. Per input: {p["substeps_per_input"]:.1f} substeps, '
               f'{p["sweeps_per_input"]:.1f} sweeps.']
-    return lines + _limit_lines(p)
+    return lines + limit_lines(p)
 
 
 # The stages a replay with no output at all would still run for each input.
 SIMULATION_ONLY = ('decode', 'prepare', 'step', 'complete')
 
 
-def _limit_lines(p: Dict) -> List[str]:
-    """Return the lines setting a profile against its kernel-only limit (none in older runs)."""
+def limit_lines(p: Dict) -> List[str]:
+    """Return the lines setting a profile against its kernel-only limit.
+
+    Shares as item 2 counts the replay's: the limit's time over the time taken, so 0.8 is
+    item 2's bar for a whole replay.
+
+    :param p: a :func:`per_input_profile` result.
+    :returns: a blank line and the text; none for a run from before the kernel was timed
+        beside the profile.
+    """
     if 'kernel_step_us' not in p:
         return []
     limit = p['kernel_step_us'] * p['steps_per_input']
     alone = sum(p['us'][name] for name in SIMULATION_ONLY)
     return ['', f'The kernel-only limit beside this run: {limit:.1f} us per input (the bare '
             f'kernel\'s {p["kernel_step_us"]:.1f} us step, {p["steps_per_input"]:g} an '
-            f'input). The step stage is {p["us"]["step"] / limit:.2f}x it; decode to '
-            f'complete, the simulation with no output, is at {limit / alone:.2f} of it; the '
-            f'whole main thread at {limit / p["us_per_input"]:.2f}.']
+            f'input). The step stage alone costs {p["us"]["step"] / limit:.2f}x it; a replay '
+            f'doing only decode to complete (the simulation with no output) would be at '
+            f'{limit / alone:.2f} of the limit, the whole main thread is at '
+            f'{limit / p["us_per_input"]:.2f}.']

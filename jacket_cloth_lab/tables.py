@@ -151,7 +151,8 @@ def speed_profile(sources: Sequence[Any]) -> list[str]:
     """Return where one input's CPU goes, by stage, on the replay's and the node's path.
 
     :param sources: speed.json.
-    :returns: the table's lines and a line on the recorder's thread and the sweeps.
+    :returns: the table's lines, a line on the recorder's thread and the sweeps, and one
+        setting the stages against the kernel-only limit timed beside them.
     """
     return profile.summary(_part(sources[0], 'profile'))
 

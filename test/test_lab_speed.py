@@ -17,8 +17,9 @@ from doc_tables import rewritten
 from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_lab.floor_node import kernel_stepper
+from jacket_cloth_lab.profile import limit_lines
 from jacket_cloth_lab.speed import (
-    _cpu_s, _cpu_ticks, captured_steps, endurance, in_rounds, targets)
+    _cpu_s, _cpu_ticks, captured_steps, endurance, in_rounds, summary, targets)
 from jacket_cloth_lab.cli import main
 
 
@@ -60,7 +61,7 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     # Set against the bare kernel timed beside it: how far the simulation alone, with no
     # output, is from the replay's kernel-only limit (the bound issue 37's item 2 meets).
     assert replay['kernel_step_us'] > 0 and replay['steps_per_input'] == 2.0
-    assert 'decode to complete, the simulation with no output, is at' in printed
+    assert 'doing only decode to complete (the simulation with no output) would be at' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
     crowd = results['crowd']
@@ -122,6 +123,29 @@ def test_a_target_the_run_did_not_measure_is_neither_met_nor_missed():
     assert [t['met'] for t in targets(_results([(30.0, 1.0)], [0.5]))
             if 'under 15 s' in t['figure']] == [None]
     assert targets({}) == []
+
+
+def _profile(step_us, **kernel):
+    """A replay profile: 10 us each to decode, prepare and complete, ``step_us`` of steps."""
+    us = {'decode': 10.0, 'prepare': 10.0, 'step': step_us, 'complete': 10.0, 'bones': 70.0}
+    return dict({'node': False, 'us': us, 'us_per_input': sum(us.values()),
+                 'share': {k: v / sum(us.values()) for k, v in us.items()},
+                 'writer_thread_us': 0.0, 'substeps_per_input': 2.0, 'sweeps_per_input': 16.0},
+                **kernel)
+
+
+def test_the_profile_bounds_any_replay_of_its_stages_by_the_kernel_only_limit():
+    # Two 80 us kernel steps an input: a 160 us limit. Steps of 200 us are 1.25x it; decode to
+    # complete, 230 us, would be at 160/230 of the limit; with bones, 300 us, at 160/300.
+    line = limit_lines(_profile(200.0, kernel_step_us=80.0, steps_per_input=2.0))[-1]
+    assert '160.0 us per input' in line and 'costs 1.25x it' in line, line
+    assert 'would be at 0.70 of the limit' in line and 'is at 0.53.' in line, line
+    # A speed.json from before the kernel was timed beside the profile has no such line.
+    assert limit_lines(_profile(200.0)) == []
+    # `--only profile`: the summary holds the profile and its bound, and nothing else's.
+    only = summary({'profile': [_profile(200.0, kernel_step_us=80.0, steps_per_input=2.0)]})
+    assert 'Where one input\'s CPU goes' in only and 'kernel-only limit' in only
+    assert 'Replay of a walk' not in only
 
 
 class _FailingYardstick:
