@@ -21,10 +21,10 @@ with a timer around each stage:
 Shares are of the main thread's CPU per input; ``other`` is what no stage timer covers (the
 pipeline's accounting between stages). Each timer adds its own small cost to its stage.
 
-The bare kernel's step is timed just before and after the run, as the replay's kernel-only
-limit is (``speed.replay_scaling``; wall time of back-to-back steps, where the stages are the
+``bench speed`` times the bare kernel just before and after each profile, as it does beside
+each replay (``speed.beside_kernel``; wall time of back-to-back steps, where the stages are the
 thread's CPU), so the summary can say how far the simulation alone, with no output at all, is
-from that limit: a bound on what any replay with these stages can reach.
+from the kernel-only limit: a bound on what any replay with these stages can reach.
 """
 
 import functools
@@ -100,10 +100,9 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     :param node: add the node's rclpy take and publish (DDS in this process, own domain).
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
         share of the main thread}, 'writer_thread_us', 'sweeps_per_input',
-        'substeps_per_input', 'kernel_step_us', 'steps_per_input'}``; ``kernel_step_us`` is
-        the bare kernel's median step at the shipped grid, timed beside the run.
+        'substeps_per_input', 'steps_per_input'}`` (``bench speed`` adds
+        ``kernel_step_us``, the bare kernel's step timed beside the run).
     """
-    from jacket_cloth_lab import speed      # speed imports this module
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.motion.clips import joint_state_content
@@ -126,9 +125,6 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     skip = int(0.5 * INPUT_RATE)
     topics = session_topics()
     ros = _NodeIO(raws, clock) if node else None
-    steps = speed.captured_steps(skeleton, speed.rig_at_grid(skeleton, 9, 12),
-                                 fabrics['tweed_jacket'])
-    kernel_before = speed.kernel_step_ns(steps, repeat=speed.ROUND_REPEATS)
     sweeps = substeps = 0
     try:
         with tempfile.TemporaryDirectory() as tmp:
@@ -161,7 +157,6 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
         pipeline_module.messages = messages_module
         if ros:
             ros.close()
-    kernel_after = speed.kernel_step_ns(steps, repeat=speed.ROUND_REPEATS)
     counted = len(raws) - skip
     us = {name: ns / counted / 1e3 for name, ns in clock.ns.items()
           if node or name not in NODE_ONLY}
@@ -171,7 +166,6 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             'share': {name: v / total for name, v in us.items()},
             'writer_thread_us': max(all_ns - main_ns, 0) / counted / 1e3,
             'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted,
-            'kernel_step_us': (kernel_before + kernel_after) / 2e3,
             'steps_per_input': values['sim_rate'] / INPUT_RATE}
 
 
@@ -277,7 +271,7 @@ def limit_lines(p: Dict) -> List[str]:
     Shares as item 2 counts the replay's: the limit's time over the time taken, so 0.8 is
     item 2's bar for a whole replay.
 
-    :param p: a :func:`per_input_profile` result.
+    :param p: a :func:`per_input_profile` result, with ``kernel_step_us``.
     :returns: a blank line and the text; none for a run from before the kernel was timed
         beside the profile.
     """

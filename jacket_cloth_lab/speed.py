@@ -23,6 +23,7 @@ Each part also says how much CPU time the host gave to other guests while it ran
 """
 
 import argparse
+import functools
 import itertools
 import json
 import os
@@ -31,7 +32,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from typing import Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -173,6 +174,46 @@ def kernel_step_ns(steps: Sequence[tuple], repeat: int = 3) -> float:
             step(*a)
             times.append(time.perf_counter_ns() - t0)
     return float(np.median(times))
+
+
+@functools.lru_cache(maxsize=1)
+def limit_steps(skeleton: Skeleton) -> list[tuple]:
+    """Return the walk's kernel arguments at item 4's grid and sweeps, captured once a run.
+
+    The states the kernel-only limits are timed on (beside each replay and each profile) and
+    the host's phases; :func:`kernel_step_ns` copies them before each step.
+
+    :param skeleton: the shipped character.
+    """
+    cols, nrows = (int(n) for n in KERNEL_TARGET['grid'].split('x'))
+    fabric = load_fabric('tweed_jacket').with_values(iterations=KERNEL_TARGET['iterations'])
+    return captured_steps(skeleton, rig_at_grid(skeleton, cols, nrows), fabric)
+
+
+def beside_kernel(steps: Sequence[tuple], measure: Callable[[], Any]) -> tuple[Any, float]:
+    """Run ``measure`` between two rounds of the bare kernel: the host's phase it ran in.
+
+    :param steps: the kernel's arguments (:func:`limit_steps`).
+    :param measure: what to run.
+    :returns: what ``measure`` returned, and the mean of the two rounds' median steps, ns.
+    """
+    before = kernel_step_ns(steps, repeat=ROUND_REPEATS)
+    got = measure()
+    after = kernel_step_ns(steps, repeat=ROUND_REPEATS)
+    return got, (before + after) / 2.0
+
+
+def profiled(skeleton: Skeleton, seconds: float, node: bool) -> dict:
+    """Return :func:`profile.per_input_profile` with the bare kernel's step timed beside it.
+
+    :param skeleton: the shipped character.
+    :param seconds: the walk's length.
+    :param node: whether the node's take and publish are added.
+    :returns: the profile and its ``kernel_step_us``.
+    """
+    got, kernel_ns = beside_kernel(limit_steps(skeleton), lambda: profile.per_input_profile(
+        skeleton, seconds, node=node))
+    return dict(got, kernel_step_us=kernel_ns / 1e3)
 
 
 def kernel_vs_limit(skeleton: Skeleton, grids: Sequence[tuple[int, int]] = GRIDS,
@@ -325,8 +366,7 @@ def host_phases(skeleton: Skeleton, probe: host_probe.HostProbe, rounds: int,
     """
     cols, nrows = (int(n) for n in KERNEL_TARGET['grid'].split('x'))
     it = KERNEL_TARGET['iterations']
-    fabric = load_fabric('tweed_jacket').with_values(iterations=it)
-    steps = captured_steps(skeleton, rig_at_grid(skeleton, cols, nrows), fabric)[:PHASE_STATES]
+    steps = limit_steps(skeleton)[:PHASE_STATES]
     # About as many yardstick steps as the kernel's measurement, over its timed blocks.
     ref = (lambda: yardstick.step_ns(cols, nrows, it, steps=PHASE_YARDSTICK_STEPS)[
         'step_ns_median'] * 1e-3) if yardstick else None
@@ -588,8 +628,7 @@ def replay_scaling(skeleton: Skeleton, lengths: Sequence[float], folder: str) ->
     from jacket_cloth_ros.motion.messages import clip_messages
     from jacket_cloth_ros.tools.replay import replay
     from jacket_cloth_ros.tools.session import load_session
-    fabric = load_fabrics()['tweed_jacket']
-    steps = captured_steps(skeleton, rig_at_grid(skeleton, 9, 12), fabric)
+    steps = limit_steps(skeleton)
     rows = []
     for length in lengths:
         src = os.path.join(folder, f'clip_{length:g}.mcap')
@@ -601,11 +640,9 @@ def replay_scaling(skeleton: Skeleton, lengths: Sequence[float], folder: str) ->
         rec.close()
         out = os.path.join(folder, f'replay_{length:g}.mcap')
         session = load_session(src)
-        before = kernel_step_ns(steps, repeat=ROUND_REPEATS)
-        _, took = replay(session, out)
-        after = kernel_step_ns(steps, repeat=ROUND_REPEATS)
+        (_, took), kernel_ns = beside_kernel(steps, lambda: replay(session, out))
         rows.append({'session_s': length, 'replay_s': took, 'realtime_x': length / took,
-                     'kernel_ns': (before + after) / 2.0})
+                     'kernel_ns': kernel_ns})
     return rows
 
 
@@ -708,8 +745,7 @@ def run(quick: bool, out_dir: str, say: Callable[[str], None] = print,
         skeleton, GRIDS[:2] if quick else GRIDS, (8,) if quick else ITERATIONS, yardstick,
         probe))
     section('profile', 'where one input\'s time goes (replay, node)', lambda: [
-        profile.per_input_profile(skeleton, 5.0 if quick else 15.0, node=node)
-        for node in (False, True)])
+        profiled(skeleton, 5.0 if quick else 15.0, node=node) for node in (False, True)])
     section('input', 'pipeline per input', lambda: input_vs_kernel(
         skeleton, 2.0 if quick else 10.0, 1.0 if quick else 5.0))
     with tempfile.TemporaryDirectory() as tmp:
