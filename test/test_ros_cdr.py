@@ -64,7 +64,7 @@ def test_collider_and_hood_markers_sit_where_the_simulation_has_them():
     names = list(skeleton.joint_names) + [f'world_joint/{v}' for v in WORLD_VARIABLES]
     assert sim.process(10 ** 9, names, list(q) + world).accepted
     c = sim.collider_frames(sim.links)
-    shown = {(m.ns, m.id): m for m in messages.marker_specs(sim)}
+    shown = {(m.ns, m.id): m for m in messages.marker_specs(sim, debug=True)}
     for k in range(len(c.centers)):                         # ellipsoids: scaled spheres
         m = shown['colliders', k]
         assert m.type == messages.SPHERE and np.allclose(m.position, c.centers[k])

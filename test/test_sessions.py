@@ -441,9 +441,9 @@ def test_byte_templates_equal_the_field_by_field_encoding(make_sim):
         assert messages.tf_message(bones, stamp, 'p/') == cdr.tf_message(
             bones.names, ['p/' + p for p in bones.parents], bones.translations,
             bones.quaternions, stamp, 'p/')
-        for reset in (True, False):
-            specs = messages.marker_specs(sim, reset)
-            assert messages.marker_array(sim, stamp, 'base_link', reset) == \
+        for reset, debug in ((True, False), (False, False), (True, True), (False, True)):
+            specs = messages.marker_specs(sim, reset, debug)
+            assert messages.marker_array(sim, stamp, 'base_link', reset, debug) == \
                 cdr.marker_array(specs, stamp, 'base_link')
 
 

@@ -248,7 +248,7 @@ def _lower_jacket(b, s):
 
 
 def _catmull_rom(row, c):
-    """Return the point at fractional column ``c`` of a row, on the Catmull-Rom spline through it."""
+    """Return the point at column ``c`` (fractional) on the Catmull-Rom spline of a row."""
     n = len(row)
     i = min(int(np.floor(c)), n - 2)
     t = c - i

@@ -219,7 +219,7 @@ class JacketSimulation:
         # new input or reset drops them.
         self.ready_bones = None
         self.lod = LevelOfDetail()
-        self.bone_set = _bone_set(skeleton, rig)
+        self.bone_set = bone_set(skeleton, rig)
         self._advance_kernel = FixedTypes(step.advance)
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
@@ -811,8 +811,12 @@ def _put(kept: np.ndarray, value: npt.ArrayLike) -> None:
     kept[...] = value
 
 
-def _bone_set(skeleton: 'Skeleton', rig: 'Rig') -> BoneSet:
-    """Return every bone of ``rig``: M9 cloth bones, M8 hood bone, M1/M2 layer bones."""
+def bone_set(skeleton: 'Skeleton', rig: 'Rig') -> BoneSet:
+    """Return every bone of ``rig``: M9 cloth bones, M8 hood bone, M1/M2 layer bones.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    """
     grid = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
     layer_names = rig.layer.names if rig.layer else []
     layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []

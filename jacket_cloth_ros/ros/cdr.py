@@ -283,15 +283,16 @@ def _put_rows(f64, at, rows):
             f64[at[i, k]] = rows[i, k]
 
 
-def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[int, int, int]:
+def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int,
+           frame: str) -> tuple[int, int, int, int]:
     """One visualization_msgs/Marker from a :class:`messages.MarkerSpec`.
 
     :param w: the writer the marker is appended to.
     :param m: the marker.
     :param stamp_ns: its header stamp, ns.
     :param frame: its header frame.
-    :returns: where its varying fields start: (stamp, pose, points) byte offsets; the scale's
-        three doubles follow the pose's seven.
+    :returns: where its varying fields start: (stamp, pose, points, colors) byte offsets; the
+        scale's three doubles follow the pose's seven.
     """
     w.align(4)
     stamp_at = len(w.buf)
@@ -313,7 +314,12 @@ def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[in
     points_at = len(w.buf)
     if len(points):
         w.f64_array(points)
-    w.u32(0)                                 # colors
+    colors = np.zeros((0, 4)) if m.colors is None else np.asarray(m.colors)
+    w.u32(len(colors))                       # one per point: a mesh's shading
+    w.align(4)
+    colors_at = len(w.buf)
+    if len(colors):
+        w.buf += np.ascontiguousarray(colors, dtype='<f4').tobytes()
     w.string('')                             # texture_resource
     w.header(0, '')                          # texture: CompressedImage header, format, data
     w.string('')
@@ -324,7 +330,7 @@ def marker(w: CdrWriter, m: 'MarkerSpec', stamp_ns: int, frame: str) -> tuple[in
     w.string('')                             # mesh_file.filename
     w.u32(0)                                 # mesh_file.data
     w.u8(0)                                  # mesh_use_embedded_materials
-    return stamp_at, pose_at, points_at
+    return stamp_at, pose_at, points_at, colors_at
 
 
 def marker_array(markers: 'Sequence[MarkerSpec]', stamp_ns: int, frame: str) -> bytes:
@@ -358,12 +364,19 @@ class MarkerTemplate(_Template):
         w = CdrWriter()
         w.u32(len(layout))
         stamps, dst, src = [], [], []
+        self.meshes = {}                              # name -> (points, colors) views, filled
         width = 10                                   # pose (7) and scale (3) doubles
+        meshes = []
         for m in layout:
             rows = m.point_rows
             if rows is not None:
                 m = dataclasses.replace(m, points=np.zeros((len(rows), 3)))
-            stamp_at, pose_at, points_at = marker(w, m, 0, frame)
+            if m.mesh:
+                m = dataclasses.replace(m, points=np.zeros((m.mesh_points, 3)),
+                                        colors=np.zeros((m.mesh_points, 4)))
+            stamp_at, pose_at, points_at, colors_at = marker(w, m, 0, frame)
+            if m.mesh:
+                meshes.append((m.mesh, points_at, colors_at, m.mesh_points))
             stamps.append(stamp_at)
             if m.pose_row >= 0:
                 dst.append(self._f64_at(pose_at, width))
@@ -373,17 +386,27 @@ class MarkerTemplate(_Template):
                 src.append(pose_rows * width + (3 * np.asarray(rows)[:, None]
                                                 + np.arange(3)).reshape(-1))
         super().__init__(w, stamps)
-        self._dst, self._src = np.concatenate(dst), np.concatenate(src)  # the mesh has points
+        # Without the debug layer nothing comes from the tables.
+        self._dst = np.concatenate(dst) if dst else np.zeros(0, dtype=np.int64)
+        self._src = np.concatenate(src) if src else np.zeros(0, dtype=np.int64)
+        f32 = self._u8[4:4 + (len(self._u8) - 4) // 4 * 4].view('<f4')
+        for name, points_at, colors_at, n in meshes:
+            at, c_at = (points_at - 4) // 8, (colors_at - 4) // 4
+            self.meshes[name] = (self._f64[at:at + 3 * n].reshape(n, 3),
+                                 f32[c_at:c_at + 4 * n].reshape(n, 4))
 
     def encode(self, fill: Callable[..., None], arguments: tuple, stamp_ns: int) -> bytes:
         """Return the message's bytes with the values ``fill(*arguments, src, dst, doubles)``.
+
+        A mesh marker's points and colours are written into :attr:`meshes` before this.
 
         :param fill: makes the pose and point tables (as messages.marker_values) and scatters
             ``doubles[dst] = tables[src]`` (marker_kernel.fill_markers).
         :param arguments: fill's arguments before the template's own.
         :param stamp_ns: every marker's stamp, ns.
         """
-        fill(*arguments, self._src, self._dst, self._f64)
+        if len(self._src):
+            fill(*arguments, self._src, self._dst, self._f64)
         return self._bytes(stamp_ns)
 
 

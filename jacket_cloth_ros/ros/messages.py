@@ -1,5 +1,10 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py)."""
+"""/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py).
+
+The markers a person sees: the skinned jacket and hood (``jacket``) on a simple body (``body``),
+triangle lists shaded per corner. The method's scaffolding (the M3 grid, the M10 colliders,
+the M8 pendulum, the M1/M2 bones) is the debug layer, sent with ``markers_debug``.
+"""
 
 import functools
 from dataclasses import dataclass, replace
@@ -7,10 +12,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.body_mesh import body_mesh
 from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import Scene, floats
 from ..core.compiled import FixedTypes
+from ..core.jacket_mesh import SkinnedMesh, jacket_mesh, posed_joints, skinned
+from ..core.physics import skinning
 
 if TYPE_CHECKING:           # for the annotations only
     from builtin_interfaces.msg import Time
@@ -27,7 +35,12 @@ OK, WARN, ERROR = 0, 1, 2
 _FILL_MARKERS = FixedTypes(marker_kernel.fill_markers)
 _MARKER_TABLE = FixedTypes(marker_kernel.marker_table)
 
-MARKER_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
+DEBUG_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
+MESH_NAMESPACES = ('jacket', 'body')
+MARKER_NAMESPACES = MESH_NAMESPACES + DEBUG_NAMESPACES
+# The meshes' light, in the body's (front, left, up) axes: above, in front, a little left.
+LIGHT = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
+AMBIENT = 0.35
 TWEED = (0.42, 0.33, 0.24, 0.9)
 SEAM = (0.2, 0.15, 0.1, 1.0)
 GHOST = (0.4, 0.6, 0.9, 0.25)
@@ -50,6 +63,9 @@ class MarkerSpec:
     # Where a marker of marker_layout takes its varying values from (see marker_values):
     pose_row: int = -1           # its position, orientation and scale: this row of the poses
     point_rows: np.ndarray = None  # its points: these rows of the point table
+    mesh: str = ''               # a shaded mesh of Outfit (``jacket``, ``body``): its corners
+    mesh_points: int = 0         # how many corners (3 per triangle)
+    colors: np.ndarray = None    # (P,4) one per point
 
 
 def stamp_msg(stamp_ns: int) -> 'Time':
@@ -85,18 +101,93 @@ def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
     return cdr.TfTemplate(names, tuple(prefix + p for p in parents), prefix)
 
 
-@functools.lru_cache(maxsize=8)
-def marker_layout(rig: 'Rig', layer_bones: int, reset: bool) -> tuple[MarkerSpec, ...]:
+class Outfit:
+    """The meshes a rig's markers draw: the jacket and hood, and the body (core.jacket_mesh).
+
+    :param rig: the character's rig.
+    :param bone_names: the published bones (simulation.BoneSet), the jacket's joints.
+    :param bone_parents: their parent links' names.
+    :param grid: (G,2) the M9 grid bones' (row, column).
+    """
+
+    def __init__(self, rig: 'Rig', bone_names: list, bone_parents: list, grid: np.ndarray):
+        skeleton = rig.skeleton
+        self.jacket = jacket_mesh(skeleton, rig, bone_names, bone_parents, grid)
+        self.body = body_mesh(skeleton, rig)
+        self.bone_parents = np.array([skeleton.link_names.index(p) for p in bone_parents],
+                                     dtype=np.int64)
+        self.light = floats(rig.world_axes @ LIGHT)
+        self._shading = {name: (m.triangles[~m.back], floats(m.colors), m.back)
+                         for name, m in self.meshes().items()}
+
+    def meshes(self) -> dict[str, SkinnedMesh]:
+        """Return the meshes by marker namespace."""
+        return {'jacket': self.jacket, 'body': self.body}
+
+    def corners(self, name: str) -> int:
+        """Return how many triangle-list points a mesh's marker has.
+
+        :param name: ``jacket`` or ``body``.
+        """
+        return 3 * len(self.meshes()[name].triangles)
+
+    def draw(self, name: str, joints: np.ndarray, points: np.ndarray,
+             colors: np.ndarray) -> None:
+        """Skin, shade and lay out a mesh as a triangle list into ``points`` and ``colors``.
+
+        :param name: ``jacket`` or ``body``.
+        :param joints: (J,3,4) every joint now (core.jacket_mesh.posed_joints).
+        :param points: (3T,3) written: the corners.
+        :param colors: (3T,4) float32 written: their shaded colours.
+        """
+        mesh = self.meshes()[name]
+        where = skinned(mesh, joints[:len(mesh.inverse_rest)])
+        normals = np.empty(where.shape)
+        front, base, back = self._shading[name]
+        skinning.vertex_normals(where, front, normals)
+        skinning.shaded_triangles(where, normals, mesh.triangles, base, back, self.light,
+                                  AMBIENT, points, colors)
+
+
+@functools.lru_cache(maxsize=16)
+def outfit(rig: 'Rig') -> Outfit:
+    """Return the rig's meshes, built once per rig.
+
+    :param rig: the character's rig.
+    """
+    from ..core.simulation import bone_set
+    bones = bone_set(rig.skeleton, rig)
+    return Outfit(rig, bones.names, bones.parents, bones.grid)
+
+
+@functools.lru_cache(maxsize=16)
+def marker_layout(rig: 'Rig', layer_bones: int, reset: bool, debug: bool = False,
+                  body: bool = True) -> tuple[MarkerSpec, ...]:
     """Lay out every marker of the rig but its varying values.
 
-    Cloth mesh and seams, colliders, hood pendulum, M1/M2 bones.
+    The jacket and hood mesh and the body (``jacket``, ``body``), then with ``debug`` the
+    method's scaffolding: cloth grid and seams, colliders, hood pendulum, M1/M2 bones.
 
     :param rig: the character's rig.
     :param layer_bones: how many M1/M2 bones.
     :param reset: whether a DELETEALL goes first in each namespace (after a reset).
+    :param debug: add the scaffolding.
+    :param body: add the body.
     """
     out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
            for ns in MARKER_NAMESPACES] if reset else []
+    meshes = outfit(rig)
+    for name in ('jacket', 'body') if body else ('jacket',):
+        out.append(MarkerSpec(name, 0, TRIANGLE_LIST, color=(1.0, 1.0, 1.0, 1.0), mesh=name,
+                              mesh_points=meshes.corners(name)))
+    if debug:
+        out.extend(_debug_layout(rig, layer_bones))
+    return tuple(out)
+
+
+def _debug_layout(rig, layer_bones):
+    """The scaffolding's markers: cloth grid and seams, colliders, hood pendulum, bones."""
+    out = []
     n = rig.n
     out.append(MarkerSpec('cloth', 0, TRIANGLE_LIST, color=TWEED,
                           point_rows=grid_triangles(rig.rows, rig.cols)))
@@ -115,7 +206,7 @@ def marker_layout(rig: 'Rig', layer_bones: int, reset: bool) -> tuple[MarkerSpec
         out.append(MarkerSpec('jacket_bones', 0, LINE_LIST, scale=(0.012, 1.0, 1.0),
                               color=SEAM, point_rows=np.stack([pivots, pivots + layer_bones], 1)
                               .reshape(-1)))
-    return tuple(out)
+    return out
 
 
 def marker_values(sim: 'JacketSimulation') -> tuple[np.ndarray, np.ndarray]:
@@ -144,15 +235,25 @@ def _layer_bones(sim):
     return 0 if sim.layer is None else len(sim.layer.positions)
 
 
-def marker_specs(sim: 'JacketSimulation', reset: bool = False) -> list[MarkerSpec]:
+def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = False,
+                 body: bool = True) -> list[MarkerSpec]:
     """Return the MarkerArray's markers with their values: what marker_array encodes, readable.
 
     :param sim: the simulation, after its last step.
     :param reset: whether a DELETEALL goes first in each namespace (after a reset).
+    :param debug: add the method's scaffolding (see marker_layout).
+    :param body: add the body.
     """
     poses, points = marker_values(sim)
+    meshes = outfit(sim.rig)
+    joints = mesh_joints(sim)
     out = []
-    for m in marker_layout(sim.rig, _layer_bones(sim), reset):
+    for m in marker_layout(sim.rig, _layer_bones(sim), reset, debug, body):
+        if m.mesh:
+            corners = np.empty((m.mesh_points, 3))
+            colors = np.empty((m.mesh_points, 4), dtype=np.float32)
+            meshes.draw(m.mesh, joints, corners, colors)
+            m = replace(m, points=corners, colors=colors)
         if m.pose_row >= 0:
             row = poses[m.pose_row].tolist()
             m = replace(m, position=tuple(row[:3]), orientation=tuple(row[3:7]),
@@ -163,23 +264,38 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False) -> list[MarkerSpe
     return out
 
 
+def mesh_joints(sim: 'JacketSimulation') -> np.ndarray:
+    """Return every joint of the meshes now: the links, then the bones as published.
+
+    :param sim: the simulation, after its last step.
+    """
+    return posed_joints(sim.links, outfit(sim.rig).bone_parents, sim.bones().poses)
+
+
 def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
-                 reset: bool = False) -> bytes:
+                 reset: bool = False, debug: bool = False, body: bool = True) -> bytes:
     """Return the MarkerArray's CDR bytes: its values written into a template laid out once.
 
     :param sim: the simulation, after its last step.
     :param stamp_ns: every marker's stamp, ns.
     :param frame: every marker's frame.
     :param reset: whether a DELETEALL goes first in each namespace (after a reset).
+    :param debug: add the method's scaffolding (see marker_layout).
+    :param body: add the body.
     """
-    template = _marker_template(sim.rig, _layer_bones(sim), reset, frame)
+    template = _marker_template(sim.rig, _layer_bones(sim), reset, frame, debug, body)
+    if template.meshes:
+        joints = mesh_joints(sim)
+        meshes = outfit(sim.rig)
+        for name, (points, colors) in template.meshes.items():
+            meshes.draw(name, joints, points, colors)
     return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
 
 
-@functools.lru_cache(maxsize=8)
-def _marker_template(rig, layer_bones, reset, frame):
+@functools.lru_cache(maxsize=16)
+def _marker_template(rig, layer_bones, reset, frame, debug, body):
     """One per layout: the reset array, with its DELETEALLs in front, is another."""
-    return cdr.MarkerTemplate(marker_layout(rig, layer_bones, reset), frame,
+    return cdr.MarkerTemplate(marker_layout(rig, layer_bones, reset, debug, body), frame,
                               marker_kernel.shape_count(rig))
 
 

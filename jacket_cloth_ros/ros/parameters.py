@@ -59,6 +59,12 @@ NODE_PARAMETERS = {
                     'the parent frame of that transform'),
     'markers_rate': (T.PARAMETER_DOUBLE, 30.0, (0.0, 240.0), False,
                      'Hz of ~/markers (by message stamps); 0 turns markers off'),
+    'markers_debug': (T.PARAMETER_BOOL, False, None, False,
+                      'also draw the method on ~/markers: the cloth grid, colliders, hood '
+                      'pendulum and jacket bones'),
+    'markers_body': (T.PARAMETER_STRING, 'auto', None, False,
+                     'draw a simple body under the jacket on ~/markers: on, off, or auto (on '
+                     'when the URDF has no <visual> for RViz\'s RobotModel to show)'),
     'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
     'record': (T.PARAMETER_STRING, '', None, False,
                'where to record the session: an MCAP file (.mcap), else a rosbag2 bag '
@@ -70,6 +76,7 @@ NODE_PARAMETERS = {
 
 
 MIN_MARKERS_RATE = 0.01
+BODY_CHOICES = ('auto', 'on', 'off')
 # The longest frame_prefix, world_frame or world_joint taken.
 MAX_NAME = 256
 _NAMES = ('frame_prefix', 'world_frame', 'world_joint')
@@ -154,6 +161,8 @@ def check_value(name: str, value: object) -> str:
         return f'{name} {reason}' if reason else ''
     if name == 'record_compression' and str(value).upper() not in Compression.__members__:
         return f'record_compression must be one of {", ".join(Compression.names())}'
+    if name == 'markers_body' and value not in BODY_CHOICES:
+        return f'markers_body must be one of {", ".join(BODY_CHOICES)}'
     if name == 'markers_rate' and 0 < value < MIN_MARKERS_RATE:
         # Its period must be a number of nanoseconds: 1e-300 Hz made it infinite.
         return f'markers_rate must be 0 (off) or at least {MIN_MARKERS_RATE} Hz'

@@ -123,6 +123,13 @@ class SessionPipeline:
         return messages.tf_template(tuple(self.sim.bone_names), tuple(self.sim.bone_parents),
                                     self.values['frame_prefix'])
 
+    def draws_body(self) -> bool:
+        """Tell whether the markers carry the body: ``markers_body``, auto without visuals."""
+        choice = self.values.get('markers_body', 'auto')
+        if choice == 'auto':
+            return '<visual' not in self.sim.skeleton.urdf_xml
+        return choice == 'on'
+
     def root_frame(self) -> str:
         """Return the frame of the URDF root link as published: ``frame_prefix`` in front."""
         return self.values['frame_prefix'] + self.sim.skeleton.link_names[0]
@@ -244,7 +251,8 @@ class SessionPipeline:
         if self._finite and rate > 0 and self._due(self._marker_clocks, stamp_ns, rate):
             if self.markers_wanted is None or self.markers_wanted():
                 out.append(('markers', messages.marker_array(
-                    self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset)))
+                    self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset,
+                    debug=self.values.get('markers_debug', False), body=self.draws_body())))
                 self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
         if self._due(self._diag_clocks, stamp_ns, self.values['diagnostics_rate']):

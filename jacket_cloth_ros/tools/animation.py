@@ -1,8 +1,8 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """A session as an animated GIF: side and front views of every recorded marker frame.
 
-The frames are the filmstrip's (``picture.recorded_frames``: the cloth, hood and jacket bones
-as the node published them, the skeleton from the nearest input, the skinned pose dashed),
+The frames are the filmstrip's (``picture.recorded_frames``: the skinned jacket and body as the
+node published them, or with ``debug`` the cloth, hood and jacket bones and the skinned pose),
 played at their recorded pace. A long session is thinned to at most ``MAX_FRAMES`` frames,
 evenly, so the time and the file stay bounded.
 """
@@ -22,7 +22,8 @@ MAX_FRAMES = 600
 
 
 def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
-                     rig: 'Rig | None' = None, max_frames: int = MAX_FRAMES) -> int:
+                     rig: 'Rig | None' = None, max_frames: int = MAX_FRAMES,
+                     style: str = 'jacket') -> int:
     """Write a recording's marker frames as a GIF; return the frames drawn.
 
     :param mcap_path: the recording (an MCAP file or a bag folder) with ~/markers in it.
@@ -30,6 +31,7 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
     :param skeleton: the recorded character.
     :param rig: its rig, for the skinned pose (dashed) and the world's up and forward.
     :param max_frames: at most this many frames, evenly chosen over the session.
+    :param style: ``jacket`` (the shaded jacket on the body) or ``debug`` (see draw_view).
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
 
@@ -50,7 +52,7 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
         f = frames[k]
         for ax, (view, axis) in zip(axes, VIEWS):
             ax.cla()
-            draw_view(ax, f, skeleton, axis, across, upward)
+            draw_view(ax, f, skeleton, axis, across, upward, style)
             ax.set_xlabel(labels[axis], fontsize=8)
             ax.set_title(f'{view} view', fontsize=9)
         fig.suptitle(f't = {(frames[k].stamp_ns - t0) * 1e-9:.2f} s', fontsize=10)

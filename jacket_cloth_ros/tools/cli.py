@@ -205,12 +205,13 @@ def cmd_picture(args: argparse.Namespace) -> int:
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
     with replacing(args.output, force=args.force) as tmp:
-        render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig)
+        render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig,
+                         style=args.style)
     print(args.output)
     if gif:
         from .animation import render_animation
         with replacing(gif, force=args.force) as tmp:
-            frames = render_animation(args.input, tmp, skeleton, rig)
+            frames = render_animation(args.input, tmp, skeleton, rig, style=args.style)
         print(f'{gif} ({frames} frames)')
     return 0
 
@@ -258,6 +259,35 @@ def cmd_replay(args: argparse.Namespace) -> int:
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
           f'{sim.steps_total} steps, {sim.resets} resets; {span:.1f} s of session in '
           f'{took:.2f} s ({span / max(took, 1e-9):.0f}x real time)')
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """Write a recorded session as glTF 2.0 binary: skeleton and jacket layer, meshes, motion.
+
+    :param args: the ``export`` command's options.
+    """
+    from ..recording.reader import read_recording
+    from .crowd_replay import is_crowd
+    from .export import export
+    from .session import NO_MESSAGES
+    _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
+    listed = read_recording(args.input, NO_MESSAGES)
+    if is_crowd(listed):
+        raise ToolError(f'{args.input} is a crowd\'s recording: export takes one character\'s '
+                        'session (a jacket_cloth_node recording, or a JointState recording with '
+                        '--urdf and --rig)')
+    session = _session(args, listed)
+    done = export(session, args.output, args.force)
+    _warn_rig(args, done.rig_warnings)
+    if done.restarts:
+        print(f'jacket_cloth export: warning: {args.input}: the stamps went back {done.restarts} '
+              'time(s) (the simulation reset); those inputs are keyed on after the last',
+              file=sys.stderr)
+    size = os.path.getsize(args.output)
+    print(f'{args.output}: {done.frames} frames of {done.inputs} JointState, '
+          f'{done.joints} joints ({done.links} links, {done.bones} bones), '
+          f'{done.vertices} vertices, {size / 1e6:.1f} MB in {done.seconds:.2f} s')
     return 0
 
 
@@ -487,6 +517,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
     f.add_argument('--animate', action='store_true',
                    help='also write the session as a GIF beside the picture (OUTPUT.gif)')
+    f.add_argument('--style', choices=('jacket', 'debug'), default='jacket',
+                   help='jacket: the shaded jacket and hood on the body; debug: the stick '
+                        'figure, cloth grid, pendulum and bones (recorded with markers_debug)')
     f.add_argument('--force', action='store_true')
     f.set_defaults(func=cmd_picture)
     r = sub.add_parser('replay', help='run a recording through the simulation again')
@@ -504,6 +537,14 @@ def build_parser() -> argparse.ArgumentParser:
     _session_options(a)
     a.add_argument('--force', action='store_true', help='overwrite an existing report')
     a.set_defaults(func=cmd_analyze)
+    e = sub.add_parser('export', help='a recorded session as glTF 2.0 binary (.glb): the '
+                       'skeleton and jacket bones as one skin, the jacket, hood and body meshes, '
+                       'the motion as an animation (Blender, three.js)')
+    e.add_argument('input', help='an MCAP file or a rosbag2 bag directory (MCAP storage)')
+    e.add_argument('-o', '--output', required=True, help='the .glb file to write')
+    _session_options(e)
+    e.add_argument('--force', action='store_true', help='overwrite the output file')
+    e.set_defaults(func=cmd_export)
     i = sub.add_parser('import', help='a BVH motion capture, or a DeepMimic clip, as a '
                        'JointState recording (and a BVH skeleton as a URDF)')
     i.add_argument('input', help='a .bvh file, or a DeepMimic clip (humanoid3d_*.txt) with --urdf')

@@ -1,12 +1,14 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""A filmstrip of a session: skeleton, jacket, hood and jacket bones at chosen moments.
+"""A filmstrip of a session: the jacket and hood on the body at chosen moments.
 
-Frames come either from a recording (the cloth mesh, hood and jacket bones as the node
-published them on ~/markers, the skeleton from the recorded JointState through the same forward
-kinematics) or straight from a simulation being run (the analysis). The response is drawn
-against the skinned pose the simulation starts from (dashed: the jacket's reference hem and the
-hood at rest for that skeleton pose): the gap between dashed and solid is what the cloth and
-the pendulum add.
+Frames come either from a recording (the skinned jacket and body as the node published them on
+~/markers, the skeleton from the recorded JointState through the same forward kinematics) or
+straight from a simulation being run (the analysis). By default a frame is the shaded jacket
+and hood on the shaded body, drawn back to front with hidden faces left out. The ``debug``
+style draws the method instead: the stick figure, the cloth grid, the hood pendulum and the
+jacket bones against the skinned pose the simulation starts from (dashed: the jacket's
+reference hem and the hood at rest for that skeleton pose), the gap between dashed and solid
+being what the cloth and the pendulum add; a recording has that only with ``markers_debug``.
 
 Frames are drawn in the world, whatever the URDF's link axes: the root's world pose (the world
 joint of the input) carries them out of the character's frame, the rig's ``up`` is drawn up and
@@ -34,6 +36,7 @@ from ..core.inputs import InputParser  # noqa: E402
 from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import each_message  # noqa: E402
+from ..ros import messages  # noqa: E402
 from ..ros.cdr import DECODE_ERRORS, JointStateReader  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
@@ -45,16 +48,24 @@ VIEWS = (('side', 0), ('front', 1))     # the view axis drawn across: forward, l
 WORLD_AXES = body_axes([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 'rig')    # z up, x forward
 
 
+STYLES = ('jacket', 'debug')
+DEFAULT_TITLES = {'jacket': 'the jacket and hood, skinned on the simulated bones',
+                  'debug': 'jacket grid (brown), hood pendulum (orange), jacket bones (navy);\n'
+                           'dashed blue: skinned hem and hood at rest'}
+
+
 @dataclass
 class Frame:
     stamp_ns: int
-    triangles: np.ndarray       # (T,3,3) cloth mesh
-    hood: np.ndarray            # (2,3) anchor and particle
-    bones: np.ndarray           # (B,2,3) jacket bone segments
+    triangles: np.ndarray       # (T,3,3) cloth grid mesh (debug)
+    hood: np.ndarray            # (2,3) anchor and particle (debug)
+    bones: np.ndarray           # (B,2,3) jacket bone segments (debug)
     links: np.ndarray           # (L,3) skeleton link origins
     hem_ref: np.ndarray = None  # (C,3) skinned hem
     hood_ref: np.ndarray = None  # (2,3) hood at rest
     root: np.ndarray = None     # (4,4) the root's world pose; points above are in its frame
+    mesh: np.ndarray = None     # (M,3,3) the skinned jacket, hood and body
+    mesh_colors: np.ndarray = None  # (M,4) each triangle's shaded colour
 
 
 def body_link(skeleton: 'Skeleton') -> int:
@@ -87,7 +98,8 @@ def in_view(frame: Frame, axes: np.ndarray, centre: int) -> Frame:
         return None if points is None else points @ to_view.T + (axes.T @ root[:3, 3] - origin)
 
     return Frame(frame.stamp_ns, view(frame.triangles), view(frame.hood), view(frame.bones),
-                 view(frame.links), view(frame.hem_ref), view(frame.hood_ref), np.eye(4))
+                 view(frame.links), view(frame.hem_ref), view(frame.hood_ref), np.eye(4),
+                 view(frame.mesh), frame.mesh_colors)
 
 
 def axis_label(direction: np.ndarray, meaning: str) -> str:
@@ -147,9 +159,14 @@ def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
     anchor, rot = sim.hood_anchor(sim.links)
     rest = anchor + rot @ rig.hood.rest_direction * rig.hood.length
     bones = np.stack([layer.positions, layer.tips], axis=1) if layer else np.zeros((0, 2, 3))
+    mesh, colors = [], []
+    for m in messages.marker_specs(sim):
+        mesh.append(m.points.reshape(-1, 3, 3))
+        colors.append(m.colors.reshape(-1, 3, 4).mean(axis=1))
     return Frame(stamp_ns, sim.x[grid_triangles(rig.rows, rig.cols)].reshape(-1, 3, 3),
                  np.array([anchor, sim.hood_p]), bones, sim.links[:, :3, 3].copy(),
-                 ref[-1].copy(), np.array([anchor, rest]), sim.root.copy())
+                 ref[-1].copy(), np.array([anchor, rest]), sim.root.copy(),
+                 np.concatenate(mesh), np.concatenate(colors))
 
 
 def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = None,
@@ -294,12 +311,29 @@ def _read_input(reader, m, path):
 
 
 def _marker_points(data):
-    """Return the points of a recorded MarkerArray by (ns, id); None without cloth and hood."""
+    """Return the points of a recorded MarkerArray by (ns, id), a mesh's colours by (ns,
+    'colors'); None without the jacket's mesh or the cloth and hood."""
     arr = deserialize_message(data, MarkerArray)
     found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
-    if ('cloth', 0) not in found or ('hood', 0) not in found:
+    if ('jacket', 0) not in found and (('cloth', 0) not in found or ('hood', 0) not in found):
         return None
-    return {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+    out = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+    for ns in messages.MESH_NAMESPACES:
+        if (ns, 0) in found:
+            out[ns, 'colors'] = np.array([[c.r, c.g, c.b, c.a] for c in found[ns, 0].colors])
+    return out
+
+
+def _recorded_mesh(pts):
+    """Return the recorded meshes' triangles and their colours (each the mean of its corners)."""
+    mesh, colors = [], []
+    for ns in messages.MESH_NAMESPACES:
+        if (ns, 0) in pts:
+            mesh.append(pts[ns, 0].reshape(-1, 3, 3))
+            colors.append(pts[ns, 'colors'].reshape(-1, 3, 4).mean(axis=1))
+    if not mesh:
+        return None, None
+    return np.concatenate(mesh), np.concatenate(colors)
 
 
 def _frame(log_time, pts, js, parser, skeleton, sim):
@@ -307,8 +341,10 @@ def _frame(log_time, pts, js, parser, skeleton, sim):
     bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
     sample = parser.parse(js.stamp_ns, js.name, js.position)
     poses = skeleton.forward(sample.q)
-    frame = Frame(log_time, pts[('cloth', 0)].reshape(-1, 3, 3), pts[('hood', 0)], bones,
-                  poses[:, :3, 3], root=sample.root)
+    mesh, colors = _recorded_mesh(pts)
+    frame = Frame(log_time, pts.get(('cloth', 0), np.zeros((0, 3))).reshape(-1, 3, 3),
+                  pts.get(('hood', 0)), bones, poses[:, :3, 3], root=sample.root, mesh=mesh,
+                  mesh_colors=colors)
     if sim is not None:
         sim.links = poses          # the skinned pose of this skeleton pose
         skinned = sim_frame(sim, log_time)
@@ -339,7 +375,8 @@ def moments_at(times: Sequence[float] | None = None,
 
 
 def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
-              across: tuple[float, float], upward: tuple[float, float]) -> None:
+              across: tuple[float, float], upward: tuple[float, float],
+              style: str = 'jacket') -> None:
     """Draw one view of a frame (in view coordinates, see in_view) into ``ax``.
 
     :param ax: the matplotlib axes.
@@ -348,8 +385,36 @@ def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
     :param axis: the view coordinate drawn across: 0 side view, 1 front view.
     :param across: the limits across, metres.
     :param upward: the limits up, metres.
+    :param style: ``jacket``: the shaded jacket and hood on the body; ``debug``: the method.
     """
-    f = frame
+    if style == 'jacket' and frame.mesh is not None:
+        _draw_mesh(ax, frame, axis)
+    else:
+        _draw_method(ax, frame, skeleton, axis)
+    ax.set_xlim(*across)
+    ax.set_ylim(*upward)
+    ax.set_aspect('equal')
+    ax.grid(alpha=0.3)
+    ax.tick_params(labelsize=7)
+
+
+def _draw_mesh(ax, f, axis):
+    """Draw the meshes back to front, faces turned away left out (the lining shows inside)."""
+    flat = f.mesh[:, :, [axis, 2]]
+    # The side view looks along +left (forward is drawn to the right), the front view along
+    # -forward: a face is seen when its corners turn counter-clockwise on the page.
+    e1, e2 = flat[:, 1] - flat[:, 0], flat[:, 2] - flat[:, 0]
+    seen = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] > 0
+    toward = -f.mesh[:, :, 1].mean(axis=1) if axis == 0 else f.mesh[:, :, 0].mean(axis=1)
+    order = np.argsort(toward[seen], kind='stable')
+    ax.add_collection(matplotlib.collections.PolyCollection(
+        flat[seen][order], facecolors=np.clip(f.mesh_colors[seen][order], 0, 1),
+        edgecolors=np.clip(f.mesh_colors[seen][order] * [0.85, 0.85, 0.85, 1], 0, 1),
+        linewidths=0.3))
+
+
+def _draw_method(ax, f, skeleton, axis):
+    """Draw the stick figure, the cloth grid, the hood pendulum, the bones, the skinned pose."""
     for i in range(1, len(f.links)):
         p = f.links[[skeleton.parent[i], i]]
         ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
@@ -358,22 +423,18 @@ def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
         edgecolor=(0.25, 0.18, 0.12, 0.8), lw=0.4))
     for seg in f.bones:
         ax.plot(seg[:, axis], seg[:, 2], color=(0.15, 0.1, 0.35), lw=2)
-    ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
-    ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
+    if f.hood is not None:
+        ax.plot(f.hood[:, axis], f.hood[:, 2], color=(0.75, 0.3, 0.1), lw=3)
+        ax.plot(f.hood[1, axis], f.hood[1, 2], 'o', color=(0.75, 0.3, 0.1), ms=7)
     for ref in (f.hem_ref, f.hood_ref):
         if ref is not None:
             ax.plot(ref[:, axis], ref[:, 2], '--', color=(0.2, 0.2, 0.8), lw=1.2)
-    ax.set_xlim(*across)
-    ax.set_ylim(*upward)
-    ax.set_aspect('equal')
-    ax.grid(alpha=0.3)
-    ax.tick_params(labelsize=7)
 
 
 def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]', png_path: str,
                    t0: int, labels: Callable[[int], str] | None = None,
                    title: str | None = None, world_axes: np.ndarray | None = None,
-                   columns: Sequence[str] | None = None) -> None:
+                   columns: Sequence[str] | None = None, style: str = 'jacket') -> None:
     """Two rows (side and front view), one column per frame, in the world (see in_view).
 
     :param frames: the frames, one a column.
@@ -384,6 +445,7 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
     :param title: the figure's title; None: what the colours show.
     :param world_axes: the world's forward, left and up (Rig.view_axes); None: x, y, z.
     :param columns: each column's title instead of its time; None: times.
+    :param style: ``jacket`` (the shaded jacket on the body) or ``debug`` (see draw_view).
     """
     skeletons = list(skeleton) if isinstance(skeleton, (list, tuple)) else [skeleton] * len(
         frames)
@@ -397,7 +459,7 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
     for col, f in enumerate(frames):
         for row, (view, axis) in enumerate(VIEWS):
             ax = axes[row][col]
-            draw_view(ax, f, skeletons[col], axis, across, upward)
+            draw_view(ax, f, skeletons[col], axis, across, upward, style)
             ax.set_xlabel(xlabels[axis], fontsize=8)
             if col == 0:
                 ax.set_ylabel(f'{view} view: {ylabel}', fontsize=8)
@@ -406,8 +468,7 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
             elif row == 0:
                 name = labels(f.stamp_ns - t0) if labels else ''
                 ax.set_title(f't = {(f.stamp_ns - t0) * 1e-9:.1f} s {name}', fontsize=9)
-    fig.suptitle((title or 'jacket (brown), hood pendulum (orange), jacket bones (navy);\n'
-                  'dashed blue: skinned hem and hood at rest')
+    fig.suptitle((title or DEFAULT_TITLES[style])
                  + f'\nin the world, each frame centred on {skeletons[0].link_names[centres[0]]}',
                  fontsize=10)
     fig.tight_layout()
@@ -418,7 +479,7 @@ def draw_filmstrip(frames: list[Frame], skeleton: 'Skeleton | Sequence[Skeleton]
 def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moments: int = 6,
                      labels: Callable[[int], str] | None = None, title: str | None = None,
                      times: Sequence[float] | None = None,
-                     rig: 'Rig | None' = None) -> list[int]:
+                     rig: 'Rig | None' = None, style: str = 'jacket') -> list[int]:
     """Draw a filmstrip of a recording; return the stamps drawn.
 
     :param mcap_path: the recording.
@@ -429,7 +490,12 @@ def render_filmstrip(mcap_path: str, png_path: str, skeleton: 'Skeleton', moment
     :param title: the figure's title; None: what the colours show.
     :param times: the instants, s from its start; None: evenly spaced ones.
     :param rig: its rig: the skinned pose is drawn too; None: not.
+    :param style: ``jacket`` or ``debug`` (see draw_view).
     """
     chosen, t0 = recorded_frames(mcap_path, skeleton, rig, moments_at(times, moments))
-    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title, view_axes_of(chosen, rig))
+    if style == 'debug' and not any(len(f.triangles) for f in chosen):
+        raise ValueError(f'{mcap_path}: no cloth grid to draw (the node records it with '
+                         'markers_debug:=true)')
+    draw_filmstrip(chosen, skeleton, png_path, t0, labels, title, view_axes_of(chosen, rig),
+                   style=style)
     return [f.stamp_ns for f in chosen]
