@@ -88,7 +88,9 @@ def test_replay_writes_what_the_node_records_and_an_independent_reader_decodes_i
     q = tf.transforms[0].transform.rotation
     assert abs(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 - 1) < 1e-9
     mesh = decoded['/jacket_cloth_node/markers'][0].markers
-    assert {m.ns for m in mesh} == {'cloth', 'colliders', 'hood', 'jacket_bones'}
+    assert {m.ns for m in mesh} == {'jacket', 'body', 'cloth', 'colliders', 'hood',
+                                    'jacket_bones'}          # the reset's DELETEALLs
+    assert {m.ns for m in mesh if m.action == 0} == {'jacket', 'body'}
     status = decoded['/diagnostics'][0].status[0]
     assert status.name == '/jacket_cloth_node: cloth simulation'
     assert 'step_cost_us_median' not in {kv.key for kv in status.values}   # no wall clock

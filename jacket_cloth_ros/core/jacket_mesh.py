@@ -406,7 +406,7 @@ def _hood(b, s):
     rows = []
     for r in range(HOOD_ROWS + 1):
         u = r / HOOD_ROWS
-        w = width * np.sin(np.pi * (0.3 + 0.7 * u)) ** 0.7 if u < 1 else 0.0
+        w = width * max(np.sin(np.pi * (0.3 + 0.7 * u)) ** 0.7, 0.3)   # a rounded tip
         d = 0.55 * w
         neck = max(0.0, 0.6 * (1 - u / 0.4))
         inf = {s.hood_bone: 1.0 - neck, rig.hood.link: neck} if neck > 0 else {s.hood_bone: 1.0}
