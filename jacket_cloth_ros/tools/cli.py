@@ -269,8 +269,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     """
     from ..recording.reader import read_recording
     from .crowd_replay import is_crowd
-    from .export import export
     from .session import NO_MESSAGES
+    try:
+        from .export import export
+    except ImportError as e:        # pygltflib has no rosdep key: a ROS install may lack it
+        raise ToolError(f'{e}: export needs pygltflib (pip install pygltflib)') from None
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     listed = read_recording(args.input, NO_MESSAGES)
     if is_crowd(listed):
