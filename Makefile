@@ -24,7 +24,7 @@ else
   SETUP := system
 endif
 
-.PHONY: all setup mocap demo analysis test bench-kernel clean-venv
+.PHONY: all setup mocap demo analysis test bench-kernel bench-export clean-venv
 all: test
 
 setup: $(READY) $(AMENT)
@@ -140,8 +140,19 @@ $(ROBOTS) &: | $(READY)
 	    $(ERD_WHEEL) $(ROBOT_URDFS)
 	rm -f $(ERD_WHEEL)
 
+# The Khronos glTF validator (Apache-2.0, no dependencies of its own), with the machine's Node.js,
+# for test/test_export.py: every .glb the tests write is checked by it (test/gltf_validate.js).
+GLTF_VALIDATOR_VERSION := 2.0.0-dev.3.10
+GLTF_VALIDATOR := $(VENV)/node/.gltf-validator-$(GLTF_VALIDATOR_VERSION)
+$(GLTF_VALIDATOR): | $(READY)
+	command -v npm >/dev/null || (echo "npm (Node.js) is needed for the glTF validator"; exit 1)
+	npm install --prefix $(VENV)/node --no-audit --no-fund --loglevel=error \
+	    gltf-validator@$(GLTF_VALIDATOR_VERSION)
+	touch $@
+
 # Two workers, the live test files one after another on one of them (test/conftest.py).
-test: $(READY) $(AMENT) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
+test: $(READY) $(AMENT) $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS) \
+      $(GLTF_VALIDATOR)
 	$(PY) -m pytest -q -n 2 --dist loadgroup test
 
 # The lab's full modes (minutes; `make test` runs their quick modes).
@@ -157,6 +168,10 @@ stress: $(READY)
 # Why the cloth step is compiled: the same step in numpy, and the C yardstick if it is here.
 bench-kernel: $(READY)
 	$(PY) benchmarks/kernel_choice.py
+
+# Export of a 60 s session against the 10 s it may take (issue 46).
+bench-export: $(READY)
+	$(PY) benchmarks/export_time.py
 
 clean-venv:
 	rm -rf $(VENV)
