@@ -18,6 +18,7 @@ from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
 from jacket_cloth_ros.ros.cdr import joint_state
 from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.export import key_times
 from jacket_cloth_ros.tools.session import load_session, run_session
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -226,3 +227,11 @@ def test_bad_input_is_one_line_and_a_failure(walk, tmp_path, capsys):
     assert 'exists' in _one_line_error(capsys, ['export', str(walk), '-o', out])
     assert 'is the input' in _one_line_error(capsys, ['export', str(walk), '-o', str(walk),
                                                       '--force'])
+
+
+def test_keys_rise_where_the_stamps_go_back():
+    # A jump back resets the simulation; glTF's key times must still rise.
+    ms = 1_000_000
+    seconds, restarts = key_times(np.array([100, 110, 120, 40, 50, 60]) * ms)
+    assert restarts == 1
+    assert np.allclose(seconds, [0.0, 0.01, 0.02, 0.03, 0.04, 0.05])

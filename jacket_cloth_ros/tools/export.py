@@ -15,6 +15,7 @@ Vertices, normals and inverse bind matrices are in glTF's axes, so each inverse 
 the inverse of its joint's global transform at rest, as Blender's importer expects.
 """
 
+import os
 import time
 from dataclasses import dataclass
 
@@ -63,7 +64,7 @@ class ExportSummary:
     joints: int
     links: int
     bones: int
-    vertices: int
+    vertices: int              # in all the meshes' primitives (the lining's its own)
     seconds: float             # wall time of the run and the writing
     restarts: int
     rig_warnings: list         # what the simulation found wrong with the rig (replay's too)
@@ -300,7 +301,8 @@ def build_gltf(session: SessionInput, frames: Frames, bone_names: list, bone_par
     jacket_node, body_node = len(nodes), len(nodes) + 1
     nodes += [gl.Node(name='jacket', mesh=0, skin=0), gl.Node(name='body', mesh=1, skin=0)]
     gltf.nodes = nodes
-    gltf.scenes = [gl.Scene(name=session.recording.path, nodes=[0, jacket_node, body_node])]
+    title = os.path.basename(os.path.normpath(session.recording.path))
+    gltf.scenes = [gl.Scene(name=title, nodes=[0, jacket_node, body_node])]
 
     # The skin: each inverse bind matrix the inverse of its joint at rest in glTF's axes.
     to_gltf = np.eye(4)
@@ -376,9 +378,9 @@ def export(session: SessionInput, out_path: str, force: bool = False) -> ExportS
                       np.asarray(bone_set.grid), np.asarray(sim.model.cloth.up, float))
     with replacing(out_path, force=force) as tmp:
         gltf.save_binary(tmp)
-    jacket_vertices = sum(gltf.accessors[p.attributes.POSITION].count
-                          for m in gltf.meshes for p in m.primitives)
+    vertices = sum(gltf.accessors[p.attributes.POSITION].count
+                   for m in gltf.meshes for p in m.primitives)
     return ExportSummary(out_path, len(frames.seconds), pipeline.inputs,
                          len(gltf.skins[0].joints), len(sim.skeleton.link_names),
-                         len(bone_set.names), jacket_vertices, time.perf_counter() - started,
+                         len(bone_set.names), vertices, time.perf_counter() - started,
                          frames.restarts, list(sim.faults.rig))
