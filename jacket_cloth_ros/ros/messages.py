@@ -186,7 +186,7 @@ def marker_layout(rig: 'Rig', layer_bones: int, reset: bool, debug: bool = False
 
 
 def _debug_layout(rig, layer_bones):
-    """The scaffolding's markers: cloth grid and seams, colliders, hood pendulum, bones."""
+    """Return the scaffolding's markers: cloth grid and seams, colliders, pendulum, bones."""
     out = []
     n = rig.n
     out.append(MarkerSpec('cloth', 0, TRIANGLE_LIST, color=TWEED,

@@ -311,8 +311,10 @@ def _read_input(reader, m, path):
 
 
 def _marker_points(data):
-    """Return the points of a recorded MarkerArray by (ns, id), a mesh's colours by (ns,
-    'colors'); None without the jacket's mesh or the cloth and hood."""
+    """Return the points of a recorded MarkerArray by (ns, id), a mesh's colours by (ns, 'colors').
+
+    None without the jacket's mesh, or the cloth and hood of a recording made before it.
+    """
     arr = deserialize_message(data, MarkerArray)
     found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
     if ('jacket', 0) not in found and (('cloth', 0) not in found or ('hood', 0) not in found):
