@@ -14,8 +14,9 @@ CORE = pathlib.Path(__file__).resolve().parent.parent / 'jacket_cloth_ros' / 'co
 LAYERS = (
     ('bundles', 'compiled', 'choices', 'config', 'transforms', 'geometry'),
     ('physics.pose', 'physics.colliders', 'physics.cloth', 'physics.hood', 'physics.step',
-     'physics.crowd', 'physics.sampling'),
-    ('skeleton', 'bone_layer', 'urdf_colliders', 'rig', 'fabric', 'params'),
+     'physics.crowd', 'physics.sampling', 'physics.skinning'),
+    ('skeleton', 'bone_layer', 'urdf_colliders', 'rig', 'fabric', 'params', 'jacket_mesh',
+     'body_mesh'),
     ('inputs', 'lod', 'measures', 'body_proxy', 'simulation', 'crowd'),
 )
 LAYER_OF = {name: k for k, names in enumerate(LAYERS) for name in names}

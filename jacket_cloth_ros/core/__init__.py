@@ -6,9 +6,11 @@ Layers, each importing only those below it (test/test_core_layers.py holds them 
 1. types and compiling: ``bundles`` (the named arrays the compiled steps take), ``compiled``
    (``njit``, the cache stamp, FixedTypes), ``choices``, ``config``, ``transforms``,
    ``geometry``;
-2. the compiled physics, ``physics/``: pose, colliders, cloth, hood, step, crowd, sampling;
+2. the compiled physics, ``physics/``: pose, colliders, cloth, hood, step, crowd, sampling,
+   skinning;
 3. building a character's model: ``skeleton``, ``bone_layer``, ``urdf_colliders``, ``rig``
-   (``model_of``), ``fabric``, ``params``;
+   (``model_of``), ``fabric``, ``params``, ``jacket_mesh`` and ``body_mesh`` (what a person
+   sees);
 4. drivers: ``inputs``, ``lod``, ``measures``, ``body_proxy`` (the body the measures see),
    ``simulation`` (JacketSimulation), ``crowd``.
 """
