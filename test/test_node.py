@@ -496,7 +496,8 @@ def test_a_disk_filling_while_recording_leaves_a_finished_file(harness, tmp_path
     path = tmp_path / 'session.mcap'
     h = harness(record=str(path))
     writer = h.node.recorder._writer
-    writer._stream = _FillingFile(writer._stream, writer._stream.tell() + 600_000)
+    # Room for about a quarter of the session: the jacket's markers dominate each chunk.
+    writer._stream = _FillingFile(writer._stream, writer._stream.tell() + 4_000_000)
     h.send_clip('idle', 60, 6.0)
     h.spin_until(lambda: h.node.recorder is None)
     assert 'closed on a full disk: a finished file without its last' in \
