@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from ..core.config import ConfigError
+from ..core.rig import REP103_UP, UP_TOLERANCE_DEG
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 from ..core.transforms import rpy_matrix, snapped_to_axis
@@ -595,9 +596,9 @@ def propose(sk: Skeleton, forward: list | None = None,
 
     :param sk: the skeleton.
     :param forward: the direction the character faces, (3,) in its root frame; None: inferred.
-    :param first_pose: (joint values, the root's world rotation) of a motion's first input;
-        the world's up (gravity, the floor) is then the body's up in that world (issue 35
-        item 1). None: the URDF's up.
+    :param first_pose: (joint values, the root's world rotation) of a motion's first input:
+        a line says whether the body lies down in it; the world's up (gravity, the floor) stays
+        REP 103's +z (issue 47 item 1). None: no such line.
     """
     body = find_body(sk, None if forward is None else np.asarray(forward, float))
     up, fwd, left = body.up, body.forward, body.left
@@ -707,19 +708,20 @@ def propose(sk: Skeleton, forward: list | None = None,
         rig['forward'] = _r(fwd)
     rig.update({'cloth': cloth, 'jacket_bones': {'sleeves': sleeves, 'upper': upper},
                 'hood': hood})
-    world_up = _world_up(body, first_pose)
-    if world_up is not None and not np.allclose(world_up, up, atol=1e-3):
-        rig['world_up'] = _r(world_up)
-        lines.append(f'{"world up":>15}: {_r(world_up)} (pelvis to neck at the motion\'s '
-                     'first pose, in its world)')
+    # The floor is square to the world's up (REP 103's +z), never to the body's: a motion's
+    # first pose only says whether the body starts lying down (issue 47 item 1).
+    tilt = _tilt(body, first_pose)
+    if tilt is not None:
+        lines.append(f'{"first pose":>15}: the body lies {tilt:.0f} deg from the world\'s up '
+                     '[0, 0, 1]; gravity and the floor stay the world\'s')
     rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s, ahead,
-                                       up if world_up is None else world_up)
+                                       np.array(REP103_UP))
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
 
 
-def _world_up(body, first_pose):
-    """Return the body's up (pelvis to neck, snapped) in the world of a first pose, or None."""
+def _tilt(body, first_pose):
+    """Return the body's angle (deg) from the world's up at a first pose, if over tolerance."""
     if first_pose is None:
         return None
     q, rotation = first_pose
@@ -727,7 +729,9 @@ def _world_up(body, first_pose):
     neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
     if not np.linalg.norm(neck) > 1e-9:
         return None
-    return snapped_to_axis(np.asarray(rotation, float) @ neck)
+    up = np.asarray(rotation, float) @ neck / np.linalg.norm(neck)
+    angle = float(np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))))
+    return angle if angle > UP_TOLERANCE_DEG else None
 
 
 def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
@@ -904,7 +908,7 @@ COMMENTS = {
     'cloth': '# M3: a coarse grid around the torso; the top row is pinned (M6)',
     'jacket_bones': '# M1 sleeves on the arms, M2 shoulder pads on the chest',
     'hood': '# M8: a one-particle pendulum behind the neck',
-    'world_up': "# the world's up where the motion lives (gravity, the floor), at its first pose",
+    'world_up': "# the world's up where the motion lives (gravity, the floor); default [0, 0, 1]",
     'colliders': '# M10: the body the cloth must stay out of, and the floor',
 }
 

@@ -528,8 +528,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the character's forward in the URDF root frame (default: where the "
                    'toes point, else from the left and right names, else 1,0,0)')
     g.add_argument('--motion', default=None,
-                   help="a recording of the character: the world's up (gravity, the floor) is "
-                   'the body\'s up at its first JointState, whatever turns its root')
+                   help='a recording of the character: says whether the body lies down at its '
+                   "first JointState (gravity and the floor stay the world's up, +z)")
     g.add_argument('--world-joint', default='world_joint',
                    help='the world joint the recording names (with --motion)')
     g.add_argument('--force', action='store_true', help='overwrite the output files')
