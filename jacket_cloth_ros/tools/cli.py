@@ -198,9 +198,9 @@ def cmd_picture(args: argparse.Namespace) -> int:
     """
     from ..tools.picture import render_filmstrip
     from .outputs import replacing
-    skeleton, _ = _skeleton(args.urdf)
+    from .session import recorded_character
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
-    rig = load_rig(skeleton, args.rig)
+    skeleton, rig = recorded_character(args.input, args.urdf, args.rig)
     gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
@@ -483,8 +483,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument('input')
     f.add_argument('-o', '--output', required=True)
     f.add_argument('--moments', type=int, default=6)
-    f.add_argument('--urdf', default=None)
-    f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
+    f.add_argument('--urdf', default=None,
+                   help='the character (default: the recorded one; required without it)')
+    f.add_argument('--rig', default=None,
+                   help='rig YAML of the session (default: the recorded one, else shipped)')
     f.add_argument('--animate', action='store_true',
                    help='also write the session as a GIF beside the picture (OUTPUT.gif)')
     f.add_argument('--force', action='store_true')
