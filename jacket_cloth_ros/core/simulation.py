@@ -217,7 +217,8 @@ class JacketSimulation:
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
-        self.faults.rig = self._inside_at_rest()
+        self._inside = self._inside_at_rest()
+        self.faults.rig = list(getattr(skeleton, 'warnings', ())) + self._inside
 
     # -- the state, held once in ``state`` --------------------------------------------------
     x = property(lambda self: self.state.x, lambda self, v: _put(self.state.x, v),
@@ -555,7 +556,7 @@ class JacketSimulation:
                 report.reset = 'non-finite cloth state'
                 self._reset(sample)
             if first:
-                self.faults.rig += self._stretched_at_start(inside=at_load > 0)
+                self.faults.rig += self._stretched_at_start(inside=bool(self._inside))
                 # A code each: the node logs one line per code at most every few seconds.
                 report.warnings += [(f'rig{k}', w) for k, w in
                                     enumerate(self.faults.rig[at_load:], at_load)]

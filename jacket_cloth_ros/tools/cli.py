@@ -379,6 +379,8 @@ def cmd_rig(args: argparse.Namespace) -> int:
     if args.picture:
         _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
     skeleton = load_skeleton(args.urdf)
+    for line in skeleton.warnings:
+        print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
     forward = _vector(args.forward, '--forward') if args.forward else None
     first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
     rig, lines, body = propose(skeleton, forward, first)
