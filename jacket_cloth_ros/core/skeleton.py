@@ -85,6 +85,7 @@ class Skeleton:
                 joints.append(j)
             i += 1
         self.link_index = {n: k for k, n in enumerate(self.link_names)}
+        self.world_root = _is_world(robot, root, children)
         n = len(self.link_names)
         self.parent = np.array(parent)
         self.origin = np.tile(np.eye(4), (n, 1, 1))
@@ -149,6 +150,24 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def _is_world(robot, root, children):
+    """Tell whether the root link is the world: massless, shapeless, fixed to every child.
+
+    In a URDF that gives masses.
+    Whatever its name (``world``, ``map``): robot descriptions as vendors publish them bolt
+    the body to such a frame. It is the world, not a bone: no picture draws it, no body proxy
+    wraps a capsule from it, and the node never publishes it as a child of the world frame
+    (issue 47 item 3).
+    """
+    link = robot.link_map.get(root)
+    joints = children.get(root, [])
+    # Only where the URDF gives masses: a skeleton without any (the shipped character, a BVH
+    # import) has massless links throughout, its root a bone like the others.
+    masses = any(other.inertial is not None for other in robot.links)
+    return bool(masses and link is not None and link.inertial is None and not link.visuals
+                and not link.collisions and joints and all(j.type == 'fixed' for j in joints))
 
 
 def _without_declaration(text):

@@ -35,6 +35,9 @@ ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bon
 # body proxy's bones (core.body_proxy, a knee's), so cloth the colliders hold is outside those.
 BONE_COLLIDER_SHARE = 0.04
 TORSO_GAP = 0.02            # m at 1.75 m tall: the top row outside a robot's torso box
+# m: a link whose shapes are all smaller than this (a camera frame's marker sphere) has no
+# body to speak of: with no mass too, it is a sensor or virtual frame (issue 47 item 3).
+MARKER_SIZE = 0.005
 
 #  Words of sensor and virtual frames (an IMU, a camera, a lidar): never a part of the body.
 SENSOR_WORDS = {'imu', 'camera', 'cam', 'lidar', 'laser', 'sensor', 'gyro', 'gyrometer',
@@ -152,7 +155,7 @@ class Frames:
 
     mass: np.ndarray                    # (L,) kg; 0 when none is given
     com: np.ndarray                     # (L,3) centre of mass in the link's frame
-    shaped: np.ndarray                  # (L,) bool: a <visual> or <collision>
+    shaped: np.ndarray                  # (L,) bool: a <visual> or <collision> over MARKER_SIZE
     inertia: np.ndarray | None = None   # (L,3,3) about the centre of mass, the link's axes
 
 
@@ -167,7 +170,9 @@ def _frames(sk):
         k = sk.link_index.get(link.get('name', ''))
         if k is None:
             continue
-        out.shaped[k] = link.find('visual') is not None or link.find('collision') is not None
+        out.shaped[k] = any(_shape_size(g) > MARKER_SIZE
+                            for g in link.findall('visual/geometry')
+                            + link.findall('collision/geometry'))
         try:
             mass = link.find('inertial/mass')
             out.mass[k] = float(mass.get('value', 0)) if mass is not None else 0.0
@@ -181,6 +186,22 @@ def _frames(sk):
         | ~np.isfinite(out.inertia).all(axis=(1, 2))
     out.mass[bad], out.com[bad], out.inertia[bad] = 0.0, 0.0, 0.0
     return out
+
+
+def _shape_size(geometry):
+    """Return a URDF geometry's largest extent (m): a mesh or an unread shape counts as big."""
+    try:
+        for shape in geometry:
+            if shape.tag == 'sphere':
+                return 2 * float(shape.get('radius', 'inf'))
+            if shape.tag == 'box':
+                return max(float(v) for v in shape.get('size', 'inf').split())
+            if shape.tag in ('cylinder', 'capsule'):
+                return max(2 * float(shape.get('radius', 'inf')),
+                           float(shape.get('length', 'inf')))
+    except ValueError:
+        pass
+    return float('inf')
 
 
 def _inertia(link):
@@ -209,7 +230,8 @@ def virtual_links(sk: Skeleton, frames: Frames | None = None) -> list[int]:
     """Return the sensor and virtual frames: links that are no part of the body.
 
     A link whose name says a sensor (IMU, camera, lidar, laser, ``*_sensor``) or, in a URDF that
-    gives masses, a link with no mass and no visual or collision shape, when every link below it
+    gives masses, a link with no mass and no visual or collision shape over MARKER_SIZE
+    (whatever its name: a camera frame's 1 mm marker sphere is no body), when every link below it
     is such a frame too (a sensor frame that carries a gripper is part of the arm). A skeleton
     without masses (BVH import, an animation rig) keeps its shapeless end links: they are its
     bones' ends.
@@ -407,7 +429,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
         names = [sk.link_names[k] for k in virtual]
         shown = ', '.join(names[:8]) + (f' and {len(names) - 8} more' if len(names) > 8 else '')
         body.choices.append(Choice('not body parts', shown, 'sensor or virtual frames: a '
-                                   'sensor\'s name, or no mass and no shape'))
+                                   'sensor\'s name, or no mass and no shape over a few mm'))
     for root in arms_roots:
         _arm(body, root, kids, reach)
     for root in legs[:2]:

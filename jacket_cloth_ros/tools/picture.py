@@ -347,6 +347,8 @@ def draw_view(ax: 'plt.Axes', frame: Frame, skeleton: 'Skeleton', axis: int,
     """
     f = frame
     for i in range(1, len(f.links)):
+        if skeleton.parent[i] == 0 and getattr(skeleton, 'world_root', False):
+            continue                # a massless fixed root is the world: no pole to the body
         p = f.links[[skeleton.parent[i], i]]
         ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
     ax.add_collection(matplotlib.collections.PolyCollection(
