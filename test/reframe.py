@@ -133,6 +133,8 @@ def rotate_rig(data: dict, rotation: 'np.ndarray | dict | Rotations', root: str,
     out = copy.deepcopy(data)
     out['up'] = _vec(world, data.get('up', [0.0, 0.0, 1.0]))
     out['forward'] = _vec(world, data.get('forward', [1.0, 0.0, 0.0]))
+    # The world is turned with the root: its up too, which is REP 103's +z unless said.
+    out['world_up'] = _vec(world, data.get('world_up', [0.0, 0.0, 1.0]))
 
     def turn_part(part):
         r = rot(part['link'])

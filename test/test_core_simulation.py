@@ -600,3 +600,31 @@ def test_the_teleport_distance_scales_with_the_characters_height_unless_set():
     assert reset == '' and giant_m == pytest.approx(3 * person_m)
     reset, set_m = reset_by_a_move_of(1.5, giant, teleport_distance=1.0)
     assert reset.startswith('teleport') and set_m == 1.0
+
+
+def test_a_body_lying_at_the_first_input_keeps_the_worlds_gravity_and_floor(make_sim,
+                                                                            rest_input):
+    # Issue 47 item 1: a capture that starts on the floor turned gravity and the floor onto the
+    # body's pelvis-to-neck direction (67-82 degrees on get-up clips). The world's up is the
+    # rig's world_up (REP 103's +z here), whatever the body's pose; one line says it lies.
+    sim = make_sim()
+    names, pos = rest_input
+    pos = pos.copy()
+    on_back = {'rot_y': -np.sqrt(0.5), 'rot_w': np.sqrt(0.5), 'trans_z': 0.3}   # head to -x
+    for k, v in on_back.items():
+        pos[names.index(f'world_joint/{k}')] = v
+    assert quat_to_matrix([0, -np.sqrt(0.5), 0, np.sqrt(0.5)]) @ [0, 0, 1] == pytest.approx(
+        [-1, 0, 0])
+    floor = sim.model.colliders.plane_normals.copy()
+    report = sim.process(1_000_000_000, names, pos)
+    lines = [w for _, w in report.warnings if 'lies' in w]
+    assert len(lines) == 1 and 'lies 90 deg from the world\'s up [0, 0, 1]' in lines[0]
+    assert 'write world_up' in lines[0]
+    assert list(sim.model.cloth.up) == [0.0, 0.0, 1.0]
+    assert np.array_equal(sim.model.colliders.plane_normals, floor)
+    for k in range(1, 31):                  # lying still for half a second: the hem falls to -z
+        sim.process(1_000_000_000 + k * 16_666_667, names, pos)
+    hem = sim.x[-sim.rig.cols:] @ sim.root[:3, :3].T + sim.root[:3, 3]
+    top = sim.x[:sim.rig.cols] @ sim.root[:3, :3].T + sim.root[:3, 3]
+    assert hem[:, 2].mean() < top[:, 2].mean()
+    assert len(sim.faults.rig) == 1

@@ -44,6 +44,28 @@ def test_malformed_urdf_is_one_clear_error(text):
         Skeleton(text)
 
 
+def test_a_urdf_robot_state_publisher_loads_is_loaded_and_a_refusal_says_why(urdf_text):
+    # Issue 47 item 3: an empty <texture/> in a material (urdfdom skips it) was refused, and
+    # the refusal stopped at the element's path: "ParseError in .../texture:" and no reason.
+    textured = urdf_text.replace(
+        '</robot>', '<material name="skin"><color rgba="1 1 1 1"/><texture/></material></robot>')
+    textured = textured.replace('<link name="base_link"/>',
+                                '<link name="base_link"><sensor/></link>', 1)
+    sk = Skeleton(textured)
+    assert sk.link_names == Skeleton(urdf_text).link_names
+    [line] = sk.warnings
+    assert "an empty <texture/> in material 'skin'" in line
+    assert 'unknown element "sensor"' in line and 'ignored 2 element(s)' in line
+    assert Skeleton(urdf_text).warnings == []
+    broken = urdf_text.replace('</robot>', '<material name="m"><texture filename=""/>'
+                               '<color/></material></robot>')
+    with pytest.raises(ConfigError) as refused:
+        Skeleton(broken)
+    message = str(refused.value)
+    assert '\n' not in message and message.endswith(')')
+    assert 'color' in message and 'Required attribute not set in XML: rgba' in message
+
+
 def _rig_data():
     with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
         return yaml.safe_load(f)

@@ -100,17 +100,20 @@ def test_forward_kinematics_of_the_imported_joints_is_the_clips_pose(name):
             i += n
     assert worst < 1e-9
     # The root: the URDF root link's pose, positions four times the clip's (pybullet loads
-    # the humanoid at a quarter), the quaternion as x, y, z, w up to its sign.
-    assert np.allclose(cap.root[:, :3], frames[:, 1:4] * 4.0)
-    sign = np.sign(np.sum(cap.root[:, 3:] * np.roll(frames[:, 4:8], -1, axis=1), axis=1))
-    assert np.allclose(cap.root[:, 3:] * sign[:, None],
-                       np.roll(frames[:, 4:8], -1, axis=1) / np.linalg.norm(
-                           frames[:, 4:8], axis=1, keepdims=True))
+    # the humanoid at a quarter), both turned from the clip's Y-up world into REP 103's Z-up
+    # one (x, y, z) -> (x, -z, y); the rotation as x, y, z, w, up to its sign.
+    x, y, z = (frames[:, 1 + i] * 4.0 for i in range(3))
+    assert np.allclose(cap.root[:, :3], np.column_stack([x, -z, y]))
+    y_up = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+    for k in range(cap.frames):
+        w, qx, qy, qz = frames[k, 4:8] / np.linalg.norm(frames[k, 4:8])
+        assert np.allclose(quat_to_matrix(cap.root[k, 3:]), y_up @ quat_to_matrix([qx, qy, qz, w]))
 
 
-def test_the_walking_humanoid_stands_on_the_y_up_floor():
+def test_the_walking_humanoid_stands_on_the_z_up_floor():
     # Scale and up checked together: the standing foot's ankle is its box's half height plus
-    # the box's offset (0.11 + 0.09 m) above y = 0 at its lowest, within 5 cm.
+    # the box's offset (0.11 + 0.09 m) above z = 0 at its lowest, within 5 cm: the clip's Y-up
+    # world is REP 103's Z-up one (issue 47 item 1), the humanoid standing in it.
     urdf = fetched('humanoid.urdf')
     sk = load_skeleton(urdf)
     cap = load_clip(_clip('walk'), urdf)
@@ -121,7 +124,7 @@ def test_the_walking_humanoid_stands_on_the_y_up_floor():
         q[columns] = cap.positions[k]
         links = sk.forward(q)
         turn = quat_to_matrix(cap.root[k, 3:])
-        lowest.append(min((turn @ links[sk.link(f'{s}_ankle')][:3, 3] + cap.root[k, :3])[1]
+        lowest.append(min((turn @ links[sk.link(f'{s}_ankle')][:3, 3] + cap.root[k, :3])[2]
                           for s in ('left', 'right')))
     assert abs(min(lowest) - 0.20) < 0.05
 

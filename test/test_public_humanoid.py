@@ -85,7 +85,8 @@ def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_pat
     # The knees' capsules too: a kicking or seated shin meets the hem (issue 35 item 3).
     assert rig['colliders']['from_urdf'] == ['root', 'chest', 'left_hip', 'right_hip',
                                              'left_knee', 'right_knee']
-    assert rig['colliders']['add'][0]['normal'] == [0.0, 1.0, 0.0]
+    # The floor is the world's (REP 103's +z), not the body's up in the URDF (issue 47 item 1).
+    assert rig['colliders']['add'][0]['normal'] == [0.0, 0.0, 1.0] and 'world_up' not in rig
     loaded = Rig(rig, load_skeleton(urdf))
     by_name = {c.name: c for c in loaded.capsules}
     assert by_name['left_hip'].radius == pytest.approx(0.22)         # its <capsule>
@@ -95,10 +96,14 @@ def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_pat
     assert rig['cloth']['shape']['radii'][1] > 0.34 + 0.22
 
 
-def test_a_public_y_up_humanoid_sits_down_in_its_proposed_jacket(tmp_path):
+def test_a_public_y_up_humanoid_sits_down_in_a_y_up_world_its_rig_names(tmp_path):
+    # A world whose up is not REP 103's is the rig's to say: world_up and the floor's normal.
     urdf = fetched('humanoid.urdf')
     rig_path, session = tmp_path / 'rig.yaml', tmp_path / 'sit.mcap'
     assert main(['rig', '--urdf', urdf, '-o', str(rig_path)]) == 0
+    data = yaml.safe_load(rig_path.read_text())
+    data['world_up'], data['colliders']['add'][-1]['normal'] = [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]
+    rig_path.write_text(yaml.safe_dump(data))
     write_sit_down(load_skeleton(urdf), session)
     loaded = load_session(str(session), urdf=urdf, rig=str(rig_path))
     s = measure_every_input(loaded, keep_x=True)
@@ -141,11 +146,9 @@ def write_sit_down_z_up(skeleton, path):
 
 
 def test_a_y_up_urdf_driven_in_a_z_up_world_gets_gravity_from_that_world(tmp_path, capsys):
-    # Issue 35 item 1: the proposal took up from the links' axes ([0, 1, 0]); in a Z-up world
-    # gravity pulled sideways and the floor was a wall through the body (horizontal stretch
-    # 1.03 at p99 on this sit-down). The first input now finds the body's up in the world
-    # 90 degrees from it and takes the world's up from the body, with one line naming the
-    # key; `rig --motion` writes that key.
+    # Issue 47 item 1: the world's up is REP 103's +z whatever the body's axes or pose, so the
+    # plain proposal (up [0, 1, 0], the body's in the URDF) needs no world_up in a Z-up world,
+    # and `rig --motion` writes none (issue 35 wrote the body's up at the first pose).
     urdf = fetched('humanoid.urdf')
     session = tmp_path / 'sit_z_up.mcap'
     write_sit_down_z_up(load_skeleton(urdf), session)
@@ -155,6 +158,7 @@ def test_a_y_up_urdf_driven_in_a_z_up_world_gets_gravity_from_that_world(tmp_pat
         assert main(['rig', '--urdf', urdf, '-o', str(rig_path)] + extra) == 0
         rig = yaml.safe_load(rig_path.read_text())
         assert rig['up'] == [0.0, 1.0, 0.0]            # the body's, in the URDF root frame
+        assert 'world_up' not in rig and rig['colliders']['add'][0]['normal'] == [0, 0, 1]
         loaded = load_session(str(session), urdf=urdf, rig=str(rig_path))
         s = measure_every_input(loaded, keep_x=True)
         vertical, horizontal = s['vertical_stretch'], s['horizontal_stretch']
@@ -163,20 +167,13 @@ def test_a_y_up_urdf_driven_in_a_z_up_world_gets_gravity_from_that_world(tmp_pat
         assert inside.max() <= 0.01 and np.percentile(inside, 99) <= 0.003
         assert np.percentile(horizontal, 99) <= 0.10 and s['resets'] == ['first sample']
         figures.append(s)
-        if name == 'motion':
-            assert rig['world_up'] == [0.0, 0.0, 1.0]
-            assert rig['colliders']['add'][0]['normal'] == [0.0, 0.0, 1.0]
-        else:
-            assert 'world_up' not in rig
-    assert np.array_equal(figures[0]['x'], figures[1]['x'])     # turned as --motion wrote it
+    assert np.array_equal(figures[0]['x'], figures[1]['x'])
     capsys.readouterr()
     assert main(['analyze', str(session), '--urdf', urdf, '--rig', str(tmp_path / 'plain.yaml'),
                  '--out', str(tmp_path / 'out')]) == 0
-    [line] = [w for w in capsys.readouterr().err.splitlines() if 'world up' in w]
-    assert "the rig's world up [0, 1, 0] is 90 deg from the body's up in the world" in line
-    assert 'write world_up: [0, 0, 1] in the rig' in line
+    assert 'world' not in capsys.readouterr().err     # standing: nothing to say of the world
     report = json.loads((tmp_path / 'out' / 'report.json').read_text())
-    assert report['rig_warnings'] == [line.split(f'{session}: ', 1)[1]]
+    assert report['rig_warnings'] == []
 
 
 def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
@@ -200,10 +197,9 @@ def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
     assert np.allclose(axes[:, 2], [0, 0, 1]) and np.allclose(axes.T @ axes, np.eye(3))
     assert np.allclose(rig.view_axes([0, 1, 0]), rig.world_axes)    # the body's own up
     frames, _ = recorded_frames(str(out), sk, rig, moments_at(None, 3))
-    # A rig without world_up (the plain proposal) is drawn in the world the body shows, as the
-    # simulation turns its up at the first input.
+    # A rig without world_up (the plain proposal) is drawn in REP 103's world, as --motion's.
     plain = load_rig(sk, str(plain_path))
-    assert plain.view_axes()[:, 2].tolist() == [0, 1, 0]
+    assert plain.view_axes()[:, 2].tolist() == [0, 0, 1]
     assert np.allclose(view_axes_of(frames, plain), axes)
     frames = [in_view(f, axes, body_link(sk)) for f in frames]
     neck = sk.link('neck')

@@ -267,7 +267,9 @@ def test_a_y_up_skeleton_gets_up_and_forward_and_the_same_numbers_in_its_links()
     for key in ('cloth', 'jacket_bones', 'hood'):
         assert yaml.safe_dump(rig[key]) == yaml.safe_dump(z_up[key]) or \
             np.allclose(_numbers(rig[key]), _numbers(z_up[key]), atol=2e-3)
-    assert rig['colliders'][-1]['normal'] == [0.0, 1.0, 0.0]      # the floor is under the feet
+    # The floor is the world's (REP 103's +z), whatever the body's axes: a Y-up skeleton
+    # stands in that world through its world joint (issue 47 item 1).
+    assert rig['colliders'][-1]['normal'] == [0.0, 0.0, 1.0] and 'world_up' not in rig
     text = to_yaml(rig, lines, 'y_up.urdf', body)
     assert text.index('up: [0.0, 1.0, 0.0]') < text.index('cloth:')
 

@@ -147,6 +147,28 @@ def test_g1s_rig_says_which_frames_it_left_out(tmp_path, capsys):
     assert 'sensor' in ignored and 'd435_link' in ignored and 'mid360_link' in ignored
 
 
+def test_a_massless_frame_with_a_millimetre_shape_is_no_neck_whatever_its_name(tmp_path):
+    # Issue 47 item 3: a camera frame with a 1 mm sphere and no inertial was chosen as the neck
+    # (its shape made it a body part). Named as a body link here, so only its size tells.
+    with open(fetched('g1_29dof_rev_1_0.urdf'), encoding='utf-8') as f:
+        text = f.read()
+    marker = '<visual><geometry><sphere radius="0.0005"/></geometry></visual>'
+    text = text.replace('<link name="d435_link"></link>',
+                        f'<link name="head_front">{marker}</link>')
+    text = text.replace('<child link="d435_link"/>', '<child link="head_front"/>')
+    path = tmp_path / 'g1_marker.urdf'
+    path.write_text(text)
+    rig, lines, body = propose(load_skeleton(str(path)))
+    assert _chosen(lines)['neck'] == 'head_link', '\n'.join(lines)
+    assert 'head_front' in next(line for line in lines if 'not body parts' in line)
+    assert 'head_front' not in _rig_links(rig)
+    # A shape of a body's size keeps it a body part (as the capsules of a BVH import's hands).
+    big = text.replace('radius="0.0005"', 'radius="0.05"')
+    path.write_text(big)
+    rig, lines, body = propose(load_skeleton(str(path)))
+    assert 'head_front' not in next(line for line in lines if 'not body parts' in line)
+
+
 # A joint's swing in a walk: name with {s} for the side, offset, amplitude, whether the
 # amplitude takes the side's sign (arms and legs in counter-phase), whether the phase does.
 Swing = tuple[str, float, float, bool, bool]
@@ -296,3 +318,34 @@ def test_a_robots_jacket_is_sized_from_its_torso_not_its_shoulders():
     shoulder = rest[sk.link('arm_left_3_link')][1, 3]
     assert width < shoulder - 0.05                     # the upper arms hang outside it
     assert any("from the torso's inertia" in line for line in lines)
+
+
+def test_a_massless_fixed_root_is_the_world_not_a_bone():
+    # Issue 47 item 3: G1 as published with its root `world` bolted to the pelvis: the world
+    # was a body link, published world -> world, drawn as a pole and wrapped in a capsule.
+    from jacket_cloth_ros.core.body_proxy import body_proxy
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.ros.parameters import default_values
+    with open(fetched('g1_29dof_rev_1_0.urdf'), encoding='utf-8') as f:
+        text = f.read()
+    bolted = text.replace('<link name="pelvis">', '<link name="world"/><joint name="bolt" '
+                          'type="fixed"><origin xyz="0 0 0.793"/><parent link="world"/>'
+                          '<child link="pelvis"/></joint><link name="pelvis">', 1)
+    sk, plain = Skeleton(bolted), Skeleton(text)
+    assert sk.link_names[0] == 'world' and sk.world_root and not plain.world_root
+    assert not Skeleton(open(shipped('character.urdf'), encoding='utf-8').read()).world_root
+    # No capsule from the world to the pelvis: the body proxy is the one without the world.
+    assert 0 not in body_proxy(sk).capsule_link and 0 not in body_proxy(sk).ellipsoid_link
+    assert len(body_proxy(sk).capsule_link) == len(body_proxy(plain).capsule_link)
+    rig, lines, body = propose(sk)
+    assert _chosen(lines)['pelvis'] == 'pelvis' and 'world' not in _rig_links(rig)
+    values = default_values(load_fabric('tweed_jacket'))
+    values['publish_world_tf'] = True
+    pipeline = SessionPipeline(sk, Rig(yaml.safe_load(to_yaml(rig, lines, 'g1', body)), sk),
+                               {'tweed_jacket': load_fabric('tweed_jacket')}, values)
+    assert pipeline.root_is_world_frame()
+    values['frame_prefix'] = 'npc1/'        # npc1/world is a frame of its own: published
+    assert not SessionPipeline(sk, pipeline.sim.rig, {'tweed_jacket': load_fabric(
+        'tweed_jacket')}, values).root_is_world_frame()

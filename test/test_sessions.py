@@ -679,3 +679,28 @@ def test_a_session_is_read_without_its_outputs_and_its_tf_compared_by_digest(tmp
     tf = [m.data for m in read_messages(str(session))[0] if m.topic == '/tf']
     figures = SessionFigures(loaded, 2)
     assert figures.recorded_tf == [message_digest(d) for d in tf] and len(tf) > 30
+
+
+def test_picture_draws_the_character_and_rig_recorded_in_it(tmp_path, capsys, monkeypatch):
+    # Issue 47 item 5: `picture` of a recording made with another character drew the shipped
+    # skeleton beside that character's cloth (exit 0); analyze read the recorded ones.
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    from jacket_cloth_ros.tools import picture
+    urdf = shipped('examples/mannequin.urdf')
+    rig = shipped('examples/mannequin_rig.yaml')
+    with open(urdf, encoding='utf-8') as f:
+        names = list(Skeleton(f.read()).joint_names)
+    inputs, out = tmp_path / 'inputs.mcap', tmp_path / 'out.mcap'
+    _foreign_joint_states(inputs, names)
+    assert main(['replay', str(inputs), '-o', str(out), '--urdf', urdf, '--rig', rig]) == 0
+    drawn = []
+    monkeypatch.setattr(picture, 'draw_filmstrip',
+                        lambda frames, skeleton, *a, **k: drawn.append((frames, skeleton)))
+    assert main(['picture', str(out), '-o', str(tmp_path / 'p.png'), '--moments', '2']) == 0
+    [(frames, skeleton)] = drawn
+    assert skeleton.name == 'example_mannequin'
+    assert all(len(f.links) == len(skeleton.link_names) for f in frames)
+    # A recording of inputs alone records no character: one line, never the shipped one.
+    capsys.readouterr()
+    err = _one_line_error(capsys, ['picture', str(inputs), '-o', str(tmp_path / 'q.png')])
+    assert 'no character recorded in it' in err and '--urdf' in err

@@ -94,8 +94,8 @@ def body_proxy(skeleton: 'Skeleton', leave_out: Sequence[int] = ()) -> BodyProxy
                             entry['radii'], name))
             else:
                 caps.append((k, entry['a'], entry['b'], entry['radius'], name))
-        if mine:
-            continue
+        if mine or (k == 0 and getattr(skeleton, 'world_root', False)):
+            continue                # a massless fixed root is the world, not a bone
         for child in np.flatnonzero(skeleton.parent == k):
             if child in out_of_it:
                 continue

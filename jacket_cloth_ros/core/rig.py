@@ -8,8 +8,8 @@ carry its pinned target (M6) or its reference point (M11).
 Axes: no link axis means up or forward. ``up`` (default +z) and ``forward`` (default +x) are
 the body's in the URDF root's frame; the cloth shape and the M2 bones take their front, left
 and up from them at the zero pose, unless an ``rpy_deg`` gives their axes in their link's frame
-(docs/method.md). Gravity pulls along -``world_up`` (default: ``up``), a vector of the world the
-world joint moves the root in.
+(docs/method.md). Gravity pulls along -``world_up``, a vector of the world the world joint moves
+the root in: REP 103's +z unless the rig says otherwise, whatever the body's pose.
 """
 
 from dataclasses import dataclass
@@ -21,8 +21,7 @@ import numpy.typing as npt
 from .bone_layer import BoneLayer, layer_model
 from .bundles import ClothModel, ColliderModel, Model, flags, floats, ints
 from .config import ConfigError, Section, load_yaml, shipped, shown
-from .transforms import (apply_transform, invert_transform, rotation_between, rpy_matrix,
-                         snapped_to_axis)
+from .transforms import apply_transform, invert_transform, rotation_between, rpy_matrix
 
 if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
@@ -158,8 +157,9 @@ def _clean(rotation):
 
 
 # The body's up (root link to the hood's link) at the first input further than this (deg) from
-# the rig's world up: the world's up is taken from the body (issue 35 item 1).
+# the world's up: the body lies down, which is said once and changes nothing (issue 47 item 1).
 UP_TOLERANCE_DEG = 45.0
+REP103_UP = (0.0, 0.0, 1.0)     # the world's up when the rig does not say otherwise
 
 
 class Rig:
@@ -177,9 +177,10 @@ class Rig:
         self.world_axes = body_axes(top.vector('up', 3, [0.0, 0.0, 1.0]),
                                     top.vector('forward', 3, [1.0, 0.0, 0.0]), where)
         self.up = self.world_axes[:, 2].copy()
-        # The world's up, where the motion lives (gravity, the floor): the body's up unless a
-        # world joint turns the root (a Y-up URDF in a Z-up world, issue 35 item 1).
-        self.world_up = self.up.copy()
+        # The world's up, where the motion lives (gravity, the floor): the world's own (REP
+        # 103), never the body's: a Y-up URDF stands in a Z-up world through its world joint,
+        # and a body on the floor lies in it (issue 47 item 1).
+        self.world_up = np.array(REP103_UP)
         if top.has('world_up'):
             world_up = np.array(top.vector('world_up', 3))
             if np.linalg.norm(world_up) < 1e-9:
@@ -265,28 +266,27 @@ class Rig:
             return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
         return _clean(self._rest[link][:3, :3].T @ self.world_axes)
 
-    def up_in_world(self, positions: np.ndarray, root_rotation: np.ndarray,
-                    up: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, float] | None:
-        """Return the world's up as the body shows it, where that is far from ``up``.
+    def body_tilt(self, positions: np.ndarray, root_rotation: np.ndarray
+                  ) -> tuple[np.ndarray, float] | None:
+        """Return the body's up in the world and its angle from the world's up, if far from it.
 
         The body's up is the root link to the hood's link in the world. Further than
-        UP_TOLERANCE_DEG from ``up`` (a Y-up URDF driven in a Z-up world with a rig whose
-        world up is the URDF's), the world's up is the body's snapped onto a world axis.
+        UP_TOLERANCE_DEG from ``world_up`` the body lies down (a capture that starts on the
+        floor, a Y-up URDF whose world joint does not stand it up); the world's up stays.
 
         :param positions: the link origins (L, 3) in the root's frame, at a pose.
         :param root_rotation: the root's rotation in the world, (3, 3).
-        :param up: the world's up as taken so far, (3,) unit.
-        :returns: (the world's up, the body's up, the angle between it and ``up`` in
-            degrees), or None where the body agrees with ``up``.
+        :returns: (the body's up, (3,) unit, the angle from ``world_up`` in degrees), or None
+            where the body stands within UP_TOLERANCE_DEG of it.
         """
         neck = positions[self.hood.link] - positions[0]
         if not np.linalg.norm(neck) > 1e-9:
             return None
         body_up = np.asarray(root_rotation, float) @ neck / np.linalg.norm(neck)
-        angle = float(np.degrees(np.arccos(np.clip(body_up @ np.asarray(up, float), -1.0, 1.0))))
+        angle = float(np.degrees(np.arccos(np.clip(body_up @ self.world_up, -1.0, 1.0))))
         if not angle > UP_TOLERANCE_DEG:
             return None
-        return snapped_to_axis(body_up), body_up, angle
+        return body_up, angle
 
     def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
         """Return the world's forward, left and up as columns: the views' axes.

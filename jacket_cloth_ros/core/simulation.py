@@ -30,7 +30,6 @@ from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
-from .transforms import rotation_between
 
 if TYPE_CHECKING:           # for the annotations only
     from .fabric import Fabric
@@ -195,13 +194,7 @@ class JacketSimulation:
         self.parser = InputParser(skeleton, world_joint)
         self.fabric = fabric
         self.params = params
-        model = model_of(skeleton, rig)
-        # Its own world up and world planes: the first input may turn them (_turn_up), in
-        # place, where a crowd's slot sees them too.
-        self.model = model._replace(
-            cloth=model.cloth._replace(up=model.cloth.up.copy()),
-            colliders=model.colliders._replace(plane_points=model.colliders.plane_points.copy(),
-                                               plane_normals=model.colliders.plane_normals.copy()))
+        self.model = model_of(skeleton, rig)
         self.state = ClothState(floats(rig.rest).copy(), floats(rig.rest).copy(),
                                 np.zeros(rig.n, dtype=np.bool_), np.zeros(3), np.zeros(3),
                                 np.eye(4), np.zeros(len(rig.con_a)), np.zeros(1, dtype=np.bool_))
@@ -224,7 +217,8 @@ class JacketSimulation:
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
-        self.faults.rig = self._inside_at_rest()
+        self._inside = self._inside_at_rest()
+        self.faults.rig = list(getattr(skeleton, 'warnings', ())) + self._inside
 
     # -- the state, held once in ``state`` --------------------------------------------------
     x = property(lambda self: self.state.x, lambda self, v: _put(self.state.x, v),
@@ -440,34 +434,25 @@ class JacketSimulation:
         row, col = divmod(int(rig.vert_b[k]), rig.cols)
         return f': the vertical edge above row {row}, column {col} has no length'
 
-    def _turn_up(self, sample: Sample) -> list[str]:
-        """Check the rig's world up against the body's in the world at the first input.
+    def _lying_down(self, sample: Sample) -> list[str]:
+        """Say that the body lies down at the first input, if it does; gravity stays the world's.
 
         The body's up is the root link to the hood's link, as the input poses them. Further
-        than rig.UP_TOLERANCE_DEG from it (a Y-up URDF driven in a Z-up world with a rig whose
-        world up is the URDF's), the world's up becomes the body's (snapped onto a world axis
-        within 15 degrees): gravity and the planes fixed in the world turn with it, and the
-        line says the rig's key that does it.
+        than rig.UP_TOLERANCE_DEG from the world's up, a capture that starts on the floor (or a
+        Y-up URDF whose world joint does not stand it up) lies down: one line says so, and
+        gravity and the floor keep the world's up (issue 47 item 1: turning them onto the body
+        tilted a get-up clip's floor by 67-82 degrees).
         """
-        links = self.skeleton.forward(sample.q)
-        rig, up = self.rig, self.model.cloth.up
-        turned = rig.up_in_world(links[:, :3, 3], sample.root[:3, :3], up)
-        if turned is None:
+        rig = self.rig
+        tilt = rig.body_tilt(self.skeleton.forward(sample.q)[:, :3, 3], sample.root[:3, :3])
+        if tilt is None:
             return []
-        new, body_up, angle = turned
-        turn = rotation_between(up, new)
-        colliders = self.model.colliders
-        world = colliders.plane_links < 0
-        colliders.plane_points[world] = colliders.plane_points[world] @ turn.T
-        colliders.plane_normals[world] = colliders.plane_normals[world] @ turn.T
-        was = up.copy()
-        up[:] = new
+        body_up, angle = tilt
         names = self.skeleton.link_names
-        return [f'the rig\'s world up {_shown(was)} is {angle:.0f} deg from the body\'s up in '
-                f'the world at the first input ({names[0]} to {names[rig.hood.link]}: '
-                f'{_shown(body_up)}): gravity and the floor now pull along {_shown(-new)}; '
-                f'write world_up: {_shown(new)} in the rig (jacket_cloth rig --motion FILE '
-                'does)']
+        return [f'the body lies {angle:.0f} deg from the world\'s up {_shown(rig.world_up)} at '
+                f'the first input ({names[0]} to {names[rig.hood.link]}: {_shown(body_up)}); '
+                'gravity and the floor stay the world\'s: if this world\'s up is another axis, '
+                'write world_up in the rig']
 
     def _inside_at_rest(self) -> list[str]:
         """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is.
@@ -565,13 +550,13 @@ class JacketSimulation:
             first = report.reset == 'first sample'
             at_load = len(self.faults.rig)      # said at load (the node logs them then)
             if first:
-                self.faults.rig += self._turn_up(sample)
+                self.faults.rig += self._lying_down(sample)
             self._reset(sample)
             if not (np.isfinite(self.x).all() and np.isfinite(self.hood_p).all()):
                 report.reset = 'non-finite cloth state'
                 self._reset(sample)
             if first:
-                self.faults.rig += self._stretched_at_start(inside=at_load > 0)
+                self.faults.rig += self._stretched_at_start(inside=bool(self._inside))
                 # A code each: the node logs one line per code at most every few seconds.
                 report.warnings += [(f'rig{k}', w) for k, w in
                                     enumerate(self.faults.rig[at_load:], at_load)]

@@ -43,14 +43,26 @@ class Skeleton:
         links = urdf_xml.count('<link')
         if links > MAX_LINKS:
             raise ConfigError(f'URDF: {links} links, over the {MAX_LINKS} a character may have')
+        text, ignored = _lenient(_readable(_without_declaration(urdf_xml)))
         try:
-            # urdf_parser_py prints warnings for elements it does not know; keep them out of logs.
-            with contextlib.redirect_stderr(io.StringIO()):
-                robot = urdf.URDF.from_xml_string(_readable(_without_declaration(urdf_xml)))
+            # urdf_parser_py prints a line for each element it does not know: gathered into
+            # one warning, as robot_state_publisher ignores them too.
+            printed = io.StringIO()
+            with contextlib.redirect_stderr(printed):
+                robot = urdf.URDF.from_xml_string(text)
             root = robot.get_root()
         except Exception as e:  # noqa: BLE001 - the parser raises many kinds; all mean "bad URDF"
-            msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            # Its ParseError puts the reason on a line after the element's path: both, on one.
+            lines = [t.strip() for t in str(e).strip().splitlines() if t.strip()]
+            msg = ' '.join(lines) if lines else type(e).__name__
             raise ConfigError(f'URDF: malformed robot description ({msg})') from None
+        ignored += [t.strip().replace('Unknown tag', 'unknown element')
+                    for t in printed.getvalue().splitlines() if t.startswith('Unknown tag')]
+        # What the parser left out, said once (issue 47 item 3): robot_state_publisher and RViz
+        # load these URDFs, and so does the node.
+        self.warnings = [] if not ignored else [
+            f'URDF: ignored {len(ignored)} element(s) robot_state_publisher ignores too: '
+            + '; '.join(ignored[:3]) + ('; ...' if len(ignored) > 3 else '')]
         self.name = robot.name
         self.root = root
         self.urdf_xml = urdf_xml          # its <collision> shapes can become colliders (rig)
@@ -73,6 +85,7 @@ class Skeleton:
                 joints.append(j)
             i += 1
         self.link_index = {n: k for k, n in enumerate(self.link_names)}
+        self.world_root = _is_world(robot, root, children)
         n = len(self.link_names)
         self.parent = np.array(parent)
         self.origin = np.tile(np.eye(4), (n, 1, 1))
@@ -139,6 +152,24 @@ class Skeleton:
         return world
 
 
+def _is_world(robot, root, children):
+    """Tell whether the root link is the world: massless, shapeless, fixed to every child.
+
+    In a URDF that gives masses.
+    Whatever its name (``world``, ``map``): robot descriptions as vendors publish them bolt
+    the body to such a frame. It is the world, not a bone: no picture draws it, no body proxy
+    wraps a capsule from it, and the node never publishes it as a child of the world frame
+    (issue 47 item 3).
+    """
+    link = robot.link_map.get(root)
+    joints = children.get(root, [])
+    # Only where the URDF gives masses: a skeleton without any (the shipped character, a BVH
+    # import) has massless links throughout, its root a bone like the others.
+    masses = any(other.inertial is not None for other in robot.links)
+    return bool(masses and link is not None and link.inertial is None and not link.visuals
+                and not link.collisions and joints and all(j.type == 'fixed' for j in joints))
+
+
 def _without_declaration(text):
     """Return the URDF text without its ``<?xml encoding?>`` line (lxml refuses it in a str)."""
     stripped = text.lstrip()
@@ -147,6 +178,30 @@ def _without_declaration(text):
         if end > 0:
             return stripped[end + 2:]
     return text
+
+
+def _lenient(text):
+    """Return the URDF text without the empty elements urdfdom skips, and what was left out.
+
+    An empty ``<texture/>`` in a material (no ``filename``) is refused by urdf_parser_py
+    (``Required attribute not set in XML: filename``) but loaded by robot_state_publisher's
+    urdfdom, which reads the filename only if there is one.
+    """
+    if '<texture' not in text:
+        return text, []
+    try:
+        robot = ElementTree.fromstring(text)
+    except ElementTree.ParseError:
+        return text, []                   # urdf_parser_py says what is wrong with it
+    ignored = []
+    for material in robot.iter('material'):
+        for texture in material.findall('texture'):
+            if not texture.get('filename'):
+                material.remove(texture)
+                ignored.append(f'an empty <texture/> in material {material.get("name", "")!r}')
+    if not ignored:
+        return text, []
+    return ElementTree.tostring(robot, encoding='unicode'), ignored
 
 
 BALL_AXES = (('Z', '0 0 1'), ('X', '1 0 0'), ('Y', '0 1 0'))

@@ -11,8 +11,11 @@ order ``humanoid_stable_pd.py`` hands them to ``resetJointStatesMultiDof``).
 
 Conventions of the result:
 
-- Axes: the clip's world and the humanoid are both Y-up; nothing is turned. The root pose is
-  the URDF root link's (``base``: pybullet places a base by its inertial frame, which is at
+- Axes: the clip's world and the humanoid are both Y-up (x forward, z to the right); the
+  world is turned once into REP 103's (x forward, y left, z up: a quarter turn about x,
+  ``Y_UP_WORLD``), so the humanoid stands up in a Z-up world through its world joint and the
+  URDF is not edited (issue 47 item 1: gravity is the world's, never the body's). The root pose
+  is the URDF root link's (``base``: pybullet places a base by its inertial frame, which is at
   this link's origin) and travels on ``world_joint`` as BVH import's does.
 - Units: pybullet loads the humanoid at ``globalScaling=0.25`` (``humanoid_stable_pd.py``);
   the URDF as written is four times that, so root positions are multiplied by ``scale`` (URDF
@@ -49,6 +52,10 @@ FRAME_LENGTH = 1 + 3 + 4 + sum(n for _, n in LAYOUT)
 # The humanoid's scale in pybullet's DeepMimic environment, which the clips were made for.
 PYBULLET_SCALING = 0.25
 _BALL = ('Z', 'X', 'Y')
+# The clip's Y-up world in REP 103's Z-up one: a quarter turn about x, (x, y, z) -> (x, -z, y),
+# as a matrix and as a quaternion (x, y, z, w).
+Y_UP_WORLD = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+Y_UP_WORLD_QUAT = np.array([math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)])
 
 
 class ClipError(ValueError):
@@ -167,6 +174,16 @@ def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
+def _turned_quaternions(q: np.ndarray) -> np.ndarray:
+    """Return (F, 4) quaternions (x, y, z, w) turned by Y_UP_WORLD: Y_UP_WORLD_QUAT * q."""
+    ax, ay, az, aw = Y_UP_WORLD_QUAT
+    bx, by, bz, bw = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.column_stack([aw * bx + ax * bw + ay * bz - az * by,
+                            aw * by - ax * bz + ay * bw + az * bx,
+                            aw * bz + ax * by - ay * bx + az * bw,
+                            aw * bw - ax * bx - ay * by - az * bz])
+
+
 def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBULLET_SCALING
             ) -> Capture:
     """Convert a clip's frames (F, 44) into JointState content for ``urdf`` (its text).
@@ -202,9 +219,10 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
         else:
             columns.append(continuous_angles(frames[:, i:i + 1]))
         i += n
-    root_q = continuous_quaternions(_xyzw(frames[:, 4:8]))
+    root_q = continuous_quaternions(_turned_quaternions(_xyzw(frames[:, 4:8])))
+    root_p = frames[:, 1:4] @ Y_UP_WORLD.T * scale
     return Capture(name=name, urdf=urdf, frame_time=dt, scale=scale, joint_names=joint_names(),
-                   positions=np.hstack(columns), root=np.hstack([frames[:, 1:4] * scale, root_q]),
+                   positions=np.hstack(columns), root=np.hstack([root_p, root_q]),
                    link_names=[], height_m=float('nan'))
 
 

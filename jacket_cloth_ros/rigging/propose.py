@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from ..core.config import ConfigError
+from ..core.rig import REP103_UP, UP_TOLERANCE_DEG
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 from ..core.transforms import rpy_matrix, snapped_to_axis
@@ -34,6 +35,9 @@ ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bon
 # body proxy's bones (core.body_proxy, a knee's), so cloth the colliders hold is outside those.
 BONE_COLLIDER_SHARE = 0.04
 TORSO_GAP = 0.02            # m at 1.75 m tall: the top row outside a robot's torso box
+# m: a link whose shapes are all smaller than this (a camera frame's marker sphere) has no
+# body to speak of: with no mass too, it is a sensor or virtual frame (issue 47 item 3).
+MARKER_SIZE = 0.005
 
 #  Words of sensor and virtual frames (an IMU, a camera, a lidar): never a part of the body.
 SENSOR_WORDS = {'imu', 'camera', 'cam', 'lidar', 'laser', 'sensor', 'gyro', 'gyrometer',
@@ -151,7 +155,7 @@ class Frames:
 
     mass: np.ndarray                    # (L,) kg; 0 when none is given
     com: np.ndarray                     # (L,3) centre of mass in the link's frame
-    shaped: np.ndarray                  # (L,) bool: a <visual> or <collision>
+    shaped: np.ndarray                  # (L,) bool: a <visual> or <collision> over MARKER_SIZE
     inertia: np.ndarray | None = None   # (L,3,3) about the centre of mass, the link's axes
 
 
@@ -166,7 +170,9 @@ def _frames(sk):
         k = sk.link_index.get(link.get('name', ''))
         if k is None:
             continue
-        out.shaped[k] = link.find('visual') is not None or link.find('collision') is not None
+        out.shaped[k] = any(_shape_size(g) > MARKER_SIZE
+                            for g in link.findall('visual/geometry')
+                            + link.findall('collision/geometry'))
         try:
             mass = link.find('inertial/mass')
             out.mass[k] = float(mass.get('value', 0)) if mass is not None else 0.0
@@ -180,6 +186,22 @@ def _frames(sk):
         | ~np.isfinite(out.inertia).all(axis=(1, 2))
     out.mass[bad], out.com[bad], out.inertia[bad] = 0.0, 0.0, 0.0
     return out
+
+
+def _shape_size(geometry):
+    """Return a URDF geometry's largest extent (m): a mesh or an unread shape counts as big."""
+    try:
+        for shape in geometry:
+            if shape.tag == 'sphere':
+                return 2 * float(shape.get('radius', 'inf'))
+            if shape.tag == 'box':
+                return max(float(v) for v in shape.get('size', 'inf').split())
+            if shape.tag in ('cylinder', 'capsule'):
+                return max(2 * float(shape.get('radius', 'inf')),
+                           float(shape.get('length', 'inf')))
+    except ValueError:
+        pass
+    return float('inf')
 
 
 def _inertia(link):
@@ -208,7 +230,8 @@ def virtual_links(sk: Skeleton, frames: Frames | None = None) -> list[int]:
     """Return the sensor and virtual frames: links that are no part of the body.
 
     A link whose name says a sensor (IMU, camera, lidar, laser, ``*_sensor``) or, in a URDF that
-    gives masses, a link with no mass and no visual or collision shape, when every link below it
+    gives masses, a link with no mass and no visual or collision shape over MARKER_SIZE
+    (whatever its name: a camera frame's 1 mm marker sphere is no body), when every link below it
     is such a frame too (a sensor frame that carries a gripper is part of the arm). A skeleton
     without masses (BVH import, an animation rig) keeps its shapeless end links: they are its
     bones' ends.
@@ -406,7 +429,7 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
         names = [sk.link_names[k] for k in virtual]
         shown = ', '.join(names[:8]) + (f' and {len(names) - 8} more' if len(names) > 8 else '')
         body.choices.append(Choice('not body parts', shown, 'sensor or virtual frames: a '
-                                   'sensor\'s name, or no mass and no shape'))
+                                   'sensor\'s name, or no mass and no shape over a few mm'))
     for root in arms_roots:
         _arm(body, root, kids, reach)
     for root in legs[:2]:
@@ -595,9 +618,9 @@ def propose(sk: Skeleton, forward: list | None = None,
 
     :param sk: the skeleton.
     :param forward: the direction the character faces, (3,) in its root frame; None: inferred.
-    :param first_pose: (joint values, the root's world rotation) of a motion's first input;
-        the world's up (gravity, the floor) is then the body's up in that world (issue 35
-        item 1). None: the URDF's up.
+    :param first_pose: (joint values, the root's world rotation) of a motion's first input:
+        a line says whether the body lies down in it; the world's up (gravity, the floor) stays
+        REP 103's +z (issue 47 item 1). None: no such line.
     """
     body = find_body(sk, None if forward is None else np.asarray(forward, float))
     up, fwd, left = body.up, body.forward, body.left
@@ -707,19 +730,20 @@ def propose(sk: Skeleton, forward: list | None = None,
         rig['forward'] = _r(fwd)
     rig.update({'cloth': cloth, 'jacket_bones': {'sleeves': sleeves, 'upper': upper},
                 'hood': hood})
-    world_up = _world_up(body, first_pose)
-    if world_up is not None and not np.allclose(world_up, up, atol=1e-3):
-        rig['world_up'] = _r(world_up)
-        lines.append(f'{"world up":>15}: {_r(world_up)} (pelvis to neck at the motion\'s '
-                     'first pose, in its world)')
+    # The floor is square to the world's up (REP 103's +z), never to the body's: a motion's
+    # first pose only says whether the body starts lying down (issue 47 item 1).
+    tilt = _tilt(body, first_pose)
+    if tilt is not None:
+        lines.append(f'{"first pose":>15}: the body lies {tilt:.0f} deg from the world\'s up '
+                     '[0, 0, 1]; gravity and the floor stay the world\'s')
     rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s, ahead,
-                                       up if world_up is None else world_up)
+                                       np.array(REP103_UP))
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
 
 
-def _world_up(body, first_pose):
-    """Return the body's up (pelvis to neck, snapped) in the world of a first pose, or None."""
+def _tilt(body, first_pose):
+    """Return the body's angle (deg) from the world's up at a first pose, if over tolerance."""
     if first_pose is None:
         return None
     q, rotation = first_pose
@@ -727,7 +751,9 @@ def _world_up(body, first_pose):
     neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
     if not np.linalg.norm(neck) > 1e-9:
         return None
-    return snapped_to_axis(np.asarray(rotation, float) @ neck)
+    up = np.asarray(rotation, float) @ neck / np.linalg.norm(neck)
+    angle = float(np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))))
+    return angle if angle > UP_TOLERANCE_DEG else None
 
 
 def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
@@ -904,7 +930,7 @@ COMMENTS = {
     'cloth': '# M3: a coarse grid around the torso; the top row is pinned (M6)',
     'jacket_bones': '# M1 sleeves on the arms, M2 shoulder pads on the chest',
     'hood': '# M8: a one-particle pendulum behind the neck',
-    'world_up': "# the world's up where the motion lives (gravity, the floor), at its first pose",
+    'world_up': "# the world's up where the motion lives (gravity, the floor); default [0, 0, 1]",
     'colliders': '# M10: the body the cloth must stay out of, and the floor',
 }
 

@@ -310,6 +310,10 @@ class JacketClothNode(Node):
         c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
         for line in pipeline.sim.faults.rig:        # the rig's own, before any input
             self.get_logger().warning(c.label + line)
+        if spec.values['publish_world_tf'] and pipeline.root_is_world_frame():
+            self.get_logger().info(
+                f'{c.label}the URDF root {pipeline.root_frame()!r} is world_frame itself: '
+                'publish_world_tf publishes no transform to it (the world is not its own child)')
         pipeline.recording_problem = self._recording_problem
         if self.recorder is not None:
             c.add_to_recording(self.recorder)

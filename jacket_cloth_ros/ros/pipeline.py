@@ -134,6 +134,14 @@ class SessionPipeline:
         """Return the frame of the URDF root link as published: ``frame_prefix`` in front."""
         return self.values['frame_prefix'] + self.sim.skeleton.link_names[0]
 
+    def root_is_world_frame(self) -> bool:
+        """Tell whether the URDF root, as published, is ``world_frame`` itself.
+
+        A robot description bolted to a massless ``world`` link: world_frame -> root would
+        publish the world as a child of itself (issue 47 item 3), so it is not published.
+        """
+        return self.root_frame() == self.values['world_frame']
+
     def _fabric(self):
         return fabric_from(self.fabrics[self.values['fabric_preset']], self.values)
 
@@ -230,7 +238,7 @@ class SessionPipeline:
         if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
             return []
         out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
-        if self.values['publish_world_tf']:
+        if self.values['publish_world_tf'] and not self.root_is_world_frame():
             out.append(('tf', self._world_transform(stamp_ns)))
         self._window['published'] += 1
         return out

@@ -246,8 +246,8 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
     for name, session in zip(names, sessions):
         figures = SessionFigures(session, moments)
         pipeline = run_session(session, probe=figures.probe)
-        # The views' up is the world's as the simulation found it at the first input.
-        axes = session.setup.rig.view_axes(pipeline.sim.model.cloth.up)
+        # The views' up is the world's (the rig's world_up), as the simulation's gravity.
+        axes = session.setup.rig.view_axes()
         reports.append(figures.report(pipeline))
         series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
         strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'

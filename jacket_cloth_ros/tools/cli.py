@@ -198,9 +198,9 @@ def cmd_picture(args: argparse.Namespace) -> int:
     """
     from ..tools.picture import render_filmstrip
     from .outputs import replacing
-    skeleton, _ = _skeleton(args.urdf)
+    from .session import recorded_character
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
-    rig = load_rig(skeleton, args.rig)
+    skeleton, rig = recorded_character(args.input, args.urdf, args.rig)
     gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
@@ -412,6 +412,8 @@ def cmd_rig(args: argparse.Namespace) -> int:
     if args.picture:
         _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
     skeleton = load_skeleton(args.urdf)
+    for line in skeleton.warnings:
+        print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
     forward = _vector(args.forward, '--forward') if args.forward else None
     first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
     rig, lines, body = propose(skeleton, forward, first)
@@ -516,8 +518,10 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument('input')
     f.add_argument('-o', '--output', required=True)
     f.add_argument('--moments', type=int, default=6)
-    f.add_argument('--urdf', default=None)
-    f.add_argument('--rig', default=None, help='rig YAML of the session (default: shipped)')
+    f.add_argument('--urdf', default=None,
+                   help='the character (default: the recorded one; required without it)')
+    f.add_argument('--rig', default=None,
+                   help='rig YAML of the session (default: the recorded one, else shipped)')
     f.add_argument('--animate', action='store_true',
                    help='also write the session as a GIF beside the picture (OUTPUT.gif)')
     f.add_argument('--style', choices=('jacket', 'debug'), default='jacket',
@@ -572,8 +576,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the character's forward in the URDF root frame (default: where the "
                    'toes point, else from the left and right names, else 1,0,0)')
     g.add_argument('--motion', default=None,
-                   help="a recording of the character: the world's up (gravity, the floor) is "
-                   'the body\'s up at its first JointState, whatever turns its root')
+                   help='a recording of the character: says whether the body lies down at its '
+                   "first JointState (gravity and the floor stay the world's up, +z)")
     g.add_argument('--world-joint', default='world_joint',
                    help='the world joint the recording names (with --motion)')
     g.add_argument('--force', action='store_true', help='overwrite the output files')

@@ -118,19 +118,15 @@ def axis_label(direction: np.ndarray, meaning: str) -> str:
 def view_axes_of(frames: Sequence[Frame], rig: 'Rig | None') -> np.ndarray:
     """Return the views' forward, left and up: the world's, as the simulation takes it.
 
-    The rig's ``world_up``, or the body's up in the world at the first frame where that is far
-    from it (Rig.up_in_world, as the simulation turns its up at the first input).
+    The rig's ``world_up`` (REP 103's +z unless the rig says otherwise): a body that lies down
+    is drawn lying down (issue 47 item 1).
 
     :param frames: the frames drawn, their points in the root's frame.
     :param rig: the rig; None: x forward, z up.
     """
     if rig is None:
         return WORLD_AXES
-    up = rig.world_up
-    if frames and frames[0].root is not None:
-        turned = rig.up_in_world(frames[0].links, frames[0].root[:3, :3], up)
-        up = up if turned is None else turned[0]
-    return rig.view_axes(up)
+    return rig.view_axes()
 
 
 def view_limits(frames: Sequence[Frame]) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -418,6 +414,8 @@ def _draw_mesh(ax, f, axis):
 def _draw_method(ax, f, skeleton, axis):
     """Draw the stick figure, the cloth grid, the hood pendulum, the bones, the skinned pose."""
     for i in range(1, len(f.links)):
+        if skeleton.parent[i] == 0 and getattr(skeleton, 'world_root', False):
+            continue                # a massless fixed root is the world: no pole to the body
         p = f.links[[skeleton.parent[i], i]]
         ax.plot(p[:, axis], p[:, 2], color='0.25', lw=2.5, solid_capstyle='round')
     ax.add_collection(matplotlib.collections.PolyCollection(

@@ -160,6 +160,40 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     return session
 
 
+def recorded_character(path: str, urdf: str | None = None,
+                       rig: str | None = None) -> tuple[Skeleton, Rig]:
+    """Return the character and rig a tool draws a recording with: given, else recorded.
+
+    Never the shipped character in their place (issue 47 item 5: ``picture`` of a recording
+    made with another character drew the shipped skeleton beside its cloth): a recording
+    without a set-up (not a node's or a replay's) needs ``--urdf``, and a rig unless the
+    shipped one fits it.
+
+    :param path: the recording, an MCAP file or a bag folder.
+    :param urdf: a URDF file instead of the recorded character.
+    :param rig: a rig YAML file instead of the recorded rig.
+    """
+    # The files given first: what is wrong with them is said whatever the recording holds.
+    urdf_text = read_text(urdf, 'URDF') if urdf else None
+    rig_yaml = read_text(rig, 'rig') if rig else None
+    recorded = read_recording(path, NO_MESSAGES).metadata.get(SESSION_CONFIG, {})
+    where = f'{path}: the recorded'
+    if urdf_text is not None:
+        skeleton = skeleton_from(urdf_text, f'URDF {urdf}')
+    elif recorded.get('urdf'):
+        skeleton = skeleton_from(recorded['urdf'], f'{where} URDF')
+    else:
+        raise RecordingError(f'{path}: no character recorded in it (only a node\'s or a '
+                             "replay's recording has one): give --urdf, and --rig unless the "
+                             'shipped rig fits it')
+    rig_where = rig
+    if rig_yaml is None and recorded.get('rig_yaml'):
+        rig_yaml, rig_where = recorded['rig_yaml'], f'{where} rig'
+    elif rig_yaml is None:
+        rig_yaml, rig_where = read_text(shipped('jacket_rig.yaml'), 'rig'), 'rig'
+    return skeleton, Rig(parse_yaml(rig_yaml, rig_where), skeleton, where=rig_where)
+
+
 def recorded_parameters(setup: dict, where: str) -> dict:
     """Return a set-up record's parameters, each validated as a ``-p`` value (typed_value).
 
