@@ -203,8 +203,7 @@ def test_an_edge_pressed_flat_keeps_its_bones_finite_without_a_reset(skeleton, m
     assert flat.finite and np.allclose(flat.poses[:n_grid, 3:], last)
 
 
-def test_bones_that_are_not_finite_reset_the_cloth_and_are_counted(skeleton, make_sim,
-                                                                    rest_input):
+def test_bones_that_are_not_finite_reset_the_cloth_and_are_counted(make_sim, rest_input):
     # Issue 35 item 5: bones that are not finite went on /tf and nothing said why. check_bones,
     # the door to publishing, resets the cloth then (M6, M11 skinned pose) and counts it; bones
     # no reset mends (a degenerate skeleton pose) are returned as they are, counted once
