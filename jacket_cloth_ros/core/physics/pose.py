@@ -110,7 +110,7 @@ PARALLEL_SINE = 1e-4
 
 @njit(cache=True)
 def _offset(k):
-    """The k-th of 0, 1, -1, 2, -2, ...: the nearest first, on either side."""
+    """Return the k-th of 0, 1, -1, 2, -2, ...: the nearest first, on either side."""
     return (k + 1) // 2 if k % 2 == 1 else -(k // 2)
 
 
