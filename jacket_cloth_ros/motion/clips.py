@@ -187,15 +187,18 @@ def looped_pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...
 
 
 def joint_state_content(joint_names: Sequence[str], name: str, t: float,
-                        world_joint: str = 'world_joint') -> tuple[list[str], list[float]]:
+                        world_joint: str = 'world_joint',
+                        looped: bool = False) -> tuple[list[str], list[float]]:
     """(names, positions) of a JointState for the clip at time t: every joint plus the root.
 
     :param joint_names: the skeleton's joints, every one given a value.
     :param name: a name of ``ALL_CLIPS``.
-    :param t: seconds from the clip's start; past its end, as ``looped_pose`` goes on.
+    :param t: seconds from the clip's start.
     :param world_joint: the prefix of the root's variables (``world_joint/trans_x`` ...).
+    :param looped: past the clip's end, go on as ``looped_pose`` does; else the closed form
+        holds on (``pose``).
     """
-    q, root = looped_pose(name, t)
+    q, root = looped_pose(name, t) if looped else pose(name, t)
     names = list(joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
 

@@ -58,6 +58,7 @@ def clip_messages(skeleton: Skeleton, clip: str, rate: float, duration: float, s
         if retarget is not None:
             names, pos = retarget.content(clip, t, world_joint)
         else:
-            names, pos = joint_state_content(skeleton.joint_names, clip, t, world_joint)
+            names, pos = joint_state_content(skeleton.joint_names, clip, t, world_joint,
+                                             looped=True)
         stamp = start_ns + int(round(t * 1e9))
         yield stamp, joint_state_message(names, pos, stamp)
