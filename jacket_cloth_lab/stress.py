@@ -154,7 +154,7 @@ _OVERHEAD = {'l_shoulder_roll': 2.8, 'r_shoulder_roll': -2.8, 'l_elbow': -0.2, '
 
 
 def _key_frames(skeleton, keys, start_s=10.0):
-    """JointState content through key poses: (seconds to reach it, pose) each, smoothed.
+    """Return JointState content through key poses: (seconds to reach it, pose) each.
 
     :param skeleton: the character.
     :param keys: the first pose, then (seconds, pose) to each next one (a hold: the same pose).
@@ -185,8 +185,10 @@ def _smooth(s):
 
 
 def _rolled(pose, roll):
-    """The lying ``pose`` turned about the world's x (its long axis) by ``roll``, and lifted so
-    the trunk's ellipse rests on the floor."""
+    """Return the lying ``pose`` turned about the world's x (its long axis) by ``roll``.
+
+    It is lifted so that the trunk's ellipse rests on the floor.
+    """
     joints, (x, y, _), (_, pitch) = pose
     depth, width = 0.135, 0.18
     z = np.hypot(depth * np.cos(roll), width * np.sin(roll)) + 0.01

@@ -137,7 +137,9 @@ def _grid_down(x, cols, rows, r, c, out):
                 for j in range(3):
                     out[j] = x[(rr + 1) * cols + cc, j] - x[rr * cols + cc, j]
                     n2 += out[j] * out[j]
-                if n2 > EDGE_NO_LENGTH * EDGE_NO_LENGTH:
+                # A non-finite edge is taken as it is: its NaN reaches the bones, and the
+                # caller resets a non-finite state instead of hiding it.
+                if not n2 <= EDGE_NO_LENGTH * EDGE_NO_LENGTH:
                     return True
     return False
 
@@ -169,6 +171,8 @@ def _grid_across(x, cols, rows, r, c, down, out):
                 z1 = down[2] * out[0] - down[0] * out[2]
                 z2 = down[0] * out[1] - down[1] * out[0]
                 n = np.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2])
+                if not np.isfinite(n) or not np.isfinite(dn):
+                    return True
                 if (n > EDGE_NO_LENGTH
                         and np.sqrt(z0 * z0 + z1 * z1 + z2 * z2) > PARALLEL_SINE * n * dn):
                     return True
