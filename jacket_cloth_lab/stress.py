@@ -122,6 +122,114 @@ def scenes(skeleton: Skeleton, loop_s: float = 60.0) -> list[Scene]:
               _with_calm(skeleton, _clip(skeleton, 'walk', 0.0, 2.0, edit=garbage))),
         Scene(f'walk looped for {loop_s:.0f} s',     # the gait repeats; the walker goes on
               _with_calm(skeleton, _clip(skeleton, 'walk', 0.0, loop_s))),
+        *floor_scenes(skeleton),
+    ]
+
+
+# The body on the floor (issue 47 item 2), each scene from standing, world up +z and the rig's
+# floor plane at z = 0. A key pose: joint values, the root's position (m) and its roll and
+# pitch (rad, about world x then y; pitch > 0 leans forward). The root is the pelvis; lying
+# down, it sits one centimetre further from the floor than the shipped pelvis and torso
+# colliders reach (0.13-0.135 m front and back, 0.175-0.18 m to the sides): the body on the
+# floor, the cloth between them.
+_ARMS_DOWN = {'l_elbow': -0.1, 'r_elbow': -0.1}
+_STAND = (_ARMS_DOWN, (0.0, 0.0, 0.96), (0.0, 0.0))
+# Both knees on the floor (shin capsules 0.06), thighs upright, shins behind.
+_KNEEL = ({**_ARMS_DOWN, 'l_knee': 1.55, 'r_knee': 1.55, 'l_ankle': 0.5, 'r_ankle': 0.5},
+          (0.0, 0.0, 0.56), (0.0, 0.0))
+# Sitting on the floor, legs ahead, hands beside the hips.
+_SIT = ({'l_hip_pitch': -1.5, 'r_hip_pitch': -1.5, 'l_shoulder_pitch': 0.4,
+         'r_shoulder_pitch': 0.4, 'l_elbow': -0.1, 'r_elbow': -0.1, 'spine_pitch': 0.1},
+        (0.1, 0.0, 0.18), (0.0, 0.0))
+_SQUAT = ({'l_hip_pitch': -1.6, 'r_hip_pitch': -1.6, 'l_knee': 2.2, 'r_knee': 2.2,
+           'l_ankle': -0.6, 'r_ankle': -0.6, 'spine_pitch': 0.5, 'l_shoulder_pitch': -0.8,
+           'r_shoulder_pitch': -0.8}, (0.0, 0.0, 0.5), (0.0, 0.0))
+_BACK = (_ARMS_DOWN, (0.3, 0.0, 0.145), (0.0, -np.pi / 2))
+_FRONT = (_ARMS_DOWN, (0.6, 0.0, 0.145), (0.0, np.pi / 2))
+# On hands and knees: the trunk level, thighs upright, arms straight down to the floor.
+_ALL_FOURS = ({'l_hip_pitch': -1.5, 'r_hip_pitch': -1.5, 'l_knee': 1.55, 'r_knee': 1.55,
+               'l_shoulder_pitch': -1.5, 'r_shoulder_pitch': -1.5, 'l_ankle': 0.5,
+               'r_ankle': 0.5}, (0.15, 0.0, 0.56), (0.0, 1.5))
+_OVERHEAD = {'l_shoulder_roll': 2.8, 'r_shoulder_roll': -2.8, 'l_elbow': -0.2, 'r_elbow': -0.2}
+
+
+def _key_frames(skeleton, keys, start_s=10.0):
+    """Return JointState content through key poses: (seconds to reach it, pose) each.
+
+    :param skeleton: the character.
+    :param keys: the first pose, then (seconds, pose) to each next one (a hold: the same pose).
+    """
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from jacket_cloth_ros.core.transforms import matrix_to_quat, rpy_matrix
+    names = list(skeleton.joint_names) + [f'world_joint/{v}' for v in WORLD_VARIABLES]
+    out, t = [], 0.0
+    frames = [(0.0, keys[0])] + list(keys[1:])
+    for (_, a), (seconds, b) in zip(frames, frames[1:]):
+        n = max(1, int(round(seconds * RATE)))
+        for k in range(1 if out else 0, n + 1):
+            w = float(_smooth(k / n))
+            q = {j: (1 - w) * a[0].get(j, 0.0) + w * b[0].get(j, 0.0)
+                 for j in set(a[0]) | set(b[0])}
+            xyz = [(1 - w) * u + w * v for u, v in zip(a[1], b[1])]
+            roll, pitch = ((1 - w) * u + w * v for u, v in zip(a[2], b[2]))
+            quat = matrix_to_quat(rpy_matrix([roll, 0.0, 0.0]) @ rpy_matrix([0.0, pitch, 0.0]))
+            pos = [q.get(j, 0.0) for j in skeleton.joint_names] + xyz + [float(v) for v in quat]
+            out.append((int(round((start_s + t + k / RATE) * 1e9)), names, pos))
+        t += n / RATE
+    return out
+
+
+def _smooth(s):
+    s = min(max(s, 0.0), 1.0)
+    return s * s * (3 - 2 * s)
+
+
+def _rolled(pose, roll):
+    """Return the lying ``pose`` turned about the world's x (its long axis) by ``roll``.
+
+    It is lifted so that the trunk's ellipse rests on the floor.
+    """
+    joints, (x, y, _), (_, pitch) = pose
+    depth, width = 0.135, 0.18
+    z = np.hypot(depth * np.cos(roll), width * np.sin(roll)) + 0.01
+    return ({**joints, **_OVERHEAD}, (x, y, z), (roll, pitch))
+
+
+def _crawl(pose, ahead, side):
+    """On all fours ``pose``, ``ahead`` m on, one knee and the other hand forward."""
+    joints, (x, y, z), turn = pose
+    lead, trail = ('l', 'r') if side else ('r', 'l')
+    moved = {f'{lead}_hip_pitch': joints[f'{lead}_hip_pitch'] - 0.3,
+             f'{trail}_hip_pitch': joints[f'{trail}_hip_pitch'] + 0.15,
+             f'{trail}_shoulder_pitch': joints[f'{trail}_shoulder_pitch'] - 0.3,
+             f'{lead}_shoulder_pitch': joints[f'{lead}_shoulder_pitch'] + 0.15}
+    return ({**joints, **moved}, (x + ahead, y, z), turn)
+
+
+def floor_scenes(skeleton: Skeleton) -> list[Scene]:
+    """Return the scenes where the body meets the floor, each from standing.
+
+    :param skeleton: the shipped character.
+    """
+    def scene(name, *keys):
+        # The calm tail holds the last pose: the idle joints at a root on the floor would
+        # put the legs through it.
+        return Scene(name, _key_frames(skeleton, [_STAND, *keys, (CALM_S, keys[-1][1])]))
+
+    rolling = [(0.25, _rolled(_BACK, np.pi * k / 8)) for k in range(1, 17)]
+    crawling = [(0.5, _crawl(_ALL_FOURS, 0.12 * k, k % 2)) for k in range(1, 9)]
+    return [
+        scene('floor: kneeling', (1.2, _KNEEL), (1.5, _KNEEL), (1.2, _STAND)),
+        scene('floor: sitting on the floor', (1.0, _SQUAT), (1.0, _SIT), (2.0, _SIT)),
+        scene('floor: lying on the back', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
+              (2.0, _BACK)),
+        scene('floor: lying on the front', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
+              (2.0, _FRONT)),
+        scene('floor: rolling', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
+              (0.5, _rolled(_BACK, 0.0)), *rolling, (1.0, _rolled(_BACK, 2 * np.pi))),
+        scene('floor: crawling', (1.2, _KNEEL), (1.2, _ALL_FOURS), *crawling),
+        scene('floor: getting up', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
+              (1.0, _FRONT), (1.2, _ALL_FOURS), (1.2, _KNEEL), (1.2, _STAND)),
     ]
 
 

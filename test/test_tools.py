@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from conftest import DOMAIN_ID
 
-from jacket_cloth_ros.motion.clips import ALL_CLIPS, clip_length, pose
+from jacket_cloth_ros.motion.clips import ALL_CLIPS, clip_length, joint_state_content, pose
 from jacket_cloth_ros.motion.messages import clip_messages
 from jacket_cloth_ros.recording.reader import RecordingError, read_messages
 from jacket_cloth_ros.tools.cli import main
@@ -30,7 +30,7 @@ def test_every_clip_is_continuous(skeleton):
         assert jumps == (1 if clip in ('teleport', 'showcase') else 0), clip   # the 10 m jump
 
 
-def test_clip_messages_are_stamped_from_the_start_and_loop_a_clip_past_its_end(skeleton):
+def test_clip_messages_are_stamped_from_the_start_and_go_on_past_a_clips_end(skeleton):
     length = clip_length('walk')
     msgs = list(clip_messages(skeleton, 'walk', 30.0, length + 1.0, 5 * 10 ** 9))
     assert len(msgs) == int(round((length + 1.0) * 30)) + 1
@@ -39,7 +39,9 @@ def test_clip_messages_are_stamped_from_the_start_and_loop_a_clip_past_its_end(s
     assert msgs[0][0] == 5 * 10 ** 9 and msgs[1][0] - msgs[0][0] == round(1e9 / 30)
     first, again = msgs[0][1], msgs[int(round(length * 30))][1]
     assert list(first.name[:len(skeleton.joint_names)]) == list(skeleton.joint_names)
-    assert list(first.position) == list(again.position)         # looped back to its start
+    # Issue 47 item 4: a gait goes on past its end in closed form, never back to its start.
+    _, on = joint_state_content(skeleton.joint_names, 'walk', length)
+    assert list(again.position) == on and again.position[-7] > first.position[-7] + 5.0
 
 
 def test_motion_to_file_then_errors_are_one_line(tmp_path, capsys):
@@ -189,25 +191,37 @@ def test_play_publishes_a_recording_live_as_recorded_and_its_urdf(tmp_path):
     assert stamp(got[0]) > recorded[0].stamp_ns + 10 ** 9      # stamped from now, not 1000 s
 
 
-def test_motion_says_which_clip_joints_a_urdf_lacks_and_when_only_the_root_moves(
-        tmp_path, capsys):
-    # Issue 35 item 7: a clip on a skeleton that does not know its joints moved only the world.
+def test_motion_says_which_clip_joints_a_urdf_lacks_and_retargets_the_clip(tmp_path, capsys):
+    # Issue 35 item 7: a clip on a skeleton that does not know its joints moved only the world;
+    # issue 47 item 4: it is retargeted through the skeleton's body parts, and said so.
     from fetched import fetched
 
     from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
+    from jacket_cloth_ros.recording.reader import read_recording
     with open(shipped('character.urdf'), encoding='utf-8') as f:
         renamed = f.read().replace('name="l_knee"', 'name="left_knee"')
     partial = tmp_path / 'partial.urdf'
     partial.write_text(renamed)
     assert main(['motion', '--clip', 'walk', '--urdf', str(partial), '--duration', '0.1',
                  '-o', str(tmp_path / 'partial.mcap')]) == 0
-    assert capsys.readouterr().err.strip() == (
-        f"jacket_cloth motion: {partial} lacks 1 of the 11 joints the clip 'walk' moves: l_knee")
+    assert capsys.readouterr().err.strip().startswith(
+        f"jacket_cloth motion: {partial} lacks 1 of the 11 joints (l_knee) the clip 'walk' "
+        'moves: retargeted through its body parts (pelvis base_link; chest chest; ')
     robot = fetched('g1_29dof_rev_1_0.urdf')
-    assert main(['motion', '--clip', 'walk', '--urdf', robot, '--duration', '0.1',
-                 '-o', str(tmp_path / 'robot.mcap')]) == 0      # world motion alone, said
+    out = tmp_path / 'robot.mcap'
+    assert main(['motion', '--clip', 'walk', '--urdf', robot, '--duration', '0.5',
+                 '-o', str(out)]) == 0
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and f'{robot} has none of them, so only its root moves' in err[0]
+    assert len(err) == 1 and f"{robot} has none of the 11 joints the clip 'walk' moves" in err[0]
+    states = [deserialize_message(m.data, JointState) for m in read_recording(str(out)).messages
+              if m.topic == '/joint_states']
+    knee = [s.position[list(s.name).index('left_knee_joint')] for s in states]
+    assert np.ptp(knee) > 0.3                         # its legs step, not only its root
+    assert [n for n in states[0].name if n.startswith('world_joint/')] == [
+        f'world_joint/{v}' for v in WORLD_VARIABLES]
 
 
 def test_picture_animates_a_session_beside_its_filmstrip(tmp_path, capsys):

@@ -119,7 +119,7 @@ class CrowdSteps:
         slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
                          np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
                          np.zeros(5, dtype=np.int64), out, ints(sim.bone_set.grid), parents,
-                         np.zeros((len(sim.bone_names), 7)))
+                         _identity_poses(len(sim.bone_names)))
         return slot, self._key(sim)
 
     def _current(self, index):
@@ -345,3 +345,14 @@ def stepped(steps: CrowdSteps,
         if after_round is not None:
             after_round(this, reports, not later)
     return reports
+
+
+def _identity_poses(n):
+    """Return ``n`` bone poses at the origin with no rotation.
+
+    A grid bone whose edges all lie flat keeps the rotation its slot holds (pose.grid_bones):
+    a unit quaternion before any other.
+    """
+    poses = np.zeros((n, 7))
+    poses[:, 6] = 1.0
+    return poses

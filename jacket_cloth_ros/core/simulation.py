@@ -213,6 +213,9 @@ class JacketSimulation:
         self.ready_bones = None
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
+        # The grid bones' last finite rotations (x, y, z, w), kept for edges pressed flat.
+        self._grid_rotations = np.zeros((len(self.bone_set.grid), 4))
+        self._grid_rotations[:, 3] = 1.0
         self._advance_kernel = FixedTypes(step.advance)
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
@@ -763,12 +766,17 @@ class JacketSimulation:
         n = len(self.bone_names)
         poses = np.empty((n, 7))
         layer = _NO_LAYER_POSE if layer is None else layer
+        n_grid = len(self.bone_set.grid)
+        # A grid bone whose edges all lie flat keeps the rotation it had (pose.grid_bones).
+        poses[:n_grid, 3:] = self._grid_rotations
         try:
             finite = pose.bone_poses(self.x, self.hood_p, self.links, self.model.cloth,
                                      self.bone_set.grid, layer.parents, layer.rotations,
                                      layer.positions, poses)
         except ZeroDivisionError:           # a degenerate frame (numba raises, numpy gives NaN)
             finite = False
+        if finite:
+            self._grid_rotations[:] = poses[:n_grid, 3:]
         return Bones(self.bone_names, self.bone_parents, poses, finite)
 
     def strain(self) -> tuple[float, float]:

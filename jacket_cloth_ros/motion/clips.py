@@ -150,16 +150,55 @@ def pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...]]:
     return {k: float(v) for k, v in q.items()}, tuple(float(v) for v in root)
 
 
+# Clips whose closed form goes on past their length (a gait, breathing): played on, not looped.
+ENDLESS = ('idle', 'walk', 'run')
+# A loop of another clip starts from the pose the last one ended in, turning to its own first
+# pose over this long (s).
+LOOP_BLEND_S = 0.4
+
+
+def looped_pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...]]:
+    """Return ``pose`` of a clip at any ``t``: past its end, it goes on from where it ended.
+
+    Gaits and breathing (``ENDLESS``) run on in closed form. Another clip starts again where
+    its last loop ended (its root's position and heading, never a teleport back), its joints
+    turning from that loop's last pose to its first over ``LOOP_BLEND_S``.
+
+    :param name: a name of ``ALL_CLIPS``.
+    :param t: seconds from the clip's start, 0 or more.
+    """
+    if name not in ALL_CLIPS:
+        raise ValueError(f'unknown clip {name!r} (clips: {", ".join(ALL_CLIPS)})')
+    length = clip_length(name)
+    if name in ENDLESS or t < length:
+        return pose(name, t)
+    loops, local = divmod(t, length)
+    q_end, end = pose(name, length)
+    base, yaw = (0.0, 0.0, 0.0, 0.0), 2 * np.arctan2(end[5], end[6])
+    for _ in range(int(loops)):
+        base = _compose(base, (end[0], end[1], 0.0, yaw))
+    q, root = pose(name, local)
+    here = _compose(base, (root[0], root[1], 0.0, 2 * np.arctan2(root[5], root[6])))
+    s = float(_smooth(local / LOOP_BLEND_S))
+    z = root[2] + (1 - s) * (end[2] - pose(name, 0.0)[1][2])
+    q = {k: s * q.get(k, 0.0) + (1 - s) * q_end.get(k, 0.0) for k in set(q) | set(q_end)}
+    return q, (here[0], here[1], z, 0.0, 0.0, float(np.sin(here[3] / 2)),
+               float(np.cos(here[3] / 2)))
+
+
 def joint_state_content(joint_names: Sequence[str], name: str, t: float,
-                        world_joint: str = 'world_joint') -> tuple[list[str], list[float]]:
+                        world_joint: str = 'world_joint',
+                        looped: bool = False) -> tuple[list[str], list[float]]:
     """(names, positions) of a JointState for the clip at time t: every joint plus the root.
 
     :param joint_names: the skeleton's joints, every one given a value.
     :param name: a name of ``ALL_CLIPS``.
     :param t: seconds from the clip's start.
     :param world_joint: the prefix of the root's variables (``world_joint/trans_x`` ...).
+    :param looped: past the clip's end, go on as ``looped_pose`` does; else the closed form
+        holds on (``pose``).
     """
-    q, root = pose(name, t)
+    q, root = looped_pose(name, t) if looped else pose(name, t)
     names = list(joint_names) + [f'{world_joint}/{v}' for v in WORLD_VARIABLES]
     return names, [q.get(j, 0.0) for j in joint_names] + list(root)
 

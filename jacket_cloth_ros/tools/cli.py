@@ -57,17 +57,19 @@ def _skeleton(urdf_path=None):
 def cmd_motion(args: argparse.Namespace) -> int:
     """Play a built-in clip live on joint_states (with its URDF), or write it to a recording.
 
+    A skeleton without the clip's joints gets the clip retargeted through its body parts.
+
     :param args: the ``motion`` command's options.
     """
     skeleton, urdf_path = _skeleton(args.urdf)
-    _check_clip_fits(args.clip, skeleton, urdf_path)
+    retarget = _retarget_if_needed(args.clip, skeleton, urdf_path)
     duration = args.duration if args.duration is not None else clip_length(args.clip)
     if args.output:
-        return _motion_to_file(args, skeleton, duration)
+        return _motion_to_file(args, skeleton, duration, retarget)
     with open(urdf_path, encoding='utf-8') as f:
         urdf = f.read()
     inputs = ((stamp, msg.name, msg.position) for stamp, msg in clip_messages(
-        skeleton, args.clip, args.rate, duration, 0, args.world_joint))
+        skeleton, args.clip, args.rate, duration, 0, args.world_joint, retarget))
     play_live('jacket_cloth_motion', urdf, inputs, args.ros_args, args.best_effort, args.wait,
               lambda log, verb: log.info(f'{verb} {args.clip!r} for {duration:.1f} s at '
                                          f'{args.rate} Hz'))
@@ -90,20 +92,26 @@ def cmd_play(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_clip_fits(clip, skeleton, urdf_path):
-    """Say in one line which of the clip's joints the skeleton lacks (all: only the root moves)."""
+def _retarget_if_needed(clip, skeleton, urdf_path):
+    """Return the clip retargeted onto a skeleton that lacks its joints (said in one line).
+
+    None when the skeleton has every joint the clip moves (the shipped character's names).
+    """
     moved = clip_joints(clip)
     missing = sorted(moved - set(skeleton.joint_names))
-    if len(missing) == len(moved):
-        print(f'jacket_cloth motion: the clip {clip!r} moves joints {", ".join(sorted(moved))}; '
-              f'{urdf_path} has none of them, so only its root moves (`jacket_cloth play` '
-              'plays a recording of this character)', file=sys.stderr)
-    elif missing:
-        print(f'jacket_cloth motion: {urdf_path} lacks {len(missing)} of the {len(moved)} '
-              f'joints the clip {clip!r} moves: {", ".join(missing)}', file=sys.stderr)
+    if not missing:
+        return None
+    from ..motion.retarget import Retarget
+    retarget = Retarget(skeleton)            # a skeleton without a body refuses in one line
+    lacks = (f'has none of the {len(moved)} joints' if len(missing) == len(moved)
+             else f'lacks {len(missing)} of the {len(moved)} joints ({", ".join(missing)})')
+    print(f'jacket_cloth motion: {urdf_path} {lacks} the clip {clip!r} moves: retargeted '
+          f'through its body parts ({retarget.roles()}), standing upright in the world',
+          file=sys.stderr)
+    return retarget
 
 
-def _motion_to_file(args, skeleton, duration):
+def _motion_to_file(args, skeleton, duration, retarget):
     from ..recording.writer import SessionRecorder, qos_profile_yaml
     from ..ros.cdr import joint_state
     from .outputs import replacing
@@ -114,7 +122,8 @@ def _motion_to_file(args, skeleton, duration):
         rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
         count = 0
         for stamp, msg in clip_messages(skeleton, args.clip, args.rate, duration,
-                                        int(args.start * 1e9), args.world_joint):
+                                        int(args.start * 1e9), args.world_joint,
+                                        retarget):
             rec.write('/joint_states', joint_state(stamp, msg.name, msg.position), stamp)
             count += 1
         rec.close()

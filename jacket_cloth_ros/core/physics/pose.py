@@ -102,23 +102,103 @@ def orthonormal_frame(xa, ya, out):
     out[0, 2], out[1, 2], out[2, 2] = z0, z1, z2
 
 
+# A grid edge shorter than this (m) has no direction: rows of the hem pressed flat together.
+EDGE_NO_LENGTH = 1e-7
+# Down and across closer to parallel than this sine make no frame.
+PARALLEL_SINE = 1e-4
+
+
+@njit(cache=True)
+def _offset(k):
+    """Return the k-th of 0, 1, -1, 2, -2, ...: the nearest first, on either side."""
+    return (k + 1) // 2 if k % 2 == 1 else -(k // 2)
+
+
+@njit(cache=True)
+def _grid_down(x, cols, rows, r, c, out):
+    """Down the cloth at grid vertex (r, c) into ``out``; return whether it has a direction.
+
+    Its own vertical edge, else the nearest one with a length: its column's edges above and
+    below first, then the neighbouring columns'.
+    """
+    for d in range(rows + cols):
+        for k in range(2 * min(d, cols) + 1):
+            dc = _offset(k)
+            if abs(dc) > d:
+                break
+            cc = c + dc
+            dr = d - abs(dc)
+            if cc < 0 or cc >= cols:
+                continue
+            for rr in (r + dr, r - dr):
+                if rr < 0 or rr >= rows - 1:
+                    continue
+                n2 = 0.0
+                for j in range(3):
+                    out[j] = x[(rr + 1) * cols + cc, j] - x[rr * cols + cc, j]
+                    n2 += out[j] * out[j]
+                # A non-finite edge is taken as it is: its NaN reaches the bones, and the
+                # caller resets a non-finite state instead of hiding it.
+                if not n2 <= EDGE_NO_LENGTH * EDGE_NO_LENGTH:
+                    return True
+    return False
+
+
+@njit(cache=True)
+def _grid_across(x, cols, rows, r, c, down, out):
+    """Across the cloth at grid vertex (r, c), not along ``down``, into ``out``.
+
+    Returns whether there is one: its row's edge from the left neighbour to the right one, else
+    the nearest such edge of the rows above and below, then of the neighbouring columns.
+    """
+    dn = np.sqrt(down[0] * down[0] + down[1] * down[1] + down[2] * down[2])
+    for d in range(rows + cols):
+        for k in range(2 * min(d, cols) + 1):
+            dc = _offset(k)
+            if abs(dc) > d:
+                break
+            cc = c + dc
+            dr = d - abs(dc)
+            if cc < 0 or cc >= cols:
+                continue
+            for rr in (r + dr, r - dr):
+                if rr < 0 or rr >= rows:
+                    continue
+                left, right = rr * cols + max(cc - 1, 0), rr * cols + min(cc + 1, cols - 1)
+                for j in range(3):
+                    out[j] = x[right, j] - x[left, j]
+                z0 = down[1] * out[2] - down[2] * out[1]
+                z1 = down[2] * out[0] - down[0] * out[2]
+                z2 = down[0] * out[1] - down[1] * out[0]
+                n = np.sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2])
+                if not np.isfinite(n) or not np.isfinite(dn):
+                    return True
+                if (n > EDGE_NO_LENGTH
+                        and np.sqrt(z0 * z0 + z1 * z1 + z2 * z2) > PARALLEL_SINE * n * dn):
+                    return True
+    return False
+
+
 @njit(cache=True)
 def grid_bones(x, cols, bone_rc, positions, quaternions):
-    """M9: a bone per chosen grid vertex, x down its column, y across its row."""
+    """M9: a bone per chosen grid vertex, x down its column, y across its row.
+
+    An edge pressed to no length (the hem flattened between the body and the floor) gives its
+    bone no direction: the nearest edges that have one give it, and where none does the bone
+    keeps the rotation ``quaternions`` holds (the last good one), so bones stay finite.
+    """
     frame = np.empty((3, 3))
     xa = np.empty(3)
     ya = np.empty(3)
+    rows = x.shape[0] // cols
     for b in range(bone_rc.shape[0]):
         r, c = bone_rc[b, 0], bone_rc[b, 1]
         i = r * cols + c
-        left = r * cols + max(c - 1, 0)
-        right = r * cols + min(c + 1, cols - 1)
         for k in range(3):
             positions[b, k] = x[i, k]
-            xa[k] = x[i + cols, k] - x[i, k]
-            ya[k] = x[right, k] - x[left, k]
-        orthonormal_frame(xa, ya, frame)
-        quat_from_matrix(frame, quaternions[b])
+        if _grid_down(x, cols, rows, r, c, xa) and _grid_across(x, cols, rows, r, c, xa, ya):
+            orthonormal_frame(xa, ya, frame)
+            quat_from_matrix(frame, quaternions[b])
 
 
 @njit(cache=True)

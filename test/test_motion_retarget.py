@@ -1,0 +1,159 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""``motion --clip C --urdf X``: the shipped clips on any skeleton (issue 47 item 4).
+
+Before, a skeleton whose joints were not the shipped character's got only its root moved (a
+Y-up one lying on its back), and a ``--duration`` longer than the clip teleported back to its
+start: one reset per loop. Every robot description the tests fetch (``make mocap``: JVRC-1,
+Unitree G1 with and without hands, PAL TALOS, Aldebaran Romeo, and pybullet's Y-up DeepMimic
+humanoid) walks, runs and dodges in its proposed jacket, each input held to the issue's
+targets.
+"""
+
+import numpy as np
+import pytest
+
+from jacket_cloth_ros.core.skeleton import load_skeleton, load_shipped_character
+from jacket_cloth_ros.motion.clips import ALL_CLIPS, clip_length, looped_pose
+from jacket_cloth_ros.motion.retarget import Retarget
+from jacket_cloth_ros.tools.cli import main
+from jacket_cloth_ros.tools.session import load_session
+from fetched import fetched
+from per_input import measure_every_input
+
+ROBOTS = ('jvrc1.urdf', 'g1_29dof_rev_1_0.urdf', 'g1_29dof_with_hand_rev_1_0.urdf',
+          'talos_full_v2.urdf', 'romeo.urdf', 'humanoid.urdf')
+CLIPS = ('walk', 'run', 'dodge')
+
+
+def _source_parts(retarget, clip, t):
+    values, _ = looped_pose(clip, t)
+    src = retarget.source
+    links = src.skeleton.forward(np.array([values.get(j, 0.0) for j in src.skeleton.joint_names]))
+    return links
+
+
+@pytest.mark.parametrize('name', ROBOTS)
+def test_a_robot_stands_upright_on_the_floor_and_steps_as_the_character_does(name):
+    sk = load_skeleton(fetched(name))
+    retarget = Retarget(sk)
+    body = retarget.target
+    worst_leg, lowest = 0.0, []
+    for k in range(0, 241, 4):
+        t = k / 60
+        q, root = retarget.pose('walk', t)
+        world = np.eye(4)
+        world[:3, :3] = _matrix(root[3:])
+        world[:3, 3] = root[:3]
+        links = np.einsum('ij,kjl->kil', world, sk.forward(q))
+        # Upright in the Z-up world whatever the description's own axes (humanoid.urdf: Y-up).
+        up = body.frame(links, body.pelvis)[:, 2]
+        assert up[2] > np.cos(np.radians(5)), (t, up)
+        for upper, _, _ in body.arms.values():       # the shoulders above the pelvis
+            shoulder = links[upper][:3, 3] - links[body.pelvis][:3, 3]
+            assert shoulder[2] > 0.5 * np.linalg.norm(shoulder)
+        src = _source_parts(retarget, 'walk', t)
+        for side in ('left leg', 'right leg'):
+            worst_leg = max(worst_leg, np.abs(body.part(links, side)
+                                              - retarget.source.part(src, side)).max())
+        lowest.append(min(links[k][2, 3] for k in body.legs['left'] + body.legs['right']))
+    # Thighs and shins point as the character's (unit directions); its ankles stay above the
+    # floor and under the knee's height.
+    assert worst_leg < 0.05, worst_leg
+    assert 0.0 < min(lowest) and max(lowest) < 0.35 * body.stand
+    # The root travels as far as the character's, for the legs' length.
+    _, first = retarget.pose('walk', 0.0)
+    _, last = retarget.pose('walk', 4.0)
+    assert last[0] - first[0] == pytest.approx(1.4 * 4.0 * retarget.scale, rel=0.02)
+
+
+def _matrix(q):
+    from jacket_cloth_ros.core.transforms import quat_to_matrix
+    return quat_to_matrix(np.asarray(q, float))
+
+
+# Not met: Romeo's run. Its trunk has no pitch joint (the run leans the chest forward) and its
+# hips and shoulders reach their limits; the hem's front edges (row 4) pass 24 mm into the
+# collision shape of its pelvis link, which the proposed rig's colliders do not cover (inside
+# the rig's colliders: 0 mm).
+NOT_MET = {('romeo.urdf', 'run'): 'hem 24 mm inside the pelvis link\'s shape (body proxy)'}
+
+
+@pytest.mark.parametrize('name,clip', [
+    pytest.param(n, c, marks=[pytest.mark.xfail(strict=True, reason=NOT_MET[n, c])]
+                 if (n, c) in NOT_MET else []) for n in ROBOTS for c in CLIPS])
+def test_motion_urdf_moves_a_robot_in_its_proposed_jacket(name, clip, tmp_path, capsys):
+    urdf, rig, session = fetched(name), tmp_path / 'rig.yaml', tmp_path / 's.mcap'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
+    assert main(['motion', '--clip', clip, '--urdf', urdf, '-o', str(session)]) == 0
+    said = capsys.readouterr().err.strip().splitlines()
+    assert len(said) == 1 and 'retargeted through its body parts (pelvis ' in said[0]
+    s = measure_every_input(load_session(str(session), urdf=urdf, rig=str(rig)))
+    n = int(round(clip_length(clip) * 60)) + 1
+    assert s['inputs'] == s['published'] == n and s['resets'] == ['first sample']
+    # Issue 47's targets at every input, default settings, the proposed rig as written.
+    vertical, horizontal = s['vertical_stretch'], s['horizontal_stretch']
+    assert vertical.max() <= 0.10 and np.percentile(vertical, 99) <= 0.03
+    assert horizontal.max() <= 0.10 and np.percentile(horizontal, 99) <= 0.10
+    for depth in (s['inside_m'], s['body_inside_m']):
+        assert depth.max() <= 0.01 and np.percentile(depth, 99) <= 0.003
+
+
+@pytest.mark.parametrize('clip', ALL_CLIPS)
+def test_a_clip_played_past_its_end_goes_on_from_where_it_ended(clip):
+    # Before, the next loop started back at the clip's start: a teleport, one reset a loop.
+    length, rate = clip_length(clip), 60.0
+    steps = int(round(3.5 * length * rate))
+    poses = [looped_pose(clip, k / rate) for k in range(steps + 1)]
+    root = np.array([p[1][:3] for p in poses])
+    joints = sorted(set().union(*(p[0] for p in poses)))
+    q = np.array([[p[0].get(j, 0.0) for j in joints] for p in poses])
+    moved = np.linalg.norm(np.diff(root, axis=0), axis=1)
+    turned = np.abs(np.diff(q, axis=0)).max(axis=1)
+    # Each step that crosses a loop's end: no further than a dodge moves in 1/60 s, no joint
+    # turning faster than the clips' own.
+    loop = np.floor(np.arange(steps + 1) / rate / length)
+    crossing = np.flatnonzero(np.diff(loop) > 0)
+    assert len(crossing) == 3
+    assert moved[crossing].max() < 0.1 and turned[crossing].max() < 0.25
+    assert all(looped_pose(clip, k / rate) == pose for k, pose in enumerate(poses)
+               if k / rate < length)
+
+
+@pytest.mark.parametrize('urdf', [None, 'jvrc1.urdf'])
+def test_a_longer_duration_loops_without_a_reset(urdf, tmp_path, capsys):
+    session = tmp_path / 's.mcap'
+    args = ['motion', '--clip', 'dodge', '--duration', str(3 * clip_length('dodge')),
+            '-o', str(session)]
+    rig = None
+    if urdf:
+        urdf, rig = fetched(urdf), str(tmp_path / 'rig.yaml')
+        assert main(['rig', '--urdf', urdf, '-o', rig]) == 0
+        args += ['--urdf', urdf]
+    assert main(args) == 0
+    capsys.readouterr()
+    s = measure_every_input(load_session(str(session), urdf=urdf, rig=rig))
+    assert s['resets'] == ['first sample'] and s['inputs'] == s['published']
+
+
+def test_a_skeleton_without_a_body_is_refused_in_one_line(tmp_path, capsys):
+    urdf = tmp_path / 'arm.urdf'
+    urdf.write_text('<robot name="arm"><link name="a"/><link name="b"/><joint name="j" '
+                    'type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 1"/>'
+                    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    assert main(['motion', '--clip', 'walk', '--urdf', str(urdf), '-o',
+                 str(tmp_path / 'a.mcap')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith('jacket_cloth motion: cannot find a torso')
+
+
+def test_the_shipped_character_retargeted_onto_itself_keeps_its_pose():
+    sk = load_shipped_character()
+    retarget = Retarget(sk)
+    # Retargeted onto itself the clip's parts come back where they were.
+    q, root = retarget.pose('walk', 1.3)
+    values, shipped_root = looped_pose('walk', 1.3)
+    links, src = sk.forward(q), _source_parts(retarget, 'walk', 1.3)
+    for part, _ in retarget.chains:
+        assert np.abs(retarget.target.part(links, part)
+                      - retarget.source.part(src, part)).max() < 0.01
+    assert np.allclose(root[:3], shipped_root[:3], atol=0.02)
