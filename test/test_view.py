@@ -63,7 +63,9 @@ def test_the_rviz_config_shows_the_node_topics_in_the_world_frame():
         '/jacket_cloth_node/markers'
     assert displays['rviz_default_plugins/RobotModel']['Description Topic']['Value'] == \
         'robot_description'
-    assert 'rviz_default_plugins/TF' in displays
+    # The jacket and hood are what a user looks at: the bones' axes are one tick away.
+    assert displays['rviz_default_plugins/TF']['Enabled'] is False
+    assert displays['rviz_default_plugins/MarkerArray']['Enabled'] is True
     assert config['Global Options']['Fixed Frame'] == NODE_PARAMETERS['world_frame'][1]
 
 
@@ -73,6 +75,7 @@ def test_the_foxglove_layout_shows_the_markers_and_diagnostics():
     panels = layout['configById']
     three_d = panels['3D!jacket']
     assert three_d['topics']['/jacket_cloth_node/markers']['visible']
+    assert three_d['transforms']['axisScale'] <= 0.05     # the bones' axes do not hide the jacket
     assert any(p.startswith('DiagnosticSummary!') for p in panels)
 
     def named(node):
