@@ -197,3 +197,31 @@ def test_the_body_is_closed_and_rides_on_its_links():
     assert (counts == 2).all()
     t = body.rest[body.triangles]
     assert np.einsum('ij,ij->i', t[:, 0], np.cross(t[:, 1], t[:, 2])).sum() > 0
+
+
+def test_the_drawn_lining_lies_inside_the_jacket_not_on_it(body):
+    # RViz and Foxglove draw triangle lists from both sides: a lining on the front face's own
+    # points flickered through the tweed from every side. Drawn, each lining corner lies
+    # inside its front corner, along the outward normal, and no two triangles coincide.
+    from jacket_cloth_ros.ros.messages import LINING_GAP, Outfit
+    name, sim, mesh = body
+    bones = sim.bone_set
+    outfit = Outfit(sim.rig, bones.names, bones.parents, bones.grid)
+    parents = np.array([sim.skeleton.link_names.index(p) for p in bones.parents])
+    joints = jm.rest_joints(sim.skeleton, sim.rig, parents, bones.grid)
+    corners = outfit.corners('jacket')
+    points, colors = np.empty((corners, 3)), np.empty((corners, 4), dtype=np.float32)
+    outfit.draw('jacket', joints, points, colors)
+    tris = points.reshape(-1, 3, 3)
+    front, back = tris[~mesh.back], tris[mesh.back]
+    assert len(back) and np.isfinite(points).all()
+    gap = np.linalg.norm(back - mesh.rest[mesh.triangles[mesh.back]], axis=2)
+    assert np.allclose(gap, LINING_GAP, atol=1e-6), name
+    keys = {tuple(np.round(np.sort(t, axis=0), 5).ravel()) for t in tris}
+    assert len(keys) == len(tris), name
+    # The lining is inside: from each lining corner to its front corner is outwards, against
+    # the back face's own normal (it is wound the other way).
+    inward = _normals(mesh.rest, mesh.triangles[mesh.back])
+    lined = mesh.rest[mesh.triangles[mesh.back]] - back
+    assert (np.einsum('tkc,tc->tk', lined, inward) < 0).mean() > 0.9, name
+    assert len(front) == (~mesh.back).sum()

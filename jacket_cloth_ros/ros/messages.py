@@ -41,6 +41,7 @@ MARKER_NAMESPACES = MESH_NAMESPACES + DEBUG_NAMESPACES
 # The meshes' light, in the body's (front, left, up) axes: above, in front, a little left.
 LIGHT = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
 AMBIENT = 0.35
+LINING_GAP = 0.003          # m: the lining drawn a cloth's thickness inside the jacket
 TWEED = (0.42, 0.33, 0.24, 0.9)
 SEAM = (0.2, 0.15, 0.1, 1.0)
 GHOST = (0.4, 0.6, 0.9, 0.25)
@@ -146,7 +147,7 @@ class Outfit:
         front, base, back = self._shading[name]
         skinning.vertex_normals(where, front, normals)
         skinning.shaded_triangles(where, normals, mesh.triangles, base, back, self.light,
-                                  AMBIENT, points, colors)
+                                  AMBIENT, LINING_GAP, points, colors)
 
 
 @functools.lru_cache(maxsize=16)

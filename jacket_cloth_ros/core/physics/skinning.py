@@ -102,13 +102,15 @@ def vertex_normals(points, triangles, out):
 
 
 @njit(cache=True, nogil=True)
-def shaded_triangles(points, normals, triangles, colors, back, light, ambient, out_points,
-                     out_colors):
+def shaded_triangles(points, normals, triangles, colors, back, light, ambient, lining_gap,
+                     out_points, out_colors):
     """Lay a mesh out as a triangle list with a shaded colour per corner.
 
     Lambert shading from one light plus an ambient share, so folds read in viewers that draw
     triangle lists unlit. A back face (``back[t]``) is the same triangle wound the other way
-    with the normal turned, the jacket's lining seen from inside.
+    with the normal turned, the jacket's lining seen from inside. It lies ``lining_gap``
+    inside the front face: viewers that draw both sides of a triangle (RViz, Foxglove) would
+    otherwise show the two faces flickering through each other.
 
     :param points: (V,3) the skinned vertices.
     :param normals: (V,3) their unit normals.
@@ -117,11 +119,13 @@ def shaded_triangles(points, normals, triangles, colors, back, light, ambient, o
     :param back: (T,) bool: the triangle is a back face.
     :param light: (3,) unit direction towards the light.
     :param ambient: the share of the colour lit from everywhere.
+    :param lining_gap: how far a back face lies inside its front face, along the normal.
     :param out_points: (3T,3) written: the corners in triangle-list order.
     :param out_colors: (3T,4) float32 written: each corner's shaded colour.
     """
     for t in range(triangles.shape[0]):
         sign = -1.0 if back[t] else 1.0
+        gap = lining_gap if back[t] else 0.0
         for k in range(3):
             v = triangles[t, k]
             d = sign * (normals[v, 0] * light[0] + normals[v, 1] * light[1]
@@ -129,6 +133,6 @@ def shaded_triangles(points, normals, triangles, colors, back, light, ambient, o
             lit = ambient + (1.0 - ambient) * max(d, 0.0)
             row = 3 * t + k
             for i in range(3):
-                out_points[row, i] = points[v, i]
+                out_points[row, i] = points[v, i] - gap * normals[v, i]
                 out_colors[row, i] = colors[t, i] * lit
             out_colors[row, 3] = colors[t, 3]
