@@ -91,13 +91,15 @@ class _MessagesWith:
         return getattr(self._module, name)
 
 
-def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = False) -> Dict:
+def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = False,
+                      overrides: Dict | None = None) -> Dict:
     """Run a walk through the pipeline with stage timers; return CPU per input by stage.
 
     :param skeleton: the character (its rig is the shipped proposal, its fabric the default).
     :param seconds: the session's length; the first half second (resets, first loads) is run
         but not counted.
     :param node: add the node's rclpy take and publish (DDS in this process, own domain).
+    :param overrides: node parameters to set over the defaults (e.g. ``markers_rate``).
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
         share of the main thread}, 'writer_thread_us', 'sweeps_per_input',
         'substeps_per_input', 'steps_per_input'}`` (``bench speed`` adds
@@ -112,7 +114,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
     fabrics = load_fabrics()
-    values = default_values(fabrics['tweed_jacket'])
+    values = dict(default_values(fabrics['tweed_jacket']), **(overrides or {}))
     pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
     clock = StageClock()
     messages_module = pipeline_module.messages

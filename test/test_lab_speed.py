@@ -37,7 +37,8 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     steal = results['steal_percent']
     # The host's phases are measured where a C compiler builds the probe.
     probed = {'host'} if shutil.which('cc') else set()
-    assert set(steal) == {'profile', 'kernel', 'input', 'replay', 'endurance', 'crowd'} | probed
+    assert set(steal) == {'profile', 'markers', 'kernel', 'input', 'replay', 'endurance',
+                          'crowd'} | probed
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
@@ -49,7 +50,13 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     said = {t['figure']: t for t in results['targets']}
     assert said['replay / kernel-only limit, sessions of 5 s to under 15 s']['met'] in (
         True, False)
-    assert "Issue 37's targets" in printed
+    assert "## Targets" in printed
+    # What the jacket's markers add to the node's CPU per input: timed with and without them,
+    # the markers' own stage only on the side that draws them.
+    markers = results['markers']
+    assert markers['markers_stage_us'] > 0 and markers['without_us'] > 0
+    assert said[next(f for f in said if f.startswith("the jacket's markers"))]['met'] in (
+        True, False)
     # Issue 37's profile: the replay's and the node's input by stage, the node's DDS take and
     # publish only on the node's side; two steps of the walk's sweeps per 60 Hz input.
     replay, node = results['profile']
