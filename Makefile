@@ -94,7 +94,8 @@ HUMANOID := $(MOCAP)/humanoid.urdf
 DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a spinkick,$(MOCAP)/humanoid3d_$(c).txt)
 ROBOT_URDFS := g1_description/urdf/g1_29dof_rev_1_0.urdf \
     g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf talos_data/robots/talos_full_v2.urdf \
-    romeo_description/urdf/romeo.urdf
+    romeo_description/urdf/romeo.urdf icub_description/robots/icub.urdf \
+    human_description/robots/human.urdf
 ROBOTS := $(addprefix $(MOCAP)/,$(notdir $(ROBOT_URDFS)))
 mocap: $(MOCAP_FILES) $(JVRC) $(HUMANOID) $(DEEPMIMIC_CLIPS) $(ROBOTS)
 
@@ -127,8 +128,9 @@ $(HUMANOID) $(DEEPMIMIC_CLIPS) &: | $(READY)
 	touch $(HUMANOID) $(DEEPMIMIC_CLIPS)
 
 # Robot URDFs with sensor frames (IMU, cameras, lidar) and arms split into short links, for
-# the rig proposal tests (never committed): Unitree G1 (BSD-3-Clause), PAL TALOS (Apache-2.0)
-# and Aldebaran Romeo (BSD) as example-robot-data 6.0.0 ships them (BSD-3-Clause by its metadata,
+# the rig proposal tests (never committed): Unitree G1 (BSD-3-Clause), PAL TALOS (Apache-2.0),
+# Aldebaran Romeo (BSD), iCub (CC-BY-SA-4.0, by its README there) and the Gepetto team's human
+# model (BSD-2-Clause) as example-robot-data 6.0.0 ships them (BSD-3-Clause by its metadata,
 # BSD-2-Clause by its LICENSE file's text), its URDFs only, out of its 131 MB wheel, which is
 # removed once they are out (one download for all).
 ERD_WHEEL := $(MOCAP)/example_robot_data-6.0.0-0-py3-none-any.whl

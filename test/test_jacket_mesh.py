@@ -21,10 +21,12 @@ from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.core.simulation import JacketSimulation
 from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.tools.cli import main
-from fetched import fetched
+from fetched import fetched, without_hands
 
 ROBOTS = ('g1_29dof_rev_1_0.urdf', 'g1_29dof_with_hand_rev_1_0.urdf', 'talos_full_v2.urdf',
-          'romeo.urdf', 'jvrc1.urdf', 'humanoid.urdf')
+          'romeo.urdf', 'jvrc1.urdf', 'humanoid.urdf', 'icub.urdf', 'human.urdf')
+# iCub with its wrists and hands taken off: arms that end at the elbow (issue 47 item 3).
+ELBOW_ENDED = 'icub.urdf without hands'
 CAPTURES = ('test_freebvh.bvh', 'test_mocapbank.bvh')
 
 
@@ -52,7 +54,7 @@ def _capture(name, tmp):
     return _proposed(urdf, tmp)
 
 
-BODIES = ['shipped', 'mannequin', *ROBOTS, *CAPTURES]
+BODIES = ['shipped', 'mannequin', *ROBOTS, ELBOW_ENDED, *CAPTURES]
 
 
 @pytest.fixture(scope='module', params=BODIES)
@@ -65,6 +67,9 @@ def body(request, tmp_path_factory):
         sk, rig = _mannequin()
     elif name in CAPTURES:
         sk, rig = _capture(name, tmp)
+    elif name == ELBOW_ENDED:
+        sk, rig = _proposed(without_hands('icub.urdf', str(tmp / 'icub.urdf'),
+                                          ('l_forearm', 'r_forearm')), tmp)
     else:
         sk, rig = _proposed(fetched(name), tmp)
     sim = JacketSimulation(sk, rig, load_fabric('tweed_jacket'))
@@ -114,7 +119,10 @@ def test_the_lower_jacket_and_sleeves_face_outwards(body):
 
 def _arm_segments(sim):
     rest = sim.skeleton.forward(np.zeros(len(sim.skeleton.joint_names)))
-    return [(rest[s.link][:3, 3], rest[s.end_link][:3, 3]) for s in sim.rig.layer.sleeves]
+    # From the link to its end: end_link's origin, or a point of the link itself (an arm that
+    # ends at the elbow).
+    return [(rest[s.link][:3, 3], rest[s.link][:3, 3] + rest[s.link][:3, :3] @ s.axis * s.length)
+            for s in sim.rig.layer.sleeves]
 
 
 def _nearest_on(segments, p):

@@ -4,9 +4,9 @@
 Before, a skeleton whose joints were not the shipped character's got only its root moved (a
 Y-up one lying on its back), and a ``--duration`` longer than the clip teleported back to its
 start: one reset per loop. Every robot description the tests fetch (``make mocap``: JVRC-1,
-Unitree G1 with and without hands, PAL TALOS, Aldebaran Romeo, and pybullet's Y-up DeepMimic
-humanoid) walks, runs and dodges in its proposed jacket, each input held to the issue's
-targets.
+Unitree G1 with and without hands, PAL TALOS, Aldebaran Romeo, iCub, the Gepetto team's Y-up
+human model and pybullet's Y-up DeepMimic humanoid) walks, runs and dodges in its proposed
+jacket, each input held to the issue's targets.
 """
 
 import numpy as np
@@ -21,7 +21,7 @@ from fetched import fetched
 from per_input import measure_every_input
 
 ROBOTS = ('jvrc1.urdf', 'g1_29dof_rev_1_0.urdf', 'g1_29dof_with_hand_rev_1_0.urdf',
-          'talos_full_v2.urdf', 'romeo.urdf', 'humanoid.urdf')
+          'talos_full_v2.urdf', 'romeo.urdf', 'humanoid.urdf', 'icub.urdf', 'human.urdf')
 CLIPS = ('walk', 'run', 'dodge')
 
 
@@ -85,7 +85,8 @@ def test_motion_urdf_moves_a_robot_in_its_proposed_jacket(name, clip, tmp_path, 
     urdf, rig, session = fetched(name), tmp_path / 'rig.yaml', tmp_path / 's.mcap'
     assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
     assert main(['motion', '--clip', clip, '--urdf', urdf, '-o', str(session)]) == 0
-    said = capsys.readouterr().err.strip().splitlines()
+    said = [line for line in capsys.readouterr().err.strip().splitlines()
+            if line.startswith('jacket_cloth motion')]      # rig's warnings aside (iCub's)
     assert len(said) == 1 and 'retargeted through its body parts (pelvis ' in said[0]
     s = measure_every_input(load_session(str(session), urdf=urdf, rig=str(rig)))
     n = int(round(clip_length(clip) * 60)) + 1

@@ -24,7 +24,7 @@ from jacket_cloth_ros.core.skeleton import load_skeleton
 from jacket_cloth_ros.rigging.propose import propose, to_yaml
 from jacket_cloth_ros.tools.cli import main
 from jacket_cloth_ros.tools.session import load_session
-from fetched import fetched
+from fetched import fetched, without_hands
 from per_input import measure_every_input
 
 PARTS = ('pelvis', 'chest', 'neck', 'left upper arm', 'left forearm', 'left hand',
@@ -65,6 +65,13 @@ ROBOTS = {
                                      'leg_left_3_link'],
                                     ['arm_right_3_link', 'arm_right_4_link', 'arm_right_7_link',
                                      'leg_right_3_link'])},
+    # iCub: its upper arm link is fixed halfway down the upper arm, its elbow is two links
+    # 15 mm apart, and a link fixed in the thigh comes before the one turning the leg at the
+    # hip; before, the forearm's sleeve ran from that upper arm link to the elbow, and the
+    # knee was that fixed link (the retargeted legs pointed up).
+    'icub.urdf': {'pelvis': 'root_link', 'chest': 'chest', 'neck': 'neck_1',
+                  **_sides(['l_shoulder_3', 'l_forearm', 'l_hand', 'l_upper_leg'],
+                           ['r_shoulder_3', 'r_forearm', 'r_hand', 'r_upper_leg'])},
     'romeo.urdf': {'pelvis': 'body', 'chest': 'torso', 'neck': 'NeckPitchLink',
                    **_sides(['LShoulderYawLink', 'LElbowYawLink', 'l_wrist', 'LHipPitchLink'],
                             ['RShoulderYawLink', 'RElbowYawLink', 'r_wrist', 'RHipPitchLink'])},
@@ -135,7 +142,7 @@ def test_a_robots_sleeves_run_shoulder_to_elbow_to_wrist_and_its_hood_hangs_at_t
     pivot = T[:3, :3] @ hood['pivot'] + T[:3, 3]
     shoulders = np.mean([at(want[f'{s} upper arm'])[2] for s in ('left', 'right')])
     assert pivot[2] > shoulders - 0.02 * body.height, (pivot, shoulders)
-    assert pivot[0] < at(want['chest'])[0]                 # behind the neck, +x forward
+    assert (pivot - at(want['chest'])) @ body.forward < 0     # behind the neck (iCub: -x ahead)
 
 
 def test_g1s_rig_says_which_frames_it_left_out(tmp_path, capsys):
@@ -349,3 +356,35 @@ def test_a_massless_fixed_root_is_the_world_not_a_bone():
     values['frame_prefix'] = 'npc1/'        # npc1/world is a frame of its own: published
     assert not SessionPipeline(sk, pipeline.sim.rig, {'tweed_jacket': load_fabric(
         'tweed_jacket')}, values).root_is_world_frame()
+
+
+def test_an_arm_that_ends_at_the_elbow_gets_a_forearm_sleeve_to_the_links_end(tmp_path):
+    # Issue 47 item 3: iCub with its wrists and hands taken off, as a robot whose forearm link
+    # carries its hand is published. Before, the chain's two longest bones were taken from the
+    # shoulder's links: the forearm's sleeve sat on the upper arm and ended at the elbow.
+    urdf = without_hands('icub.urdf', str(tmp_path / 'icub.urdf'), ('l_forearm', 'r_forearm'))
+    sk, full = load_skeleton(urdf), load_skeleton(fetched('icub.urdf'))
+    rig, lines, body = propose(sk)
+    chosen = _chosen(lines)
+    rest = full.forward(np.zeros(len(full.joint_names)))
+    for side, s in (('left', 'l'), ('right', 'r')):
+        assert (chosen[f'{side} upper arm'], chosen[f'{side} forearm'],
+                chosen[f'{side} hand']) == (f'{s}_shoulder_3', f'{s}_forearm', '-')
+        sleeves = {x['link']: x for x in rig['jacket_bones']['sleeves']}
+        assert sleeves[f'{s}_shoulder_3']['end_link'] == f'{s}_forearm'
+        # Sized from the forearm link's inertia: it ends within 2 cm of where the taken-off
+        # wrist was.
+        T = rest[full.link(f'{s}_forearm')]
+        end = T[:3, :3] @ sleeves[f'{s}_forearm']['end'] + T[:3, 3]
+        assert np.linalg.norm(end - rest[full.link(f'{s}_wrist_1')][:3, 3]) < 0.02
+    loaded = Rig(yaml.safe_load(to_yaml(rig, lines, 'icub.urdf', body)), sk)
+    assert [s.length for s in loaded.layer.sleeves][1] == pytest.approx(0.127, abs=0.01)
+    # The retargeted walk moves it in that jacket to the issue's targets.
+    rig_file, session = tmp_path / 'rig.yaml', tmp_path / 's.mcap'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig_file)]) == 0
+    assert main(['motion', '--clip', 'walk', '--urdf', urdf, '-o', str(session)]) == 0
+    s = measure_every_input(load_session(str(session), urdf=urdf, rig=str(rig_file)))
+    assert s['resets'] == ['first sample'] and s['vertical_stretch'].max() <= 0.10
+    assert s['horizontal_stretch'].max() <= 0.10
+    for depth in (s['inside_m'], s['body_inside_m']):
+        assert depth.max() <= 0.01 and np.percentile(depth, 99) <= 0.003

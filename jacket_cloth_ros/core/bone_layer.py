@@ -41,9 +41,9 @@ DOWN = np.array([[0.0, 0.0, 1.0],
 class Sleeve:
     name: str
     link: int
-    end_link: int
+    end_link: int           # the link itself where the sleeve ends at a point of it (``end``)
     twist_share: float
-    axis: np.ndarray        # unit, link frame: towards end_link
+    axis: np.ndarray        # unit, link frame: towards end_link (or the end point)
     length: float
     rest: np.ndarray        # end_link's rotation in the link's frame at the zero pose
 
@@ -87,11 +87,18 @@ class BoneLayer:
         self.sleeves = []
         for i, s in enumerate(section.sections('sleeves')):
             link = skeleton.link(s.text('link'), f'{where}.sleeves[{i}].link')
-            end = skeleton.link(s.text('end_link'), f'{where}.sleeves[{i}].end_link')
-            offset = apply_transform(np.linalg.inv(rest[link]), rest[end][:3, 3][None])[0]
+            if s.has('end'):
+                # An arm that ends at the elbow: the sleeve runs to a point of its own link
+                # (rigging.propose sizes it from the link's inertia); it has no twist.
+                end, offset = link, np.array(s.vector('end', 3, lo=-5.0, hi=5.0))
+                key = f'{where}.sleeves[{i}].end'
+            else:
+                end = skeleton.link(s.text('end_link'), f'{where}.sleeves[{i}].end_link')
+                offset = apply_transform(np.linalg.inv(rest[link]), rest[end][:3, 3][None])[0]
+                key = f'{where}.sleeves[{i}].end_link'
             length = float(np.linalg.norm(offset))
             if length < 1e-6:
-                raise ConfigError(f'{where}.sleeves[{i}].end_link: must not sit on link')
+                raise ConfigError(f'{key}: must not sit on link')
             self.sleeves.append(Sleeve(
                 s.text('name', 'jacket_' + skeleton.link_names[link]), link, end,
                 s.number('twist_share', 0.5, lo=0.0, hi=1.0), offset / length, length,

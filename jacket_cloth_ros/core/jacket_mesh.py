@@ -333,14 +333,15 @@ def _sleeves(b, s):
     sleeves = s.sleeves
     if not sleeves:
         return
-    ends = {sl.end_link for sl in sleeves}
+    ends = {sl.end_link for sl in sleeves if sl.end_link != sl.link}
     by_link = {sl.link: k for k, sl in enumerate(sleeves)}
     n_s = len(sleeves)
     for k, first in enumerate(sleeves):
         if first.link in ends:
             continue                          # not the start of a chain
         chain = [k]
-        while sleeves[chain[-1]].end_link in by_link and len(chain) < 4:
+        while (sleeves[chain[-1]].end_link in by_link and len(chain) < 4
+               and sleeves[chain[-1]].end_link != sleeves[chain[-1]].link):
             chain.append(by_link[sleeves[chain[-1]].end_link])
         pad = [j for j, aim, _ in s.pads if aim == first.link]
         radius = float(np.clip(0.2 * first.length, 0.03, 0.09))

@@ -97,3 +97,89 @@ def collider_labels(rig: 'Rig') -> list:
     :param rig: the rig whose ellipsoids, capsules and planes are named.
     """
     return [c.name for c in (*rig.colliders, *rig.capsules, *rig.planes)]
+
+
+# A cloth bunched or collapsed (issue 47 item 5a): the horizontal edges' p99 strain over this,
+COLLAPSED_STRAIN = 0.10
+# held at every look for this long (s),
+COLLAPSED_FOR_S = 1.0
+# looked at once in this much of the stamps' time (s): a tenth of the inputs at 100 Hz.
+LOOK_EVERY_S = 0.1
+
+
+class CollapseWatch:
+    """Tell when the horizontal edges stay bunched or stretched: p99 of |strain| over a limit.
+
+    A look costs a few numpy calls into buffers made once (no allocation): the p99 over the
+    edges, then a running window that only keeps when it started being over. An edge or two
+    strained at an armpit for a frame is no collapse; most of a row folded for a second is.
+    The cloth is looked at every LOOK_EVERY_S of its inputs' stamps, not at every input: a
+    look costs about as much as a few percent of an input's steps.
+
+    :param a: each horizontal edge's first vertex.
+    :param b: each edge's second vertex.
+    :param rest: each edge's rest length, m.
+    """
+
+    def __init__(self, a: np.ndarray, b: np.ndarray, rest: np.ndarray):
+        self.a, self.b = np.asarray(a, np.int64), np.asarray(b, np.int64)
+        self.rest = np.asarray(rest, float)
+        n = len(self.a)
+        self._pa, self._pb = np.empty((n, 3)), np.empty((n, 3))
+        self._strain, self._size = np.empty(n), np.empty(n)
+        at = (n - 1) * 0.99                     # numpy's default (linear) quantile
+        self._lo, self._share = int(at), at - int(at)
+        self._hi = min(self._lo + 1, n - 1)
+        self.since_ns = None        # the stamp from which the p99 has been over, if it is
+        self.looked_ns = None       # the last look's stamp
+        self.collapsed = False      # over for COLLAPSED_FOR_S: said once until it recovers
+        self.p99 = 0.0              # the last look's
+
+    def clear(self) -> None:
+        """Forget the window (the cloth was put back on the body: a reset)."""
+        self.since_ns, self.looked_ns, self.collapsed = None, None, False
+
+    def note(self, x: np.ndarray, stamp_ns: int) -> bool:
+        """Look at the cloth after an input; return True when it has just been over for long.
+
+        :param x: the vertices' positions, (N, 3) in m.
+        :param stamp_ns: the input's stamp, ns.
+        """
+        last = self.looked_ns
+        if len(self.a) == 0 or (last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9):
+            return False
+        self.looked_ns = stamp_ns
+        pa, pb, s, size = self._pa, self._pb, self._strain, self._size
+        np.take(x, self.a, axis=0, out=pa)
+        np.take(x, self.b, axis=0, out=pb)
+        np.subtract(pa, pb, out=pa)
+        np.multiply(pa, pa, out=pa)
+        np.sum(pa, axis=1, out=s)
+        np.sqrt(s, out=s)
+        np.divide(s, self.rest, out=s)
+        np.subtract(s, 1.0, out=s)
+        np.abs(s, out=size)
+        size.partition((self._lo, self._hi))
+        lo = size[self._lo]
+        self.p99 = float(lo + (size[self._hi] - lo) * self._share)
+        if not self.p99 > COLLAPSED_STRAIN:        # NaN too: a non-finite cloth resets
+            self.since_ns, self.collapsed = None, False
+            return False
+        if self.since_ns is None or stamp_ns < self.since_ns:
+            self.since_ns = stamp_ns
+        if self.collapsed or (stamp_ns - self.since_ns) * 1e-9 < COLLAPSED_FOR_S:
+            return False
+        self.collapsed = True
+        return True
+
+    def worst_row(self, cols: int) -> tuple[int, bool]:
+        """Return the grid row most edges over the limit are on, and whether they are stretched.
+
+        From the last look's strains; called once, when :meth:`note` says a collapse.
+
+        :param cols: the grid's columns.
+        """
+        over = np.abs(self._strain) > COLLAPSED_STRAIN
+        rows = np.bincount(self.b[over] // cols) if over.any() else np.zeros(1, np.int64)
+        stretched = int((self._strain[over] > 0).sum()) >= int((self._strain[over] < 0).sum())
+        return int(np.argmax(rows)), stretched

@@ -25,7 +25,7 @@ from .bundles import (
 from .compiled import FixedTypes
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
-from .measures import collider_labels, depth_inside, edge_strain
+from .measures import COLLAPSED_FOR_S, CollapseWatch, collider_labels, depth_inside, edge_strain
 from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
@@ -152,6 +152,7 @@ class Faults:
     nonfinite: int = 0              # inputs whose bones were not finite (check_bones)
     overruns: int = 0               # inputs whose steps were capped (max_steps_per_input)
     rig: list = field(default_factory=list)     # the rig's, at load and at the first input
+    collapse: list = field(default_factory=list)    # each time the cloth stayed collapsed
 
 
 @dataclass(slots=True)
@@ -217,6 +218,9 @@ class JacketSimulation:
         self._grid_rotations = np.zeros((len(self.bone_set.grid), 4))
         self._grid_rotations[:, 3] = 1.0
         self._advance_kernel = FixedTypes(step.advance)
+        c = self.model.cloth        # issue 47 item 5a: no silent collapse
+        self.collapse = CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest)
+        self._first_ns = None       # the first input's stamp: when a collapse is, in the line
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
@@ -374,6 +378,7 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.ready_bones = None
+        self.collapse.clear()
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)
@@ -499,6 +504,31 @@ class JacketSimulation:
                        f'first input: {fix}')
         return out
 
+    def _collapsed(self, sample: Sample) -> str:
+        """Say that the cloth has stayed bunched or stretched across, and the rig key to change.
+
+        A body lying down bunches the cloth along it: the world's up. Stretched across: the
+        colliders hold it wider than its rest (the shape's radii). Bunched on a standing body:
+        the hem is free to fold over far from the body (M11's reach at the hem).
+        """
+        rig, watch = self.rig, self.collapse
+        row, stretched = watch.worst_row(rig.cols)
+        tilt = rig.body_tilt(self.links[:, :3, 3], sample.root[:3, :3])
+        if tilt is not None:
+            fix = (f'the body lies {tilt[1]:.0f} deg from the world\'s up '
+                   f'{_shown(rig.world_up)}: write world_up in the rig if this world\'s up is '
+                   'another axis, else stand the body up (motion --urdf retargets a clip)')
+        elif stretched:
+            fix = 'widen cloth.shape.radii: the colliders hold it wider than its rest'
+        else:
+            fix = (f'lower cloth.max_distance.hem ({float(rig.max_distance[-1]):.2f} m): the hem '
+                   'folds over that far from the body')
+        since = (watch.since_ns - (self._first_ns or watch.since_ns)) * 1e-9
+        kind = 'stretched' if stretched else 'bunched'
+        return (f'the cloth is {kind} across from {since:.1f} s on: its horizontal edges\' '
+                f'p99 strain {watch.p99:.0%} for over {COLLAPSED_FOR_S:g} s (most at row {row}); '
+                f'{fix}')
+
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns: int, names: Sequence[str],
                 positions: npt.ArrayLike) -> StepReport:
@@ -551,6 +581,8 @@ class JacketSimulation:
             report.reset = self._jump(self.last, sample)
         if report.reset:
             first = report.reset == 'first sample'
+            if first:
+                self._first_ns = sample.stamp_ns
             at_load = len(self.faults.rig)      # said at load (the node logs them then)
             if first:
                 self.faults.rig += self._lying_down(sample)
@@ -606,6 +638,10 @@ class JacketSimulation:
         if not finite:
             report.reset = 'non-finite cloth state'
             self._reset(job.sample)
+        elif self.collapse.note(self.x, job.sample.stamp_ns):
+            line = self._collapsed(job.sample)
+            self.faults.collapse.append(line)
+            report.warnings.append(('collapse', line))
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:

@@ -44,6 +44,9 @@ class _Roles:
         # The body's axes seen from each link, so a posed link gives them back.
         self.axes = {k: rest[k][:3, :3].T @ frame for k in (body.pelvis, body.chest, body.neck)}
         self.arms = {s: body.arms[s] for s in ('left', 'right')}
+        # An arm that ends at the elbow ends at a point of its forearm link, in that link.
+        self.arm_ends = {s: rest[body.arms[s][1]][:3, :3].T @ (p - rest[body.arms[s][1]][:3, 3])
+                         for s, p in body.arm_ends.items()}
         self.legs = {s: (body.thighs[s], _link_at(body, body.thighs[s], body.ankles[s],
                                                   body.knees[s]), body.ankles[s])
                      for s in ('left', 'right')}
@@ -71,8 +74,11 @@ class _Roles:
             seen, (a, b, c) = self.frame(links, self.chest), self.arms[side]
         else:
             seen, (a, b, c) = self.frame(links, self.pelvis), self.legs[side]
-        return np.concatenate([_unit(seen.T @ (links[j][:3, 3] - links[i][:3, 3]))
-                               for i, j in ((a, b), (b, c))]).reshape(2, 3)
+        ends = [links[k][:3, 3] for k in (a, b, c)]
+        if limb == 'arm' and side in self.arm_ends:
+            ends[2] = links[b][:3, :3] @ self.arm_ends[side] + links[b][:3, 3]
+        return np.concatenate([_unit(seen.T @ (ends[j] - ends[i]))
+                               for i, j in ((0, 1), (1, 2))]).reshape(2, 3)
 
 
 class Retarget:

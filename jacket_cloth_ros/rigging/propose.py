@@ -6,7 +6,8 @@ the pelvis is the first link where two legs and the spine part, the chest the fi
 it where two arms and the neck part (chains from the root); sensor and virtual frames (an IMU,
 a camera, massless shapeless links of a robot) are no part of any chain; each arm's shoulder,
 elbow and wrist are where its two longest consecutive bones meet, a joint that only twists a
-straight bone halfway along it joining the two; left and right come from the names
+straight bone halfway along it joining the two, a link fixed to the one before no bend, and
+bends closer than a share of the longest bone one joint; left and right come from the names
 (REP-120 ``l_``, Mixamo ``mixamorig:Left``, Unreal ``_l``, SMPL ``L_``) or else from the side
 they are on. Names also choose between links that sit at one place (a clavicle and an upper
 arm, three links of one ball joint). Sizes come from the links' URDF ``<collision>`` shapes
@@ -31,6 +32,8 @@ from ..core.transforms import rpy_matrix, snapped_to_axis
 SAME_PLACE = 1e-3           # m: links closer than this sit at one joint
 FOOT_AHEAD = 0.04           # of the height: toes this far ahead of the ankle say forward
 ALONG = 0.9                 # cosine: a joint axis or a bone this close to a bone is along it
+JOINT_SHARE = 0.15          # of an arm's longest bone: bends closer than this are one joint
+END = -1                    # the end of an arm that ends at the elbow: a wrist with no link
 # A bone collider's radius as a share of the height: a thigh's for a person, thicker than the
 # body proxy's bones (core.body_proxy, a knee's), so cloth the colliders hold is outside those.
 BONE_COLLIDER_SHARE = 0.04
@@ -129,6 +132,8 @@ class Body:
     frames: 'Frames | None' = None      # masses and inertias (_frames)
     choices: list = field(default_factory=list)
     ankles: dict = field(default_factory=dict)      # side -> the link at the ankle
+    # side -> where an arm that ends at the elbow ends (root frame): its hand is its forearm
+    arm_ends: dict = field(default_factory=dict)
 
     def pos(self, link: int) -> np.ndarray:
         """Return a link's origin at the zero pose, (3,) in the root frame.
@@ -303,6 +308,15 @@ def _main_path(k, kids, reach):
     while kids[path[-1]]:
         path.append(max(kids[path[-1]], key=lambda c: reach[c]))
     return path
+
+
+def _moving(path, sk):
+    """Leave out a limb path's links fixed to the one before (no joint bends there).
+
+    The path's end is kept. iCub's upper arm link halfway down the upper arm; its hip's link
+    fixed in the thigh, before the link that turns the leg at the hip (down and back up).
+    """
+    return [k for k in path[:-1] if sk.kind[k] >= 0] + path[-1:]
 
 
 def _groups(path, rest):
@@ -496,23 +510,36 @@ def _side(body, root, link):
 
 def _arm(body, root, kids, reach):
     sk, rest = body.skeleton, body.rest
-    groups, twists = _bends(_groups([body.chest] + _main_path(root, kids, reach), rest), rest,
+    groups, twists = _bends(_groups([body.chest] + _moving(_main_path(root, kids, reach), sk),
+                                    rest), rest,
                             sk)
+    groups = _one_joint(groups, rest) if len(groups) > 2 else groups
+    pts = [rest[g[0]][:3, 3] for g in groups]
+    # An arm that ends at the elbow (a robot whose forearm link carries the hand): its
+    # forearm runs to where that link's body ends, a wrist without a link (END).
+    end = _forearm_end(body, groups, kids)
+    if end is not None:
+        groups, pts = groups + [[END]], pts + [end]
     if len(groups) < 4:
         raise Refusal(f'cannot find two arms: the chain from {body.name(root)!r} has fewer '
                       'than three bones')
-    seg = [np.linalg.norm(rest[groups[i + 1][0]][:3, 3] - rest[groups[i][0]][:3, 3])
-           for i in range(len(groups) - 1)]
+    seg = [np.linalg.norm(pts[i + 1] - pts[i]) for i in range(len(groups) - 1)]
     # Shoulder, elbow and wrist: where the two longest consecutive bones meet.
     i = max(range(1, len(seg) - 1), key=lambda j: seg[j] + seg[j + 1] - 1e-6 * j)
     upper, why_u = _pick(groups[i], 'upper_arm', sk)
     fore, why_f = _pick(groups[i + 1], 'forearm', sk)
-    hand, why_h = _pick(groups[i + 2], 'hand', sk)
+    if groups[i + 2] == [END]:
+        hand, why_h = fore, (f'none: the arm ends at the elbow, its forearm at {_r(pts[-1])} '
+                             'where the link\'s inertia ends')
+    else:
+        hand, why_h = _pick(groups[i + 2], 'hand', sk)
     side, why_s = _side(body, root, upper)
     if side in body.arms:
         side = 'right' if side == 'left' else 'left'
         why_s = 'the other arm'
     body.arms[side] = (upper, fore, hand)
+    if hand == fore:
+        body.arm_ends[side] = pts[-1]
     twisted = [sk.link_names[k] for k in twists
                if groups[i][0] < k < groups[min(i + 2, len(groups) - 1)][0]]
     if twisted:
@@ -521,12 +548,61 @@ def _arm(body, root, kids, reach):
         Choice(f'{side} upper arm', sk.link_names[upper],
                f'shoulder of the two longest bones of the arm chain, {why_u}; {side} {why_s}'),
         Choice(f'{side} forearm', sk.link_names[fore], f'the elbow, {why_f}'),
-        Choice(f'{side} hand', sk.link_names[hand], f'the wrist, {why_h}')]
+        Choice(f'{side} hand', sk.link_names[hand] if hand != fore else '-',
+               f'the wrist, {why_h}')]
+
+
+def _forearm_end(body, groups, kids):
+    """Return where an arm that ends at its elbow ends (root frame), else None.
+
+    The chain's last link is a leaf whose name says elbow or forearm (not hand or wrist), or
+    the chain has only a shoulder and that link: the link carries the forearm. Its end is
+    half the inertia box's long side past its centre of mass, away from the link's origin (a
+    rod's length from its moments); without an inertia, twice the centre of mass.
+    """
+    sk, frames = body.skeleton, body.frames
+    last = groups[-1][-1]
+    if kids[last] or frames is None or frames.mass[last] <= 0:
+        return None
+    names = [sk.link_names[k] for k in groups[-1]]
+    says = any(name_rank(n, 'forearm') is not None for n in names) and not any(
+        name_rank(n, 'hand') is not None for n in names)
+    if not (says or len(groups) == 3):
+        return None
+    com = frames.com[last]
+    if not np.linalg.norm(com) > 1e-3:
+        return None
+    ahead = com / np.linalg.norm(com)
+    moments = np.sort(np.linalg.eigvalsh(frames.inertia[last]))
+    long_side = np.sqrt(max(6.0 * (moments[1] + moments[2] - moments[0]) / frames.mass[last],
+                            0.0))
+    reach = np.linalg.norm(com) + 0.5 * long_side if long_side > 0 else 2 * np.linalg.norm(com)
+    T = body.rest[last]
+    return T[:3, :3] @ (ahead * reach) + T[:3, 3]
+
+
+def _one_joint(groups, rest):
+    """Join an arm's bends closer than JOINT_SHARE of its longest bone into one joint.
+
+    An elbow of two joints a few cm apart (iCub's) is one elbow: its short link is no bone
+    of the two longest. The chest's group, the first, stays apart.
+    """
+    pts = [rest[g[0]][:3, 3] for g in groups]
+    longest = max(np.linalg.norm(b - a) for a, b in zip(pts[1:], pts[2:])) if len(pts) > 2 \
+        else 0.0
+    out = [list(groups[0]), list(groups[1])] if len(groups) > 1 else [list(groups[0])]
+    for g, p in zip(groups[2:], pts[2:]):
+        if np.linalg.norm(p - rest[out[-1][-1]][:3, 3]) < JOINT_SHARE * longest:
+            out[-1] += g
+        else:
+            out.append(list(g))
+    return out
 
 
 def _leg(body, root, kids, reach):
     sk, rest = body.skeleton, body.rest
-    groups = _bends(_groups([body.pelvis] + _main_path(root, kids, reach), rest), rest, sk)[0]
+    groups = _bends(_groups([body.pelvis] + _moving(_main_path(root, kids, reach), sk), rest),
+                    rest, sk)[0]
     seg = [np.linalg.norm(rest[groups[i + 1][0]][:3, 3] - rest[groups[i][0]][:3, 3])
            for i in range(len(groups) - 1)]
     if not seg:
@@ -694,8 +770,12 @@ def propose(sk: Skeleton, forward: list | None = None,
     sleeves = []
     for side in ('left', 'right'):
         u, f, h = body.arms[side]
-        sleeves += [{'link': names[u], 'end_link': names[f], 'twist_share': 0.5},
-                    {'link': names[f], 'end_link': names[h], 'twist_share': 0.5}]
+        sleeves.append({'link': names[u], 'end_link': names[f], 'twist_share': 0.5})
+        if side in body.arm_ends:       # a forearm sleeve to where the link's body ends
+            sleeves.append({'link': names[f], 'end': _r(_in_link(body, f, body.arm_ends[side])),
+                            'twist_share': 0.5})
+        else:
+            sleeves.append({'link': names[f], 'end_link': names[h], 'twist_share': 0.5})
     pads = {}
     chest = body.chest
     for side in ('left', 'right'):

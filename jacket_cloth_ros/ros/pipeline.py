@@ -101,6 +101,7 @@ class SessionPipeline:
         self.recording_problem = ''
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
+        self._collapses_said = 0    # the simulation's collapse lines the diagnostics have said
         self._costs = []
         self._latencies = []
         # The grid each periodic output is due on, per clock the stamps come on (most recent
@@ -353,6 +354,9 @@ class SessionPipeline:
             problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
+        said = self.sim.faults.collapse
+        if self.sim.collapse.collapsed or len(said) > self._collapses_said:
+            problems.append(said[-1])       # issue 47 item 5a: no silent collapse
         if problems:
             return messages.WARN, '; '.join(problems)
         return messages.OK, 'ok' if w['inputs'] else 'no input'
@@ -392,6 +396,7 @@ class SessionPipeline:
         })
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)
+        self._collapses_said = len(sim.faults.collapse)
         return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
 
 

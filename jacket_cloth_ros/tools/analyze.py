@@ -144,6 +144,7 @@ class SessionFigures:
             'max_distance_exceeded': int(a[:, 3].sum()),
             'nonfinite_count': self.nonfinite,
             'rig_warnings': list(pipeline.sim.faults.rig),
+            'collapsed': list(pipeline.sim.faults.collapse),
             'resets': len(self.reset_reasons),
             'reset_reasons': self.reset_reasons,
             'step_time_us': {

@@ -238,7 +238,7 @@ def _session(args, listed=None):
 
 
 def _warn_rig(args: argparse.Namespace, lines: list[str]) -> None:
-    """Print what the simulation found wrong with the rig at load and at the first input."""
+    """Print what the simulation found wrong: the rig at load and first input, a collapse."""
     for line in lines:
         print(f'jacket_cloth {args.command}: warning: {args.input}: {line}', file=sys.stderr)
 
@@ -262,7 +262,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     session = _session(args, listed)
     pipeline, took = replay(session, args.output, args.force)
     sim = pipeline.sim
-    _warn_rig(args, sim.faults.rig)
+    _warn_rig(args, sim.faults.rig + sim.faults.collapse)
     first, last = session.stamp_range()
     span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
@@ -333,7 +333,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         sessions.append(_session(argparse.Namespace(**{**vars(args), 'input': path})))
     report = _analyze_into(args.out, args.force, sessions, args.moments)
     for r in report.get('sessions', [report]):
-        _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}), r['rig_warnings'])
+        _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}),
+                  r['rig_warnings'] + r['collapsed'])
     print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 

@@ -1,0 +1,126 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""No silent collapse (issue 47 item 5a): a cloth bunched or stretched across is named.
+
+When the p99 of the horizontal edges' strain (stretch or compression) stays over 10 % for a
+second, the node's diagnostics are WARN with one line naming the rig key to change, and replay
+and analyze print that line. Before, such a cloth ran on with diagnostics ``ok`` and the tools
+said nothing. A plain walk in the shipped rig says nothing.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.measures import COLLAPSED_STRAIN, CollapseWatch
+from jacket_cloth_ros.recording.reader import read_messages
+from jacket_cloth_ros.ros import messages
+from jacket_cloth_ros.tools.cli import main
+
+COLS, ROWS = 9, 12
+
+
+def _grid():
+    """A flat grid (ROWS x COLS, 0.1 m apart) and its horizontal edges below the top row."""
+    x = np.zeros((ROWS, COLS, 3))
+    x[..., 0] = np.arange(COLS) * 0.1
+    x[..., 2] = -np.arange(ROWS)[:, None] * 0.1
+    idx = np.arange(ROWS * COLS).reshape(ROWS, COLS)
+    a, b = idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
+    return x.reshape(-1, 3), a, b, np.full(len(a), 0.1)
+
+
+def _watch_over(x, seconds, rate=60):
+    """Feed one cloth for ``seconds`` at ``rate``; return the stamps (s) the watch spoke at."""
+    _, a, b, rest = _grid()
+    watch = CollapseWatch(a, b, rest)
+    said = [k / rate for k in range(int(seconds * rate) + 1)
+            if watch.note(x, int(k / rate * 1e9))]
+    return said, watch
+
+
+def test_a_row_bunched_for_a_second_is_said_once_and_a_shorter_one_is_not():
+    x, *_ = _grid()
+    bunched = x.reshape(ROWS, COLS, 3).copy()
+    bunched[6:, :, 0] *= 0.8                      # six rows 20 % narrower: bunched
+    said, watch = _watch_over(bunched.reshape(-1, 3), 3.0)
+    assert len(said) == 1 and 1.0 <= said[0] < 1.2, said
+    assert watch.worst_row(COLS) == (6, False) and watch.p99 == pytest.approx(0.2)
+    said, _ = _watch_over(bunched.reshape(-1, 3), 0.9)
+    assert said == []
+
+
+def test_one_edge_over_or_a_cloth_at_rest_is_no_collapse():
+    x, *_ = _grid()
+    said, watch = _watch_over(x, 2.0)
+    assert said == [] and watch.p99 == pytest.approx(0.0)
+    one = x.reshape(ROWS, COLS, 3).copy()
+    one[8, 4:, 0] += 0.03                         # one edge 30 % longer, out of 88
+    said, watch = _watch_over(one.reshape(-1, 3), 2.0)
+    assert said == [] and watch.p99 < COLLAPSED_STRAIN
+
+
+def test_the_watch_comes_back_after_the_cloth_recovers():
+    x, a, b, rest = _grid()
+    bunched = x.reshape(ROWS, COLS, 3).copy()
+    bunched[:, :, 0] *= 0.7
+    watch = CollapseWatch(a, b, rest)
+    said = []
+    for k in range(5 * 60 + 1):
+        t = k / 60
+        over = t < 1.5 or t >= 3.0                # bunched, recovered, bunched again
+        if watch.note(bunched.reshape(-1, 3) if over else x, int(t * 1e9)):
+            said.append(t)
+    assert len(said) == 2 and 1.0 <= said[0] < 1.2 and 4.0 <= said[1] < 4.2, said
+
+
+@pytest.fixture(scope='module')
+def walk(tmp_path_factory):
+    path = tmp_path_factory.mktemp('collapse') / 'walk.mcap'
+    assert main(['motion', '--clip', 'walk', '-o', str(path)]) == 0
+    return path
+
+
+def _narrow_rig(path):
+    """The shipped rig with its cloth's radii 0.6 of theirs: the torso holds it stretched."""
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        rig = yaml.safe_load(f)
+    rig['cloth']['shape']['radii'] = [0.6 * r for r in rig['cloth']['shape']['radii']]
+    path.write_text(yaml.safe_dump(rig))
+    return str(path)
+
+
+def _diagnostics(path):
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    return [deserialize_message(m.data, DiagnosticArray).status[0]
+            for m in read_messages(str(path), ['/diagnostics'])[0]]
+
+
+def test_a_stretched_cloth_is_named_by_diagnostics_replay_and_analyze(walk, tmp_path, capsys):
+    rig, urdf = _narrow_rig(tmp_path / 'narrow.yaml'), shipped('character.urdf')
+    out = tmp_path / 'replay.mcap'
+    assert main(['replay', str(walk), '--urdf', urdf, '--rig', rig, '-o', str(out)]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if 'across from' in line]
+    assert len(lines) == 1, lines
+    assert 'stretched across' in lines[0] and 'widen cloth.shape.radii' in lines[0]
+    # The node's diagnostics (the same pipeline): WARN from the second it is said on.
+    status = _diagnostics(out)
+    warned = [s for s in status if s.level == bytes([messages.WARN])
+              and 'widen cloth.shape.radii' in s.message]
+    assert len(warned) >= len(status) - 2 and status[-1] in warned
+    assert main(['analyze', str(walk), '--urdf', urdf, '--rig', rig, '--out',
+                 str(tmp_path / 'a')]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if 'across from' in line]
+    report = json.loads((tmp_path / 'a' / 'report.json').read_text())
+    text = lines[0].split(': warning: ', 1)[1].split(': ', 1)[1]
+    assert [line.endswith(text) for line in said] == [True] and report['collapsed'] == [text]
+
+
+def test_a_plain_walk_says_nothing(walk, tmp_path, capsys):
+    out = tmp_path / 'replay.mcap'
+    assert main(['replay', str(walk), '-o', str(out)]) == 0
+    assert 'across from' not in capsys.readouterr().err
+    assert {s.message for s in _diagnostics(out)} == {'ok'}
