@@ -199,3 +199,19 @@ def test_an_idle_node_records_its_diagnostics_when_they_change(harness, tmp_path
     h.node.close()
     idle = [m for m in read_messages(str(path), ['/diagnostics'])[0] if m.log_time == last]
     assert 1 <= len(idle) <= 2, len(idle)
+
+
+def test_a_clock_before_1970_is_refused_not_the_nodes_end(harness, capfd):
+    # rclpy's /clock callback raised on a negative second (int32 in the message), out of the
+    # executor: one `ros2 topic pub /clock` ended every node on simulated time.
+    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
+    clock = _clock_publisher(h)
+    clock.publish(_clock(30))
+    h.spin_until(lambda: h.node.get_clock().now().nanoseconds == 30 * 10 ** 9)
+    clock.publish(_clock(-5))
+    said = []
+    h.spin_until(lambda: said.append(capfd.readouterr().err) or '/clock' in ''.join(said) and
+                 'refused' in ''.join(said))
+    assert h.node.get_clock().now().nanoseconds == 30 * 10 ** 9
+    sent = h.send_clip('walk', 60, 0.1)
+    h.spin_until(lambda: len(h.tf) == sent)

@@ -8,6 +8,10 @@ what it publishes without an input (diagnostics before the first input) stand st
 """
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:           # for the annotations only
+    from rclpy.node import Node
 
 # Wall seconds without any /clock, or with /clock at one time, before it is said.
 NO_CLOCK_S = 5.0
@@ -71,3 +75,34 @@ class ClockWatch:
         elif self._told == 'none':
             self._say('info', '/clock came: the node is on simulated time')
         self._told = ''
+
+
+def guard_clock(node: 'Node', warn: Callable[[str, str], None]) -> None:
+    """Refuse a /clock that rclpy's time source cannot take, instead of ending the node.
+
+    rclpy's callback raises on a negative second (the message's is an int32) out of the
+    executor: one message ended every node on simulated time. Refused, the node's clock keeps
+    its time and ``warn`` is told (code, line). Wrapped on the time source, so a subscription
+    made later (``use_sim_time`` set live) takes the guard too.
+
+    :param node: the node, whose rclpy time source is guarded.
+    :param warn: takes (code, line), a throttled warning.
+    """
+    source = getattr(node, '_time_source', None)
+    plain = getattr(source, 'clock_callback', None)
+    if plain is None:           # another rclpy: nothing known to guard
+        return
+
+    def guarded(msg: object) -> None:
+        try:
+            plain(msg)
+        except (ValueError, OverflowError, TypeError) as e:
+            stamp = getattr(msg, 'clock', None)
+            warn('clock', f'/clock {getattr(stamp, "sec", "?")} s '
+                 f'{getattr(stamp, "nanosec", "?")} ns refused ({e}): the node\'s clock keeps '
+                 'its time')
+
+    source.clock_callback = guarded
+    subscription = getattr(source, '_clock_sub', None)
+    if subscription is not None:
+        subscription.callback = guarded

@@ -42,7 +42,7 @@ from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         cut_line, input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
-from .clock_watch import ClockWatch
+from .clock_watch import ClockWatch, guard_clock
 from .parameter_services import guard_parameter_services
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
                          check_value, descriptor, fabric_parameters,
@@ -118,6 +118,7 @@ class JacketClothNode(Node):
         # a simulator not started or paused stops the node's clock, and they must not stop.
         self._wall = Clock(clock_type=ClockType.STEADY_TIME)
         self._clock_watch = ClockWatch(self._say_clock)
+        guard_clock(self, self._warn)
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
