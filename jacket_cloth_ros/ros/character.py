@@ -251,7 +251,7 @@ def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str
     return out
 
 
-class TakenElsewhere(CallbackGroup):
+class _TakenElsewhere(CallbackGroup):
     """A callback group the executor never runs: its subscriptions' messages are taken by hand.
 
     CrowdInputs takes the characters' JointStates; the node's watchdog a late URDF.
@@ -290,7 +290,7 @@ class CrowdInputs(Waitable):
         self._on_inputs = on_inputs
         self._subs = []             # (character, subscription handle, its pointer)
         self._ready = []
-        self.taken_elsewhere = TakenElsewhere()
+        self.taken_elsewhere = _TakenElsewhere()
 
     def subscribe(self, node: 'Node', character: object, topic: str) -> 'Subscription':
         """Subscribe ``node`` to ``topic`` (raw JointStates, sensor data QoS) for ``character``.

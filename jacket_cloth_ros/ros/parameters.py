@@ -42,8 +42,8 @@ NODE_PARAMETERS = {
                           'URDF text of the character; empty: the latched /robot_description '
                           'topic, else the character shipped in config/'),
     'robot_description_timeout': (T.PARAMETER_DOUBLE, 1.0, (0.0, 60.0), True,
-                                  's to wait for /robot_description before using the shipped '
-                                  'character'),
+                                  's (wall time) to wait for /robot_description before using '
+                                  'the shipped character'),
     'rig_file': (T.PARAMETER_STRING, '', None, True, 'rig YAML; empty: config/jacket_rig.yaml'),
     'fabric_file': (T.PARAMETER_STRING, '', None, True, 'fabric presets YAML; empty: shipped'),
     'fabric_preset': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
@@ -66,7 +66,9 @@ NODE_PARAMETERS = {
     'markers_body': (T.PARAMETER_STRING, 'auto', None, False,
                      'draw a simple body under the jacket on ~/markers: on, off, or auto (on '
                      'when the URDF has no <visual> for RViz\'s RobotModel to show)'),
-    'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
+    'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False,
+                         'Hz of /diagnostics: by the inputs\' stamps, by wall time when none '
+                         'bring them'),
     'record': (T.PARAMETER_STRING, '', None, False,
                'where to record the session: an MCAP file (.mcap), else a rosbag2 bag '
                'folder; empty: no recording'),
