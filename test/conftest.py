@@ -122,7 +122,7 @@ def harness():
 # Test files with nodes over DDS or live processes: under `pytest -n` (make test) they run one
 # after another on one worker, as they do alone, and the rest of the suite on the other.
 LIVE_FILES = ('test_crowd_processes.py', 'test_first_start.py', 'test_fuzz.py',
-              'test_lab_speed.py', 'test_node.py', 'test_node_crowd.py',
+              'test_lab_speed.py', 'test_node.py', 'test_node_clock.py', 'test_node_crowd.py',
               'test_node_namespaces.py', 'test_node_viewer.py', 'test_ros2_cli.py',
               'test_tools.py')
 

@@ -306,6 +306,22 @@ def test_unknown_and_missing_joints_warn_but_keep_the_sample(make_sim, skeleton)
     assert sim.last.q[skeleton.joint_index['l_knee']] == 0.3
 
 
+def test_a_joint_named_twice_takes_its_last_value_and_warns(make_sim, skeleton, rest_input):
+    # The last value counted and nothing said: robot_state_publisher also keeps the last (its
+    # map of positions), so that stays, with a warning naming the joints (one list, one plan).
+    sim = make_sim()
+    names, pos = rest_input
+    r = sim.process(1_000_000_000, list(names) + ['l_knee', 'world_joint/trans_x'],
+                    list(pos) + [0.4, 0.0])
+    assert r.accepted and sim.last.q[skeleton.joint_index['l_knee']] == 0.4
+    lines = [t for c, t in r.warnings if c == 'duplicate']
+    assert len(lines) == 1 and 'last' in lines[0], r.warnings
+    assert 'l_knee' in lines[0] and 'world_joint/trans_x' in lines[0]
+    r = sim.process(1_016_000_000, list(names) + ['l_knee', 'l_knee'], list(pos) + [0.1, 0.2])
+    assert sim.last.q[skeleton.joint_index['l_knee']] == 0.2
+    assert [c for c, _ in r.warnings] == ['duplicate']
+
+
 def test_teleport_resets_to_the_skinned_pose_instead_of_exploding(make_sim):
     sim = make_sim()
     reports = play(sim, 'teleport', 60, 3.0)

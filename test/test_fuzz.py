@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""Fuzzing: CDR on every topic, parameter services, MCAP files, set-ups, tools, crowds.
+"""Fuzzing: CDR on every topic, /clock, parameter services, MCAP files, set-ups, tools, crowds.
 
 Each part runs for a bounded time with a fixed seed, a few seconds in ``make test``. A longer
 run: ``JACKET_CLOTH_FUZZ_SECONDS=600 make test`` (seconds per part), with another seed:
@@ -224,6 +224,70 @@ def test_fuzz_every_subscribed_topic(urdf_text):
             h.close()
         talker.destroy_node()
         rclpy.shutdown(context=ctx)
+
+
+def test_fuzz_simulated_time(harness):
+    """/clock absent, stalled, stepping, jumping back, flooding, before 1970, with inputs.
+
+    Inputs are stamped by the simulated time, as a simulator's are (a stall repeats them).
+    What must hold: the character loads without /clock, every input is seen and used or
+    counted as dropped, diagnostics go on at their wall-time rate through it all (against a
+    wall timer of the same rate in the same executor) and nothing non-finite reaches /tf.
+    """
+    from builtin_interfaces.msg import Time
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.clock import Clock, ClockType
+    from rosgraph_msgs.msg import Clock as ClockMsg
+    from test_node import _all_finite
+    rng = random.Random(SEED)
+    # Absent: the shipped character after its timeout, and diagnostics, on wall time alone.
+    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
+    diags, ticks = [], []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    h.peer.create_timer(1 / 20.0, lambda: ticks.append(len(diags)),
+                        clock=Clock(clock_type=ClockType.STEADY_TIME))
+    h.spin_until(lambda: len(diags) >= 3)
+    clock = h.peer.create_publisher(ClockMsg, '/clock', 10)
+    h.spin_until(lambda: clock.get_subscription_count() > 0)
+    names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'walk', 0.0)
+    pipeline = h.c.pipeline
+    now = 100 * 10 ** 9
+
+    def publish_clock(ns):
+        sec, nanosec = divmod(ns, 10 ** 9)
+        clock.publish(ClockMsg(clock=Time(sec=max(min(sec, 2 ** 31 - 1), -2 ** 31),
+                                          nanosec=nanosec)))
+
+    def send_input():
+        before = pipeline.inputs
+        h.send(names, pos, max(now, 0))
+        h.spin_until(lambda: pipeline.inputs > before)
+
+    for _ in _until(SECONDS):
+        action = rng.choice(('stall', 'step', 'back', 'flood', 'before_1970'))
+        if action == 'step':
+            now += rng.choice((1, 8_333_333, 16_666_667, 10 ** 9, 10 ** 12))
+        elif action == 'back':
+            now -= rng.choice((1, 10 ** 7, 10 ** 9, 10 ** 11))
+        if action == 'flood':
+            for _ in range(rng.randrange(50, 500)):
+                publish_clock(rng.randrange(-2 ** 31, 2 ** 31) * 10 ** 9 +
+                              rng.randrange(10 ** 9))
+            publish_clock(now)
+        elif action == 'before_1970':
+            publish_clock(-rng.randrange(1, 2 ** 31) * 10 ** 9)
+        elif action != 'stall':
+            publish_clock(now)
+        for _ in range(rng.randrange(1, 6)):
+            send_input()                    # a stall repeats its stamp: dropped, counted
+        # Diagnostics through it, at their wall-time rate: 5 of 10 periods at least.
+        start = len(ticks)
+        h.spin_until(lambda: len(ticks) >= start + 11)
+        assert ticks[start + 10] - ticks[start] >= 5, (SEED, action, ticks[start:])
+        assert pipeline.lost == 0, (SEED, action)
+    used = pipeline.inputs - pipeline.dropped
+    h.spin_until(lambda: len(h.tf) == used)
+    assert all(_all_finite(tf) for tf in h.tf)
 
 
 def _start_waiting(h, **params):

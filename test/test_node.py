@@ -611,9 +611,12 @@ def test_robot_description_from_the_latched_topic(harness, urdf_text):
     try:
         h = harness(robot_description_timeout=20.0)
         assert h.c.sim.skeleton.name == 'from_topic'
-        # Loaded: the node stops listening and its fallback timer is gone (less executor work).
-        assert '/robot_description' not in [s.topic_name for s in h.node.subscriptions]
+        # Loaded: its fallback timer is gone and its topic is no executor work (it is read
+        # once a watchdog tick, to say a different URDF is not taken).
         assert list(h.node.timers) == [h.node._diag_timer]       # diagnostics' own rate
+        ex = h.ex
+        waited = [s.topic_name for s in h.node.subscriptions if ex.can_execute(s)]
+        assert '/robot_description' not in waited
     finally:
         talker.destroy_node()
         rclpy.shutdown(context=ctx)

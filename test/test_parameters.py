@@ -93,3 +93,25 @@ def test_a_recording_made_before_the_rename_reads_its_preset():
     assert from_recording({'fabric': 'veil', 'fabric.damping': 0.1}) == {
         'fabric_preset': 'veil', 'fabric.damping': 0.1}
     assert from_recording({'fabric_preset': 'veil'}) == {'fabric_preset': 'veil'}
+
+
+def test_a_refused_value_is_shown_as_a_user_writes_it():
+    # rclpy hands arrays as array('d', ...): the reason printed Python's repr of it.
+    from array import array
+    reason = check_value('wind', array('d', [1e9, 0.0, 0.0]))
+    assert reason.startswith('wind [1000000000.0, 0.0, 0.0] is outside'), reason
+    assert 'array' not in check_value('lod_distances', array('d', [1.0, float('inf')]))
+    assert check_value('sim_rate', True) == 'sim_rate must be a number, not true'
+    many = check_value('wind', list(range(1000)))
+    assert len(many) < 200, many
+
+
+@pytest.mark.parametrize('name', ['record', 'frame_prefix', 'world_frame', 'world_joint'])
+@pytest.mark.parametrize('char', ['\u202e', '\n', '\x1b', '\x00', '\u2028'])
+def test_a_name_or_path_with_a_control_character_is_refused(name, char):
+    # U+202E turns the rest of a log line around: `record:=/tmp/\u202eacm.session` reads as
+    # another path, and a frame id with one names a frame no one sees as written.
+    reason = check_value(name, f'a{char}b')
+    assert reason.startswith(f'{name} holds a control character (U+{ord(char):04X}'), reason
+    assert char not in reason
+    assert check_value(name, 'npc1/ab') == ''

@@ -1,10 +1,13 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """YAML configuration loading with validation messages that name the bad key."""
 
+import itertools
 import math
+import numbers
 import os
 import reprlib
 import stat
+import unicodedata
 
 import yaml
 
@@ -15,6 +18,9 @@ MAX_ITEMS = 256               # entries of one list of a rig (colliders, regions
 _SHOW = reprlib.Repr()
 _SHOW.maxstring = _SHOW.maxother = 60
 _SHOW.maxlevel = 2
+_SHOWN_ITEMS = 8              # of a list shown in an error line
+# Unicode's control and format characters, and the line and paragraph separators.
+_CONTROL = frozenset({'Cc', 'Cf', 'Zl', 'Zp'})
 
 
 def shown(value: object) -> str:
@@ -23,6 +29,44 @@ def shown(value: object) -> str:
     :param value: the value shown.
     """
     return _SHOW.repr(value)
+
+
+def written(value: object) -> str:
+    """Return ``value`` as a user writes it in a params file or ``-p`` (YAML), bounded.
+
+    ``[1000000000.0, 0.0, 0.0]`` for rclpy's ``array('d', [1e9, 0.0, 0.0])``, ``true`` for
+    True; strings quoted and cut as :func:`shown` cuts them.
+
+    :param value: the value shown.
+    """
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, str):
+        return shown(value)
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        return repr(float(value))
+    try:
+        items = list(itertools.islice(iter(value), _SHOWN_ITEMS + 1))
+    except TypeError:
+        return shown(value)
+    more = ', ...' if len(items) > _SHOWN_ITEMS else ''
+    return f'[{", ".join(written(v) for v in items[:_SHOWN_ITEMS])}{more}]'
+
+
+def control_character(text: str) -> str:
+    """Return the first control or format character of ``text`` as ``U+XXXX at N`` ('' if none).
+
+    Those (a newline, an escape, U+202E that turns the rest of a line around) make a path or a
+    frame id read as another in a log line, a terminal or a viewer.
+
+    :param text: a name or a path.
+    """
+    for k, ch in enumerate(text):
+        if unicodedata.category(ch) in _CONTROL:
+            return f'U+{ord(ch):04X} at {k}'
+    return ''
 
 
 class _BoundedLoader(yaml.SafeLoader):

@@ -8,7 +8,7 @@ MoveIt names them: ``<world_joint>/trans_x``, ``trans_y``, ``trans_z``, ``rot_x`
 Carrying it in the JointState keeps body and world motion on one stamp, so replay is exact.
 """
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -90,11 +90,16 @@ class InputParser:
             else:
                 unknown.append(n)
         warnings = []
+        if len(set(names)) < len(names):
+            # As robot_state_publisher (a map of positions): the last value of a name counts.
+            seen, twice = set(), set()
+            for n in names:
+                (twice if n in seen else seen).add(n)
+            warnings.append(('duplicate', f'joint(s) named more than once, the last value '
+                             f'of each taken: {_names_cut(twice)}'))
         if unknown:
-            # Each name cut: a message's names are any length, a log line must not be.
-            cut = (n if len(n) <= 80 else n[:80] + '...' for n in sorted(unknown)[:5])
             warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
-                             f'{", ".join(cut)}'))
+                             f'{_names_cut(unknown)}'))
         missing = sorted(set(range(len(index))) - set(joint_to))
         if missing:
             text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])
@@ -137,3 +142,11 @@ class InputParser:
                                 'quaternion: message dropped')
         self.last = new
         return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings))
+
+
+def _names_cut(names: 'Iterable[str]') -> str:
+    """Return the first five of ``names``, sorted, each cut to 80 characters.
+
+    A message's names are any length, a log line must not be.
+    """
+    return ', '.join(n if len(n) <= 80 else n[:80] + '...' for n in sorted(names)[:5])

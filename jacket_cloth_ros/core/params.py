@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from .config import written
 from .physics.cloth import Solver, StretchLimit
 from .physics.step import gust_scale
 
@@ -119,7 +120,7 @@ def check_sim_value(name: str, value: object) -> str:
     meta = SIM_FIELDS[name].metadata
     if meta['choices'] is not None:
         return '' if str(value).upper() in meta['choices'].__members__ else (
-            f'must be one of {", ".join(meta["choices"].names())}, not {value!r}')
+            f'must be one of {", ".join(meta["choices"].names())}, not {written(value)}')
     default = SIM_FIELDS[name].default
     if isinstance(default, tuple):
         try:
@@ -130,14 +131,14 @@ def check_sim_value(name: str, value: object) -> str:
             return f'must be {len(default)} finite numbers'
         values = v.tolist()
     elif isinstance(value, bool) or not isinstance(value, (int, float)):
-        return f'must be a number, not {value!r}'
+        return f'must be a number, not {written(value)}'
     elif isinstance(default, int) and not float(value).is_integer():
-        return f'must be a whole number, not {value!r}'
+        return f'must be a whole number, not {written(value)}'
     elif not math.isfinite(value):
-        return f'must be finite, not {value!r}'
+        return f'must be finite, not {written(value)}'
     else:
         values = [value]
     lo, hi = meta['range']
     if any(not lo <= v <= hi for v in values):
-        return f'{value!r} is outside [{lo}, {hi}]'
+        return f'{written(value)} is outside [{lo}, {hi}]'
     return ''

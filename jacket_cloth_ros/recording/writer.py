@@ -126,6 +126,9 @@ class SessionRecorder:
             if self._folder is not None:
                 os.rmdir(self._folder)          # no empty bag left to refuse the next try
             raise
+        self._file_path = file_path
+        st = os.fstat(self._file.fileno())
+        self._identity = (st.st_dev, st.st_ino)
         self._queue = self._thread = self._error = None
         if background:
             self._queue = queue.SimpleQueue()
@@ -235,6 +238,31 @@ class SessionRecorder:
         """
         self._writer.add_metadata(name, data)
 
+    def file_problem(self) -> str:
+        """Tell whether the file being written is still the one at its path: '' if it is.
+
+        Else 'removed' or 'replaced' (another writer's file there now): what is written goes
+        into a file no path names, lost at its close.
+        """
+        try:
+            st = os.stat(self._file_path)
+        except FileNotFoundError:
+            return 'removed'
+        except OSError:
+            return ''                   # cannot tell (a folder made unreadable): not a replace
+        return '' if (st.st_dev, st.st_ino) == self._identity else 'replaced'
+
+    def keep_readable(self) -> int:
+        """Return a descriptor that reads the file being written, after its ``close`` too.
+
+        For a file its path no longer names (``file_problem``): what it holds can still be
+        copied out (``save_unnamed``). -1 where the system gives none (no /proc).
+        """
+        try:
+            return os.open(f'/proc/self/fd/{self._file.fileno()}', os.O_RDONLY)
+        except OSError:
+            return -1
+
     @property
     def unwritten(self) -> int:
         """How many messages the disk had no room for at the close (0 but on a full disk)."""
@@ -308,6 +336,42 @@ class SessionRecorder:
             'custom_data': {}, 'ros_distro': os.environ.get('ROS_DISTRO', 'kilted'),
         }}
         return yaml.safe_dump(meta, sort_keys=False)
+
+
+def save_unnamed(fd: int, path: str) -> str:
+    """Copy a recording no path names any more (``keep_readable``'s) next to ``path``.
+
+    As ``<path without .mcap>.saved.mcap`` (``.saved-2.mcap``... if taken), made exclusively
+    (never over a file); closes ``fd``. Returns the new file's path; OSError if none was made.
+
+    :param fd: a descriptor reading the recording, from its start.
+    :param path: the path it was recorded to (a ``.mcap`` file or a bag folder).
+    """
+    if fd < 0:
+        raise OSError('the system gives no way to read a file no path names')
+    try:
+        stem = os.path.normpath(path).removesuffix('.mcap')
+        for k in range(1, 100):
+            target = f'{stem}.saved.mcap' if k == 1 else f'{stem}.saved-{k}.mcap'
+            try:
+                out = open(target, 'xb')
+            except FileExistsError:
+                continue
+            try:
+                with out:
+                    os.lseek(fd, 0, os.SEEK_SET)
+                    while True:
+                        block = os.read(fd, 1 << 20)
+                        if not block:
+                            break
+                        out.write(block)
+            except OSError:
+                os.remove(target)       # a part of it (a full disk) would pass for the whole
+                raise
+            return target
+        raise OSError(f'{stem}.saved-1...99.mcap all exist')
+    finally:
+        os.close(fd)
 
 
 def _last(kept: list, text: str) -> str:

@@ -27,6 +27,7 @@ from .characters import CharacterSpec
 from .pipeline import session_topics
 
 if TYPE_CHECKING:           # for the annotations only
+    from rclpy.clock import Clock
     from rclpy.impl.rcutils_logger import RcutilsLogger
     from rclpy.node import Node
     from rclpy.subscription import Subscription
@@ -111,11 +112,14 @@ class Character:
         self.subscription = None        # joint_states, once loaded
         self.markers = None             # its markers publisher, once loaded
         self.description = self.fallback = None     # while it waits for its URDF
+        self.source = ''                # where its URDF came from, for the log
+        self.told_description = None    # the hash of the last late URDF said to be ignored
         self.waiting = ''               # why it still waits: the URDF its topic gave, refused
         self.reader = cdr.JointStateReader()
         self.inputs = 0
         self.log_times = {}             # its throttled warnings: code -> when last logged
         self.diag_wall = 0.0            # when its diagnostics last went out (monotonic)
+        self.diag_recorded = None       # what the watchdog's last recorded ones said
         self._sequences = {}            # publisher gid -> the last sequence number it sent
 
     @property
@@ -149,7 +153,7 @@ class Character:
             del self._sequences[next(iter(self._sequences))]
 
     def wait_for_description(self, node: 'Node', on_description: Callable,
-                             on_timeout: Callable) -> None:
+                             on_timeout: Callable, wall: 'Clock') -> None:
         """Subscribe its robot_description, and fall back on the shipped one after its timeout.
 
         Raw: bytes that are no String reach ``on_description``, which says so, not the executor.
@@ -157,15 +161,32 @@ class Character:
         :param node: the node subscribing.
         :param on_description: called with (character, raw bytes) when a description comes.
         :param on_timeout: called with the character when its timeout passes first.
+        :param wall: the clock the timeout runs on: wall time, which a simulator not started
+            (``use_sim_time`` without /clock) does not stop.
         """
         self.description = node.create_subscription(
             String, self.names['robot_description'], lambda raw: on_description(self, raw),
             LATCHED, raw=True)
         self.fallback = node.create_timer(self.spec.values['robot_description_timeout'],
-                                          lambda: on_timeout(self))
+                                          lambda: on_timeout(self), clock=wall)
+
+    def late_description(self) -> 'bytes | None':
+        """Return the last robot_description that came since the character loaded, raw, if any.
+
+        Only while it listens on (``attach``'s ``listen``): the subscription is never in the
+        executor's wait set, and the node's watchdog asks here once a tick.
+        """
+        got, last = self.description is not None and self.pipeline is not None, None
+        for _ in range(CrowdInputs.DRAIN if got else 0):
+            taken = self.description.handle.take_message(String, True)
+            if taken is None:
+                break
+            last = taken[0]
+        return last
 
     def attach(self, node: 'Node', pipeline: 'SessionPipeline', index: int, urdf: str,
-               markers_wanted: Callable[['Node'], bool]) -> None:
+               markers_wanted: Callable[['Node'], bool],
+               listen: 'CallbackGroup | None' = None) -> None:
         """Take its loaded pipeline (``index`` in the node's crowd); stop waiting for a URDF.
 
         :param node: the node, which makes its markers publisher.
@@ -173,6 +194,9 @@ class Character:
         :param index: its place in the node's CrowdPipeline.
         :param urdf: the URDF text it was loaded with.
         :param markers_wanted: tells whether markers due now on a publisher have a reader.
+        :param listen: if it waited for its topic, a group the executor never runs: its
+            robot_description stays subscribed there, so a later, different URDF is told
+            (``late_description``) at no cost to the executor; None: unsubscribed.
         """
         self.pipeline, self.index, self.urdf = pipeline, index, urdf
         # The rig and fabrics as loaded, for every recording it joins: the files may change or
@@ -187,6 +211,10 @@ class Character:
             node.destroy_subscription(self.description)
             node.destroy_timer(self.fallback)
             self.description = self.fallback = None
+            if listen is not None:
+                self.description = node.create_subscription(
+                    String, self.names['robot_description'], _never_called, LATCHED,
+                    raw=True, callback_group=listen, event_callbacks=NO_SUB_EVENTS)
         self.markers = node.create_publisher(MarkerArray, self.names['markers'], 10,
                                              event_callbacks=NO_PUB_EVENTS)
         pipeline.markers_wanted = lambda: markers_wanted(self.markers)
@@ -224,7 +252,10 @@ def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str
 
 
 class _TakenElsewhere(CallbackGroup):
-    """A callback group the executor never runs: CrowdInputs takes its subscriptions' messages."""
+    """A callback group the executor never runs: its subscriptions' messages are taken by hand.
+
+    CrowdInputs takes the characters' JointStates; the node's watchdog a late URDF.
+    """
 
     def can_execute(self, entity: object) -> bool:
         return False
@@ -259,7 +290,7 @@ class CrowdInputs(Waitable):
         self._on_inputs = on_inputs
         self._subs = []             # (character, subscription handle, its pointer)
         self._ready = []
-        self._taken_elsewhere = _TakenElsewhere()
+        self.taken_elsewhere = _TakenElsewhere()
 
     def subscribe(self, node: 'Node', character: object, topic: str) -> 'Subscription':
         """Subscribe ``node`` to ``topic`` (raw JointStates, sensor data QoS) for ``character``.
@@ -274,7 +305,7 @@ class CrowdInputs(Waitable):
         """
         subscription = node.create_subscription(
             JointState, topic, _never_called, qos_profile_sensor_data, raw=True,
-            callback_group=self._taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
+            callback_group=self.taken_elsewhere, event_callbacks=NO_SUB_EVENTS)
         handle = subscription.handle
         self._subs.append((character, handle, handle.pointer))
         return subscription
@@ -331,4 +362,4 @@ class CrowdInputs(Waitable):
 
 
 def _never_called(raw: bytes) -> None:
-    """Do nothing: CrowdInputs takes the characters' messages, the executor never calls this."""
+    """Do nothing: its messages are taken by hand, the executor never calls this."""

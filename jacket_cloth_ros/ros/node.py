@@ -20,6 +20,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -36,11 +37,12 @@ from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..recording.disk import no_room
-from ..recording.writer import SessionRecorder
+from ..recording.writer import SessionRecorder, save_unnamed
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         cut_line, input_problems, read_file, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
+from .clock_watch import ClockWatch, guard_clock
 from .parameter_services import guard_parameter_services
 from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PREFIXES,
                          check_value, descriptor, fabric_parameters,
@@ -112,6 +114,11 @@ class JacketClothNode(Node):
         self._record_asked = None       # the record value the open (or failed) file is for
         self._recording_problem = ''    # why that file is not being written, for diagnostics
         self._every = 1                 # the characters of the file (a crowd slices them)
+        # The watchdog and the robot_description fallback run on wall time: with use_sim_time
+        # a simulator not started or paused stops the node's clock, and they must not stop.
+        self._wall = Clock(clock_type=ClockType.STEADY_TIME)
+        self._clock_watch = ClockWatch(self._say_clock)
+        guard_clock(self, self._warn)
         # Messages on the other subscriptions, and those of them refused (undecodable, invalid).
         self.received = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
         self.refused = dict.fromkeys(('wind', 'viewer', 'robot_description'), 0)
@@ -145,10 +152,12 @@ class JacketClothNode(Node):
                 except ConfigError as e:
                     raise ConfigError(f'{c.label}{e}') from None
             else:
-                c.wait_for_description(self, self._on_description, self._use_shipped)
+                c.wait_for_description(self, self._on_description, self._use_shipped,
+                                       self._wall)
         # Diagnostics keep their own rate when inputs stop or nothing else is published.
+        self._watchdog_tick = time.monotonic()
         self._diag_timer = self.create_timer(1.0 / self._diagnostics_rate(),
-                                             self._diagnostics_watchdog)
+                                             self._diagnostics_watchdog, clock=self._wall)
         if crowd:
             self.get_logger().info(
                 f'{len(self.characters)} of {self._every} characters (slice '
@@ -307,7 +316,13 @@ class JacketClothNode(Node):
         if clash:
             raise ConfigError(f'bone frame(s) {", ".join(sorted(clash))} would republish URDF '
                               'links: rename them in the rig (name, below_name)')
-        c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted)
+        # jacket_cloth_node listens on after a URDF from its topic or the shipped one, to say
+        # that a different one later is not taken; a crowd's characters do not (one reader
+        # each).
+        c.attach(self, pipeline, self.crowd.add(pipeline), urdf, self._markers_wanted,
+                 None if self.program == 'jacket_cloth_crowd' else
+                 self._inputs.taken_elsewhere)
+        c.source = source
         for line in pipeline.sim.faults.rig:        # the rig's own, before any input
             self.get_logger().warning(c.label + line)
         if spec.values['publish_world_tf'] and pipeline.root_is_world_frame():
@@ -416,6 +431,8 @@ class JacketClothNode(Node):
                 self.recorder.add_topic(topic, kind, qos)
             self._recording_failed('')
             self.get_logger().info(f'recording the session to {path}')
+            for c in self.characters:       # a new file starts with their diagnostics
+                c.diag_recorded = None
         except FileExistsError:         # made since the check: the exclusive create saw it
             self.recorder = None
             self._refuse_recording(_exists(path))
@@ -617,26 +634,102 @@ class JacketClothNode(Node):
                 else:
                     self.diagnostics.publish(out)
                     c.diag_wall = time.monotonic()
+                    c.diag_recorded = None
                     self._record(self._topics['diagnostics'][0], out, stamp_ns)
 
     def _diagnostics_watchdog(self):
-        """Diagnostics of each character whose inputs' own have not gone out for a period."""
+        """Diagnostics of each character whose inputs' own have not gone out since the last tick.
+
+        On wall time (its timer's clock), as is what else it looks at once a tick: the node's
+        clock (simulated time), a late URDF, the recording's file.
+        """
         now = time.monotonic()
+        since, self._watchdog_tick = self._watchdog_tick, now
+        clock_ns = self.get_clock().now().nanoseconds
+        self._clock_watch.tick(now, self.get_clock().ros_time_is_active, clock_ns)
+        tick = self._diag_timer.timer_period_ns * 1e-9
         for c in self.characters:
             if c.pipeline is None and c.waiting:
                 out = messages.diagnostics(
-                    self.get_clock().now().nanoseconds, self._diagnostics_owner(c), {},
+                    clock_ns, self._diagnostics_owner(c), {},
                     messages.ERROR, f'no character: {c.waiting}; waiting for its topic')
                 self.diagnostics.publish(out)
                 continue
-            if c.pipeline is None or now - c.diag_wall < 1.2 / c.spec.values['diagnostics_rate']:
+            if c.pipeline is None:
+                continue
+            late = c.late_description()
+            if late is not None:
+                self._on_late_description(c, late)
+            # Due when none went out since the last tick and its own period is (nearly) over:
+            # 1.2 periods since the last ones halved the rate (each tick came one period on).
+            if c.diag_wall > since or \
+                    now - c.diag_wall < 1.0 / c.spec.values['diagnostics_rate'] - tick / 2:
                 continue
             last = c.sim.last
-            stamp_ns = last.stamp_ns if last else self.get_clock().now().nanoseconds
+            stamp_ns = last.stamp_ns if last else clock_ns
             out = c.pipeline.diagnostics_now(stamp_ns)
             self.diagnostics.publish(out)
             c.diag_wall = now
-            self._record(self._topics['diagnostics'][0], out, stamp_ns)
+            # Recorded when they say something new: without inputs they repeat at one stamp
+            # (an idle crowd's filled a file by the hour). The stamp is the first 8 bytes.
+            said = out[_DIAG_STAMP_END:]
+            if said != c.diag_recorded:
+                c.diag_recorded = said
+                self._record(self._topics['diagnostics'][0], out, stamp_ns)
+        if self.recorder is not None:
+            self._check_recording_file()
+
+    def _say_clock(self, level, line):
+        # rclpy's logger takes one severity per line of code: a call each.
+        if level == 'warn':
+            self.get_logger().warning(line)
+        else:
+            self.get_logger().info(line)
+
+    def _on_late_description(self, c, raw):
+        """Tell of a URDF on a loaded character's topic: nothing if the same, else one line."""
+        self.received['robot_description'] += 1
+        topic = c.description.topic_name
+        try:
+            text = cdr.deserialize(raw, String).data
+        except cdr.DECODE_ERRORS as e:
+            self.refused['robot_description'] += 1
+            c.warn(self.get_logger(), 'description_decode', f'a {topic} that does not decode '
+                   f'({e}): message dropped')
+            return
+        told = hash(text)
+        if text == c.urdf or told == c.told_description:
+            return
+        c.told_description = told
+        self.refused['robot_description'] += 1
+        self.get_logger().warning(
+            f'{c.label}a different URDF came on {topic}: not taken, the node keeps the '
+            f'character it runs (from {c.source}); restart the node to take it')
+
+    def _check_recording_file(self):
+        """Say, and stop, when another writer replaced or removed the file being recorded.
+
+        Writing on went into a file no path names, lost at its close: what it holds is saved
+        under a new name instead.
+        """
+        recorder = self.recorder
+        problem = recorder.file_problem()
+        if not problem:
+            return
+        kept = recorder.keep_readable()
+        self._close_recorder()
+        try:
+            saved = f'what it holds is saved as {save_unnamed(kept, recorder.path)}'
+        except OSError as e:
+            saved = f'what it held is lost ({e})'
+        text = (f'recording {recorder.path} was {problem} by another process while it was '
+                f'recorded: {saved}; recording stopped (set record to record again)')
+        self._recording_failed(text.removeprefix('recording '))
+        self.get_logger().error(text)
+
+
+# CDR encapsulation (4 bytes) and the header's stamp (8): what follows is what diagnostics say.
+_DIAG_STAMP_END = 12
 
 
 def overwrite_problem(path: str) -> str:

@@ -8,6 +8,7 @@ from dataclasses import fields
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rcl_interfaces.msg import ParameterType as T
 
+from ..core.config import control_character
 from ..core.fabric import FABRIC_RANGES, Fabric
 from ..core.params import SIM_FIELDS, SimParams, check_sim_value
 from ..recording.writer import Compression
@@ -41,8 +42,8 @@ NODE_PARAMETERS = {
                           'URDF text of the character; empty: the latched /robot_description '
                           'topic, else the character shipped in config/'),
     'robot_description_timeout': (T.PARAMETER_DOUBLE, 1.0, (0.0, 60.0), True,
-                                  's to wait for /robot_description before using the shipped '
-                                  'character'),
+                                  's (wall time) to wait for /robot_description before using '
+                                  'the shipped character'),
     'rig_file': (T.PARAMETER_STRING, '', None, True, 'rig YAML; empty: config/jacket_rig.yaml'),
     'fabric_file': (T.PARAMETER_STRING, '', None, True, 'fabric presets YAML; empty: shipped'),
     'fabric_preset': (T.PARAMETER_STRING, 'tweed_jacket', None, True,
@@ -65,7 +66,9 @@ NODE_PARAMETERS = {
     'markers_body': (T.PARAMETER_STRING, 'auto', None, False,
                      'draw a simple body under the jacket on ~/markers: on, off, or auto (on '
                      'when the URDF has no <visual> for RViz\'s RobotModel to show)'),
-    'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False, 'Hz of /diagnostics'),
+    'diagnostics_rate': (T.PARAMETER_DOUBLE, 1.0, (0.1, 50.0), False,
+                         'Hz of /diagnostics: by the inputs\' stamps, by wall time when none '
+                         'bring them'),
     'record': (T.PARAMETER_STRING, '', None, False,
                'where to record the session: an MCAP file (.mcap), else a rosbag2 bag '
                'folder; empty: no recording'),
@@ -80,6 +83,7 @@ BODY_CHOICES = ('auto', 'on', 'off')
 # The longest frame_prefix, world_frame or world_joint taken.
 MAX_NAME = 256
 _NAMES = ('frame_prefix', 'world_frame', 'world_joint')
+_TEXTS = _NAMES + ('record',)     # names and paths: no control characters
 
 # Old names: refused with a hint, never taken for another parameter. ``fabric`` was the preset
 # and also the prefix of ``fabric.*``, which ros2 param dump cannot write.
@@ -166,6 +170,10 @@ def check_value(name: str, value: object) -> str:
     if name == 'markers_rate' and 0 < value < MIN_MARKERS_RATE:
         # Its period must be a number of nanoseconds: 1e-300 Hz made it infinite.
         return f'markers_rate must be 0 (off) or at least {MIN_MARKERS_RATE} Hz'
+    if name in _TEXTS and control_character(value):
+        # Refused, not cleaned: a name that is not what was written would be silently changed.
+        return (f'{name} holds a control character ({control_character(value)}), which a '
+                'log line, a terminal or a viewer shows as another name')
     if name in _NAMES and len(value) > MAX_NAME:
         # Each /tf carries the prefix once per bone: a megabyte one made each message 68 MB.
         return f'{name} is {len(value)} characters long (at most {MAX_NAME})'
