@@ -138,7 +138,9 @@ def test_no_compiled_function_takes_more_than_ten_parameters():
 
 def test_a_simulation_holds_its_model_tuning_and_state_once(make_sim):
     sim = make_sim()
-    assert len(vars(sim)) <= 20, sorted(vars(sim))
+    # 23 since the rig's start-inside check, the M9 grid bones' last good frames (an edge
+    # pressed flat) and the collapse watch: each held here alone.
+    assert len(vars(sim)) <= 23, sorted(vars(sim))
     # The cloth is the state's very array: a write through either is seen by both and by
     # the compiled step, and assigning one writes into it rather than replacing it.
     x = sim.state.x

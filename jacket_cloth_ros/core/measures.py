@@ -131,6 +131,7 @@ class CollapseWatch:
         self._lo, self._share = int(at), at - int(at)
         self._hi = min(self._lo + 1, n - 1)
         self.since_ns = None        # the stamp from which the p99 has been over, if it is
+        self.first_ns = None        # the session's first input: the line says when, from it
         self.looked_ns = None       # the last look's stamp
         self.collapsed = False      # over for COLLAPSED_FOR_S: said once until it recovers
         self.p99 = 0.0              # the last look's

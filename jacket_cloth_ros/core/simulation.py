@@ -220,7 +220,6 @@ class JacketSimulation:
         self._advance_kernel = FixedTypes(step.advance)
         c = self.model.cloth        # issue 47 item 5a: no silent collapse
         self.collapse = CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest)
-        self._first_ns = None       # the first input's stamp: when a collapse is, in the line
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
@@ -523,7 +522,7 @@ class JacketSimulation:
         else:
             fix = (f'lower cloth.max_distance.hem ({float(rig.max_distance[-1]):.2f} m): the hem '
                    'folds over that far from the body')
-        since = (watch.since_ns - (self._first_ns or watch.since_ns)) * 1e-9
+        since = (watch.since_ns - (watch.first_ns or watch.since_ns)) * 1e-9
         kind = 'stretched' if stretched else 'bunched'
         return (f'the cloth is {kind} across from {since:.1f} s on: its horizontal edges\' '
                 f'p99 strain {watch.p99:.0%} for over {COLLAPSED_FOR_S:g} s (most at row {row}); '
@@ -582,7 +581,7 @@ class JacketSimulation:
         if report.reset:
             first = report.reset == 'first sample'
             if first:
-                self._first_ns = sample.stamp_ns
+                self.collapse.first_ns = sample.stamp_ns
             at_load = len(self.faults.rig)      # said at load (the node logs them then)
             if first:
                 self.faults.rig += self._lying_down(sample)
