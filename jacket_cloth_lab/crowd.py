@@ -65,8 +65,7 @@ def crowd_command(n: int, folder: str, threads: int, name: str = 'c') -> list[st
     path = os.path.join(folder, f'crowd_{name}_{n}.yaml')
     with open(path, 'w', encoding='utf-8') as f:
         f.write(f'characters:\n  - name: {name}\n    count: {n}\n    urdf: character.urdf\n')
-    width = len(str(n - 1))
-    names = [name] if n == 1 else [f'{name}_{k:0{width}d}' for k in range(n)]
+    names = [name] if n == 1 else [f'{name}_{k}' for k in range(n)]     # as characters.py
     remaps = [a for each in names for a in ('-r', f'/{each}/joint_states:=/joint_states')]
     return [sys.executable, '-m', 'jacket_cloth_ros.ros.crowd', '--ros-args', '-r',
             f'__node:=jacket_cloth_crowd_{name}', '-p', f'characters:={path}', '-p',

@@ -10,6 +10,7 @@ the tools end in one line and exit 0 or 1), nothing is silent (every message is 
 counted as refused, dropped, undecodable) and nothing is lost (every message sent is seen).
 """
 
+import itertools
 import json
 import math
 import os
@@ -388,15 +389,15 @@ def recordings(tmp_path_factory):
     return [clip.read_bytes(), full.read_bytes()]
 
 
-def _chunk_spans(data):
-    """(start, end) of each Chunk record (opcode 0x06) of an MCAP file."""
+def _chunk_spans(data, opcode=0x06):
+    """(start, end) of each Chunk record (or other ``opcode``'s) of an MCAP file."""
     spans, at = [], 8
     while at + 9 <= len(data):
         op, length = data[at], struct.unpack_from('<Q', data, at + 1)[0]
         end = at + 9 + length
         if end > len(data):
             break
-        if op == 0x06:
+        if op == opcode:
             spans.append((at, end))
         at = end
     return spans
@@ -415,6 +416,41 @@ def test_fuzz_mcap_files_end_in_a_replay_or_one_line(recordings, tmp_path, capsy
             data = mutate(rng, seed)
         path.write_bytes(data)
         _replays_or_says_why(path, out, capsys)
+
+
+def test_fuzz_a_flipped_bit_is_refused_or_changes_nothing(recordings, tmp_path):
+    """One bit flipped anywhere: the file is refused, or read with every byte it was written.
+
+    Issue 48 item 4: 9 of the 10 flips of 200 that replayed were in the set-up records, which
+    no CRC covered; a flip in them must now be refused, every time.
+    """
+    from jacket_cloth_ros.recording.reader import RecordingError, read_recording
+    rng = random.Random(SEED)
+    path = tmp_path / 'flipped.mcap'
+    originals = []
+    for data in recordings:
+        path.write_bytes(data)
+        whole = read_recording(str(path))
+        originals.append((data, [(m.topic, m.log_time, m.data) for m in whole.messages],
+                          whole.metadata, _chunk_spans(data, 0x0C)))     # Metadata records
+    setup_flips = 0
+    for case in itertools.chain(range(50), _until(SECONDS)):   # 50 in the set-up, at least
+        data, messages, metadata, setups = rng.choice(originals)
+        in_setup = setups and (rng.random() < 0.5 or setup_flips < 50)
+        at = rng.randrange(*rng.choice(setups)) if in_setup else rng.randrange(len(data))
+        flipped = bytearray(data)
+        flipped[at] ^= 1 << rng.randrange(8)
+        path.write_bytes(bytes(flipped))
+        try:
+            got = read_recording(str(path))
+        except RecordingError as e:
+            assert '\n' not in str(e), (SEED, at, str(e))
+            setup_flips += bool(in_setup)
+            continue
+        assert not in_setup, (SEED, at, 'a flip in a metadata record was read')
+        assert [(m.topic, m.log_time, m.data) for m in got.messages] == messages, (SEED, at)
+        assert got.metadata == metadata, (SEED, at)
+    assert setup_flips >= 50
 
 
 def _session_setup_cases(rng, setup):
@@ -560,6 +596,87 @@ def test_fuzz_yaml_set_ups_load_or_name_the_file(skeleton):
             assert message.startswith('fuzz.yaml') and '\n' not in message, (SEED, message)
             assert len(message) < 2000, (SEED, message[:300])
         assert time.process_time() - start < 5, (SEED, 'a parse spun', text[:300])
+
+
+def _mappings(node, out):
+    """Every mapping of a parsed YAML or JSON tree, into ``out``."""
+    if isinstance(node, dict):
+        out.append(node)
+        for value in node.values():
+            _mappings(value, out)
+    elif isinstance(node, list):
+        for value in node:
+            _mappings(value, out)
+    return out
+
+
+def _with_a_key_twice(rng, data):
+    """YAML text of ``data`` with a key of one of its mappings given a second time."""
+    mapping = rng.choice([m for m in _mappings(data, []) if m])
+    key = rng.choice(list(mapping))
+    mapping['__twice__'] = _random_value(rng)
+    text = yaml.safe_dump(data)
+    del mapping['__twice__']
+    spelled = yaml.safe_dump({key: 0}).rsplit(': 0', 1)[0]
+    assert text.count('__twice__:') == 1
+    return text.replace('__twice__:', spelled + ':'), key
+
+
+def test_fuzz_a_key_given_twice_in_any_yaml_the_project_reads_is_refused(
+        recordings, tmp_path):
+    """Rig, fabrics, characters, params, bag metadata and recorded set-ups (issue 48 item 2).
+
+    A key given twice in one mapping is refused in one line naming it, wherever it is: a YAML
+    reader keeps the last one, so the first was silently lost.
+    """
+    import glob
+
+    from jacket_cloth_ros.core.config import config_dir, load_yaml
+    from jacket_cloth_ros.recording.reader import RecordingError, mcap_files, read_recording
+    from jacket_cloth_ros.recording.writer import SESSION_CONFIG
+    from jacket_cloth_ros.ros.parameters import params_file_problem
+    from jacket_cloth_ros.tools.session import recorded_parameters
+    rng = random.Random(SEED)
+    folder = config_dir()
+    texts = {os.path.relpath(p, folder): open(p, encoding='utf-8').read()
+             for p in sorted(glob.glob(os.path.join(folder, '**', '*.yaml'), recursive=True))
+             if '/view/' not in p}         # RViz's and Foxglove's files, not read here
+    assert {'jacket_rig.yaml', 'fabrics.yaml', 'crowd.yaml', 'node_params.yaml'} <= set(texts)
+    full = tmp_path / 'full.mcap'
+    full.write_bytes(recordings[1])
+    setup = read_recording(str(full)).metadata[SESSION_CONFIG]
+    for key in ('rig_yaml', 'fabrics_yaml'):
+        texts[f'recorded {key}'] = setup[key]
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    texts['bag metadata.yaml'] = ('rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
+                                  '  relative_file_paths: [full.mcap]\n  version: 9\n')
+    path = tmp_path / 'twice.yaml'
+    for case in _until(SECONDS):
+        name = rng.choice(sorted(texts) + ['recorded parameters_json'])
+        if name == 'recorded parameters_json':
+            values = json.loads(setup['parameters_json'])
+            key = rng.choice(sorted(values))
+            text = json.dumps(values)[:-1] + f', {json.dumps(key)}: {json.dumps(values[key])}}}'
+            with pytest.raises(ConfigError) as raised:
+                recorded_parameters({'parameters_json': text}, 'fuzz parameter')
+            message = str(raised.value)
+        else:
+            text, key = _with_a_key_twice(rng, yaml.safe_load(texts[name]))
+            if name == 'node_params.yaml':
+                path.write_text(text)
+                message = params_file_problem(['--ros-args', '--params-file', str(path)])
+            elif name == 'bag metadata.yaml':
+                (bag / 'metadata.yaml').write_text(text)
+                with pytest.raises(RecordingError) as raised:
+                    mcap_files(str(bag))
+                message = str(raised.value)
+            else:
+                path.write_text(text)
+                with pytest.raises(ConfigError) as raised:
+                    load_yaml(str(path))
+                message = str(raised.value)
+        assert 'given twice' in message and '\n' not in message, (SEED, name, key, message)
 
 
 def test_fuzz_characters_files_load_or_name_the_file(tmp_path):

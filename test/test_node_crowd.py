@@ -332,8 +332,10 @@ def test_copies_are_characters_of_their_own(tmp_path):
     path = tmp_path / 'crowd.yaml'
     path.write_text('characters: [{name: walker, count: 12, urdf: character.urdf}]')
     specs = load_characters(str(path))
-    assert [s.name for s in specs][:3] == ['walker_00', 'walker_01', 'walker_02']
+    # The names docs/crowd.md gives, <name>_0 .. <name>_N-1, unpadded past 10 (issue 48).
+    assert [s.name for s in specs] == [f'walker_{k}' for k in range(12)]
     assert specs[11].values['frame_prefix'] == 'walker_11/'
+    assert specs[1].namespace == '/walker_1'
     assert len({s.namespace for s in specs}) == 12
     assert np.all([s.urdf == specs[0].urdf for s in specs])
 

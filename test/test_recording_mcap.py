@@ -9,7 +9,7 @@ import zlib
 
 import pytest
 from mcap.reader import NonSeekingReader, SeekingReader
-from mcap.records import Chunk, ChunkIndex, MessageIndex
+from mcap.records import Chunk, ChunkIndex, DataEnd, MessageIndex
 from mcap.stream_reader import StreamReader, get_chunk_data_stream
 
 from jacket_cloth_ros.recording.mcap_file import McapWriter
@@ -57,6 +57,11 @@ def test_mcap_readers_get_every_message_back_with_crcs_checked(compression):
     footer = len(data) - 8 - 29
     summary_start, _, crc = struct.unpack_from('<QQI', data, footer + 9)
     assert zlib.crc32(data[summary_start:footer + 25]) == crc != 0
+    # DataEnd's CRC covers the data section, from the magic to DataEnd (issue 48 item 4: it
+    # was 0, so no reader could tell a changed set-up record).
+    data_end = summary_start - 13
+    assert data[data_end] == 0x0F
+    assert struct.unpack_from('<I', data, data_end + 9)[0] == zlib.crc32(data[:data_end]) != 0
 
 
 def test_chunk_and_message_indexes_point_at_their_records():
@@ -189,6 +194,9 @@ def test_a_full_disk_keeps_what_fits_of_the_chunk_it_filled_in_and_ends_the_file
     assert got == [(i, sent[i]) for i in range(len(got))]
     summary = SeekingReader(io.BytesIO(data)).get_summary()
     assert summary.statistics.message_count == len(got)
+    # The data section's CRC is of the bytes the file kept, not of the ones cut back.
+    records = list(StreamReader(io.BytesIO(data), validate_crcs=True).records)
+    assert [r.data_section_crc for r in records if isinstance(r, DataEnd)] != [0]
     path = tmp_path / 'full.mcap'
     path.write_bytes(data)
     recording = read_recording(str(path))

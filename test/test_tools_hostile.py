@@ -524,3 +524,218 @@ def test_a_picture_holds_the_markers_it_draws_not_the_sessions(tmp_path):
         tracemalloc.stop()
     assert len(frames) == 3 and len(sizes) > 50
     assert peak < sum(sizes) / 4, (peak, sum(sizes), count_messages(str(session)))
+
+
+# Issue 48: hostile input, round four (files and tools).
+
+def _twice(text, key, value):
+    """``text`` (a YAML file) with ``key: value`` given again at its end, at the top level."""
+    return text.rstrip('\n') + f'\n{key}: {value}\n'
+
+
+@pytest.mark.parametrize('name, key, value', [
+    ('jacket_rig.yaml', 'colliders', '[]'), ('fabrics.yaml', 'tweed_jacket', '{}'),
+    ('crowd.yaml', 'characters', '[]')])
+def test_a_key_given_twice_in_a_config_file_is_refused_with_both_lines(
+        tmp_path, name, key, value):
+    # A rig ending in a second ``colliders: []`` ran with no colliders: the last one won.
+    from jacket_cloth_ros.core.config import ConfigError, shipped
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import load_skeleton
+    from jacket_cloth_ros.ros.characters import load_characters
+    text = open(shipped(name), encoding='utf-8').read()
+    first = 1 + next(k for k, line in enumerate(text.splitlines()) if line.startswith(key + ':'))
+    path = tmp_path / name
+    path.write_text(_twice(text, key, value))
+    load = {'jacket_rig.yaml': lambda: load_rig(load_skeleton(shipped('character.urdf')),
+                                                str(path)),
+            'fabrics.yaml': lambda: load_fabrics(str(path)),
+            'crowd.yaml': lambda: load_characters(str(path))}[name]
+    with pytest.raises(ConfigError) as raised:
+        load()
+    message = str(raised.value)
+    assert message == (f'{path}: line {len(text.splitlines()) + 1}: {key!r} is given twice '
+                       f'(first at line {first}), and a YAML reader keeps only the last'), message
+
+
+def test_a_key_given_twice_in_a_recorded_set_up_or_a_bag_is_refused(
+        replayed, clip, tmp_path, capsys):
+    import json
+    inputs, setup = replayed
+    cases = [({**setup, 'rig_yaml': _twice(setup['rig_yaml'], 'colliders', '[]')},
+              "the recorded rig: line"),
+             ({**setup, 'fabrics_yaml': _twice(setup['fabrics_yaml'], 'tweed_jacket', '{}')},
+              'the recorded fabrics: line'),
+             ({**setup, 'parameters_json': json.dumps(json.loads(setup['parameters_json']))[:-1]
+               + ', "sim_rate": 130}'}, "the recorded parameters: 'sim_rate' is")]
+    for k, (changed, expected) in enumerate(cases):
+        path = tmp_path / f'setup{k}.mcap'
+        _with_setup(inputs, changed, path)
+        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+        assert f'{path}: {expected}' in err and 'given twice' in err, err
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    (bag / 'a.mcap').write_bytes(clip.read_bytes())
+    (bag / 'metadata.yaml').write_text(
+        'rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
+        '  relative_file_paths: [a.mcap]\n  relative_file_paths: []\n')
+    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    assert "'relative_file_paths' is given twice (first at line 3)" in err, err
+
+
+def _flipped(path, at, bit=0):
+    data = bytearray(path.read_bytes())
+    data[at] ^= 1 << bit
+    return bytes(data)
+
+
+def test_a_bit_flipped_in_the_recorded_set_up_fails_the_files_crc(replayed, clip, tmp_path,
+                                                                  capsys):
+    # DataEnd's CRC was 0: sim_rate 120 -> 130 (one bit) replayed at 130 Hz with exit 0.
+    full = tmp_path / 'full.mcap'
+    assert main(['replay', str(clip), '-o', str(full)]) == 0
+    data = full.read_bytes()
+    at = data.index(b'"sim_rate": 120') + len('"sim_rate": 1')
+    path = tmp_path / 'flipped.mcap'
+    path.write_bytes(_flipped(full, at))
+    assert b'"sim_rate": 130' in path.read_bytes()
+    err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+    assert err.endswith(f'{path}: damaged file (its data section fails its CRC check: a byte '
+                        'of its set-up, channels or messages changed after it was written); '
+                        'nothing read'), err
+
+
+def _tailed_character(n):
+    """The shipped character with a chain of ``n`` links hanging from its pelvis (a tail)."""
+    from jacket_cloth_ros.core.config import shipped
+    text = open(shipped('character.urdf'), encoding='utf-8').read()
+    links = ''.join(f'<link name="tail{i}"/>' for i in range(n))
+    parents = ['base_link'] + [f'tail{i}' for i in range(n - 1)]
+    joints = ''.join(
+        f'<joint name="tail_j{i}" type="revolute"><parent link="{parent}"/><child '
+        f'link="tail{i}"/><origin xyz="{-0.1 if i == 0 else 0} 0 {0 if i == 0 else -0.0005}"/>'
+        '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        for i, parent in enumerate(parents))
+    return text.replace('</robot>', links + joints + '</robot>')
+
+
+def test_a_rig_is_proposed_for_a_character_with_a_tail_of_a_thousand_links(tmp_path, capsys):
+    # The proposal counted leaves by a recursion per link: a RecursionError traceback.
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import MAX_LINKS, load_skeleton
+    urdf = tmp_path / 'tailed.urdf'
+    urdf.write_text(_tailed_character(MAX_LINKS - 40))
+    out = tmp_path / 'rig.yaml'
+    assert main(['rig', '--urdf', str(urdf), '-o', str(out)]) == 0, capsys.readouterr().err
+    skeleton = load_skeleton(str(urdf))
+    assert len(skeleton.link_names) > 2000
+    assert load_rig(skeleton, str(out)).rows > 0
+
+
+def _fan_bvh(joints):
+    """A BVH whose root carries ``joints`` joints of three rotation channels and an end each."""
+    parts = ['HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition '
+             'Zposition Zrotation Xrotation Yrotation\n']
+    parts += [f'  JOINT J{i}\n  {{\n    OFFSET 0 10 0\n    CHANNELS 3 Zrotation Xrotation '
+              'Yrotation\n    End Site\n    {\n      OFFSET 0 10 0\n    }\n  }\n'
+              for i in range(joints)]
+    row = ' '.join(['0'] * (6 + 3 * joints)) + '\n'
+    return ''.join(parts) + '}\nMOTION\nFrames: 2\nFrame Time: 0.01\n' + row * 2
+
+
+@pytest.mark.parametrize('text, expected', [
+    (_BVH.format(offset='0 1e305 0', time='0.01'), 'the OFFSET of Spine reaches 1e+302 m at '
+     '0.001 m per unit, beyond the 1000 m a skeleton may'),
+    (_fan_bvh(600), 'its skeleton would be 2401 links as a URDF, over the 2048 a character '
+     'may have'),
+])
+def test_import_refuses_a_skeleton_no_tool_takes_before_writing(
+        tmp_path, capsys, text, expected):
+    # It wrote a URDF of 1e302 m bones, or of 30,002 links, that every other tool refused.
+    src = tmp_path / 'c.bvh'
+    src.write_text(text)
+    out, urdf = tmp_path / 'o.mcap', tmp_path / 'c.urdf'
+    err = _one_line_error(capsys, ['import', str(src), '-o', str(out), '--urdf-out', str(urdf)])
+    assert err == f'jacket_cloth import: {src}: {expected}', err
+    assert not out.exists() and not urdf.exists()
+    # Within the limits, what it writes loads.
+    src.write_text(_fan_bvh(500))
+    assert main(['import', str(src), '-o', str(out), '--urdf-out', str(urdf)]) == 0
+    from jacket_cloth_ros.core.skeleton import load_skeleton
+    assert len(load_skeleton(str(urdf)).link_names) == 2001
+
+
+@pytest.mark.parametrize('encoding', ['json', 'protobuf', 'ros1'])
+def test_a_channel_declared_in_another_encoding_is_refused_not_decoded_as_cdr(
+        replayed, tmp_path, capsys, encoding):
+    inputs, _ = replayed
+    out = io.BytesIO()
+    w = McapWriter(out, compression='zstd')
+    w.start(profile='ros2', library='test')
+    from jacket_cloth_ros.recording.definitions import ros2msg_schema
+    schema = w.register_schema('sensor_msgs/msg/JointState', 'ros2msg',
+                               ros2msg_schema('sensor_msgs/msg/JointState').encode())
+    channel = w.register_channel('/joint_states', encoding, schema)
+    for data, stamp in inputs:          # CDR bytes: today's reader replayed them as such
+        w.add_message(channel, stamp, data, stamp)
+    w.finish()
+    path = tmp_path / f'{encoding}.mcap'
+    path.write_bytes(out.getvalue())
+    for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
+                 ['picture', str(path), '-o', str(tmp_path / 'p.png'), '--urdf',
+                  _shipped('character.urdf')]):
+        err = _one_line_error(capsys, argv)
+        assert err.endswith(f"{path}: /joint_states (sensor_msgs/msg/JointState) is declared "
+                            f"'{encoding}'-encoded; only cdr (ROS 2) messages are read"), err
+
+
+def _shipped(name):
+    from jacket_cloth_ros.core.config import shipped
+    return shipped(name)
+
+
+def test_unknown_keys_of_a_recorded_set_up_are_named_in_one_warning(replayed, tmp_path, capsys):
+    # The node refuses a parameter it does not have; a replay dropped them without a word.
+    inputs, setup = replayed
+    path = tmp_path / 'newer.mcap'
+    _with_setup(inputs, {**_parameters(setup, sim_rte=90.0), 'urdf_v2': '<robot/>'}, path)
+    capsys.readouterr()
+    assert main(['replay', str(path), '-o', str(tmp_path / 'o.mcap')]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if 'warning' in line]
+    assert warnings == [f'jacket_cloth replay: warning: {path}: its recorded set-up holds what '
+                        "this version does not know (ignored): key(s) 'urdf_v2'; parameter(s) "
+                        "'sim_rte'"], warnings
+
+
+def test_a_picture_of_inputs_only_says_what_it_found_and_what_it_needs(clip, tmp_path, capsys):
+    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
+                                   '--urdf', _shipped('character.urdf')])
+    assert err.endswith(f"{clip}: nothing to draw: it holds 61 JointState and 0 MarkerArray "
+                        "messages; a picture needs the simulation's markers: replay it first "
+                        '(jacket_cloth replay IN -o OUT), then draw OUT'), err
+
+
+def test_a_mimic_cycle_is_named_as_one_and_a_mimic_of_a_mimic_follows_its_source():
+    from jacket_cloth_ros.core.config import ConfigError
+    from jacket_cloth_ros.core.skeleton import Skeleton
+
+    def joint(name, child, mimic=None, factor=1.0, offset=0.0):
+        follows = '' if mimic is None else \
+            f'<mimic joint="{mimic}" multiplier="{factor}" offset="{offset}"/>'
+        return (f'<joint name="{name}" type="revolute"><parent link="l{child - 1}"/><child '
+                f'link="l{child}"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" '
+                f'velocity="1"/>{follows}</joint>')
+    links = ''.join(f'<link name="l{i}"/>' for i in range(4))
+    robot = '<robot name="r">' + links + '{}</robot>'
+    with pytest.raises(ConfigError, match=r"^URDF: 2 joints mimic each other in a cycle "
+                       r"\(a -> b -> a\): none follows a joint that moves$"):
+        Skeleton(robot.format(joint('a', 1, 'b') + joint('b', 2, 'a') + joint('c', 3)))
+    with pytest.raises(ConfigError, match="^URDF: joint 'a' mimics itself"):
+        Skeleton(robot.format(joint('a', 1, 'a') + joint('b', 2) + joint('c', 3)))
+    # a = 2 b + 0.1, b = 3 c + 0.2: a = 6 c + 0.5, as joint_state_publisher computes it.
+    sk = Skeleton(robot.format(joint('a', 1, 'b', 2.0, 0.1) + joint('b', 2, 'c', 3.0, 0.2)
+                               + joint('c', 3)))
+    assert sk.joint_names == ['c']
+    assert sk.mult[1:].tolist() == [6.0, 3.0, 1.0]
+    assert sk.offset[1:].tolist() == pytest.approx([0.5, 0.2, 0.0])

@@ -69,10 +69,44 @@ def control_character(text: str) -> str:
     return ''
 
 
+class DuplicateKey(yaml.YAMLError):
+    """A key given twice in one mapping: a YAML reader keeps the last, so one is silently lost.
+
+    :param key: the key.
+    :param line: the line (from 1) of its second occurrence.
+    :param first: the line of its first.
+    """
+
+    def __init__(self, key: object, line: int, first: int):
+        super().__init__(f'line {line}: {shown(key)} is given twice (first at line {first}), '
+                         'and a YAML reader keeps only the last')
+        self.key, self.line, self.first = key, line, first
+
+
 class _BoundedLoader(yaml.SafeLoader):
-    """SafeLoader that refuses aliases and deep nesting, so no file expands beyond its size."""
+    """SafeLoader that refuses aliases, deep nesting and a key given twice in one mapping.
+
+    So no file expands beyond its size, and none says two things of which one is dropped (a
+    rig ending in a second ``colliders: []`` ran with no colliders).
+    """
 
     _depth = 0
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen = {}
+            for key_node, _ in node.value:
+                if key_node.tag == 'tag:yaml.org,2002:merge':
+                    continue                # ``<<``: its keys may be overridden by design
+                key = self.construct_object(key_node, deep=True)
+                line = key_node.start_mark.line + 1
+                try:
+                    if key in seen:
+                        raise DuplicateKey(key, line, seen[key])
+                except TypeError:
+                    continue                # unhashable: SafeLoader says so itself
+                seen[key] = line
+        return super().construct_mapping(node, deep)
 
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):
@@ -167,6 +201,8 @@ def parse_yaml(text: str, where: str) -> dict:
     """
     try:
         data = bounded_load(text)
+    except DuplicateKey as e:
+        raise ConfigError(f'{where}: {e}') from None
     except yaml.YAMLError as e:
         raise ConfigError(f'{where}: not valid YAML ({_one_line(e)})') from None
     if not isinstance(data, dict):
@@ -203,6 +239,8 @@ def load_yaml(path: str) -> dict:
         raise ConfigError(f'{path}: cannot read ({e.strerror})') from None
     except UnicodeDecodeError as e:
         raise ConfigError(f'{path}: not a UTF-8 text file (byte {e.start})') from None
+    except DuplicateKey as e:
+        raise ConfigError(f'{path}: {e}') from None
     except yaml.YAMLError as e:
         raise ConfigError(f'{path}: not valid YAML ({_one_line(e)})') from None
     if not isinstance(data, dict):

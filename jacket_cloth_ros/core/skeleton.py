@@ -120,12 +120,12 @@ class Skeleton:
                     self.var[k] = len(self.joint_names)
                     self.joint_names.append(j.name)
         index = {name: v for v, name in enumerate(self.joint_names)}
+        mimicking = {j.name: j for _, j in mimics}
         for k, j in mimics:
-            if j.mimic.joint not in index:
-                raise ConfigError(f'URDF: joint {j.name!r} mimics unknown joint {j.mimic.joint!r}')
-            self.var[k] = index[j.mimic.joint]
-            self.mult[k] = j.mimic.multiplier if j.mimic.multiplier is not None else 1.0
-            self.offset[k] = j.mimic.offset if j.mimic.offset is not None else 0.0
+            source, self.mult[k], self.offset[k] = _mimicked(j, mimicking)
+            if source not in index:
+                raise ConfigError(f'URDF: joint {j.name!r} mimics unknown joint {source!r}')
+            self.var[k] = index[source]
             _check_numbers(j.name, 'mimic multiplier and offset',
                            [self.mult[k], self.offset[k]], 100.0)
         self.joint_index = index
@@ -150,6 +150,34 @@ class Skeleton:
         world = np.empty((len(self.link_names), 4, 4))
         forward_kinematics(self.model, floats(q), world)
         return world
+
+
+def _mimicked(joint, mimicking):
+    """Return (the driven joint, multiplier, offset) a mimic joint follows, through mimics.
+
+    A mimic of a mimic follows the first's source, its factors composed (as
+    joint_state_publisher does); joints that mimic each other round a cycle follow nothing.
+
+    :param joint: a mimic joint of urdf_parser_py.
+    :param mimicking: every mimic joint, by name.
+    """
+    chain, mult, offset = [joint.name], 1.0, 0.0
+    while True:
+        m = joint.mimic
+        factor = m.multiplier if m.multiplier is not None else 1.0
+        offset += mult * (m.offset if m.offset is not None else 0.0)
+        mult *= factor
+        if m.joint not in mimicking:
+            return m.joint, mult, offset
+        if m.joint in chain:
+            cycle = chain[chain.index(m.joint):] + [m.joint]
+            shown_cycle = cycle if len(cycle) <= 6 else cycle[:5] + ['...', m.joint]
+            who = (f'joint {cycle[0]!r} mimics itself' if len(cycle) == 2 else
+                   f'{len(cycle) - 1} joints mimic each other in a cycle '
+                   f'({" -> ".join(shown_cycle)})')
+            raise ConfigError(f'URDF: {who}: none follows a joint that moves')
+        chain.append(m.joint)
+        joint = mimicking[m.joint]
 
 
 def _is_world(robot, root, children):

@@ -38,6 +38,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.config import MAX_COORDINATE, ConfigError
+from ..core.skeleton import MAX_LINKS, Skeleton
 from ..core.transforms import matrix_to_quat
 
 if TYPE_CHECKING:           # for the annotations only: pybvh is imported when a file is read
@@ -94,6 +96,10 @@ def read_bvh(path: str) -> Bvh:
         raise BvhError(f'{path}: no such file')
     if os.path.getsize(path) == 0:
         raise BvhError(f'{path}: empty file')
+    links = _urdf_links(path)
+    if links > MAX_LINKS:           # before the reader spends seconds on it
+        raise BvhError(f'{path}: its skeleton would be {links} links as a URDF, over the '
+                       f'{MAX_LINKS} a character may have')
     try:
         with warnings.catch_warnings():
             # The capture is Y-up by the format's convention: no guessing, so no warning.
@@ -114,6 +120,32 @@ def read_bvh(path: str) -> Bvh:
         if not np.isfinite(np.asarray(node.offset, dtype=float)).all():
             raise BvhError(f'{path}: the OFFSET of {node.name} is not three finite numbers')
     return bvh
+
+
+def _urdf_links(path):
+    """Count the links the import would make of the file's HIERARCHY, read up to MOTION.
+
+    The root, one a rotation channel of every other joint, and one an End Site; a file that
+    is no BVH counts few, and the reader says what is wrong with it.
+    """
+    links, channels_seen = 1, 0
+    try:
+        with open(path, encoding='utf-8', errors='replace') as f:
+            for line in f:
+                words = line.split()
+                if not words:
+                    continue
+                if words[0] == 'MOTION':
+                    break
+                if words[0] == 'End':
+                    links += 1
+                elif words[0] == 'CHANNELS':
+                    channels_seen += 1
+                    if channels_seen > 1:       # the root's are the world joint's
+                        links += sum(w.endswith('rotation') for w in words[2:])
+    except OSError:
+        return 0                    # the reader says so
+    return links
 
 
 def rest_offsets(bvh: Bvh) -> np.ndarray:
@@ -253,7 +285,18 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
         scale, _ = guess_scale(bvh)
     if not (scale > 0 and math.isfinite(scale)):
         raise BvhError(f'scale must be a positive number, not {scale}')
+    for node in bvh.nodes[1:]:
+        reach = float(np.abs(np.asarray(node.offset, dtype=float)).max()) * scale
+        if not reach <= MAX_COORDINATE:
+            part = f'the End Site of {node.parent.name}' if node.is_end_site() else node.name
+            raise BvhError(f'the OFFSET of {part} reaches {reach:g} m at {scale:g} m per unit, '
+                           f'beyond the {MAX_COORDINATE:g} m a skeleton may')
     urdf, joint_names, link_names = _urdf(bvh, name, scale)
+    try:            # the limits every tool applies to a URDF, before anything is written
+        Skeleton(urdf)
+    except ConfigError as e:
+        raise BvhError(f'its skeleton as a URDF is refused ({str(e).removeprefix("URDF: ")})'
+                       ) from None
     angles = continuous_angles(bvh.joint_angles)
     # joint_angles holds the root first, then each joint in file order, as the URDF does.
     positions = angles[:, 1:, :].reshape(len(angles), -1)
@@ -276,7 +319,11 @@ def load_capture(path: str, scale: float | None = None) -> Capture:
     :param scale: metres per BVH unit; None: ``guess_scale``'s.
     """
     name = os.path.splitext(os.path.basename(path))[0] or 'capture'
-    return convert(read_bvh(path), name, scale)
+    bvh = read_bvh(path)
+    try:
+        return convert(bvh, name, scale)
+    except BvhError as e:
+        raise BvhError(f'{path}: {e}') from None
 
 
 def joint_state_content(capture: Capture, frame: int,

@@ -61,6 +61,7 @@ class _Written:
     counts: dict = field(default_factory=dict)     # channel id -> its messages in the chunk
     start: int = 0
     end: int = 0
+    crc: int = 0                    # the data section's CRC before it: a cut back to ``at``
 
 
 def _compressor(name):
@@ -111,6 +112,10 @@ class McapWriter:
         self._chunk_bytes = chunk_bytes
         self._run = run or (lambda work, *args: work(*args))
         self._records = RecordBuilder()         # only in ``run``'s work
+        # The data section's CRC (DataEnd's), of every byte written so far: a flipped bit in
+        # the set-up records (sim_rate 120 -> 130) then fails the file's check, as a chunk's
+        # does. Kept as the bytes go out, and put back with them when a write is cut back.
+        self._crc = 0
         self._schemas = []
         self._channels = []
         # The summary's chunk index, one record a chunk, waits in an unnamed temporary file
@@ -147,12 +152,18 @@ class McapWriter:
             self._put(self._records.end())
 
     def _put(self, data):
-        """Write all of ``data`` to the file."""
+        """Write all of ``data`` to the file, counted in the data section's CRC."""
         _write_all(self._stream, data)
+        self._crc = zlib.crc32(data, self._crc)
 
     def _whole(self):
-        """Roll the file back to where it is now if the block's writes find no room."""
-        return _RollBack(self._stream)
+        """Roll the file (and the CRC) back to where it is now if the block finds no room."""
+        return _RollBack(self._stream, self)
+
+    def _cut(self, at, crc):
+        """Cut the file back to ``at``, where the data section's CRC was ``crc``."""
+        _rollback(self._stream, at)
+        self._crc = crc
 
     def start(self, profile: str = '', library: str = 'jacket_cloth_ros') -> None:
         """Write the magic and the header record.
@@ -160,7 +171,7 @@ class McapWriter:
         :param profile: the MCAP profile ('ros2' for ROS 2 messages).
         :param library: the writer's name, as the header says it.
         """
-        self._run(self._stream.write, MAGIC)
+        self._run(self._put, MAGIC)
         self._run(self._write_records, Header(profile=profile, library=library))
 
     def register_schema(self, name: str, encoding: str, data: bytes) -> int:
@@ -296,7 +307,7 @@ class McapWriter:
         """Write a chunk and its message indexes, whole or (on no room) not at all."""
         packed = self._compress(raw) if self._compress else raw
         compression = self._compression.encode()
-        at = self._stream.tell()
+        at, crc = self._stream.tell(), self._crc
         length = 8 + 8 + 8 + 4 + 4 + len(compression) + 8 + len(packed)
         head = (_CHUNK_HEAD.pack(Opcode.CHUNK, length, start, end, len(raw), zlib.crc32(raw))
                 + struct.pack('<I', len(compression)) + compression
@@ -317,7 +328,8 @@ class McapWriter:
             message_index_length=len(indexes), compression=self._compression,
             compressed_size=len(packed), uncompressed_size=len(raw)).write(self._records)
         return _Written(at, self._records.end(),
-                        {c: len(records) for c, records in message_indexes.items()}, start, end)
+                        {c: len(records) for c, records in message_indexes.items()}, start, end,
+                        crc)
 
     def finish(self, closing: Callable[[dict, tuple], dict] | None = None) -> None:
         """Write the last chunk, the summary and the footer (through ``run``, after all else).
@@ -342,7 +354,7 @@ class McapWriter:
     def _write_end(self, closing):
         pieces = self._write_held()
         while True:
-            at, metadata = self._stream.tell(), len(self._metadata_indexes)
+            at, crc, metadata = self._stream.tell(), self._crc, len(self._metadata_indexes)
             try:
                 self._write_closing(pieces, closing)
                 break
@@ -350,11 +362,12 @@ class McapWriter:
                 if not no_room(e):
                     raise
                 del self._metadata_indexes[metadata:]
-                _rollback(self._stream, at)
+                self._cut(at, crc)
                 if not pieces:
                     self.unwritten = self._unwritten(pieces)
                     raise
-                _rollback(self._stream, pieces.pop().at)     # its room for the summary's
+                piece = pieces.pop()
+                self._cut(piece.at, piece.crc)              # its room for the summary's
         self.unwritten = self._unwritten(pieces)
         self._held = []
         self._chunk_index_file.close()
@@ -400,7 +413,7 @@ class McapWriter:
                 self._index_tail + [p.index_record for p in pieces]))
 
     def _write_summary(self, statistics, more_chunk_indexes):
-        self._write_records(DataEnd(data_section_crc=0))
+        self._write_records(DataEnd(data_section_crc=self._crc))
         summary_start = self._stream.tell()
         offsets = []
         crc = 0
@@ -482,15 +495,24 @@ def _rollback(stream, at):
 
 
 class _RollBack:
-    """A block whose writes are whole or none: on no room, the file is cut back to its start."""
+    """A block whose writes are whole or none: on no room, the file is cut back to its start.
 
-    def __init__(self, stream):
+    :param stream: the file.
+    :param writer: the McapWriter whose data section CRC is put back with the file; None: none.
+    """
+
+    def __init__(self, stream, writer=None):
         self._stream = stream
+        self._writer = writer
 
     def __enter__(self):
         self._at = self._stream.tell()
+        self._crc = self._writer._crc if self._writer is not None else 0
 
     def __exit__(self, kind, error, trace):
         if error is not None and no_room(error):
-            _rollback(self._stream, self._at)
+            if self._writer is not None:
+                self._writer._cut(self._at, self._crc)
+            else:
+                _rollback(self._stream, self._at)
         return False

@@ -18,7 +18,8 @@ from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
 from mcap.records import Channel, Metadata, Schema
 
-from ..core.config import MAX_YAML_BYTES, ConfigError, bounded_load, regular_file_or_refuse
+from ..core.config import (
+    MAX_YAML_BYTES, ConfigError, bounded_load, regular_file_or_refuse, shown)
 
 try:
     import lz4.frame
@@ -213,6 +214,8 @@ def _read_file(path, wanted, out):
             out.complete = False    # a killed writer's file: its readable part is kept
         except _Damage as e:
             raise RecordingError(f'{path}: damaged file ({e}); nothing read') from None
+        except _Foreign as e:
+            raise RecordingError(f'{path}: {e}') from None
 
 
 def _open_recording(path):
@@ -234,6 +237,10 @@ class _Damage(Exception):
     """A record that no MCAP writer writes; the message is one line."""
 
 
+class _Foreign(Exception):
+    """A message whose channel declares an encoding other than CDR; the message is one line."""
+
+
 class _Scan:
     """One pass over an MCAP file's records, in file order, bounded by the file's bytes.
 
@@ -246,6 +253,7 @@ class _Scan:
         self.f, self.size, self.wanted, self.out = f, size, wanted, out
         self.crc = zlib.crc32(MAGIC)            # of the data section, then of the summary
         self.schemas, self.channels = {}, {}
+        self.foreign = {}                       # channel id -> why its messages are not read
         self.unknown = 0
         self.finished = self._has_footer()
 
@@ -314,12 +322,13 @@ class _Scan:
                     expected = struct.unpack_from('<I', body)[0]
                     break
                 self._take(opcode, body)
-            except (_Damage, _Short):
+            except (_Damage, _Short, _Foreign):
                 raise
             except Exception as e:  # noqa: BLE001 - a record that does not parse, of any kind
                 raise _Damage(f'a record at byte {at} does not parse ({_text(e)})') from None
         if expected and expected != before:
-            raise _Damage('its data section fails its CRC check')
+            raise _Damage('its data section fails its CRC check: a byte of its set-up, '
+                          'channels or messages changed after it was written')
         self._summary()
 
     def _summary(self):
@@ -352,6 +361,8 @@ class _Scan:
             channel_id, _, log_time, _ = _MESSAGE_HEAD.unpack_from(body)
             channel = self.channels.get(channel_id)
             if channel is not None and (self.wanted is None or self.wanted(*channel)):
+                if channel_id in self.foreign:
+                    raise _Foreign(self.foreign[channel_id])
                 self.out.messages.append(RecordedMessage(channel[0], channel[1], log_time,
                                                          bytes(body[_MESSAGE_HEAD.size:])))
         elif opcode == Opcode.SCHEMA:
@@ -362,6 +373,15 @@ class _Scan:
             kind = self.schemas.get(channel.schema_id, '')
             self.channels[channel.id] = (channel.topic, kind)
             self.out.topics[channel.topic] = kind
+            if channel.message_encoding != 'cdr':
+                # Its messages are not CDR bytes whatever its type says: decoded as CDR they
+                # were garbage read as values, or a refusal that blamed the bytes.
+                self.foreign[channel.id] = (
+                    f'{channel.topic} ({kind or "no schema"}) is declared '
+                    f'{shown(channel.message_encoding)}-encoded; only cdr (ROS 2) messages '
+                    'are read')
+            else:
+                self.foreign.pop(channel.id, None)
         elif opcode == Opcode.METADATA:
             metadata = Metadata.read(_stream(body))
             self.out.metadata[metadata.name] = dict(metadata.metadata)

@@ -290,7 +290,19 @@ def _reach(sk, rest, kids, tips):
 
 
 def _leaves(k, kids):
-    return 1 if not kids[k] else sum(_leaves(c, kids) for c in kids[k])
+    """Count the leaves below link ``k``: a walk with its own stack, not Python's.
+
+    A URDF may hang a chain of a thousand links (a tail, a cable) where a recursion per
+    link ran out of Python's frames.
+    """
+    count, stack = 0, [k]
+    while stack:
+        j = stack.pop()
+        if kids[j]:
+            stack.extend(kids[j])
+        else:
+            count += 1
+    return count
 
 
 def _branches(k, kids, rest, reach, least):

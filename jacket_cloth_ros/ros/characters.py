@@ -13,7 +13,7 @@ Example (``config/crowd.yaml``)::
         urdf: examples/mannequin.urdf
         rig: examples/mannequin_rig.yaml
         parameters: {wind: [2.0, 0.0, 0.0]}
-      - name: walker             # count: walker_00 .. walker_15, each its own character
+      - name: walker             # count: walker_0 .. walker_15, each its own character
         count: 16
 
 Files are looked up beside the characters file, then in the shipped config folder. Every
@@ -136,9 +136,10 @@ def load_characters(path: str) -> list[CharacterSpec]:
                                           f'{where}.parameters.{key}')
             except ValueError as e:
                 raise ConfigError(str(e)) from None
-        width = len(str(count - 1))
         for k in range(count):
-            each = name if count == 1 else f'{name}_{k:0{width}d}'
+            # Unpadded, as docs/crowd.md says: a publisher's loop names /walker_{k}, and a
+            # count grown past 10 renames no character (padding made walker_1 walker_01).
+            each = name if count == 1 else f'{name}_{k}'
             if each in names:
                 raise ConfigError(f'{where}.name: {shown(each)} is there twice')
             names.add(each)

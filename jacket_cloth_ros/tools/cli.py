@@ -312,6 +312,10 @@ def _replay_crowd(args):
         raise ConfigError(f'{args.input} is a crowd\'s recording: it replays with each '
                           f'character\'s recorded set-up ({", ".join(given)} not taken)')
     characters, took = replay_crowd(args.input, args.output, args.force)
+    for c in characters.values():
+        for line in c.warnings:
+            print(f'jacket_cloth {args.command}: warning: {args.input}: {c.name}: {line}',
+                  file=sys.stderr)
     inputs = sum(c.pipeline.inputs for c in characters.values())
     print(f'{args.output}: {len(characters)} characters, {inputs} JointState in {took:.2f} s')
     return 0
@@ -453,9 +457,8 @@ def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
     from ..core.inputs import InputParser, InputRejected
     from ..recording.reader import read_recording
     from ..ros.cdr import DECODE_ERRORS, JointStateReader
-    recording = read_recording(path)
-    first = next((m for m in recording.messages if m.type_name == 'sensor_msgs/msg/JointState'),
-                 None)
+    recording = read_recording(path, kinds=('sensor_msgs/msg/JointState',))
+    first = next(iter(recording.messages), None)
     if first is None:
         raise ToolError(f'--motion {path}: no sensor_msgs/msg/JointState message in it')
     try:

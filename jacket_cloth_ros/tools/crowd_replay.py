@@ -25,7 +25,7 @@ from ..ros.parameters import default_values
 from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
-from .session import recorded_parameters
+from .session import JOINT_STATE, recorded_parameters, setup_warnings
 
 PREFIX = SESSION_CONFIG + '/'
 
@@ -37,6 +37,7 @@ class CrowdCharacter:
     pipeline: SessionPipeline
     topics: dict
     setup: dict                 # the recorded metadata, written again into the replay
+    warnings: list              # one line each: what its set-up holds that is not known
 
 
 def is_crowd(recording: Recording) -> bool:
@@ -52,7 +53,9 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
 
     :param path: the crowd's recording, an MCAP file or a bag folder.
     """
-    recording = read_recording(path)
+    # Only what is fed (every character's inputs, the crowd's viewer): a crowd's /tf and
+    # markers are most of its bytes, and a channel of another encoding is no input of it.
+    recording = read_recording(path, kinds=(JOINT_STATE, VIEWER_TYPE))
     characters = {}
     for key, meta in recording.metadata.items():
         if not key.startswith(PREFIX):
@@ -67,7 +70,8 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         rig = Rig(parse_yaml(meta['rig_yaml'], f'{where} rig'), skeleton, where=f'{where} rig')
         fabrics = fabrics_from_data(parse_yaml(meta['fabrics_yaml'], f'{where} fabrics'),
                                     f'{where} fabrics')
-        recorded = recorded_parameters(meta, f'{where} parameter')
+        ignored = []
+        recorded = recorded_parameters(meta, f'{where} parameter', ignored)
         preset = recorded.get('fabric_preset')
         if preset not in fabrics:
             raise ConfigError(f'{where}: fabric_preset {preset!r} is not a preset')
@@ -85,8 +89,8 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         except ValueError:
             raise ConfigError(f'{where}: output_phase {meta.get("output_phase")!r} is not a '
                               'number from 0 to 0.9') from None
-        characters[topics['joint_states'][0]] = CrowdCharacter(name, values, pipeline, topics,
-                                                               dict(meta))
+        characters[topics['joint_states'][0]] = CrowdCharacter(
+            name, values, pipeline, topics, dict(meta), setup_warnings(meta, ignored))
     if not characters:
         raise RecordingError(f'{path}: not a crowd recording (no {PREFIX}<name> metadata)')
     return recording, characters

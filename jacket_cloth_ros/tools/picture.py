@@ -185,7 +185,7 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = No
     """
     times = _Times(mcap_path)
     if not times.markers or not times.inputs:
-        raise ValueError(f'{mcap_path}: no markers or JointState to draw')
+        raise ValueError(_nothing_to_draw(mcap_path, times))
     log_times = np.array(times.markers, dtype=np.int64)
     t0 = times.inputs[0]
     chosen = range(len(log_times)) if choose is None else \
@@ -202,8 +202,22 @@ def recorded_frames(mcap_path: str, skeleton: 'Skeleton', rig: 'Rig | None' = No
         out.append(_frame(log_time, points, picked.inputs[times.nearest(log_time)], parser,
                           skeleton, sim))
     if not out:
-        raise ValueError(f'{mcap_path}: no markers or JointState to draw')
+        raise ValueError(f'{mcap_path}: nothing to draw: none of its {len(log_times)} '
+                         'MarkerArray messages chosen holds the jacket\'s mesh')
     return out, t0
+
+
+def _nothing_to_draw(path, times):
+    """Say what a recording holds and what a picture needs: its markers and its inputs."""
+    found = f'{len(times.inputs)} JointState and {len(times.markers)} MarkerArray'
+    if times.inputs:        # an input-only recording: motion, import, a foreign bag
+        need = ('the simulation\'s markers: replay it first (jacket_cloth replay IN -o OUT), '
+                'then draw OUT')
+    elif times.markers:
+        need = 'the JointState inputs the markers were made from'
+    else:
+        need = f'a session recorded by the node or a replay ({MARKER_ARRAY} and {JOINT_STATE})'
+    return f'{path}: nothing to draw: it holds {found} messages; a picture needs {need}'
 
 
 class _Times:

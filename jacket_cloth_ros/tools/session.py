@@ -134,7 +134,8 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     fabrics_yaml = recorded.get('fabrics_yaml') or read_text(shipped('fabrics.yaml'), 'fabrics')
     fabrics_where = f'{where} fabrics' if recorded.get('fabrics_yaml') else 'fabrics'
     fabrics = fabrics_from_data(parse_yaml(fabrics_yaml, fabrics_where), fabrics_where)
-    recorded_values = recorded_parameters(recorded, f'{where} parameter')
+    ignored = []
+    recorded_values = recorded_parameters(recorded, f'{where} parameter', ignored)
     preset = fabric or recorded_values.get('fabric_preset', 'tweed_jacket')
     if preset not in fabrics:
         raise ConfigError(f'fabric {preset!r} is not a preset (presets: {", ".join(fabrics)})')
@@ -156,7 +157,7 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics,
                          recorded.get('node_name') or DEFAULT_NODE)
     session = SessionInput(recording, topic, _events(recording, topic), setup)
-    session.warnings = _check_joints(session)
+    session.warnings = setup_warnings(recorded, ignored) + _check_joints(session)
     return session
 
 
@@ -194,27 +195,71 @@ def recorded_character(path: str, urdf: str | None = None,
     return skeleton, Rig(parse_yaml(rig_yaml, rig_where), skeleton, where=rig_where)
 
 
-def recorded_parameters(setup: dict, where: str) -> dict:
+# The keys of a set-up record that the node and the replay write (writer.add_session_config).
+SETUP_KEYS = frozenset({'urdf', 'rig_yaml', 'fabrics_yaml', 'parameters_json', 'node_name',
+                        'output_phase'})
+
+
+class _Twice(ValueError):
+    """A name given twice in one JSON object: a JSON reader keeps the last."""
+
+
+def _pairs_once(pairs):
+    """Return a JSON object's pairs as a dict, refusing a name given twice."""
+    out = {}
+    for name, value in pairs:
+        if name in out:
+            raise _Twice(f'{shown(name)} is given twice, and a JSON reader keeps only the last')
+        out[name] = value
+    return out
+
+
+def recorded_parameters(setup: dict, where: str, ignored: list | None = None) -> dict:
     """Return a set-up record's parameters, each validated as a ``-p`` value (typed_value).
 
     A recording's set-up is input like any file: its types and ranges are checked as the
-    node's parameters are, and names no node has today are left out.
+    node's parameters are, a name given twice is refused, and names no node has today are
+    left out (listed in ``ignored``, for ``setup_warnings``).
 
     :param setup: the set-up metadata record (its ``parameters_json``).
     :param where: what starts the one-line errors (``<file>: the recorded parameter``).
+    :param ignored: if given, the names left out are added to it.
     """
     text = setup.get('parameters_json', '{}')
     try:
         if len(text) > MAX_YAML_BYTES:
             raise ValueError(f'larger than {MAX_YAML_BYTES} bytes')
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_pairs_once)
+    except _Twice as e:
+        raise ConfigError(f'{where}s: {e}') from None
     except (ValueError, RecursionError) as e:
         raise ConfigError(f'{where}s: not JSON ({shown(str(e))})') from None
     if not isinstance(data, dict):
         raise ConfigError(f'{where}s: not a JSON object of names and values')
     known = default_values(Fabric(**{f.name: FABRIC_RANGES[f.name][0] for f in fields(Fabric)}))
+    values = from_recording(data)
+    if ignored is not None:
+        ignored.extend(sorted(name for name in values if name not in known))
     return {name: typed_value(name, value, known[name], f'{where} {name}')
-            for name, value in from_recording(data).items() if name in known}
+            for name, value in values.items() if name in known}
+
+
+def setup_warnings(setup: dict, ignored: list[str]) -> list[str]:
+    """Say, in one line, what a set-up record holds that this version does not know.
+
+    Written by another version (older or newer) of the node: the replay runs without it, and
+    says so rather than silently (a parameter the node would refuse is no input here).
+
+    :param setup: the set-up metadata record.
+    :param ignored: the parameter names ``recorded_parameters`` left out.
+    """
+    unknown = sorted(set(setup) - SETUP_KEYS)
+    parts = ([f'key(s) {shown(", ".join(unknown))}'] if unknown else []) + \
+        ([f'parameter(s) {shown(", ".join(ignored))}'] if ignored else [])
+    if not parts:
+        return []
+    return ['its recorded set-up holds what this version does not know (ignored): '
+            + '; '.join(parts)]
 
 
 def _check_joints(session):
