@@ -233,3 +233,17 @@ def test_the_drawn_lining_lies_inside_the_jacket_not_on_it(body):
     lined = mesh.rest[mesh.triangles[mesh.back]] - back
     assert (np.einsum('tkc,tc->tk', lined, inward) < 0).mean() > 0.9, name
     assert len(front) == (~mesh.back).sum()
+
+
+def test_the_body_has_its_head_above_the_hood(body):
+    # G1's head link is fixed at its waist: the head was drawn there, inside the torso, and
+    # the robot stood headless in its hood. The head's top is now above the hood's pivot.
+    from jacket_cloth_ros.core.transforms import apply_transform
+    name, sim, _ = body
+    rig = sim.rig
+    drawn = body_mesh(sim.skeleton, rig)
+    up = rig.world_axes[:, 2]
+    rest = sim.skeleton.forward(np.zeros(len(sim.skeleton.joint_names)))
+    pivot = apply_transform(rest[rig.hood.link], rig.hood.pivot[None])[0]
+    top = (drawn.rest @ up).max()
+    assert top - pivot @ up > 0.1 * rig.height_m, name

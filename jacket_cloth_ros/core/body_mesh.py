@@ -55,7 +55,12 @@ def body_mesh(skeleton: 'Skeleton', rig: 'Rig') -> 'SkinnedMesh':
     heads = [k for k in range(len(skeleton.link_names)) if skeleton.parent[k] == head_link]
     top = heads[0] if heads else head_link
     r = 0.065 * size
-    centre = rest[top][:3, 3] + rig.world_axes[:, 2] * 0.7 * r
+    up = rig.world_axes[:, 2]
+    centre = rest[top][:3, 3] + up * 0.7 * r
+    # A head link whose origin sits in the torso (a robot's, fixed at the waist) would bury
+    # the head: it stays above the hood's pivot, which the rig puts behind the neck.
+    pivot = apply_transform(rest[head_link], rig.hood.pivot[None])[0]
+    centre = centre + up * max(0.0, r - float((centre - pivot) @ up))
     _ellipsoid(b, top, centre, rig.world_axes, np.array([0.9 * r, 0.8 * r, r]))
     return b.done(list(skeleton.link_names), floats(inverse(rest[:, :3, :])))
 
