@@ -28,6 +28,15 @@ def _clock(sec):
     return ClockMsg(clock=Time(sec=sec))
 
 
+def _on_clock(harness, sec):
+    """A node on simulated time with /clock at ``sec``: (harness, /clock publisher)."""
+    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
+    clock = _clock_publisher(h)
+    clock.publish(_clock(sec))
+    h.spin_until(lambda: h.node.get_clock().now().nanoseconds == sec * 10 ** 9)
+    return h, clock
+
+
 def test_simulated_time_without_clock_falls_back_and_keeps_diagnostics(harness, capfd,
                                                                        monkeypatch):
     # No /clock (a simulator not started): the fallback never came, nothing was logged and no
@@ -53,10 +62,7 @@ def test_a_stalled_clock_drops_repeated_inputs_and_says_so(harness, capfd, monke
     # dropped as repeated and no diagnostics went out (docs/node.md: ERROR at the diagnostics
     # rate of wall time).
     monkeypatch.setattr(clock_watch, 'STALL_S', 0.3)
-    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
-    clock = _clock_publisher(h)
-    clock.publish(_clock(50))
-    h.spin_until(lambda: h.node.get_clock().now().nanoseconds == 50 * 10 ** 9)
+    h, clock = _on_clock(harness, 50)
     diags = []
     h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
     names, pos = joint_state_content(h.c.sim.skeleton.joint_names, 'idle', 0.0)
@@ -81,10 +87,7 @@ def test_a_stalled_clock_drops_repeated_inputs_and_says_so(harness, capfd, monke
 
 
 def test_a_clock_that_jumps_back_is_said_once(harness, capfd):
-    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
-    clock = _clock_publisher(h)
-    clock.publish(_clock(80))
-    h.spin_until(lambda: h.node.get_clock().now().nanoseconds == 80 * 10 ** 9)
+    h, clock = _on_clock(harness, 80)
     diags = []
     h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
     h.spin_until(lambda: len(diags) >= 2)
@@ -204,10 +207,7 @@ def test_an_idle_node_records_its_diagnostics_when_they_change(harness, tmp_path
 def test_a_clock_before_1970_is_refused_not_the_nodes_end(harness, capfd):
     # rclpy's /clock callback raised on a negative second (int32 in the message), out of the
     # executor: one `ros2 topic pub /clock` ended every node on simulated time.
-    h = harness(use_sim_time=True, robot_description_timeout=0.2, diagnostics_rate=20.0)
-    clock = _clock_publisher(h)
-    clock.publish(_clock(30))
-    h.spin_until(lambda: h.node.get_clock().now().nanoseconds == 30 * 10 ** 9)
+    h, clock = _on_clock(harness, 30)
     clock.publish(_clock(-5))
     said = []
     h.spin_until(lambda: said.append(capfd.readouterr().err) or '/clock' in ''.join(said) and
