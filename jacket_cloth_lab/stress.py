@@ -29,7 +29,7 @@ from jacket_cloth_ros.core.physics.cloth import StretchLimit
 from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import Skeleton, load_shipped_character
-from jacket_cloth_ros.motion.clips import joint_state_content
+from jacket_cloth_ros.motion.clips import joint_state_content, smoothstep
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
@@ -167,7 +167,7 @@ def _key_frames(skeleton, keys, start_s=10.0):
     for (_, a), (seconds, b) in zip(frames, frames[1:]):
         n = max(1, int(round(seconds * RATE)))
         for k in range(1 if out else 0, n + 1):
-            w = float(_smooth(k / n))
+            w = float(smoothstep(k / n))
             q = {j: (1 - w) * a[0].get(j, 0.0) + w * b[0].get(j, 0.0)
                  for j in set(a[0]) | set(b[0])}
             xyz = [(1 - w) * u + w * v for u, v in zip(a[1], b[1])]
@@ -177,11 +177,6 @@ def _key_frames(skeleton, keys, start_s=10.0):
             out.append((int(round((start_s + t + k / RATE) * 1e9)), names, pos))
         t += n / RATE
     return out
-
-
-def _smooth(s):
-    s = min(max(s, 0.0), 1.0)
-    return s * s * (3 - 2 * s)
 
 
 def _rolled(pose, roll):

@@ -30,7 +30,7 @@ import numpy as np
 
 from .bundles import floats, ints
 from .physics import pose, skinning
-from .rig import model_of
+from .rig import cloth_model
 
 if TYPE_CHECKING:           # for the annotations only
     from .rig import Rig
@@ -150,7 +150,7 @@ def rest_joints(skeleton: 'Skeleton', rig: 'Rig', bone_parents: np.ndarray,
     :param grid: (G,2) the M9 grid bones' (row, column).
     """
     links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
-    cloth = model_of(skeleton, rig).cloth
+    cloth = cloth_model(rig)
     t = links[rig.hood.link]
     hood_p = t[:3, :3] @ (rig.hood.pivot + rig.hood.rest_direction * rig.hood.length) + t[:3, 3]
     layer = rig.layer.solve(links) if rig.layer else None
@@ -185,7 +185,7 @@ def jacket_mesh(skeleton: 'Skeleton', rig: 'Rig', bone_names: list, bone_parents
     parents = np.array([skeleton.link_names.index(p) for p in bone_parents], dtype=np.int64)
     rest_j = rest_joints(skeleton, rig, parents, grid)
     names = list(skeleton.link_names) + list(bone_names)
-    shape = _Shape(skeleton, rig, rest_j, names, grid)
+    shape = _Shape(skeleton, rig, rest_j, grid)
     b = MeshBuilder()
     top = _lower_jacket(b, shape)
     _yoke_and_collar(b, shape, top)
@@ -197,10 +197,9 @@ def jacket_mesh(skeleton: 'Skeleton', rig: 'Rig', bone_names: list, bone_parents
 class _Shape:
     """What the parts are sized and skinned from: the rig's body axes, joints and sizes."""
 
-    def __init__(self, skeleton, rig, rest_j, names, grid):
-        self.rig, self.skeleton, self.rest_j = rig, skeleton, rest_j
+    def __init__(self, skeleton, rig, rest_j, grid):
+        self.rig, self.rest_j = rig, rest_j
         self.n_links = len(skeleton.link_names)
-        self.index = {n: k for k, n in enumerate(names)}
         self.axes = rig.world_axes          # front, left, up of the body, simulation frame
         self.grid = {(int(r), int(c)): self.n_links + k for k, (r, c) in enumerate(grid)}
         self.hood_bone = self.n_links + len(grid)
@@ -215,9 +214,6 @@ class _Shape:
                 self.pads.append((self.layer_base + first + k, pad.aim_link,
                                   pose_.tips[first + k]))
         self.sleeves = layer.sleeves if layer is not None else []
-
-    def origin(self, joint):
-        return self.rest_j[joint, :, 3]
 
     def link_origin(self, link):
         return self.rest_j[link, :, 3]

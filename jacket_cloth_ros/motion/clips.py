@@ -15,7 +15,11 @@ from ..core.inputs import WORLD_VARIABLES
 STAND = 0.96
 
 
-def _smooth(s):
+def smoothstep(s: 'float | np.ndarray') -> 'float | np.ndarray':
+    """Return 0 before 0, 1 after 1, and an ease-in-out between (3s² - 2s³).
+
+    :param s: where in the blend, 0 to 1 (outside: held at the ends).
+    """
     s = np.clip(s, 0.0, 1.0)
     return s * s * (3 - 2 * s)
 
@@ -47,7 +51,7 @@ def _run(t):
 
 
 def _dodge(t):
-    s = _smooth((t - 0.3) / 0.35)
+    s = smoothstep((t - 0.3) / 0.35)
     crouch = np.exp(-((t - 0.5) / 0.25) ** 2)
     q = {'l_knee': 0.9 * crouch, 'r_knee': 0.9 * crouch, 'l_hip_pitch': -0.6 * crouch,
          'r_hip_pitch': -0.6 * crouch, 'spine_pitch': 0.4 * crouch, 'l_hip_roll': 0.3 * crouch,
@@ -68,13 +72,13 @@ def _jump(t):
 
 
 def _arms_up(t):
-    s = _smooth((t - 0.2) / 1.0)
+    s = smoothstep((t - 0.2) / 1.0)
     return {'l_shoulder_roll': 2.8 * s, 'r_shoulder_roll': -2.8 * s,
             'l_elbow': -0.2 * s, 'r_elbow': -0.2 * s}, (0.0, 0.0, 0.0, 0.0)
 
 
 def _turn(t):
-    s = _smooth((t - 0.4) / 0.6)
+    s = smoothstep((t - 0.4) / 0.6)
     q, _ = _idle(t)
     step = np.sin(np.pi * s)
     q.update({'l_hip_pitch': -0.3 * step, 'r_knee': 0.4 * step, 'spine_yaw': 0.3 * step})
@@ -179,7 +183,7 @@ def looped_pose(name: str, t: float) -> tuple[dict[str, float], tuple[float, ...
         base = _compose(base, (end[0], end[1], 0.0, yaw))
     q, root = pose(name, local)
     here = _compose(base, (root[0], root[1], 0.0, 2 * np.arctan2(root[5], root[6])))
-    s = float(_smooth(local / LOOP_BLEND_S))
+    s = float(smoothstep(local / LOOP_BLEND_S))
     z = root[2] + (1 - s) * (end[2] - pose(name, 0.0)[1][2])
     q = {k: s * q.get(k, 0.0) + (1 - s) * q_end.get(k, 0.0) for k in set(q) | set(q_end)}
     return q, (here[0], here[1], z, 0.0, 0.0, float(np.sin(here[3] / 2)),

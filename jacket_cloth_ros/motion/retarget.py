@@ -15,7 +15,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..core.skeleton import Skeleton, load_shipped_character
-from ..core.transforms import matrix_to_quat
+from ..core.transforms import matrix_to_quat, quat_to_matrix
 from ..rigging.propose import find_body
 from .clips import looped_pose
 
@@ -131,7 +131,7 @@ class Retarget:
             self._solve(part, joints, src.part(links, part))
         # The pelvis's world frame: the shipped pelvis's axes, its travel scaled to the legs.
         world = np.eye(4)
-        world[:3, :3] = _quat_matrix(root[3:])
+        world[:3, :3] = quat_to_matrix(np.asarray(root[3:], float))
         world[:3, 3] = root[:3]
         axes = world[:3, :3] @ src.frame(links, src.pelvis)
         at = world[:3, :3] @ links[src.pelvis][:3, 3] + world[:3, 3]
@@ -208,11 +208,6 @@ def _lowest(skeleton, rest, up):
 def _unit(v):
     n = np.linalg.norm(v)
     return v / n if n > 1e-12 else v
-
-
-def _quat_matrix(q):
-    from ..core.transforms import quat_to_matrix
-    return quat_to_matrix(np.asarray(q, float))
 
 
 def _link_at(body, top, end, where):

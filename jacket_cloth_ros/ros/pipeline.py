@@ -117,7 +117,11 @@ class SessionPipeline:
         self._world_tf = None
         # Load the encoders' compiled parts now rather than on the first input's outputs.
         self._tf.encode(self.sim.bones().poses, 0)
-        messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True)
+        # The URDF's own visuals are read once: `auto` asks on every markers message.
+        self._has_visuals = '<visual' in self.sim.skeleton.urdf_xml
+        messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
+                              debug=self.values.get('markers_debug', False),
+                              body=self.draws_body())
 
     def _tf_template(self):
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
@@ -128,7 +132,7 @@ class SessionPipeline:
         """Tell whether the markers carry the body: ``markers_body``, auto without visuals."""
         choice = self.values.get('markers_body', 'auto')
         if choice == 'auto':
-            return '<visual' not in self.sim.skeleton.urdf_xml
+            return not self._has_visuals
         return choice == 'on'
 
     def root_frame(self) -> str:

@@ -22,8 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import pygltflib as gl
 
-from ..core.jacket_mesh import LINING, SKIN, TWEED, SkinnedMesh, jacket_mesh
-from ..core.body_mesh import body_mesh
+from ..core.jacket_mesh import LINING, SKIN, TWEED, SkinnedMesh
+from ..core.physics import skinning
+from ..ros.messages import outfit
 from ..core.transforms import matrix_to_quat
 from .outputs import replacing
 from .session import SessionInput, run_session
@@ -213,17 +214,14 @@ class _Blob:
 
 
 def _normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Return unit vertex normals (V,3): the sum of the faces' area-weighted normals."""
-    a, b, c = (points[triangles[:, k]] for k in range(3))
-    face = np.cross(b - a, c - a)
-    out = np.zeros(points.shape)
-    for k in range(3):
-        np.add.at(out, triangles[:, k], face)
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    lone = length[:, 0] < 1e-12
-    out[lone] = [0.0, 1.0, 0.0]
-    length[lone] = 1.0
-    return out / length
+    """Return unit vertex normals (V,3), as the markers shade them; +y where a vertex has no area.
+
+    glTF asks for a unit NORMAL on every vertex, so the compiled normals' zeros are turned up.
+    """
+    out = np.empty(points.shape)
+    skinning.vertex_normals(points, np.ascontiguousarray(triangles, dtype=np.int64), out)
+    out[~out.any(axis=1)] = [0.0, 1.0, 0.0]
+    return out
 
 
 def _primitive(blob: _Blob, mesh: SkinnedMesh, faces: np.ndarray, axes: np.ndarray,
@@ -259,20 +257,18 @@ def _material(name: str, color: tuple, double_sided: bool) -> gl.Material:
 
 
 def build_gltf(session: SessionInput, frames: Frames, bone_names: list, bone_parents: list,
-               grid: np.ndarray, world_up: np.ndarray) -> gl.GLTF2:
+               world_up: np.ndarray) -> gl.GLTF2:
     """Return the glTF document of a session's frames: skin, meshes, animation.
 
     :param session: the recording's input and set-up (skeleton, rig, the character's name).
     :param frames: the simulation's state at each input (session_frames).
     :param bone_names: the published bones (simulation.BoneSet.names).
     :param bone_parents: each one's parent link's name.
-    :param grid: (G,2) the M9 grid bones' (row, column).
     :param world_up: the world's up the simulation used (after its first input), world frame.
     """
     skeleton, rig = session.setup.skeleton, session.setup.rig
     n_links, n_bones = len(skeleton.link_names), len(bone_names)
-    jacket = jacket_mesh(skeleton, rig, bone_names, bone_parents, grid)
-    body = body_mesh(skeleton, rig)
+    jacket, body = outfit(rig).jacket, outfit(rig).body       # as the markers draw them
     first_front = frames.root[0, :3, :3] @ frames.links[0, 0, :3, :3] @ rig.world_axes[:, 0]
     axes = world_axes(world_up, first_front)
     gltf = gl.GLTF2(asset=gl.Asset(version='2.0', generator='jacket_cloth_ros export'))
@@ -375,7 +371,7 @@ def export(session: SessionInput, out_path: str, force: bool = False) -> ExportS
     sim = pipeline.sim
     bone_set = sim.bone_set
     gltf = build_gltf(session, frames, list(bone_set.names), list(bone_set.parents),
-                      np.asarray(bone_set.grid), np.asarray(sim.model.cloth.up, float))
+                      np.asarray(sim.model.cloth.up, float))
     with replacing(out_path, force=force) as tmp:
         gltf.save_binary(tmp)
     vertices = sum(gltf.accessors[p.attributes.POSITION].count
