@@ -162,6 +162,22 @@ UP_TOLERANCE_DEG = 45.0
 REP103_UP = (0.0, 0.0, 1.0)     # the world's up when the rig does not say otherwise
 
 
+def lying(body_up: np.ndarray, world_up: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """Return a body's unit up and its angle from the world's up, where it lies down.
+
+    :param body_up: (3,) the body's up in the world (pelvis or root to neck), any length.
+    :param world_up: (3,) unit, the world's up.
+    :returns: (the unit up, the angle in degrees), or None where the body stands within
+        UP_TOLERANCE_DEG of the world's up or has no up.
+    """
+    length = np.linalg.norm(body_up)
+    if not length > 1e-9:
+        return None
+    unit = body_up / length
+    angle = float(np.degrees(np.arccos(np.clip(unit @ world_up, -1.0, 1.0))))
+    return (unit, angle) if angle > UP_TOLERANCE_DEG else None
+
+
 class Rig:
     """A validated rig fitted to a skeleton.
 
@@ -279,14 +295,8 @@ class Rig:
         :returns: (the body's up, (3,) unit, the angle from ``world_up`` in degrees), or None
             where the body stands within UP_TOLERANCE_DEG of it.
         """
-        neck = positions[self.hood.link] - positions[0]
-        if not np.linalg.norm(neck) > 1e-9:
-            return None
-        body_up = np.asarray(root_rotation, float) @ neck / np.linalg.norm(neck)
-        angle = float(np.degrees(np.arccos(np.clip(body_up @ self.world_up, -1.0, 1.0))))
-        if not angle > UP_TOLERANCE_DEG:
-            return None
-        return body_up, angle
+        return lying(np.asarray(root_rotation, float) @ (positions[self.hood.link] - positions[0]),
+                     self.world_up)
 
     def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
         """Return the world's forward, left and up as columns: the views' axes.

@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 
 from ..core.config import ConfigError
-from ..core.rig import REP103_UP, UP_TOLERANCE_DEG
+from ..core.rig import REP103_UP, lying
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 from ..core.transforms import rpy_matrix, snapped_to_axis
@@ -841,11 +841,8 @@ def _tilt(body, first_pose):
     q, rotation = first_pose
     links = body.skeleton.forward(np.asarray(q, float))
     neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
-    if not np.linalg.norm(neck) > 1e-9:
-        return None
-    up = np.asarray(rotation, float) @ neck / np.linalg.norm(neck)
-    angle = float(np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))))
-    return angle if angle > UP_TOLERANCE_DEG else None
+    tilt = lying(np.asarray(rotation, float) @ neck, np.array(REP103_UP, float))
+    return None if tilt is None else tilt[1]
 
 
 def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
