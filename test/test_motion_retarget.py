@@ -71,16 +71,10 @@ def _matrix(q):
     return quat_to_matrix(np.asarray(q, float))
 
 
-# Not met: Romeo's run. Its trunk has no pitch joint (the run leans the chest forward) and its
-# hips and shoulders reach their limits; the hem's front edges (row 4) pass 24 mm into the
-# collision shape of its pelvis link, which the proposed rig's colliders do not cover (inside
-# the rig's colliders: 0 mm).
-NOT_MET = {('romeo.urdf', 'run'): 'hem 24 mm inside the pelvis link\'s shape (body proxy)'}
-
-
-@pytest.mark.parametrize('name,clip', [
-    pytest.param(n, c, marks=[pytest.mark.xfail(strict=True, reason=NOT_MET[n, c])]
-                 if (n, c) in NOT_MET else []) for n in ROBOTS for c in CLIPS])
+# Romeo's run: its trunk has no pitch joint and the run leans the chest forward, so the hem's
+# front edges meet the bone its pelvis's IMU frame gives the body proxy; the proposal covers
+# that bone (rigging.propose._pelvis_frame_bones).
+@pytest.mark.parametrize('name,clip', [(n, c) for n in ROBOTS for c in CLIPS])
 def test_motion_urdf_moves_a_robot_in_its_proposed_jacket(name, clip, tmp_path, capsys):
     urdf, rig, session = fetched(name), tmp_path / 'rig.yaml', tmp_path / 's.mcap'
     assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0

@@ -239,6 +239,31 @@ def test_a_thigh_shape_far_thinner_than_the_bone_gets_a_capsule_over_the_whole_b
     assert 'a capsule over l_thigh' in ' '.join(lines)
 
 
+def _with_pelvis_frames(text, frames):
+    """The shipped character with frames fixed to its pelvis: {name: 'x y z'}."""
+    extra = ''.join(f'<link name="{n}"/><joint name="{n}_joint" type="fixed"><parent '
+                    f'link="base_link"/><child link="{n}"/><origin xyz="{xyz}"/></joint>'
+                    for n, xyz in frames.items())
+    return text.replace('</robot>', extra + '</robot>')
+
+
+def test_a_frame_fixed_low_in_the_pelvis_gets_a_capsule_as_the_body_proxy_draws_a_bone_to_it():
+    # Romeo's run: its IMU frame sits low and ahead in its shapeless pelvis; the body proxy drew
+    # a bone to it and the rig's colliders had none, so the hem went 24 mm into it. Two frames
+    # at one place give one capsule; a footprint on the floor is no part of the pelvis.
+    frames = {'imu_gyro': '0.08 0 -0.12', 'imu_accel': '0.08 0 -0.12',
+              'base_footprint': '0 0 -0.9'}
+    text = _with_pelvis_frames(_text(shipped('character.urdf')), frames)
+    sk, rig, lines, body = _rig_of(text)
+    mine = [c for c in rig['colliders'] if c['link'] == 'base_link' and c['name'] == 'pelvis'
+            and c.get('type') == 'capsule']
+    assert len(mine) == 1, rig['colliders']
+    assert mine[0]['a'] == [0.0, 0.0, 0.0] and mine[0]['b'] == [0.08, 0.0, -0.12]
+    assert mine[0]['radius'] == pytest.approx(0.04 * body.height, abs=1e-3)
+    assert not [c for c in rig['colliders'] if c['name'].startswith('pelvis_')]
+    assert 'each frame fixed in the pelvis' in ' '.join(lines)
+
+
 # --- a skeleton that is not Z-up: the orientation keys -------------------------------------
 
 def _turned(text, rpy):

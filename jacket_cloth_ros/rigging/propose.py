@@ -883,7 +883,8 @@ def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
     out += [_bone_capsule(body, bone, radius) for bone in _hung_over_bones(body)]
     out.append(floor)
     return out, ('an ellipsoid on the torso and the pelvis, a capsule over each spine and leg '
-                 'bone down to the ankles (no primitive <collision> shape on ' + ', '.join(
+                 'bone down to the ankles and to each frame fixed in the pelvis (no primitive '
+                 '<collision> shape on ' + ', '.join(
                      body.name(k) for k in wanted if body.name(k) not in shapes) + ')')
 
 
@@ -934,11 +935,12 @@ def _hung_over_bones(body):
     """Return the bones the jacket hangs over: (name, link carrying it, start, end), root frame.
 
     The spine's from the pelvis to the chest, and each leg's from the pelvis to the ankle, the
-    shin too (a knee lifted in a stride or a seated shin meets the hem). A bone shorter than a
-    bone collider's radius is left to its neighbours' rounded ends.
+    shin too (a knee lifted in a stride or a seated shin meets the hem), and the pelvis's other
+    bones (``_pelvis_frame_bones``). A bone shorter than a bone collider's radius is left to its
+    neighbours' rounded ends.
     """
     shortest = BONE_COLLIDER_SHARE * body.height
-    out = []
+    out = _pelvis_frame_bones(body, shortest)
     chains = [('spine', 'spine', body.chest)] + [(side[0], side, body.ankles[side])
                                                  for side in ('left', 'right')]
     for prefix, side, end in chains:
@@ -955,6 +957,28 @@ def _hung_over_bones(body):
             counts[phase] = counts.get(phase, 0) + 1
             name = phase if side == 'spine' else f'{prefix}_{phase}'
             out.append((name + (f'_{counts[phase]}' if counts[phase] > 1 else ''), parent, a, b))
+    return out
+
+
+def _pelvis_frame_bones(body, shortest):
+    """Return the pelvis's bones to its other children (a sensor's frame), ending above the knees.
+
+    Such a frame sits in the pelvis's flesh (Romeo's IMU, low and ahead of its spine): the body
+    proxy (core.body_proxy) draws a bone to it on a pelvis without shapes, so the cloth must
+    stay out of it too. Frames at one place give one bone.
+    """
+    sk, pelvis = body.skeleton, body.pelvis
+    chains = set(body.spine) | {k for side in ('left', 'right')
+                                for k in _chain(body, body.ankles[side])}
+    lowest = min((body.knees[side] - body.pos(pelvis)) @ body.up for side in ('left', 'right'))
+    out, ends = [], []
+    for child in np.flatnonzero(sk.parent == pelvis):
+        a, b = body.pos(pelvis), body.pos(int(child))
+        if (child in chains or np.linalg.norm(b - a) < shortest or (b - a) @ body.up <= lowest
+                or any(np.linalg.norm(b - e) < SAME_PLACE for e in ends)):
+            continue
+        ends.append(b)
+        out.append(('pelvis' + (f'_{len(out) + 1}' if out else ''), pelvis, a, b))
     return out
 
 
