@@ -92,7 +92,7 @@ class _MessagesWith:
 
 
 def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = False,
-                      overrides: Dict | None = None) -> Dict:
+                      overrides: Dict | None = None, record: bool = True) -> Dict:
     """Run a walk through the pipeline with stage timers; return CPU per input by stage.
 
     :param skeleton: the character (its rig is the shipped proposal, its fabric the default).
@@ -100,8 +100,10 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
         but not counted.
     :param node: add the node's rclpy take and publish (DDS in this process, own domain).
     :param overrides: node parameters to set over the defaults (e.g. ``markers_rate``).
+    :param record: record the session (inputs and outputs), as the node's ``record`` does.
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
-        share of the main thread}, 'writer_thread_us', 'sweeps_per_input',
+        share of the main thread}, 'writer_thread_us', 'markers_publish_us' (of 'publish'),
+        'sweeps_per_input',
         'substeps_per_input', 'steps_per_input'}`` (``bench speed`` adds
         ``kernel_step_us``, the bare kernel's step timed beside the run).
     """
@@ -133,12 +135,16 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             recorder = SessionRecorder(os.path.join(tmp, 'profile.mcap'), background=True)
             for name, kind, qos in topics.values():
                 recorder.add_topic(name, kind, qos)
-            write = clock.wrap('record', recorder.write)
+            write = clock.wrap('record', recorder.write if record else _no_write)
             publish = clock.wrap('publish', ros.publish) if ros else None
+            # The markers' share of publishing, timed again apart (markers_cost).
+            markers_clock = StageClock()
+            publish_markers = markers_clock.wrap('publish', publish) if ros else None
             for k, raw in enumerate(raws):
                 if k == skip:
                     for name in clock.ns:
                         clock.ns[name] = 0 if name != 'take' else ros.take_ns(skip) if ros else 0
+                    markers_clock.ns['publish'] = 0
                     started, cpu = time.thread_time_ns(), time.process_time_ns()
                     sweeps = substeps = 0
                 if ros:
@@ -151,7 +157,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
                 for key, data in outputs:
                     write(topics[key][0], data, msg.stamp_ns)
                     if publish:
-                        publish(key, data)
+                        (publish_markers if key == 'markers' else publish)(key, data)
             main_ns = time.thread_time_ns() - started
             recorder.close()
             all_ns = time.process_time_ns() - cpu
@@ -167,8 +173,13 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     return {'inputs': counted, 'node': node, 'us_per_input': total, 'us': us,
             'share': {name: v / total for name, v in us.items()},
             'writer_thread_us': max(all_ns - main_ns, 0) / counted / 1e3,
+            'markers_publish_us': markers_clock.ns['publish'] / counted / 1e3,
             'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted,
             'steps_per_input': values['sim_rate'] / INPUT_RATE}
+
+
+def _no_write(*_: object) -> None:
+    """Record nothing (a node without ``record``)."""
 
 
 class _NodeIO:

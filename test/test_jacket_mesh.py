@@ -247,3 +247,38 @@ def test_the_body_has_its_head_above_the_hood(body):
     pivot = apply_transform(rest[rig.hood.link], rig.hood.pivot[None])[0]
     top = (drawn.rest @ up).max()
     assert top - pivot @ up > 0.1 * rig.height_m, name
+
+
+def test_the_live_bodys_spheres_and_cylinders_are_the_pictures_body(body):
+    # ~/markers sends the body as its pieces (a viewer lights them, a small share of the
+    # bytes), pictures and export mesh the same pieces: posed anywhere, every corner of the
+    # body's mesh lies on the surface of a published sphere or cylinder, and every piece
+    # carries some of them.
+    from rclpy.serialization import deserialize_message
+    from visualization_msgs.msg import Marker, MarkerArray
+    from jacket_cloth_ros.ros import messages
+    name, sim, _ = body
+    sk = sim.skeleton
+    q = np.random.default_rng(5).uniform(-0.6, 0.6, len(sk.joint_names))
+    sim.links = sk.forward(q)
+    arr = deserialize_message(messages.marker_array(sim, 0, sk.link_names[0]), MarkerArray)
+    pieces = [m for m in arr.markers if m.ns == 'body']
+    corners, _ = messages.outfit(sim.rig).triangles('body', sim.links[:, :3, :].copy())
+    on = np.zeros((len(pieces), len(corners)), dtype=bool)
+    for k, m in enumerate(pieces):
+        x, y, z, w = (m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z,
+                      m.pose.orientation.w)
+        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        c = np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z])
+        half = 0.5 * np.array([m.scale.x, m.scale.y, m.scale.z])
+        local = (corners - c) @ r
+        if m.type == Marker.SPHERE:
+            on[k] = np.abs(np.linalg.norm(local / half, axis=1) - 1) < 1e-6
+        else:
+            assert m.type == Marker.CYLINDER
+            side = np.abs(np.linalg.norm(local[:, :2], axis=1) - half[0]) < 1e-6
+            on[k] = side & (np.abs(local[:, 2]) <= half[2] + 1e-9)
+    assert on.any(axis=0).all(), name
+    assert on.any(axis=1).all(), name

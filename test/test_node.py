@@ -120,11 +120,16 @@ def test_joint_states_in_bones_on_tf_and_markers_out(harness):
     # What a person sees (issue 46): the skinned jacket, shaded per corner, on a body (the
     # shipped URDF has no visuals); the method's scaffolding only with markers_debug.
     assert {m.ns for m in later} == {'jacket', 'body'}
-    for mesh in later:
-        assert mesh.type == Marker.TRIANGLE_LIST and len(mesh.points) % 3 == 0
-        assert len(mesh.colors) == len(mesh.points) and all(c.a > 0 for c in mesh.colors)
-        shades = {round(c.r, 3) for c in mesh.colors}
-        assert len(shades) > 20                         # lit: folds read, not one flat colour
+    mesh = [m for m in later if m.ns == 'jacket']
+    assert len(mesh) == 1 and mesh[0].type == Marker.TRIANGLE_LIST
+    assert len(mesh[0].points) % 3 == 0 and len(mesh[0].colors) == len(mesh[0].points)
+    assert all(c.a > 0 for c in mesh[0].colors)
+    shades = {round(c.r, 3) for c in mesh[0].colors}
+    assert len(shades) > 20                             # lit: folds read, not one flat colour
+    # The body as its pieces, which the viewer lights: spheres, and a cylinder per capsule.
+    pieces = [m for m in later if m.ns == 'body']
+    assert {m.type for m in pieces} == {Marker.SPHERE, Marker.CYLINDER}
+    assert all(m.scale.x > 0.01 and m.color.a == 1 and not m.points for m in pieces)
 
 
 def test_markers_are_built_only_for_a_subscriber_or_a_recording(harness, monkeypatch):

@@ -3,15 +3,16 @@
 
 Made of what the cloth already knows of the body: the rig's M10 ellipsoids and capsules, then a
 capsule along every skeleton segment they leave bare (arms, neck, feet) and a head on the hood's
-link's child. Each piece rides rigidly on one link: a mesh of the same kind as the jacket's
-(jacket_mesh.SkinnedMesh), so it is posed, shaded and exported by the same code.
+link's child. Each piece rides rigidly on one link (body_shapes): live markers send them as
+spheres and cylinders, which a viewer shades itself; pictures and export mesh them
+(body_mesh), a mesh of the same kind as the jacket's (jacket_mesh.SkinnedMesh).
 """
 
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .bundles import floats
+from .bundles import ColliderModel, floats, ints
 from .jacket_mesh import BODY, MeshBuilder, inverse
 from .transforms import apply_transform
 
@@ -23,35 +24,30 @@ if TYPE_CHECKING:           # for the annotations only
 SIDES, BANDS = 8, 4         # round an ellipsoid or capsule, and from pole to pole
 
 
-def body_mesh(skeleton: 'Skeleton', rig: 'Rig') -> 'SkinnedMesh':
-    """Build the body: the rig's colliders, capsules on the bare segments, a head.
+def body_shapes(skeleton: 'Skeleton', rig: 'Rig') -> ColliderModel:
+    """Return the body's pieces, each in its link's frame: ellipsoids and capsules.
 
-    Its joints are the skeleton's links.
+    The rig's colliders, a capsule along every segment they leave bare, and a head (the last
+    ellipsoid). Live markers draw these as spheres and cylinders; :func:`body_mesh` meshes them.
 
     :param skeleton: the character.
     :param rig: its rig (colliders, the hood's link for the head, the body's up).
     """
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
-    b = MeshBuilder()
-    covered = set()
-    for link, centre, rotation, radii in zip(rig.collider_links, rig.collider_centers,
-                                             rig.collider_rotations, rig.collider_radii):
-        frame = rest[link][:3, :3] @ rotation
-        _ellipsoid(b, link, apply_transform(rest[link], centre[None])[0], frame, radii)
-        covered.add(int(link))
-    for link, (a, c), radius in zip(rig.capsule_links, rig.capsule_ends, rig.capsule_radii):
-        ends = apply_transform(rest[link], np.array([a, c]))
-        _capsule(b, link, ends[0], ends[1], radius)
-        covered.add(int(link))
+    covered = set(int(k) for k in rig.collider_links) | set(int(k) for k in rig.capsule_links)
     size = max(rig.height_m, 0.3)
     limb = float(np.clip(0.024 * size, 0.01, 0.06))
-    head_link = rig.hood.link
+    cap_links, cap_ends = list(rig.capsule_links), list(rig.capsule_ends)
+    cap_radii = list(rig.capsule_radii)
     for child in range(1, len(skeleton.link_names)):
         parent = int(skeleton.parent[child])
         a, c = rest[parent][:3, 3], rest[child][:3, 3]
         if parent in covered or np.linalg.norm(c - a) < 0.04 * size:
             continue
-        _capsule(b, parent, a, c, limb)
+        cap_links.append(parent)
+        cap_ends.append(_local(rest[parent], np.array([a, c])))
+        cap_radii.append(limb)
+    head_link = rig.hood.link
     heads = [k for k in range(len(skeleton.link_names)) if skeleton.parent[k] == head_link]
     top = heads[0] if heads else head_link
     r = 0.065 * size
@@ -61,8 +57,40 @@ def body_mesh(skeleton: 'Skeleton', rig: 'Rig') -> 'SkinnedMesh':
     # the head: it stays above the hood's pivot, which the rig puts behind the neck.
     pivot = apply_transform(rest[head_link], rig.hood.pivot[None])[0]
     centre = centre + up * max(0.0, r - float((centre - pivot) @ up))
-    _ellipsoid(b, top, centre, rig.world_axes, np.array([0.9 * r, 0.8 * r, r]))
+    links = list(rig.collider_links) + [top]
+    centres = list(rig.collider_centers) + [_local(rest[top], centre[None])[0]]
+    rotations = list(rig.collider_rotations) + [rest[top][:3, :3].T @ rig.world_axes]
+    radii = list(rig.collider_radii) + [np.array([0.9 * r, 0.8 * r, r])]
+    return ColliderModel(
+        ints(links), floats(np.reshape(centres, (-1, 3))),
+        floats(np.reshape(rotations, (-1, 3, 3))), floats(np.reshape(radii, (-1, 3))),
+        ints(cap_links), floats(np.reshape(cap_ends, (-1, 2, 3))), floats(cap_radii),
+        ints(np.zeros(0)), floats(np.zeros((0, 3))), floats(np.zeros((0, 3))))
+
+
+def body_mesh(skeleton: 'Skeleton', rig: 'Rig') -> 'SkinnedMesh':
+    """Build the body's mesh from :func:`body_shapes`; its joints are the skeleton's links.
+
+    :param skeleton: the character.
+    :param rig: its rig.
+    """
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    shapes = body_shapes(skeleton, rig)
+    b = MeshBuilder()
+    for link, centre, rotation, radii in zip(shapes.links, shapes.centers, shapes.rotations,
+                                             shapes.radii):
+        _ellipsoid(b, link, apply_transform(rest[link], centre[None])[0],
+                   rest[link][:3, :3] @ rotation, radii)
+    for link, ends, radius in zip(shapes.capsule_links, shapes.capsule_ends,
+                                  shapes.capsule_radii):
+        a, c = apply_transform(rest[link], ends)
+        _capsule(b, link, a, c, radius)
     return b.done(list(skeleton.link_names), floats(inverse(rest[:, :3, :])))
+
+
+def _local(frame, points):
+    """Return world ``points`` in the frame of the 4x4 ``frame``."""
+    return (points - frame[:3, 3]) @ frame[:3, :3]
 
 
 def _ellipsoid(b, link, centre, frame, radii):

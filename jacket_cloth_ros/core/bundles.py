@@ -378,6 +378,19 @@ class CrowdSlot(NamedTuple):
     bones: np.ndarray               # (B,7) the bones' poses after the steps, as bones() gives
 
 
+class MeshModel(NamedTuple):
+    """A skinned mesh as the compiled draw reads it (core.jacket_mesh.SkinnedMesh, shaded)."""
+
+    inverse_rest: np.ndarray        # (J,3,4) each joint's inverse at rest
+    joints: np.ndarray              # (V,K) int64 joint of each influence, (V,K) its weight
+    weights: np.ndarray
+    rest: np.ndarray                # (V,3) the rest mesh
+    triangles: np.ndarray           # (T,3) int64 corners; (F,3) the front faces, for normals
+    front: np.ndarray
+    colors: np.ndarray              # (T,4) each triangle's base colour; (T,) bool a back face
+    back: np.ndarray
+
+
 class Scene(NamedTuple):
     """What the markers draw at one instant."""
 

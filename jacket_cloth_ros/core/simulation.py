@@ -416,6 +416,7 @@ class JacketSimulation:
         bones = self.bones()
         if (bones.finite or not report.accepted or self.last is None
                 or report.reset.startswith(NONFINITE_BONES)):      # done for this input
+            self.ready_bones = bones        # the markers' skinning reads them again
             return bones
         self.faults.nonfinite += 1
         report.reset = NONFINITE_BONES + self._degenerate_edge()

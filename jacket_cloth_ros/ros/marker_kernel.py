@@ -1,17 +1,17 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The poses of the collider and hood markers, compiled.
+"""The poses of the solid markers (colliders, hood, the body's pieces), compiled.
 
 Why compiled: worked out in numpy, one marker per collider, they cost more than a cloth step
 per MarkerArray (docs/performance.md). One row per solid marker:
 position (3), orientation (x, y, z, w) and scale (3), in the order messages.marker_layout lists
-them.
+them: the debug layer's shapes (shape_count), then the body's (body_count).
 """
 
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.bundles import Posed
+from ..core.bundles import ColliderModel, Posed
 from ..core.compiled import njit
 from ..core.physics.colliders import collider_poses, plane_poses
 from ..core.physics.pose import _transform_point, quat_from_matrix
@@ -32,12 +32,38 @@ def shape_count(rig: 'Rig') -> int:
     return len(rig.collider_links) + 3 * len(rig.capsule_links) + len(rig.plane_links) + 1
 
 
+def body_count(body: ColliderModel) -> int:
+    """Rows of the body's pieces (core.body_mesh.body_shapes): ellipsoids, three per capsule.
+
+    :param body: the body's pieces.
+    """
+    return len(body.links) + 3 * len(body.capsule_links)
+
+
 @njit(cache=True, nogil=True)
 def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hood_p, out):
     """Pose the marker shapes into ``out``.
 
-    Ellipsoids as scaled spheres; a capsule as its cylinder and two end spheres; a plane as a
-    thin square at its point nearest the origin (the root); the hood particle as a sphere.
+    Ellipsoids and capsules as :func:`solid_poses`; a plane as a thin square at its point
+    nearest the origin (the root); the hood particle as a sphere.
+    """
+    j = solid_poses(centers, axes, radii, cap_a, cap_b, cap_r, out)
+    for k in range(plane_p.shape[0]):
+        n = plane_n[k]
+        out[j, :3] = _dot(plane_p[k], n) * n
+        _z_to(n, out[j, 3:7])
+        out[j, 7], out[j, 8], out[j, 9] = PLANE_SIZE, PLANE_SIZE, PLANE_THICKNESS
+        j += 1
+    out[j, :3] = hood_p
+    _identity(out[j, 3:7])
+    out[j, 7:] = HOOD_SPHERE
+
+
+@njit(cache=True, nogil=True)
+def solid_poses(centers, axes, radii, cap_a, cap_b, cap_r, out):
+    """Pose ellipsoids as scaled spheres, a capsule as its cylinder and two end spheres.
+
+    Returns the rows written.
     """
     j = 0
     for k in range(centers.shape[0]):
@@ -57,15 +83,7 @@ def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hoo
             _identity(out[j + 1 + e, 3:7])
             out[j + 1 + e, 7:] = d
         j += 3
-    for k in range(plane_p.shape[0]):
-        n = plane_n[k]
-        out[j, :3] = _dot(plane_p[k], n) * n
-        _z_to(n, out[j, 3:7])
-        out[j, 7], out[j, 8], out[j, 9] = PLANE_SIZE, PLANE_SIZE, PLANE_THICKNESS
-        j += 1
-    out[j, :3] = hood_p
-    _identity(out[j, 3:7])
-    out[j, 7:] = HOOD_SPHERE
+    return j
 
 
 @njit(cache=True, nogil=True)
@@ -95,12 +113,13 @@ def _z_to(d, q):
 
 
 @njit(cache=True, nogil=True)
-def marker_table(model, scene):
+def marker_table(model, scene, body):
     """Return (table, pose rows): the pose table and the point table, flattened in turn.
 
     The pose table has shape_poses' rows: the colliders of a bundles.Model on the scene's
-    links, and the hood particle. The point table holds the cloth's vertices, the hood's anchor
-    and particle, the layer bones' pivots and their tips.
+    links, and the hood particle; then solid_poses' rows of the body's pieces (a
+    bundles.ColliderModel) on those links. The point table holds the cloth's vertices, the
+    hood's anchor and particle, the layer bones' pivots and their tips.
     """
     colliders, x, hood_p = model.colliders, scene.x, scene.hood_p
     k_caps = colliders.capsule_links.shape[0]
@@ -111,12 +130,20 @@ def marker_table(model, scene):
                   np.empty((0, 3)))
     collider_poses(scene.links, colliders, posed)
     plane_poses(scene.links, scene.root, colliders, posed)
-    rows = posed.centers.shape[0] + 3 * k_caps + posed.plane_p.shape[0] + 1
+    debug_rows = posed.centers.shape[0] + 3 * k_caps + posed.plane_p.shape[0] + 1
+    b_caps = body.capsule_links.shape[0]
+    rows = debug_rows + body.links.shape[0] + 3 * b_caps
     k = scene.layer_pos.shape[0]
     table = np.empty(rows * POSE_WIDTH + 3 * (nv + 2 + 2 * k))
+    poses = table[:rows * POSE_WIDTH].reshape((rows, POSE_WIDTH))        # posed in place
     shape_poses(posed.centers, posed.axes, colliders.radii, posed.cap_a, posed.cap_b,
-                colliders.capsule_radii, posed.plane_p, posed.plane_n, hood_p,
-                table[:rows * POSE_WIDTH].reshape((rows, POSE_WIDTH)))     # posed in place
+                colliders.capsule_radii, posed.plane_p, posed.plane_n, hood_p, poses)
+    pieces = Posed(np.empty(body.centers.shape), np.empty(body.rotations.shape),
+                   np.empty((b_caps, 3)), np.empty((b_caps, 3)), np.empty((0, 3)),
+                   np.empty((0, 3)), np.empty((0, 3)))
+    collider_poses(scene.links, body, pieces)
+    solid_poses(pieces.centers, pieces.axes, body.radii, pieces.cap_a, pieces.cap_b,
+                body.capsule_radii, poses[debug_rows:])
     points = table[rows * POSE_WIDTH:].reshape((nv + 2 + 2 * k, 3))
     points[:nv] = x
     cloth = model.cloth
@@ -128,12 +155,38 @@ def marker_table(model, scene):
 
 
 @njit(cache=True, nogil=True)
-def fill_markers(model, scene, src, dst, out):
+def fill_markers(model, scene, body, src, dst, out):
     """Run marker_table, then cdr.MarkerTemplate's scatter ``out[dst] = table[src]``, in one call.
 
     As separate numpy and compiled calls they cost several times as much in a node that
     sleeps between inputs (caches cold).
     """
-    table, _ = marker_table(model, scene)
+    table, _ = marker_table(model, scene, body)
     for i in range(dst.shape[0]):
         out[dst[i]] = table[src[i]]
+
+
+@njit(cache=True, nogil=True)
+def fill_body(links, body, first, src, dst, out):
+    """Pose only the body's pieces and scatter them as fill_markers would (no debug layer).
+
+    The layout then reads nothing else of the tables; the rest of marker_table would be a
+    large share of a markers message.
+
+    :param links: (L,4,4) the links now.
+    :param body: the body's pieces (a bundles.ColliderModel).
+    :param first: the pose table's row of the body's first piece.
+    """
+    caps = body.capsule_links.shape[0]
+    rows = body.links.shape[0] + 3 * caps
+    pieces = Posed(np.empty(body.centers.shape), np.empty(body.rotations.shape),
+                   np.empty((caps, 3)), np.empty((caps, 3)), np.empty((0, 3)),
+                   np.empty((0, 3)), np.empty((0, 3)))
+    collider_poses(links, body, pieces)
+    table = np.empty((rows, POSE_WIDTH))
+    solid_poses(pieces.centers, pieces.axes, body.radii, pieces.cap_a, pieces.cap_b,
+                body.capsule_radii, table)
+    flat = table.reshape(-1)
+    skip = first * POSE_WIDTH
+    for i in range(dst.shape[0]):
+        out[dst[i]] = flat[src[i] - skip]

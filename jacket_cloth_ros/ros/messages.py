@@ -1,9 +1,10 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py).
 
-The markers a person sees: the skinned jacket and hood (``jacket``) on a simple body (``body``),
-triangle lists shaded per corner. The method's scaffolding (the M3 grid, the M10 colliders,
-the M8 pendulum, the M1/M2 bones) is the debug layer, sent with ``markers_debug``.
+The markers a person sees: the skinned jacket and hood (``jacket``), a triangle list shaded per
+corner, on a simple body (``body``): its spheres and cylinders, which the viewer lights. The
+method's scaffolding (the M3 grid, the M10 colliders, the M8 pendulum, the M1/M2 bones) is the
+debug layer, sent with ``markers_debug``.
 """
 
 import functools
@@ -12,12 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.body_mesh import body_mesh
+from ..core.body_mesh import body_mesh, body_shapes
 from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
-from ..core.bundles import Scene, floats
+from ..core.bundles import MeshModel, Scene, flags, floats, ints
 from ..core.compiled import FixedTypes
-from ..core.jacket_mesh import SkinnedMesh, jacket_mesh, posed_joints, skinned
+from ..core.jacket_mesh import SKIN, SkinnedMesh, jacket_mesh, posed_joints
 from ..core.physics import skinning
 
 if TYPE_CHECKING:           # for the annotations only
@@ -34,10 +35,12 @@ OK, WARN, ERROR = 0, 1, 2
 # Every scene's bundles have the same types, so the marker kernel is typed once.
 _FILL_MARKERS = FixedTypes(marker_kernel.fill_markers)
 _MARKER_TABLE = FixedTypes(marker_kernel.marker_table)
+_FILL_BODY = FixedTypes(marker_kernel.fill_body)
+_DRAW = FixedTypes(skinning.draw)
 
 DEBUG_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
-MESH_NAMESPACES = ('jacket', 'body')
-MARKER_NAMESPACES = MESH_NAMESPACES + DEBUG_NAMESPACES
+MESH_NAMESPACES = ('jacket',)      # triangle lists shaded per corner
+MARKER_NAMESPACES = MESH_NAMESPACES + ('body',) + DEBUG_NAMESPACES
 # The meshes' light, in the body's (front, left, up) axes: above, in front, a little left.
 LIGHT = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
 AMBIENT = 0.35
@@ -103,7 +106,9 @@ def tf_template(names: tuple[str, ...], parents: tuple[str, ...],
 
 
 class Outfit:
-    """The meshes a rig's markers draw: the jacket and hood, and the body (core.jacket_mesh).
+    """The meshes of a rig: the jacket and hood, and the body (core.jacket_mesh, body_mesh).
+
+    The markers draw the jacket's mesh and the body's pieces; pictures and export both meshes.
 
     :param rig: the character's rig.
     :param bone_names: the published bones (simulation.BoneSet), the jacket's joints.
@@ -115,11 +120,15 @@ class Outfit:
         skeleton = rig.skeleton
         self.jacket = jacket_mesh(skeleton, rig, bone_names, bone_parents, grid)
         self.body = body_mesh(skeleton, rig)
+        self.body_shapes = body_shapes(skeleton, rig)
         self.bone_parents = np.array([skeleton.link_names.index(p) for p in bone_parents],
                                      dtype=np.int64)
         self.light = floats(rig.world_axes @ LIGHT)
-        self._shading = {name: (m.triangles[~m.back], floats(m.colors), m.back)
-                         for name, m in self.meshes().items()}
+        self._models = {name: MeshModel(floats(m.inverse_rest), ints(m.joints),
+                                        floats(m.weights), floats(m.rest), ints(m.triangles),
+                                        ints(m.triangles[~m.back]), floats(m.colors),
+                                        flags(m.back))
+                        for name, m in self.meshes().items()}
 
     def meshes(self) -> dict[str, SkinnedMesh]:
         """Return the meshes by marker namespace."""
@@ -132,6 +141,18 @@ class Outfit:
         """
         return 3 * len(self.meshes()[name].triangles)
 
+    def triangles(self, name: str, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return a mesh skinned and shaded on ``joints``: its corners and their colours.
+
+        :param name: ``jacket`` or ``body``.
+        :param joints: (J,3,4) every joint now (the body's: the skeleton's links).
+        :returns: (3T,3) corners, (3T,4) float32 colours.
+        """
+        n = self.corners(name)
+        points, colors = np.empty((n, 3)), np.empty((n, 4), dtype=np.float32)
+        self.draw(name, joints, points, colors)
+        return points, colors
+
     def draw(self, name: str, joints: np.ndarray, points: np.ndarray,
              colors: np.ndarray) -> None:
         """Skin, shade and lay out a mesh as a triangle list into ``points`` and ``colors``.
@@ -141,13 +162,8 @@ class Outfit:
         :param points: (3T,3) written: the corners.
         :param colors: (3T,4) float32 written: their shaded colours.
         """
-        mesh = self.meshes()[name]
-        where = skinned(mesh, joints[:len(mesh.inverse_rest)])
-        normals = np.empty(where.shape)
-        front, base, back = self._shading[name]
-        skinning.vertex_normals(where, front, normals)
-        skinning.shaded_triangles(where, normals, mesh.triangles, base, back, self.light,
-                                  AMBIENT, LINING_GAP, points, colors)
+        _DRAW(self._models[name], floats(joints), self.light, AMBIENT, LINING_GAP, points,
+              colors)
 
 
 @functools.lru_cache(maxsize=16)
@@ -178,9 +194,17 @@ def marker_layout(rig: 'Rig', layer_bones: int, reset: bool, debug: bool = False
     out = [MarkerSpec(ns, 0, 0, action=DELETEALL, lifetime_s=0)
            for ns in MARKER_NAMESPACES] if reset else []
     meshes = outfit(rig)
-    for name in ('jacket', 'body') if body else ('jacket',):
-        out.append(MarkerSpec(name, 0, TRIANGLE_LIST, color=(1.0, 1.0, 1.0, 1.0), mesh=name,
-                              mesh_points=meshes.corners(name)))
+    out.append(MarkerSpec('jacket', 0, TRIANGLE_LIST, color=(1.0, 1.0, 1.0, 1.0), mesh='jacket',
+                          mesh_points=meshes.corners('jacket')))
+    if body:
+        # Solids, a small share of a triangle list's bytes; the pose table's rows after the
+        # debug layer's.
+        shapes = meshes.body_shapes
+        first = marker_kernel.shape_count(rig)
+        kinds = [SPHERE] * len(shapes.links) + [CYLINDER, SPHERE, SPHERE] * len(
+            shapes.capsule_links)
+        out.extend(MarkerSpec('body', k, kind, color=SKIN, pose_row=first + k)
+                   for k, kind in enumerate(kinds))
     if debug:
         out.extend(_debug_layout(rig, layer_bones))
     return tuple(out)
@@ -229,7 +253,8 @@ def _marker_arguments(sim):
     return (sim.model, Scene(floats(sim.links), floats(sim.root), floats(sim.x),
                              floats(sim.hood_p),
                              empty if layer is None else floats(layer.positions),
-                             empty if layer is None else floats(layer.tips)))
+                             empty if layer is None else floats(layer.tips)),
+            outfit(sim.rig).body_shapes)
 
 
 def _layer_bones(sim):
@@ -251,9 +276,7 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = Fal
     out = []
     for m in marker_layout(sim.rig, _layer_bones(sim), reset, debug, body):
         if m.mesh:
-            corners = np.empty((m.mesh_points, 3))
-            colors = np.empty((m.mesh_points, 4), dtype=np.float32)
-            meshes.draw(m.mesh, joints, corners, colors)
+            corners, colors = meshes.triangles(m.mesh, joints)
             m = replace(m, points=corners, colors=colors)
         if m.pose_row >= 0:
             row = poses[m.pose_row].tolist()
@@ -290,14 +313,17 @@ def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
         meshes = outfit(sim.rig)
         for name, (points, colors) in template.meshes.items():
             meshes.draw(name, joints, points, colors)
-    return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
+    if debug:
+        return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
+    return template.encode(_FILL_BODY, (floats(sim.links), outfit(sim.rig).body_shapes,
+                                        marker_kernel.shape_count(sim.rig)), stamp_ns)
 
 
 @functools.lru_cache(maxsize=16)
 def _marker_template(rig, layer_bones, reset, frame, debug, body):
     """One per layout: the reset array, with its DELETEALLs in front, is another."""
-    return cdr.MarkerTemplate(marker_layout(rig, layer_bones, reset, debug, body), frame,
-                              marker_kernel.shape_count(rig))
+    rows = marker_kernel.shape_count(rig) + marker_kernel.body_count(outfit(rig).body_shapes)
+    return cdr.MarkerTemplate(marker_layout(rig, layer_bones, reset, debug, body), frame, rows)
 
 
 def diagnostics(stamp_ns: int, node_name: str, values: dict, level: int,

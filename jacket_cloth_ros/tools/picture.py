@@ -30,6 +30,7 @@ import numpy as np  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
+from ..core.bundles import floats  # noqa: E402
 from ..core.fabric import load_fabric  # noqa: E402
 from ..core.geometry import grid_triangles  # noqa: E402
 from ..core.inputs import InputParser  # noqa: E402
@@ -156,9 +157,12 @@ def sim_frame(sim: JacketSimulation, stamp_ns: int) -> Frame:
     rest = anchor + rot @ rig.hood.rest_direction * rig.hood.length
     bones = np.stack([layer.positions, layer.tips], axis=1) if layer else np.zeros((0, 2, 3))
     mesh, colors = [], []
-    for m in messages.marker_specs(sim):
+    for m in messages.marker_specs(sim, body=False):
         mesh.append(m.points.reshape(-1, 3, 3))
         colors.append(m.colors.reshape(-1, 3, 4).mean(axis=1))
+    body, body_colors = _body_triangles(rig, sim.links)
+    mesh.append(body)
+    colors.append(body_colors)
     return Frame(stamp_ns, sim.x[grid_triangles(rig.rows, rig.cols)].reshape(-1, 3, 3),
                  np.array([anchor, sim.hood_p]), bones, sim.links[:, :3, 3].copy(),
                  ref[-1].copy(), np.array([anchor, rest]), sim.root.copy(),
@@ -330,17 +334,31 @@ def _marker_points(data):
     if ('jacket', 0) not in found and (('cloth', 0) not in found or ('hood', 0) not in found):
         return None
     out = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
-    for ns in messages.MESH_NAMESPACES:
+    for ns in messages.MESH_NAMESPACES + ('body',):
         if (ns, 0) in found:
             out[ns, 'colors'] = np.array([[c.r, c.g, c.b, c.a] for c in found[ns, 0].colors])
     return out
 
 
+def _body_pieces(pts):
+    """Tell whether recorded markers hold the body as its pieces (spheres, cylinders)."""
+    return ('body', 0) in pts and not len(pts['body', 0])
+
+
+def _body_triangles(rig, links):
+    """Return the body's mesh on the skeleton's ``links``: triangles and their colours."""
+    points, colors = messages.outfit(rig).triangles('body', floats(links[:, :3, :]))
+    return points.reshape(-1, 3, 3), colors.reshape(-1, 3, 4).mean(axis=1)
+
+
 def _recorded_mesh(pts):
-    """Return the recorded meshes' triangles and their colours (each the mean of its corners)."""
+    """Return the recorded meshes' triangles and their colours (each the mean of its corners).
+
+    A body recorded as a triangle list (before it was sent as its pieces) is one of them.
+    """
     mesh, colors = [], []
-    for ns in messages.MESH_NAMESPACES:
-        if (ns, 0) in pts:
+    for ns in messages.MESH_NAMESPACES + ('body',):
+        if len(pts.get((ns, 0), ())):
             mesh.append(pts[ns, 0].reshape(-1, 3, 3))
             colors.append(pts[ns, 'colors'].reshape(-1, 3, 4).mean(axis=1))
     if not mesh:
@@ -354,6 +372,9 @@ def _frame(log_time, pts, js, parser, skeleton, sim):
     sample = parser.parse(js.stamp_ns, js.name, js.position)
     poses = skeleton.forward(sample.q)
     mesh, colors = _recorded_mesh(pts)
+    if sim is not None and mesh is not None and _body_pieces(pts):
+        body, body_colors = _body_triangles(sim.rig, poses)
+        mesh, colors = np.concatenate([mesh, body]), np.concatenate([colors, body_colors])
     frame = Frame(log_time, pts.get(('cloth', 0), np.zeros((0, 3))).reshape(-1, 3, 3),
                   pts.get(('hood', 0)), bones, poses[:, :3, 3], root=sample.root, mesh=mesh,
                   mesh_colors=colors)
