@@ -18,7 +18,7 @@ from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import MeshModel, Scene, flags, floats, ints
 from ..core.compiled import FixedTypes
-from ..core.jacket_mesh import SKIN, SkinnedMesh, jacket_mesh, posed_joints
+from ..core.jacket_mesh import SKIN, SkinnedMesh, jacket_mesh
 from ..core.physics import skinning
 
 if TYPE_CHECKING:           # for the annotations only
@@ -37,6 +37,7 @@ _FILL_MARKERS = FixedTypes(marker_kernel.fill_markers)
 _MARKER_TABLE = FixedTypes(marker_kernel.marker_table)
 _FILL_BODY = FixedTypes(marker_kernel.fill_body)
 _DRAW = FixedTypes(skinning.draw)
+_DRAW_POSED = FixedTypes(skinning.draw_posed)
 
 DEBUG_NAMESPACES = ('cloth', 'colliders', 'hood', 'jacket_bones')
 MESH_NAMESPACES = ('jacket',)      # triangle lists shaded per corner
@@ -152,6 +153,18 @@ class Outfit:
         points, colors = np.empty((n, 3)), np.empty((n, 4), dtype=np.float32)
         self.draw(name, joints, points, colors)
         return points, colors
+
+    def draw_jacket(self, links: np.ndarray, bone_poses: np.ndarray, points: np.ndarray,
+                    colors: np.ndarray) -> None:
+        """Pose the jacket's joints and :meth:`draw` it, in one compiled call (the markers').
+
+        :param links: (L,4,4) the links now (JacketSimulation.links).
+        :param bone_poses: (B,7) the published bones, each in its parent's frame.
+        :param points: (3T,3) written: the corners.
+        :param colors: (3T,4) float32 written: their shaded colours.
+        """
+        _DRAW_POSED(self._models['jacket'], floats(links), self.bone_parents,
+                    floats(bone_poses), self.light, AMBIENT, LINING_GAP, points, colors)
 
     def draw(self, name: str, joints: np.ndarray, points: np.ndarray,
              colors: np.ndarray) -> None:
@@ -272,11 +285,12 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = Fal
     """
     poses, points = marker_values(sim)
     meshes = outfit(sim.rig)
-    joints = mesh_joints(sim)
     out = []
     for m in marker_layout(sim.rig, _layer_bones(sim), reset, debug, body):
         if m.mesh:
-            corners, colors = meshes.triangles(m.mesh, joints)
+            corners = np.empty((m.mesh_points, 3))
+            colors = np.empty((m.mesh_points, 4), dtype=np.float32)
+            meshes.draw_jacket(sim.links, sim.bones().poses, corners, colors)
             m = replace(m, points=corners, colors=colors)
         if m.pose_row >= 0:
             row = poses[m.pose_row].tolist()
@@ -286,14 +300,6 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = Fal
             m = replace(m, points=points[m.point_rows])
         out.append(m)
     return out
-
-
-def mesh_joints(sim: 'JacketSimulation') -> np.ndarray:
-    """Return every joint of the meshes now: the links, then the bones as published.
-
-    :param sim: the simulation, after its last step.
-    """
-    return posed_joints(sim.links, outfit(sim.rig).bone_parents, sim.bones().poses)
 
 
 def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
@@ -309,10 +315,8 @@ def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
     """
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame, debug, body)
     if template.meshes:
-        joints = mesh_joints(sim)
-        meshes = outfit(sim.rig)
-        for name, (points, colors) in template.meshes.items():
-            meshes.draw(name, joints, points, colors)
+        points, colors = template.meshes['jacket']
+        outfit(sim.rig).draw_jacket(sim.links, sim.bones().poses, points, colors)
     if debug:
         return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
     return template.encode(_FILL_BODY, (floats(sim.links), outfit(sim.rig).body_shapes,

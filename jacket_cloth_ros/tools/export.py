@@ -250,9 +250,13 @@ def _primitive(blob: _Blob, mesh: SkinnedMesh, faces: np.ndarray, axes: np.ndarr
 
 
 def _material(name: str, color: tuple, double_sided: bool) -> gl.Material:
+    # glTF's base colour is linear; the colours are picked on screens (sRGB), as the markers
+    # and pictures show them: taken as they are, Blender drew the tweed beige.
+    rgb = [float(c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4)
+           for c in color[:3]]
     return gl.Material(name=name, doubleSided=double_sided,
                        pbrMetallicRoughness=gl.PbrMetallicRoughness(
-                           baseColorFactor=[float(c) for c in color], metallicFactor=0.0,
+                           baseColorFactor=rgb + [float(color[3])], metallicFactor=0.0,
                            roughnessFactor=0.9))
 
 

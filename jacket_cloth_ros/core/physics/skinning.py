@@ -123,19 +123,31 @@ def shaded_triangles(points, normals, triangles, colors, back, light, ambient, l
     :param out_points: (3T,3) written: the corners in triangle-list order.
     :param out_colors: (3T,4) float32 written: each corner's shaded colour.
     """
+    n = points.shape[0]
+    # Lit and placed once per vertex and side, not per corner (a vertex has six corners).
+    lit = np.empty((2, n))
+    inner = np.empty((n, 3))
+    for v in range(n):
+        d = normals[v, 0] * light[0] + normals[v, 1] * light[1] + normals[v, 2] * light[2]
+        lit[0, v] = ambient + (1.0 - ambient) * max(d, 0.0)
+        lit[1, v] = ambient + (1.0 - ambient) * max(-d, 0.0)
+        for i in range(3):
+            inner[v, i] = points[v, i] - lining_gap * normals[v, i]
     for t in range(triangles.shape[0]):
-        sign = -1.0 if back[t] else 1.0
-        gap = lining_gap if back[t] else 0.0
+        side = 1 if back[t] else 0
+        source = inner if back[t] else points
+        r, g, b, a = colors[t, 0], colors[t, 1], colors[t, 2], colors[t, 3]
         for k in range(3):
             v = triangles[t, k]
-            d = sign * (normals[v, 0] * light[0] + normals[v, 1] * light[1]
-                        + normals[v, 2] * light[2])
-            lit = ambient + (1.0 - ambient) * max(d, 0.0)
             row = 3 * t + k
-            for i in range(3):
-                out_points[row, i] = points[v, i] - gap * normals[v, i]
-                out_colors[row, i] = colors[t, i] * lit
-            out_colors[row, 3] = colors[t, 3]
+            out_points[row, 0] = source[v, 0]
+            out_points[row, 1] = source[v, 1]
+            out_points[row, 2] = source[v, 2]
+            shade = lit[side, v]
+            out_colors[row, 0] = r * shade
+            out_colors[row, 1] = g * shade
+            out_colors[row, 2] = b * shade
+            out_colors[row, 3] = a
 
 
 @njit(cache=True, nogil=True)
@@ -160,3 +172,22 @@ def draw(mesh, joints_now, light, ambient, lining_gap, out_points, out_colors):
     vertex_normals(where, mesh.front, normals)
     shaded_triangles(where, normals, mesh.triangles, mesh.colors, mesh.back, light, ambient,
                      lining_gap, out_points, out_colors)
+
+
+@njit(cache=True, nogil=True)
+def draw_posed(mesh, links, parents, poses, light, ambient, lining_gap, out_points, out_colors):
+    """:func:`draw` on the joints of ``links`` and bone ``poses`` (joint_matrices), one call.
+
+    :param mesh: the mesh (a bundles.MeshModel).
+    :param links: (L,4,4) link transforms.
+    :param parents: (B,) each bone's parent link.
+    :param poses: (B,7) each bone's pose in its parent's frame.
+    :param light: (3,) unit direction towards the light.
+    :param ambient: the share of the colour lit from everywhere.
+    :param lining_gap: how far a back face lies inside its front face.
+    :param out_points: (3T,3) written: the corners in triangle-list order.
+    :param out_colors: (3T,4) float32 written: each corner's shaded colour.
+    """
+    joints_now = np.empty((links.shape[0] + parents.shape[0], 3, 4))
+    joint_matrices(links, parents, poses, joints_now)
+    draw(mesh, joints_now, light, ambient, lining_gap, out_points, out_colors)
