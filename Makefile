@@ -91,7 +91,8 @@ analysis: $(READY)
 MOCAP_FILES := $(MOCAP)/test_mocapbank.bvh $(MOCAP)/test_freebvh.bvh
 JVRC := $(MOCAP)/jvrc1.urdf
 HUMANOID := $(MOCAP)/humanoid.urdf
-DEEPMIMIC_CLIPS := $(foreach c,walk run jump cartwheel dance_a spinkick,$(MOCAP)/humanoid3d_$(c).txt)
+DEEPMIMIC_CLIPS := $(foreach c,backflip cartwheel crawl dance_a dance_b getup_facedown \
+    getup_faceup jump kick punch roll run spin spinkick walk,$(MOCAP)/humanoid3d_$(c).txt)
 ROBOT_URDFS := g1_description/urdf/g1_29dof_rev_1_0.urdf \
     g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf talos_data/robots/talos_full_v2.urdf \
     romeo_description/urdf/romeo.urdf icub_description/robots/icub.urdf \
@@ -115,7 +116,7 @@ $(JVRC): | $(READY)
 
 # A Y-up humanoid URDF with primitive collision shapes and pybullet's spherical joints, and
 # DeepMimic motion clips made for it (never committed): the DeepMimic humanoid of pybullet
-# 3.2.7's pybullet_data (zlib) and some of its data/motions, from its 80 MB source
+# 3.2.7's pybullet_data (zlib) and every humanoid clip of its data/motions, from its 80 MB source
 # distribution, which is removed once they are out (one grouped rule: one download for all).
 $(HUMANOID) $(DEEPMIMIC_CLIPS) &: | $(READY)
 	$(PIP) download --no-deps --no-binary :all: pybullet==3.2.7 -d $(MOCAP)
