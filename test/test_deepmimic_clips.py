@@ -2,11 +2,11 @@
 """DeepMimic's motion clips on pybullet's DeepMimic humanoid: import, and issue 19's targets.
 
 ``make`` fetches the 15 humanoid clips of pybullet 3.2.7's ``pybullet_data/data/motions``
-(zlib, see docs/motion_capture.md) with ``humanoid.urdf`` into share/mocap; none is committed. Each goes
-through ``jacket_cloth import CLIP --urdf humanoid.urdf``, then the replay's pipeline at the
-default settings with the rig ``jacket_cloth rig`` proposes for the humanoid, measured after
-every input as ``jacket_cloth analyze`` measures it (core.measures), as test_mocap_targets.py
-does for the BVH captures. Whole clips: 25 to 227 inputs.
+(zlib, see docs/motion_capture.md) with ``humanoid.urdf`` into share/mocap; none is
+committed. Each goes through ``jacket_cloth import CLIP --urdf humanoid.urdf``, then the
+replay's pipeline at the default settings with the rig ``jacket_cloth rig`` proposes for the
+humanoid, measured after every input as ``jacket_cloth analyze`` measures it
+(core.measures), as test_mocap_targets.py does for the BVH captures. Whole clips: 25 to 227 inputs.
 """
 
 import math
