@@ -82,9 +82,11 @@ def test_a_public_y_up_humanoid_gets_a_rig_with_its_own_collision_shapes(tmp_pat
     rig = yaml.safe_load(rig_path.read_text())
     assert rig['up'] == [0.0, 1.0, 0.0] and rig['forward'] == [1.0, 0.0, 0.0]
     assert 'by the names' in out                       # no toe links: left_ and right_ say it
-    # The knees' capsules too: a kicking or seated shin meets the hem (issue 35 item 3).
+    # The knees' capsules too: a kicking or seated shin meets the hem (issue 35 item 3); and
+    # the feet's boxes: crawling and getting up from face up, a foot went through the hem.
     assert rig['colliders']['from_urdf'] == ['root', 'chest', 'left_hip', 'right_hip',
-                                             'left_knee', 'right_knee']
+                                             'left_knee', 'right_knee', 'left_ankle',
+                                             'right_ankle']
     # The floor is the world's (REP 103's +z), not the body's up in the URDF (issue 47 item 1).
     assert rig['colliders']['add'][0]['normal'] == [0.0, 0.0, 1.0] and 'world_up' not in rig
     loaded = Rig(rig, load_skeleton(urdf))

@@ -863,6 +863,10 @@ def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
         # The torso's shapes hold its bones; the legs' are checked.
         bones = [b for b in _hung_over_bones(body) if b[1] not in body.spine]
         wanted += [k for _, k, _, _ in bones if body.name(k) in shapes and k not in wanted]
+        # The feet's too: a foot brought up to the hem (crawling, getting up) went through it.
+        feet = [body.ankles[side] for side in ('left', 'right') if side in body.ankles]
+        wanted += [k for k in _below(body, feet[::-1])
+                   if body.name(k) in shapes and k not in wanted]
         bare = [b for b in bones if not _covered(body, shapes, wanted, b[2], b[3], radius / 2)]
         names = [body.name(k) for k in wanted]
         why = 'from the URDF <collision> shapes of ' + ', '.join(names)
@@ -886,6 +890,17 @@ def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
                  'bone down to the ankles and to each frame fixed in the pelvis (no primitive '
                  '<collision> shape on ' + ', '.join(
                      body.name(k) for k in wanted if body.name(k) not in shapes) + ')')
+
+
+def _below(body, links):
+    """Return ``links`` and every link under them (a foot: the ankle's ball joint's links)."""
+    parent = body.skeleton.parent
+    out, todo = [], list(links)
+    while todo:
+        k = todo.pop()
+        out.append(k)
+        todo += [int(c) for c in np.flatnonzero(parent == k)]
+    return out
 
 
 def _bone_capsule(body, bone, radius):
