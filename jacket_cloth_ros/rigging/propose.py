@@ -887,7 +887,8 @@ def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):
     out += [_bone_capsule(body, bone, radius) for bone in _hung_over_bones(body)]
     out.append(floor)
     return out, ('an ellipsoid on the torso and the pelvis, a capsule over each spine and leg '
-                 'bone down to the ankles and to each frame fixed in the pelvis (no primitive '
+                 'bone down to the ankles, across the hips and to each frame fixed in the '
+                 'pelvis (no primitive '
                  '<collision> shape on ' + ', '.join(
                      body.name(k) for k in wanted if body.name(k) not in shapes) + ')')
 
@@ -950,14 +951,16 @@ def _hung_over_bones(body):
     """Return the bones the jacket hangs over: (name, link carrying it, start, end), root frame.
 
     The spine's from the pelvis to the chest, and each leg's from the pelvis to the ankle, the
-    shin too (a knee lifted in a stride or a seated shin meets the hem), and the pelvis's other
-    bones (``_pelvis_frame_bones``). A bone shorter than a bone collider's radius is left to its
+    shin too (a knee lifted in a stride or a seated shin meets the hem), one across the hips
+    where the legs' hip bones leave the pelvis, and the pelvis's other bones
+    (``_pelvis_frame_bones``). A bone shorter than a bone collider's radius is left to its
     neighbours' rounded ends.
     """
     shortest = BONE_COLLIDER_SHARE * body.height
     out = _pelvis_frame_bones(body, shortest)
     chains = [('spine', 'spine', body.chest)] + [(side[0], side, body.ankles[side])
                                                  for side in ('left', 'right')]
+    hips = {}
     for prefix, side, end in chains:
         links = _chain(body, end)
         phase, counts = ('spine' if side == 'spine' else 'hip'), {}
@@ -969,9 +972,15 @@ def _hung_over_bones(body):
                 phase = 'shin'
             if np.linalg.norm(b - a) < shortest:
                 continue
+            if phase == 'hip':
+                hips[side] = b
             counts[phase] = counts.get(phase, 0) + 1
             name = phase if side == 'spine' else f'{prefix}_{phase}'
             out.append((name + (f'_{counts[phase]}' if counts[phase] > 1 else ''), parent, a, b))
+    # Hip bones from the pelvis form a V the hem's middle was pushed up into between the legs
+    # (TALOS raising its arms): a bone across the hips closes it.
+    if len(hips) == 2 and np.linalg.norm(hips['left'] - hips['right']) >= shortest:
+        out.append(('hips', body.pelvis, hips['left'], hips['right']))
     return out
 
 
