@@ -934,3 +934,26 @@ def test_the_node_names_a_rig_inside_the_body_at_load_and_its_stretch_at_the_fir
     log = capfd.readouterr().err
     assert log.count('the cloth starts inside the body: row ') == 1
     assert log.count('the cloth starts stretched ') == 1 and 'across at row' in log
+
+
+def test_a_collapsed_cloth_is_a_warn_in_the_live_nodes_diagnostics(harness, tmp_path):
+    # Issue 47 item 5 through a node over DDS, as test_collapse holds it for replay and
+    # analyze: the shipped rig with its cloth's radii 0.6 of theirs, the torso holding the
+    # cloth stretched across; after a second of it the node's status is WARN with the line
+    # naming the rig key, and a walk in the shipped rig stays OK (test_collapse).
+    import yaml
+    from diagnostic_msgs.msg import DiagnosticArray
+    from jacket_cloth_ros.core.config import shipped
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        rig = yaml.safe_load(f)
+    rig['cloth']['shape']['radii'] = [0.6 * r for r in rig['cloth']['shape']['radii']]
+    narrow = tmp_path / 'narrow.yaml'
+    narrow.write_text(yaml.safe_dump(rig))
+    h = harness(rig_file=str(narrow), diagnostics_rate=10.0)
+    diags = []
+    h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+    h.send_clip('walk', 60, 2.0)
+    # Waited on by its words: a loaded machine may also say the step costs too much.
+    h.spin_until(lambda: any('widen cloth.shape.radii' in d.status[0].message for d in diags))
+    warned = [d.status[0] for d in diags if 'widen cloth.shape.radii' in d.status[0].message]
+    assert warned[0].level == bytes([1]) and 'stretched across' in warned[0].message
