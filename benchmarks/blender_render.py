@@ -56,7 +56,7 @@ def main() -> int:
 
 
 def _centre(obj, frame):
-    """The mean of a skinned mesh's vertices at ``frame``, in the world."""
+    """Return the mean of a skinned mesh's vertices at ``frame``, in the world."""
     bpy.context.scene.frame_set(frame)
     posed = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
     mesh = posed.to_mesh()

@@ -407,7 +407,9 @@ class McapWriter:
             channel_count=len(self._channels), attachment_count=0,
             metadata_count=len(self._metadata_indexes),
             chunk_count=self._chunk_count + len(pieces), message_start_time=first,
-            message_end_time=last, channel_message_counts=counts)
+            message_end_time=last,
+            # Channels with messages only, as mcap's own writers (Python, C++) count them.
+            channel_message_counts={c: n for c, n in counts.items() if n})
         with self._whole():
             self._write_summary(statistics, b''.join(
                 self._index_tail + [p.index_record for p in pieces]))
