@@ -91,3 +91,28 @@ def test_collider_and_hood_markers_sit_where_the_simulation_has_them():
     bones = shown['jacket_bones', 0].points
     assert np.allclose(bones[0::2], sim.layer.positions)
     assert np.allclose(bones[1::2], sim.layer.tips)
+
+
+def test_read_markers_reads_what_rclpy_reads_without_an_object_per_point():
+    # picture and the animation read recorded markers with read_markers, arrays over the
+    # bytes: rclpy's deserialize_message took most of a session's animation. Every marker of
+    # a reset array with the debug layer and the body, as rclpy reads it.
+    from rclpy.serialization import deserialize_message
+    from visualization_msgs.msg import MarkerArray
+    from jacket_cloth_ros.ros.cdr import read_markers
+    with open(shipped('examples/mannequin.urdf'), encoding='utf-8') as f:
+        skeleton = Skeleton(f.read())
+    rig = load_rig(skeleton, shipped('examples/mannequin_rig.yaml'))
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    raw = messages.marker_array(sim, 7, 'root', reset=True, debug=True, body=True)
+    ours, theirs = read_markers(raw), deserialize_message(raw, MarkerArray).markers
+    assert len(ours) == len(theirs) > 10
+    for a, b in zip(ours, theirs):
+        assert (a.ns, a.id, a.type, a.action) == (b.ns, b.id, b.type, b.action)
+        points = np.array([[p.x, p.y, p.z] for p in b.points]).reshape(-1, 3)
+        colors = np.array([[c.r, c.g, c.b, c.a] for c in b.colors], dtype=np.float32)
+        assert np.array_equal(a.points, points)
+        assert np.array_equal(a.colors, colors.reshape(-1, 4))
+    assert {a.ns for a in ours if len(a.points)} >= {'jacket', 'cloth', 'hood'}
+    with pytest.raises(ValueError):
+        read_markers(raw[:len(raw) // 2])

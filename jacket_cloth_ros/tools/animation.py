@@ -33,7 +33,7 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
     :param max_frames: at most this many frames, evenly chosen over the session.
     :param style: ``jacket`` (the shaded jacket on the body) or ``debug`` (see draw_view).
     """
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    from PIL import Image
 
     def evenly(log_times, t0):
         n = len(log_times)
@@ -47,17 +47,40 @@ def render_animation(mcap_path: str, gif_path: str, skeleton: 'Skeleton',
     fig, axes = plt.subplots(1, 2, figsize=(6.4, 4.6))
     spans = np.diff([f.stamp_ns for f in frames]) * 1e-9
     fps = 1.0 / float(np.median(spans)) if len(spans) and np.median(spans) > 0 else 10.0
-
-    def draw(k):
-        f = frames[k]
-        for ax, (view, axis) in zip(axes, VIEWS):
-            ax.cla()
+    # The axes and their text are drawn once, and each frame only draws its own artists over
+    # them (blitting): matplotlib's animation cleared and laid out both axes for every frame
+    # and drew each frame twice.
+    for ax, (view, axis) in zip(axes, VIEWS):
+        draw_view(ax, frames[0], skeleton, axis, across, upward, style)
+        _clear(ax)
+        ax.set_xlabel(labels[axis], fontsize=8)
+        ax.set_title(f'{view} view', fontsize=9)
+    fig.canvas.draw()
+    background = fig.canvas.copy_from_bbox(fig.bbox)
+    title = fig.suptitle('', fontsize=10)
+    images, palette = [], None
+    for f in frames:
+        fig.canvas.restore_region(background)
+        for ax, (_, axis) in zip(axes, VIEWS):
+            _clear(ax)
             draw_view(ax, f, skeleton, axis, across, upward, style)
-            ax.set_xlabel(labels[axis], fontsize=8)
-            ax.set_title(f'{view} view', fontsize=9)
-        fig.suptitle(f't = {(frames[k].stamp_ns - t0) * 1e-9:.2f} s', fontsize=10)
-        return []
-    FuncAnimation(fig, draw, frames=len(frames), blit=False).save(
-        gif_path, writer=PillowWriter(fps=min(fps, 50.0)))
+            for artist in ax.collections + ax.lines:
+                ax.draw_artist(artist)
+        title.set_text(f't = {(f.stamp_ns - t0) * 1e-9:.2f} s')
+        fig.draw_artist(title)
+        image = Image.fromarray(np.asarray(fig.canvas.buffer_rgba())).convert('RGB')
+        # One palette, the first frame's, for all: a palette per frame was most of the time.
+        if palette is None:
+            palette = image.quantize(colors=255, method=Image.Quantize.FASTOCTREE)
+        images.append(image.quantize(palette=palette, dither=Image.Dither.NONE))
+    if images:
+        images[0].save(gif_path, save_all=True, append_images=images[1:], loop=0,
+                       duration=int(round(1000.0 / min(fps, 50.0))))
     plt.close(fig)
     return len(frames)
+
+
+def _clear(ax):
+    """Take a frame's drawing (its collections and lines) off ``ax``."""
+    for artist in ax.collections[:] + ax.lines[:]:
+        artist.remove()

@@ -27,8 +27,7 @@ import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from rclpy.serialization import deserialize_message  # noqa: E402
-from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
+from visualization_msgs.msg import Marker  # noqa: E402
 
 from ..core.bundles import floats  # noqa: E402
 from ..core.fabric import load_fabric  # noqa: E402
@@ -38,7 +37,7 @@ from ..core.rig import body_axes  # noqa: E402
 from ..core.simulation import JacketSimulation  # noqa: E402
 from ..recording.reader import each_message  # noqa: E402
 from ..ros import messages  # noqa: E402
-from ..ros.cdr import DECODE_ERRORS, JointStateReader  # noqa: E402
+from ..ros.cdr import DECODE_ERRORS, JointStateReader, read_markers  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
     from ..core.rig import Rig
@@ -329,14 +328,13 @@ def _marker_points(data):
 
     None without the jacket's mesh, or the cloth and hood of a recording made before it.
     """
-    arr = deserialize_message(data, MarkerArray)
-    found = {(k.ns, k.id): k for k in arr.markers if k.action == Marker.ADD}
+    found = {(k.ns, k.id): k for k in read_markers(data) if k.action == Marker.ADD}
     if ('jacket', 0) not in found and (('cloth', 0) not in found or ('hood', 0) not in found):
         return None
-    out = {key: np.array([[p.x, p.y, p.z] for p in k.points]) for key, k in found.items()}
+    out = {key: k.points for key, k in found.items()}
     for ns in messages.MESH_NAMESPACES + ('body',):
         if (ns, 0) in found:
-            out[ns, 'colors'] = np.array([[c.r, c.g, c.b, c.a] for c in found[ns, 0].colors])
+            out[ns, 'colors'] = found[ns, 0].colors
     return out
 
 
