@@ -254,3 +254,16 @@ def test_horizontal_stretch_of_a_clip_is_within_the_target(measured, request):
     name, s = measured
     _known(request, name, 'horizontal')
     assert np.percentile(s['horizontal_stretch'], 99) <= 0.10, name
+
+
+def test_the_backflip_meets_the_horizontal_target_with_two_substeps(rig, tmp_path):
+    # At the defaults its p99 is 10.1 % (KNOWN): the flip turns the body faster than one step
+    # a 120 Hz input resolves. Two substeps hold it (8.2 % max measured); more sweeps do not
+    # (16 gave 14.5 %), the row limit then fighting a cloth further from its pose.
+    urdf = fetched('humanoid.urdf')
+    session = tmp_path / 'backflip.mcap'
+    assert main(['import', _clip('backflip'), '--urdf', urdf, '-o', str(session)]) == 0
+    loaded = load_session(str(session), urdf=urdf, rig=rig, overrides=['substeps:=2'])
+    s = measure_every_input(loaded)
+    assert s['horizontal_stretch'].max() <= 0.10 and s['resets'] == ['first sample']
+    assert s['inside_m'].max() <= 0.01 and s['body_inside_m'].max() <= 0.01
