@@ -68,14 +68,16 @@ def body_shapes(skeleton: 'Skeleton', rig: 'Rig') -> ColliderModel:
         ints(np.zeros(0)), floats(np.zeros((0, 3))), floats(np.zeros((0, 3))))
 
 
-def body_mesh(skeleton: 'Skeleton', rig: 'Rig') -> 'SkinnedMesh':
+def body_mesh(skeleton: 'Skeleton', rig: 'Rig',
+              shapes: ColliderModel | None = None) -> 'SkinnedMesh':
     """Build the body's mesh from :func:`body_shapes`; its joints are the skeleton's links.
 
     :param skeleton: the character.
     :param rig: its rig.
+    :param shapes: its body_shapes, when already made.
     """
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
-    shapes = body_shapes(skeleton, rig)
+    shapes = body_shapes(skeleton, rig) if shapes is None else shapes
     b = MeshBuilder()
     for link, centre, rotation, radii in zip(shapes.links, shapes.centers, shapes.rotations,
                                              shapes.radii):

@@ -138,12 +138,7 @@ def marker_table(model, scene, body):
     poses = table[:rows * POSE_WIDTH].reshape((rows, POSE_WIDTH))        # posed in place
     shape_poses(posed.centers, posed.axes, colliders.radii, posed.cap_a, posed.cap_b,
                 colliders.capsule_radii, posed.plane_p, posed.plane_n, hood_p, poses)
-    pieces = Posed(np.empty(body.centers.shape), np.empty(body.rotations.shape),
-                   np.empty((b_caps, 3)), np.empty((b_caps, 3)), np.empty((0, 3)),
-                   np.empty((0, 3)), np.empty((0, 3)))
-    collider_poses(scene.links, body, pieces)
-    solid_poses(pieces.centers, pieces.axes, body.radii, pieces.cap_a, pieces.cap_b,
-                body.capsule_radii, poses[debug_rows:])
+    body_poses(scene.links, body, poses[debug_rows:])
     points = table[rows * POSE_WIDTH:].reshape((nv + 2 + 2 * k, 3))
     points[:nv] = x
     cloth = model.cloth
@@ -167,6 +162,18 @@ def fill_markers(model, scene, body, src, dst, out):
 
 
 @njit(cache=True, nogil=True)
+def body_poses(links, body, out):
+    """Pose the body's pieces (a bundles.ColliderModel) on ``links`` into ``out``'s rows."""
+    caps = body.capsule_links.shape[0]
+    pieces = Posed(np.empty(body.centers.shape), np.empty(body.rotations.shape),
+                   np.empty((caps, 3)), np.empty((caps, 3)), np.empty((0, 3)),
+                   np.empty((0, 3)), np.empty((0, 3)))
+    collider_poses(links, body, pieces)
+    solid_poses(pieces.centers, pieces.axes, body.radii, pieces.cap_a, pieces.cap_b,
+                body.capsule_radii, out)
+
+
+@njit(cache=True, nogil=True)
 def fill_body(links, body, first, src, dst, out):
     """Pose only the body's pieces and scatter them as fill_markers would (no debug layer).
 
@@ -177,15 +184,8 @@ def fill_body(links, body, first, src, dst, out):
     :param body: the body's pieces (a bundles.ColliderModel).
     :param first: the pose table's row of the body's first piece.
     """
-    caps = body.capsule_links.shape[0]
-    rows = body.links.shape[0] + 3 * caps
-    pieces = Posed(np.empty(body.centers.shape), np.empty(body.rotations.shape),
-                   np.empty((caps, 3)), np.empty((caps, 3)), np.empty((0, 3)),
-                   np.empty((0, 3)), np.empty((0, 3)))
-    collider_poses(links, body, pieces)
-    table = np.empty((rows, POSE_WIDTH))
-    solid_poses(pieces.centers, pieces.axes, body.radii, pieces.cap_a, pieces.cap_b,
-                body.capsule_radii, table)
+    table = np.empty((body.links.shape[0] + 3 * body.capsule_links.shape[0], POSE_WIDTH))
+    body_poses(links, body, table)
     flat = table.reshape(-1)
     skip = first * POSE_WIDTH
     for i in range(dst.shape[0]):

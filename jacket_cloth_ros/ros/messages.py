@@ -120,8 +120,8 @@ class Outfit:
     def __init__(self, rig: 'Rig', bone_names: list, bone_parents: list, grid: np.ndarray):
         skeleton = rig.skeleton
         self.jacket = jacket_mesh(skeleton, rig, bone_names, bone_parents, grid)
-        self.body = body_mesh(skeleton, rig)
         self.body_shapes = body_shapes(skeleton, rig)
+        self.body = body_mesh(skeleton, rig, self.body_shapes)
         self.bone_parents = np.array([skeleton.link_names.index(p) for p in bone_parents],
                                      dtype=np.int64)
         self.light = floats(rig.world_axes @ LIGHT)
