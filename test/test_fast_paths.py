@@ -205,12 +205,16 @@ def _check_marker_content(pipe, got, specs, reset, debug, body, frame, stamp):
     ids = [(m.ns, m.id) for m in got.markers if m.action != messages.DELETEALL]
     assert len(set(ids)) == len(ids)
     # The jacket mesh the fast path skins, poses and shades in one compiled call, against
-    # the separate calls that pictures and export use.
+    # the separate calls that pictures and export use: their outer faces, in their order (the
+    # viewers draw both sides of a triangle list, so the live markers carry no lining).
     jacket = next(m for m in got.markers if m.ns == 'jacket' and m.action == messages.ADD)
     outfit = messages.outfit(pipe.sim.rig)
     sim = pipe.sim
     points, colors = outfit.triangles('jacket', posed_joints(
         sim.links, outfit.bone_parents, sim.bones().poses))
+    outer = np.repeat(~outfit.jacket.back, 3)
+    assert 0 < outer.sum() < len(points)
+    points, colors = points[outer], colors[outer]
     assert len(jacket.points) == len(points) > 1000 and len(jacket.colors) == len(points)
     got_points = np.array([[p.x, p.y, p.z] for p in jacket.points])
     assert np.abs(got_points - points).max() < 1e-12       # float64, not rounded to float32

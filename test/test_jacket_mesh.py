@@ -208,9 +208,9 @@ def test_the_body_is_closed_and_rides_on_its_links():
 
 
 def test_the_drawn_lining_lies_inside_the_jacket_not_on_it(body):
-    # RViz and Foxglove draw triangle lists from both sides: a lining on the front face's own
-    # points flickered through the tweed from every side. Drawn, each lining corner lies
-    # inside its front corner, along the outward normal, and no two triangles coincide.
+    # A lining on the front face's own points would fight it for the same depth wherever
+    # both sides are drawn. Drawn (pictures), each lining corner lies inside its front
+    # corner, along the outward normal, and no two triangles coincide.
     from jacket_cloth_ros.ros.messages import LINING_GAP, Outfit
     name, sim, mesh = body
     bones = sim.bone_set
@@ -233,6 +233,32 @@ def test_the_drawn_lining_lies_inside_the_jacket_not_on_it(body):
     lined = mesh.rest[mesh.triangles[mesh.back]] - back
     assert (np.einsum('tkc,tc->tk', lined, inward) < 0).mean() > 0.9, name
     assert len(front) == (~mesh.back).sum()
+
+
+def test_a_picture_puts_back_the_lining_the_live_markers_leave_out(body):
+    # The live jacket is its outer faces (viewers draw both sides); a picture draws only the
+    # faces turned to it, so from a recording it puts the lining back: the same triangles in
+    # the same order as the full mesh drawn, the lining within a few millimetres of it (a
+    # face's normal for its vertices') and in the lining's colour.
+    from jacket_cloth_ros.ros.messages import LINING_GAP, Outfit
+    name, sim, mesh = body
+    bones = sim.bone_set
+    outfit = Outfit(sim.rig, bones.names, bones.parents, bones.grid)
+    parents = np.array([sim.skeleton.link_names.index(p) for p in bones.parents])
+    joints = jm.rest_joints(sim.skeleton, sim.rig, parents, bones.grid)
+    full, full_colors = outfit.triangles('jacket', joints)
+    outer = np.repeat(outfit.outer, 3)
+    assert outer.sum() == outfit.marker_corners() < len(full)
+    tris, colors = outfit.lined(full[outer], full_colors[outer])
+    full = full.reshape(-1, 3, 3)
+    assert tris.shape == full.shape, name
+    assert np.array_equal(tris[~mesh.back], full[~mesh.back])
+    assert np.abs(tris[mesh.back] - full[mesh.back]).max() < 2 * LINING_GAP, name
+    drawn = full_colors.reshape(-1, 3, 4).mean(axis=1)
+    off = np.abs(colors[mesh.back] - drawn[mesh.back])       # flat against smooth light
+    assert np.median(off) < 0.01 and off.max() < 0.2, name
+    assert np.allclose(colors[mesh.back, :3] / colors[mesh.back, :1], np.divide(
+        jm.LINING[:3], jm.LINING[0]), atol=1e-6)
 
 
 def test_the_body_has_its_head_above_the_hood(body):

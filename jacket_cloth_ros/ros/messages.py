@@ -1,8 +1,9 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """/tf, marker and diagnostic messages from the simulation's state, as CDR bytes (cdr.py).
 
-The markers a person sees: the skinned jacket and hood (``jacket``), a triangle list shaded per
-corner, on a simple body (``body``): its spheres and cylinders, which the viewer lights. The
+The markers a person sees: the skinned jacket and hood (``jacket``), a triangle list of its outer
+faces shaded per corner, on a simple body (``body``): its spheres and cylinders, which the viewer
+lights. The
 method's scaffolding (the M3 grid, the M10 colliders, the M8 pendulum, the M1/M2 bones) is the
 debug layer, sent with ``markers_debug``.
 """
@@ -18,7 +19,7 @@ from ..core.geometry import grid_lines, grid_triangles
 from . import cdr, marker_kernel
 from ..core.bundles import MeshModel, Scene, flags, floats, ints
 from ..core.compiled import FixedTypes
-from ..core.jacket_mesh import SKIN, SkinnedMesh, jacket_mesh
+from ..core.jacket_mesh import LINING, SKIN, SkinnedMesh, jacket_mesh
 from ..core.physics import skinning
 
 if TYPE_CHECKING:           # for the annotations only
@@ -125,11 +126,12 @@ class Outfit:
         self.bone_parents = np.array([skeleton.link_names.index(p) for p in bone_parents],
                                      dtype=np.int64)
         self.light = floats(rig.world_axes @ LIGHT)
-        self._models = {name: MeshModel(floats(m.inverse_rest), ints(m.joints),
-                                        floats(m.weights), floats(m.rest), ints(m.triangles),
-                                        ints(m.triangles[~m.back]), floats(m.colors),
-                                        flags(m.back))
+        self._models = {name: _mesh_model(m, np.ones(len(m.triangles), bool))
                         for name, m in self.meshes().items()}
+        # RViz and Foxglove draw both sides of a triangle list, so the live jacket needs no
+        # lining: its outer faces alone, drawn from inside too, at three fifths of the bytes.
+        self.outer = ~self.jacket.back
+        self._outer_model = _mesh_model(self.jacket, self.outer)
 
     def meshes(self) -> dict[str, SkinnedMesh]:
         """Return the meshes by marker namespace."""
@@ -141,6 +143,36 @@ class Outfit:
         :param name: ``jacket`` or ``body``.
         """
         return 3 * len(self.meshes()[name].triangles)
+
+    def marker_corners(self) -> int:
+        """Return how many points the live jacket's triangle list has (its outer faces)."""
+        return 3 * int(self.outer.sum())
+
+    def lined(self, corners: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the live jacket's triangles with the lining put back, as pictures draw it.
+
+        Each lined outer face gets its back face after it, :meth:`draw`'s way: wound the
+        other way, ``LINING_GAP`` inside, in the lining's colour lit from its side (flat).
+
+        :param corners: (:meth:`marker_corners`,3) the markers' jacket (:meth:`draw_jacket`).
+        :param colors: (:meth:`marker_corners`,4) their colours.
+        :returns: (T,3,3) triangles and (T,4) their colours, each the mean of its corners'.
+        """
+        tris = corners.reshape(-1, 3, 3)
+        face = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+        face /= np.maximum(np.linalg.norm(face, axis=1), 1e-12)[:, None]
+        shade = AMBIENT + (1.0 - AMBIENT) * np.maximum(-face @ self.light, 0.0)
+        inside = tris[:, [0, 2, 1]] - LINING_GAP * face[:, None, :]
+        lining = np.array(LINING) * np.stack([shade] * 3 + [np.ones_like(shade)], axis=1)
+        # A front face is lined when its back face follows it in the jacket's triangles.
+        back = self.jacket.back
+        has = np.append(back[1:], False)[~back]
+        out = np.empty((len(tris) + has.sum(), 3, 3))
+        out_colors = np.empty((len(out), 4))
+        at = np.arange(len(tris)) + np.cumsum(has) - has
+        out[at], out_colors[at] = tris, colors.reshape(-1, 3, 4).mean(axis=1)
+        out[at[has] + 1], out_colors[at[has] + 1] = inside[has], lining[has]
+        return out, out_colors
 
     def triangles(self, name: str, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return a mesh skinned and shaded on ``joints``: its corners and their colours.
@@ -156,14 +188,16 @@ class Outfit:
 
     def draw_jacket(self, links: np.ndarray, bone_poses: np.ndarray, points: np.ndarray,
                     colors: np.ndarray) -> None:
-        """Pose the jacket's joints and :meth:`draw` it, in one compiled call (the markers').
+        """Pose the jacket's joints and :meth:`draw` its outer faces, in one compiled call.
+
+        The markers' jacket: the outer faces of :meth:`triangles`, in their order.
 
         :param links: (L,4,4) the links now (JacketSimulation.links).
         :param bone_poses: (B,7) the published bones, each in its parent's frame.
-        :param points: (3T,3) written: the corners.
-        :param colors: (3T,4) float32 written: their shaded colours.
+        :param points: (:meth:`marker_corners`,3) written: the corners.
+        :param colors: (:meth:`marker_corners`,4) float32 written: their shaded colours.
         """
-        _DRAW_POSED(self._models['jacket'], floats(links), self.bone_parents,
+        _DRAW_POSED(self._outer_model, floats(links), self.bone_parents,
                     floats(bone_poses), self.light, AMBIENT, LINING_GAP, points, colors)
 
     def draw(self, name: str, joints: np.ndarray, points: np.ndarray,
@@ -177,6 +211,14 @@ class Outfit:
         """
         _DRAW(self._models[name], floats(joints), self.light, AMBIENT, LINING_GAP, points,
               colors)
+
+
+def _mesh_model(mesh, keep):
+    """Return the compiled draw's model of a mesh's triangles ``keep``."""
+    return MeshModel(floats(mesh.inverse_rest), ints(mesh.joints), floats(mesh.weights),
+                     floats(mesh.rest), ints(mesh.triangles[keep]),
+                     ints(mesh.triangles[~mesh.back]), floats(mesh.colors[keep]),
+                     flags(mesh.back[keep]))
 
 
 @functools.lru_cache(maxsize=16)
@@ -208,7 +250,7 @@ def marker_layout(rig: 'Rig', layer_bones: int, reset: bool, debug: bool = False
            for ns in MARKER_NAMESPACES] if reset else []
     meshes = outfit(rig)
     out.append(MarkerSpec('jacket', 0, TRIANGLE_LIST, color=(1.0, 1.0, 1.0, 1.0), mesh='jacket',
-                          mesh_points=meshes.corners('jacket')))
+                          mesh_points=meshes.marker_corners()))
     if body:
         # Solids, a small share of a triangle list's bytes; the pose table's rows after the
         # debug layer's.

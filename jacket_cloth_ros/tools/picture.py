@@ -349,14 +349,21 @@ def _body_triangles(rig, links):
     return points.reshape(-1, 3, 3), colors.reshape(-1, 3, 4).mean(axis=1)
 
 
-def _recorded_mesh(pts):
+def _recorded_mesh(pts, rig=None):
     """Return the recorded meshes' triangles and their colours (each the mean of its corners).
 
-    A body recorded as a triangle list (before it was sent as its pieces) is one of them.
+    A body recorded as a triangle list (before it was sent as its pieces) is one of them. The
+    live jacket is its outer faces (viewers draw both sides); with the rig its lining is put
+    back, which a picture, drawing only the faces turned to it, needs to show inside.
     """
     mesh, colors = [], []
+    outfit = messages.outfit(rig) if rig is not None else None
     for ns in messages.MESH_NAMESPACES + ('body',):
-        if len(pts.get((ns, 0), ())):
+        if ns == 'jacket' and outfit and len(pts.get((ns, 0), ())) == outfit.marker_corners():
+            tris, tri_colors = outfit.lined(pts[ns, 0], pts[ns, 'colors'])
+            mesh.append(tris)
+            colors.append(tri_colors)
+        elif len(pts.get((ns, 0), ())):
             mesh.append(pts[ns, 0].reshape(-1, 3, 3))
             colors.append(pts[ns, 'colors'].reshape(-1, 3, 4).mean(axis=1))
     if not mesh:
@@ -369,7 +376,7 @@ def _frame(log_time, pts, js, parser, skeleton, sim):
     bones = pts.get(('jacket_bones', 0), np.zeros((0, 3))).reshape(-1, 2, 3)
     sample = parser.parse(js.stamp_ns, js.name, js.position)
     poses = skeleton.forward(sample.q)
-    mesh, colors = _recorded_mesh(pts)
+    mesh, colors = _recorded_mesh(pts, sim.rig if sim is not None else None)
     if sim is not None and mesh is not None and _body_pieces(pts):
         body, body_colors = _body_triangles(sim.rig, poses)
         mesh, colors = np.concatenate([mesh, body]), np.concatenate([colors, body_colors])
