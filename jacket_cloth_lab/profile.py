@@ -61,7 +61,7 @@ class StageClock:
             try:
                 return function(*args, **kwargs)
             finally:
-                self.ns[name] += time.thread_time_ns() - started
+                self.ns[name] = self.ns.get(name, 0) + time.thread_time_ns() - started
         return timed
 
 
@@ -103,6 +103,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     :param record: record the session (inputs and outputs), as the node's ``record`` does.
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
         share of the main thread}, 'writer_thread_us', 'markers_publish_us' (of 'publish'),
+        'markers_skinning_us' (of 'markers': the jacket skinned, shaded and laid out),
         'sweeps_per_input',
         'substeps_per_input', 'steps_per_input'}`` (``bench speed`` adds
         ``kernel_step_us``, the bare kernel's step timed beside the run).
@@ -137,14 +138,17 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
                 recorder.add_topic(name, kind, qos)
             write = clock.wrap('record', recorder.write if record else _no_write)
             publish = clock.wrap('publish', ros.publish) if ros else None
-            # The markers' share of publishing, timed again apart (markers_cost).
+            # The markers' share of publishing and their skinning, timed again apart
+            # (markers_cost); the rig's outfit is shared, so its timer comes off after.
             markers_clock = StageClock()
             publish_markers = markers_clock.wrap('publish', publish) if ros else None
+            outfit = messages_module.outfit(pipeline.sim.rig)
+            outfit.draw_jacket = markers_clock.wrap('skinning', outfit.draw_jacket)
             for k, raw in enumerate(raws):
                 if k == skip:
                     for name in clock.ns:
                         clock.ns[name] = 0 if name != 'take' else ros.take_ns(skip) if ros else 0
-                    markers_clock.ns['publish'] = 0
+                    markers_clock.ns.update(publish=0, skinning=0)
                     started, cpu = time.thread_time_ns(), time.process_time_ns()
                     sweeps = substeps = 0
                 if ros:
@@ -163,6 +167,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             all_ns = time.process_time_ns() - cpu
     finally:
         pipeline_module.messages = messages_module
+        vars(messages_module.outfit(pipeline.sim.rig)).pop('draw_jacket', None)
         if ros:
             ros.close()
     counted = len(raws) - skip
@@ -174,6 +179,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             'share': {name: v / total for name, v in us.items()},
             'writer_thread_us': max(all_ns - main_ns, 0) / counted / 1e3,
             'markers_publish_us': markers_clock.ns['publish'] / counted / 1e3,
+            'markers_skinning_us': markers_clock.ns.get('skinning', 0) / counted / 1e3,
             'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted,
             'steps_per_input': values['sim_rate'] / INPUT_RATE}
 

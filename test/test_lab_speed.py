@@ -58,6 +58,12 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
         assert markers['markers_stage_us'] > 0 and markers['without_us'] > 0
     rows = [said[f] for f in said if f.startswith("the jacket's markers")]
     assert [r['met'] in (True, False) for r in rows] == [True, False]   # the recorded: a cost
+    # The skinning itself, which the target names, a part of the markers' stage.
+    skinning = [said[f] for f in said if f.startswith("the jacket's skinning")]
+    assert len(skinning) == 1 and skinning[0]['met'] in (True, False)
+    live = results['markers']['live']
+    assert 0 < live['skinning_us'] < live['markers_stage_us'] and 0 < live['skinning'] < 1
+    assert {float(r) for r in live['share_by_rate']} == {20.0, 15.0} and ' Hz +' in printed
     assert 'a cost to know' in printed
     # Issue 37's profile: the replay's and the node's input by stage, the node's DDS take and
     # publish only on the node's side; two steps of the walk's sweeps per 60 Hz input.
