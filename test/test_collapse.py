@@ -119,6 +119,22 @@ def test_a_stretched_cloth_is_named_by_diagnostics_replay_and_analyze(walk, tmp_
     assert [line.endswith(text) for line in said] == [True] and report['collapsed'] == [text]
 
 
+def test_a_cloth_drawn_in_below_the_hips_is_named_bunched_with_its_shape_to_fit(
+        walk, tmp_path, capsys):
+    # The shipped rig with its hem drawn in (flare -0.01 m a row): the thighs push the cloth
+    # out at the sides and it folds between. The line named M11's reach at the hem, which
+    # folds it more when lowered; fitting the shape is what removes it.
+    with open(shipped('jacket_rig.yaml'), encoding='utf-8') as f:
+        rig = yaml.safe_load(f)
+    rig['cloth']['shape']['flare'] = -0.01
+    path = tmp_path / 'drawn_in.yaml'
+    path.write_text(yaml.safe_dump(rig))
+    assert main(['replay', str(walk), '--rig', str(path), '-o', str(tmp_path / 'r.mcap')]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if 'across from' in line]
+    assert len(lines) == 1 and 'bunched across' in lines[0], lines
+    assert 'fit cloth.shape' in lines[0] and 'max_distance' not in lines[0]
+
+
 def test_a_plain_walk_says_nothing(walk, tmp_path, capsys):
     out = tmp_path / 'replay.mcap'
     assert main(['replay', str(walk), '-o', str(out)]) == 0

@@ -509,7 +509,9 @@ class JacketSimulation:
 
         A body lying down bunches the cloth along it: the world's up. Stretched across: the
         colliders hold it wider than its rest (the shape's radii). Bunched on a standing body:
-        the hem is free to fold over far from the body (M11's reach at the hem).
+        a cloth narrower than the body in places (a hem drawn in by the flare), which the
+        colliders push out there and which folds between; a shorter reach at the hem (M11)
+        folds it more, not less.
         """
         rig, watch = self.rig, self.collapse
         row, stretched = watch.worst_row(rig.cols)
@@ -521,8 +523,8 @@ class JacketSimulation:
         elif stretched:
             fix = 'widen cloth.shape.radii: the colliders hold it wider than its rest'
         else:
-            fix = (f'lower cloth.max_distance.hem ({float(rig.max_distance[-1]):.2f} m): the hem '
-                   'folds over that far from the body')
+            fix = ('fit cloth.shape (radii, flare, center) to the colliders: the body pushes a '
+                   'cloth narrower than itself out in places and it folds between')
         since = (watch.since_ns - (watch.first_ns or watch.since_ns)) * 1e-9
         kind = 'stretched' if stretched else 'bunched'
         return (f'the cloth is {kind} across from {since:.1f} s on: its horizontal edges\' '
