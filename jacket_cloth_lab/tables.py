@@ -309,7 +309,7 @@ def bench_pareto(sources: Sequence[Any]) -> list[str]:
 
 
 def stress_matrix(sources: Sequence[Any]) -> list[str]:
-    """Return each scene's verdict per method, with the worst figure behind it.
+    """Return how each scene ended per method, with the worst figures behind it.
 
     :param sources: stress.json.
     """
@@ -323,7 +323,7 @@ def stress_matrix(sources: Sequence[Any]) -> list[str]:
                 f'{r["max_inside_m"] * 100:.1f} cm)')
     rows = [[scene] + [said(cell[scene, m]) for m in methods] for scene in scenes]
     # The legend in the corner: worst vertical stretch at any input, deepest inside a collider.
-    return _table(['scene: verdict (stretch %, inside cm)'] + methods, rows)
+    return _table(['scene: how it ended (stretch %, inside cm)'] + methods, rows)
 
 
 def _sessions(report: dict) -> list[dict]:

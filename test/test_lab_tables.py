@@ -165,3 +165,12 @@ def test_the_full_runs_parts_render_as_the_quick_run_does_not_give_them():
     assert '| its floor, one core | 24 (' in held and '| 28 (not all answered) |' in held
     assert '| crowd, 2 threads | 24 (2.00x one core) | 28 (' in held
     assert '| single-node processes, one core / all | 2 / 4 | 4 / 8 |' in held
+
+
+def test_the_stress_matrix_says_how_each_run_ended_with_its_worst_figures():
+    runs = [{'scene': 'teleport 10 m', 'method': m, 'verdict': v, 'max_vertical_stretch': x,
+             'max_inside_m': d} for m, v, x, d in (('hard_pass', 'holds', 0.0, 0.0),
+                                                   ('none', 'stretched', 0.197, 0.003))]
+    table = TABLES['stress.matrix'].render([runs])
+    assert table[0] == '| scene: how it ended (stretch %, inside cm) | hard_pass | none |'
+    assert table[2] == '| teleport 10 m | holds (0.0 %, 0.0 cm) | stretched (19.7 %, 0.3 cm) |'
