@@ -13,7 +13,7 @@ import enum
 import os
 import struct
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from ..recording.disk import no_room
@@ -78,7 +78,7 @@ class NodeRecording:
     """
 
     def __init__(self, topics: dict[str, tuple[str, str, str]],
-                 characters: 'Iterable[Character]', logger: 'RcutilsLogger', *,
+                 characters: 'Sequence[Character]', logger: 'RcutilsLogger', *,
                  program: str = 'jacket_cloth_node',
                  alive: 'Callable[[], bool] | None' = None):
         self.topics = topics
