@@ -311,7 +311,7 @@ def test_wind_set_live_on_its_topic(harness):
 
 def test_unwritable_record_path_keeps_the_node_running(harness, tmp_path):
     h = harness(record=str(tmp_path / 'no' / 'such' / 'folder' / 'x.mcap'))
-    assert h.node.recorder is None
+    assert h.node.recording.recorder is None
     h.send_clip('idle', 60, 0.2)
     h.spin_until(lambda: len(h.tf) > 5)
 
@@ -406,13 +406,13 @@ def test_a_params_file_for_another_node_is_refused(tmp_path):
 def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     path = str(tmp_path / 's.mcap')
     h = harness(record=path)
-    recorder = h.node.recorder
+    recorder = h.node.recording.recorder
     assert recorder is not None
     assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
-    assert h.node.recorder is recorder           # a params file loaded live: still recording
+    assert h.node.recording.recorder is recorder    # a params file loaded live: still recording
     other = str(tmp_path / 't.mcap')
     assert h.node.set_parameters([Parameter('record', value=other)])[0].successful
-    assert h.node.recorder is not recorder and h.node.recorder.path == other
+    assert h.node.recording.recorder is not recorder and h.node.recording.recorder.path == other
 
 
 def _service(node, name):
@@ -447,34 +447,34 @@ def test_record_never_overwrites_a_file_at_start_or_live(harness, tmp_path):
     old = tmp_path / 'old.mcap'
     old.write_bytes(b'an earlier session')
     h = harness(record=str(old))
-    assert h.node.recorder is None and old.read_bytes() == b'an earlier session'
+    assert h.node.recording.recorder is None and old.read_bytes() == b'an earlier session'
     path = str(tmp_path / 'new.mcap')
     assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
-    recorder = h.node.recorder
+    recorder = h.node.recording.recorder
     result = h.node.set_parameters([Parameter('record', value=str(old))])[0]
     assert not result.successful and 'exists' in result.reason and str(old) in result.reason
-    assert h.node.recorder is recorder and old.read_bytes() == b'an earlier session'
+    assert h.node.recording.recorder is recorder and old.read_bytes() == b'an earlier session'
     # The file being recorded now is the one exception: setting it again keeps it going.
     assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
-    assert h.node.recorder is recorder
+    assert h.node.recording.recorder is recorder
     # A bag folder there is refused the same way.
     (tmp_path / 'bag').mkdir()
     assert not h.node.set_parameters(
         [Parameter('record', value=str(tmp_path / 'bag'))])[0].successful
-    assert h.node.recorder is recorder
+    assert h.node.recording.recorder is recorder
 
 
 def test_record_refuses_a_file_made_between_its_check_and_its_open(
         harness, tmp_path, monkeypatch):
     # The check saw no file, then open(path, 'wb') truncated the one made meanwhile.
-    from jacket_cloth_ros.ros import node
+    from jacket_cloth_ros.ros import recording
     h = harness()
     path = tmp_path / 'made_meanwhile.mcap'
-    monkeypatch.setattr(node, 'overwrite_problem',
+    monkeypatch.setattr(recording, 'overwrite_problem',
                         lambda p: path.write_bytes(b'an earlier session') and '')
     assert h.node.set_parameters([Parameter('record', value=str(path))])[0].successful
-    assert h.node.recorder is None and path.read_bytes() == b'an earlier session'
-    assert h.node._recording_problem == (
+    assert h.node.recording.recorder is None and path.read_bytes() == b'an earlier session'
+    assert h.node.recording.problem == (
         f'record: {str(path)!r} exists (the node never overwrites a recording): move it or '
         'choose another path')
 
@@ -500,13 +500,13 @@ def test_a_disk_filling_while_recording_leaves_a_finished_file(harness, tmp_path
     from jacket_cloth_ros.recording.reader import read_recording
     path = tmp_path / 'session.mcap'
     h = harness(record=str(path))
-    writer = h.node.recorder._writer
+    writer = h.node.recording.recorder._writer
     # Room for about a quarter of the session: the jacket's markers dominate each chunk.
     writer._stream = _FillingFile(writer._stream, writer._stream.tell() + 4_000_000)
     h.send_clip('idle', 60, 6.0)
-    h.spin_until(lambda: h.node.recorder is None)
+    h.spin_until(lambda: h.node.recording.recorder is None)
     assert 'closed on a full disk: a finished file without its last' in \
-        h.node._recording_problem, h.node._recording_problem
+        h.node.recording.problem, h.node.recording.problem
     recording = read_recording(str(path))
     assert recording.complete
     inputs = [m for m in recording.messages if m.topic == '/joint_states']
@@ -536,9 +536,10 @@ def test_a_recording_whose_writer_failed_is_closed_with_one_line(harness, tmp_pa
     # Its writer thread's error came back at the close, out of the parameter callback: a
     # `ros2 param set record` after a full disk ended the node.
     h = harness(record=str(tmp_path / 'session.mcap'))
-    h.node.recorder._error = OSError('No space left on device')   # as its thread leaves it
+    # As its thread leaves it:
+    h.node.recording.recorder._error = OSError('No space left on device')
     assert h.node.set_parameters([Parameter('record', value='')])[0].successful
-    assert h.node.recorder is None
+    assert h.node.recording.recorder is None
 
 
 def _recording_status(diags):
@@ -552,7 +553,7 @@ def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
     # They said `recording: <path>` at OK after the file failed to open or a write failed.
     from diagnostic_msgs.msg import DiagnosticArray
     h = harness(record=str(tmp_path / 'gone' / 'x.mcap'), diagnostics_rate=20.0)
-    assert h.node.recorder is None
+    assert h.node.recording.recorder is None
     diags = []
     h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
     h.spin_until(lambda: len(diags) >= 2)
@@ -568,9 +569,9 @@ def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
 
     def full_disk(*args):
         raise OSError(28, 'No space left on device')
-    h.node.recorder.write = full_disk
+    h.node.recording.recorder.write = full_disk
     h.send_clip('idle', 60, 0.1)
-    assert h.node.recorder is None
+    assert h.node.recording.recorder is None
     count = len(diags)
     h.spin_until(lambda: len(diags) >= count + 2)
     level, recording, message = _recording_status(diags)
@@ -579,7 +580,7 @@ def test_diagnostics_say_when_the_recording_failed(harness, tmp_path):
     # A file whose close fails at a live stop stays told (the stop cleared it at once).
     path = str(tmp_path / 'second.mcap')
     assert h.node.set_parameters([Parameter('record', value=path)])[0].successful
-    h.node.recorder._error = OSError(28, 'No space left on device')
+    h.node.recording.recorder._error = OSError(28, 'No space left on device')
     assert h.node.set_parameters([Parameter('record', value='')])[0].successful
     count = len(diags)
     h.spin_until(lambda: len(diags) >= count + 2)
@@ -592,7 +593,7 @@ def test_a_recording_that_fails_to_close_at_the_end_is_one_line(tmp_path, capfd)
     # went to rosout, which was gone: a line of rcl's besides.
     h = Harness(record=str(tmp_path / 'session.mcap'))
     try:
-        h.node.recorder._error = OSError(28, 'No space left on device')
+        h.node.recording.recorder._error = OSError(28, 'No space left on device')
         h.ex.shutdown()
         capfd.readouterr()
         rclpy.shutdown(context=h.ctx)
@@ -763,7 +764,7 @@ def test_an_input_stamped_before_1970_is_recorded_and_replays(harness, tmp_path,
     for k, stamp in enumerate(stamps):
         h.send(names, pos, stamp)
         h.spin_until(lambda: h.c.inputs == k + 1)
-    assert h.node.recorder is not None
+    assert h.node.recording.recorder is not None
     h.node.close()
     with open(path, 'rb') as f:
         logged = [m.log_time for _, c, m in make_reader(f).iter_messages(

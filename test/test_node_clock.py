@@ -172,7 +172,7 @@ def test_a_recording_replaced_by_another_writer_is_said_and_saved(harness, tmp_p
         msg = JointState(name=list(n), position=[float(p) for p in pos])
         msg.header.stamp.sec, msg.header.stamp.nanosec = 100, 200_000_000 + k * 16_666_667
         h.node.on_joint_states([(h.c, serialize_message(msg), {})])
-    h.spin_until(lambda: h.node.recorder is None)
+    h.spin_until(lambda: h.node.recording.recorder is None)
     assert path.read_bytes() == b'not ours'                  # the other's file is left alone
     saved = tmp_path / 'session.saved.mcap'
     joint_states = read_messages(str(saved), ['/joint_states'])[0]

@@ -5,15 +5,14 @@ One class for ``jacket_cloth_node`` (one character, its parameters the node's ow
 ``jacket_cloth_crowd`` (ros/crowd.py: the characters of a characters file). Each character
 (ros/character.py) has its own input, outputs, resets, warnings and recording channels; the
 node has what is one per process: parameters, ``~/viewer``, /tf and /diagnostics, the
-recording, the diagnostics watchdog, and one CrowdInputs taking every character's JointStates
+recording (ros/recording.py, which the node hands what it records), the diagnostics
+watchdog, and one CrowdInputs taking every character's JointStates
 each executor wake-up, processed as one batch (ros/pipeline.py's CrowdPipeline: the steps of
 every character with an input in one compiled call over the cores; a lone character's alone).
 """
 
 import argparse
 import gc
-import os
-import struct
 import sys
 import time
 from collections.abc import Callable
@@ -36,8 +35,6 @@ from ..core.config import ConfigError, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
-from ..recording.disk import no_room
-from ..recording.writer import SessionRecorder, save_unnamed
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         cut_line, input_problems, read_file, throttled)
@@ -49,6 +46,7 @@ from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PRE
                          params_file_for_another_node, params_file_problem, ros_args_problem,
                          unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
+from .recording import NodeRecording
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
 from .warm import kernels_cached
 from .warm import warm_kernels
@@ -104,15 +102,12 @@ class JacketClothNode(Node):
         problem = params_file_for_another_node(sys.argv, self.get_fully_qualified_name())
         if problem:
             raise ConfigError(problem)
-        self.recorder: 'SessionRecorder | None' = None
         self._viewer = None             # the last accepted ~/viewer: (raw, stamp)
         self._last_stamp = None         # the last accepted input's, for recording after it
         self._log_times = {}            # the node's own warnings (each character has its own)
         self._models = {}               # (URDF, rig file) -> (skeleton, rig), shared read-only
         self._fabrics = {}              # fabrics file -> its presets
         self._told_compiling = False
-        self._record_asked = None       # the record value the open (or failed) file is for
-        self._recording_problem = ''    # why that file is not being written, for diagnostics
         self._every = 1                 # the characters of the file (a crowd slices them)
         # The watchdog and the robot_description fallback run on wall time: with use_sim_time
         # a simulator not started or paused stops the node's clock, and they must not stop.
@@ -144,7 +139,9 @@ class JacketClothNode(Node):
         self._inputs = CrowdInputs(self.default_callback_group,
                                    lambda taken: self.on_joint_states(taken))
         self.add_waitable(self._inputs)
-        self._open_recorder(self._p('record'))
+        self.recording = NodeRecording(self._topics, self.characters, self.get_logger(),
+                                       program=self.program, alive=self.context.ok)
+        self._record_to(self._p('record'))
         for c, (urdf, source) in zip(self.characters, urdfs):
             if urdf:
                 try:
@@ -329,9 +326,7 @@ class JacketClothNode(Node):
             self.get_logger().info(
                 f'{c.label}the URDF root {pipeline.root_frame()!r} is world_frame itself: '
                 'publish_world_tf publishes no transform to it (the world is not its own child)')
-        pipeline.recording_problem = self._recording_problem
-        if self.recorder is not None:
-            c.add_to_recording(self.recorder)
+        self.recording.add_character(c)
         keep_loaded_out_of_collections()
         # Subscribed only now: a publisher that waits for us knows we can simulate.
         c.subscription = self._inputs.subscribe(self, c, c.names['joint_states'])
@@ -359,25 +354,17 @@ class JacketClothNode(Node):
             if p.name == 'wind' and p.type_ != Parameter.Type.DOUBLE_ARRAY:
                 return SetParametersResult(successful=False,
                                            reason='wind must be 3 finite numbers [x, y, z]')
-            reason = check_value(p.name, p.value) or self._record_problem(p)
+            reason = check_value(p.name, p.value) or \
+                (self.recording.refusal(p.value) if p.name == 'record' else '')
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
-    def _record_problem(self, p: Parameter) -> str:
-        """Why ``record`` cannot be set to ``p``'s path: a file or folder there, not ours now."""
-        if p.name != 'record' or not p.value or \
-                (p.value == self._record_asked and self.recorder is not None):
-            return ''
-        return overwrite_problem(p.value)
-
     def _apply_parameters(self, params):
         """Apply valid changes from the next step; they never reset the cloth."""
         names = {p.name for p in params}
-        # The same path again (a params file loaded live) keeps the recording going.
-        if 'record' in names and (self._p('record') != self._record_asked or
-                                  self.recorder is None):
-            self._open_recorder(self._p('record'))
+        if 'record' in names and self.recording.needs_open(self._p('record')):
+            self._record_to(self._p('record'))
         values = self._values()
         changes = {n: values[n] for n in names if n in values}
         c = self.characters[0]
@@ -389,7 +376,7 @@ class JacketClothNode(Node):
         c.pipeline.apply(changes)
         # Recorded at the last input's stamp: a replay applies them after the same input.
         stamp = self._last_input_stamp(0)
-        self._record(self._topics['parameter_events'][0], cdr.parameter_event(
+        self.recording.write(self._topics['parameter_events'][0], cdr.parameter_event(
             stamp, self.get_fully_qualified_name(), [p.to_parameter_msg() for p in params]),
             stamp)
 
@@ -412,90 +399,13 @@ class JacketClothNode(Node):
             self._warn('wind', f'~/wind rejected: {result.reason}')
             return
         header = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        self._record(self._topics['wind'][0], raw, self._last_input_stamp(header))
+        self.recording.write(self._topics['wind'][0], raw, self._last_input_stamp(header))
 
-    # -- recording ----------------------------------------------------------------------------
-    def _open_recorder(self, path):
-        self._record_asked = path
-        self._recording_failed('')      # before the close: an error closing the old file stays
-        self._close_recorder(say=True)  # shown until a new file opens
-        if not path:
-            return
-        problem = overwrite_problem(path)
-        if problem:
-            self._refuse_recording(problem)
-            return
-        try:
-            self.recorder = SessionRecorder(path, compression=self._p('record_compression'))
-            for topic, kind, qos in self._topics.values():
-                self.recorder.add_topic(topic, kind, qos)
-            self._recording_failed('')
-            self.get_logger().info(f'recording the session to {path}')
-            for c in self.characters:       # a new file starts with their diagnostics
-                c.diag_recorded = None
-        except FileExistsError:         # made since the check: the exclusive create saw it
-            self.recorder = None
-            self._refuse_recording(_exists(path))
-            return
-        except OSError as e:
-            self.recorder = None
-            self._recording_failed(f'cannot record to {path!r} ({e})')
-            self.get_logger().error(f'cannot record to {path!r} ({e}); running without '
-                                    'recording')
-            return
-        for c in self.characters:
-            if c.pipeline is not None:
-                c.add_to_recording(self.recorder)
-        self._record_viewer()
-
-    def _refuse_recording(self, problem):
-        self._recording_failed(problem)
-        self.get_logger().error(f'{problem}; running without recording')
-
-    def _record(self, topic, data, stamp_ns):
-        if self.recorder is None:
-            return
-        try:
-            self.recorder.write(topic, data, stamp_ns)
-        except (OSError, ValueError, struct.error) as e:
-            self._recording_failed(f'stopped by a write error ({e})')
-            if not no_room(e):          # a full disk: the close says what was kept, in one line
-                self.get_logger().error(f'recording stopped: {e}')
-            self._close_recorder()
-
-    def _recording_failed(self, problem: str) -> None:
-        """Say in each character's diagnostics why the recording asked for is not written."""
-        self._recording_problem = problem
-        for c in self.characters:
-            if c.pipeline is not None:
-                c.pipeline.recording_problem = problem
-
-    def _close_recorder(self, say=False):
-        """Close the recording, if any; an error its writer met is one line, not the node's end."""
-        recorder, self.recorder = self.recorder, None
-        if recorder is None:
-            return
-        try:
-            recorder.close()
-        except Exception as e:  # noqa: BLE001 - its writer thread's, whatever it was
-            self._say_closed(f'recording {recorder.path} closed with an error: {e}')
-            return
-        if recorder.unwritten or recorder.metadata_lost:
-            self._say_closed(f'recording {recorder.path} closed on a full disk: a finished '
-                             f'file without its last {recorder.unwritten} messages, which '
-                             'had no room' + (', and without metadata.yaml (it is read from '
-                                              'its .mcap file)' if recorder.metadata_lost
-                                              else ''))
-        elif say:                       # a live switch; at the node's end it goes unsaid
-            self.get_logger().info(f'recording closed: {recorder.path}')
-
-    def _say_closed(self, text):
-        """Say why a recording closed short, in diagnostics and in one line."""
-        self._recording_failed(text.removeprefix('recording '))
-        if self.context.ok():
-            self.get_logger().error(text)
-        else:                           # stopping: rosout is gone, and rcl said so in a line
-            print(f'{self.program}: {text}', file=sys.stderr, flush=True)
+    # -- recording (ros/recording.py) --------------------------------------------------------
+    def _record_to(self, path):
+        """Record to ``path`` from now ('' : no more); a new file starts with the last viewer."""
+        if self.recording.open(path, compression=self._p('record_compression')):
+            self._record_viewer()
 
     def _markers_wanted(self, publisher: 'Publisher') -> bool:
         """Tell whether markers due now have a reader: a subscriber or the recording.
@@ -503,11 +413,11 @@ class JacketClothNode(Node):
         Unread, building them was a large share of each input (docs/crowd.md); their cadence
         goes on either way, so a viewer that subscribes gets them on the same ticks.
         """
-        return self.recorder is not None or publisher.get_subscription_count() > 0
+        return self.recording.recorder is not None or publisher.get_subscription_count() > 0
 
     def close(self) -> None:
         """Close the recording, if any."""
-        self._close_recorder()
+        self.recording.close()
 
     # -- the viewer (one for the node, whatever the characters) ------------------------------
     def _warn(self, code, text, period=5.0):
@@ -572,7 +482,7 @@ class JacketClothNode(Node):
         """Record the last accepted viewer, if any; a file opened after it starts with it."""
         if self._viewer is not None:
             raw, stamp = self._viewer
-            self._record(self._topics['viewer'][0], raw, self._last_input_stamp(stamp))
+            self.recording.write(self._topics['viewer'][0], raw, self._last_input_stamp(stamp))
 
     def _last_input_stamp(self, default):
         return default if self._last_stamp is None else self._last_stamp
@@ -622,20 +532,20 @@ class JacketClothNode(Node):
             if report.accepted:
                 self._last_stamp = stamp_ns
             periodic = later()
-            self._record(c.topics['joint_states'][0], raw, stamp_ns)
+            self.recording.write(c.topics['joint_states'][0], raw, stamp_ns)
             for code, text in input_problems(report, bool(tf)):
                 c.warn(logger, code, text)
             for _, out in tf:
-                self._record(self._topics['tf'][0], out, stamp_ns)
+                self.recording.write(self._topics['tf'][0], out, stamp_ns)
             for key, out in periodic:
                 if key == 'markers':
                     c.markers.publish(out)
-                    self._record(c.topics['markers'][0], out, stamp_ns)
+                    self.recording.write(c.topics['markers'][0], out, stamp_ns)
                 else:
                     self.diagnostics.publish(out)
                     c.diag_wall = time.monotonic()
                     c.diag_recorded = None
-                    self._record(self._topics['diagnostics'][0], out, stamp_ns)
+                    self.recording.write(self._topics['diagnostics'][0], out, stamp_ns)
 
     def _diagnostics_watchdog(self):
         """Diagnostics of each character whose inputs' own have not gone out since the last tick.
@@ -675,9 +585,8 @@ class JacketClothNode(Node):
             said = out[_DIAG_STAMP_END:]
             if said != c.diag_recorded:
                 c.diag_recorded = said
-                self._record(self._topics['diagnostics'][0], out, stamp_ns)
-        if self.recorder is not None:
-            self._check_recording_file()
+                self.recording.write(self._topics['diagnostics'][0], out, stamp_ns)
+        self.recording.check_file()
 
     def _say_clock(self, level, line):
         # rclpy's logger takes one severity per line of code: a call each.
@@ -706,46 +615,9 @@ class JacketClothNode(Node):
             f'{c.label}a different URDF came on {topic}: not taken, the node keeps the '
             f'character it runs (from {c.source}); restart the node to take it')
 
-    def _check_recording_file(self):
-        """Say, and stop, when another writer replaced or removed the file being recorded.
-
-        Writing on went into a file no path names, lost at its close: what it holds is saved
-        under a new name instead.
-        """
-        recorder = self.recorder
-        problem = recorder.file_problem()
-        if not problem:
-            return
-        kept = recorder.keep_readable()
-        self._close_recorder()
-        try:
-            saved = f'what it holds is saved as {save_unnamed(kept, recorder.path)}'
-        except OSError as e:
-            saved = f'what it held is lost ({e})'
-        text = (f'recording {recorder.path} was {problem} by another process while it was '
-                f'recorded: {saved}; recording stopped (set record to record again)')
-        self._recording_failed(text.removeprefix('recording '))
-        self.get_logger().error(text)
-
 
 # CDR encapsulation (4 bytes) and the header's stamp (8): what follows is what diagnostics say.
 _DIAG_STAMP_END = 12
-
-
-def overwrite_problem(path: str) -> str:
-    """Why the node will not record to ``path``: something is there already ('' if not).
-
-    A recording is never overwritten: a dump of an earlier session's parameters holds its
-    ``record``, and starting from it wiped that session.
-
-    :param path: the ``record`` value asked for.
-    """
-    return _exists(path) if os.path.lexists(path) else ''
-
-
-def _exists(path):
-    return (f'record: {path!r} exists (the node never overwrites a recording): move it or '
-            'choose another path')
 
 
 def main(args: list[str] | None = None) -> int:

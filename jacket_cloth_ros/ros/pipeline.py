@@ -97,8 +97,8 @@ class SessionPipeline:
         self.lost = 0               # JointStates their publisher numbered that never arrived
         self.last_reset_reason = ''
         # Why the recording the values name is not being written ('' when it is, or none):
-        # the live node's, set when its file fails to open or a write fails.
-        self.recording_problem = ''
+        # asked of the live node's recording (ros/recording.py), which holds it once.
+        self.recording_problem: 'Callable[[], str]' = _no_recording_problem
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         self._collapses_said = 0    # the simulation's collapse lines the diagnostics have said
@@ -350,8 +350,9 @@ class SessionPipeline:
         if w['dropped'] and not w['accepted']:
             return messages.ERROR, 'every input dropped'
         problems = []
-        if self.recording_problem:
-            problems.append(f'recording failed: {self.recording_problem}')
+        recording = self.recording_problem()
+        if recording:
+            problems.append(f'recording failed: {recording}')
         if slow:
             problems.append('step cost above one step of real time')
         if w['resets']:
@@ -367,6 +368,7 @@ class SessionPipeline:
 
     def _diagnostics(self, stamp_ns):
         sim = self.sim
+        recording = self.recording_problem()
         vert, horiz = sim.strain()
         values = {}
         slow = False
@@ -395,13 +397,17 @@ class SessionPipeline:
             'sim_steps': sim.steps_total,
             'lod_level': sim.lod.level,
             'viewer_distance_m': self._viewer_distance(),
-            'recording': (f'failed: {self.recording_problem}' if self.recording_problem
-                          else self.values['record']),
+            'recording': (f'failed: {recording}' if recording else self.values['record']),
         })
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)
         self._collapses_said = len(sim.faults.collapse)
         return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
+
+
+def _no_recording_problem() -> str:
+    """Return '': a pipeline without a recording (a replay's) has no recording problem."""
+    return ''
 
 
 # Clocks a pipeline's periodic outputs keep a grid for (sources on different clocks).
