@@ -166,3 +166,25 @@ def test_a_file_replaced_by_another_process_is_saved_and_its_diagnostics_say_so(
     # The character's diagnostics read the problem from the recording, where it is held.
     assert c.pipeline.recording_problem() == recording.problem == \
         logger.lines[-1][1].removeprefix('recording ')
+
+
+def test_a_file_whose_channels_cannot_be_added_is_closed_not_left_open(tmp_path, monkeypatch):
+    # The file was made, then registering a topic failed: the recording ran on without it
+    # but left it open (its writer thread and handle), a file nobody would finish.
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    closed = []
+    real_close = SessionRecorder.close
+
+    def add_topic(self, *args):
+        raise OSError(errno.ENOSPC, 'No space left on device')
+
+    def close(self, *args, **kwargs):
+        closed.append(self.path)
+        return real_close(self, *args, **kwargs)
+    monkeypatch.setattr(SessionRecorder, 'add_topic', add_topic)
+    monkeypatch.setattr(SessionRecorder, 'close', close)
+    path = str(tmp_path / 'session.mcap')
+    recording, logger = _recording()
+    assert not recording.open(path)
+    assert recording.recorder is None and closed == [path]
+    assert 'cannot record to' in recording.problem and logger.lines[-1][0] == 'error'

@@ -9,6 +9,7 @@ another process replaces or removes the file, and closes it; a failure stops the
 never the node. Like mcap's ``Writer``: options by keyword, a choice as an enum.
 """
 
+import contextlib
 import enum
 import os
 import struct
@@ -152,6 +153,9 @@ class NodeRecording:
             self._refuse(_exists(path))
             return False
         except OSError as e:
+            if self.recorder is not None:       # made, then a channel failed: let it go
+                with contextlib.suppress(OSError):
+                    self.recorder.close()
             self.recorder = None
             self.problem = f'cannot record to {path!r} ({e})'
             self.logger.error(f'cannot record to {path!r} ({e}); running without recording')
