@@ -155,3 +155,34 @@ def test_a_timed_pipeline_gives_the_same_messages_and_times_each_stage():
         assert timed.on_joint_state(content, stamp)[1] == plain.on_joint_state(content, stamp)[1]
     assert all(calls.values()), calls
     assert calls['markers'] == calls['skinning']
+
+
+def test_a_timed_crowd_gives_the_same_messages_and_times_its_compiled_call():
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.motion.messages import clip_messages
+    from jacket_cloth_ros.ros.cdr import JointStateReader
+    from jacket_cloth_ros.ros.pipeline import CrowdPipeline, SessionPipeline
+    from rclpy.serialization import serialize_message
+    skeleton = load_shipped_character()
+    rig = load_rig(skeleton)
+    calls = []
+
+    def timer(name, call):
+        def counted(*args):
+            calls.append(name)
+            return call(*args)
+        return counted
+    crowds = CrowdPipeline(threads=1), CrowdPipeline(threads=1)
+    crowds[0].add(SessionPipeline(skeleton, rig, *_defaults(), timing=False))
+    with pytest.raises(ValueError, match='fewer than two'):
+        crowds[0].steps.time_stages(timer)          # one character: no compiled call yet
+    for crowd in crowds:
+        while len(crowd.pipelines) < 2:
+            crowd.add(SessionPipeline(skeleton, rig, *_defaults(), timing=False))
+    crowds[1].steps.time_stages(timer)
+    read = JointStateReader().read
+    for stamp, msg in clip_messages(skeleton, 'walk', 60.0, 0.5, 10 ** 10):
+        content = read(serialize_message(msg))
+        plain, timed = (c.on_joint_states([(0, content), (1, content)]) for c in crowds)
+        assert [outputs for _, outputs in timed] == [outputs for _, outputs in plain]
+    assert calls and set(calls) == {'step'} and len(calls) == crowds[1].steps.calls
