@@ -81,8 +81,8 @@ def main() -> int:
         rclpy.init(args=['crowd'] + argv[argv.index('--ros-args'):], context=ctx,
                    domain_id=domain)
         node = JacketClothNode(crowd=True, context=ctx)     # every character loaded: typed
-        steps = node.crowd.steps
-        steps._call = _timed(spent, 'compiled steps (advance_crowd)', steps._call)
+        node.crowd.steps.time_stages(
+            lambda _, call: _timed(spent, 'compiled steps (advance_crowd)', call))
         executor = SingleThreadedExecutor(context=ctx)
         executor.add_node(node)
         others = set(range(os.cpu_count())) - {0} or {0}

@@ -27,10 +27,7 @@ def _run(characters: int, seconds: float, every: bool,
     from rclpy.parameter import Parameter
 
     from jacket_cloth_ros.recording.reader import read_messages
-    from jacket_cloth_ros.ros import node as node_module
     from jacket_cloth_ros.ros.node import JacketClothNode
-    if every:                   # compare stamps too: each tick's is new
-        node_module._DIAG_STAMP_END = 0
     crowd = os.path.join(folder, f'crowd_{every}.yaml')
     with open(crowd, 'w', encoding='utf-8') as f:
         f.write(f'characters:\n  - name: idle\n    count: {characters}\n'
@@ -40,6 +37,7 @@ def _run(characters: int, seconds: float, every: bool,
     rclpy.init(context=ctx, domain_id=150 + os.getpid() % 50)
     node = JacketClothNode(crowd=True, context=ctx, parameter_overrides=[
         Parameter('characters', value=crowd), Parameter('record', value=path)])
+    node.record_repeated_diagnostics = every        # stamps compared too: each tick's is new
     published = [0]
     plain = node.diagnostics.publish
     node.diagnostics.publish = lambda out: (published.__setitem__(0, published[0] + 1),
@@ -53,7 +51,6 @@ def _run(characters: int, seconds: float, every: bool,
     executor.shutdown()
     node.destroy_node()
     rclpy.shutdown(context=ctx)
-    node_module._DIAG_STAMP_END = 12
     recorded = read_messages(path, ['/diagnostics'])[0]
     return (published[0], len(recorded), sum(len(m.data) for m in recorded),
             os.path.getsize(path))

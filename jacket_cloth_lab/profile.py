@@ -3,7 +3,8 @@
 
 Part of ``bench speed`` (issue 37 item 1). A walk at 60 Hz JointState (two 120 Hz steps each)
 runs through the live node's :class:`SessionPipeline` in this process, as ``replay`` runs it,
-with a timer around each stage:
+with a timer around each stage (the pipeline's ``stage_timer``, which wraps them in that
+pipeline alone; the decode, record, take and publish timers are the profile's own):
 
 - decode: the JointState's CDR read (``cdr.JointStateReader``);
 - prepare: the simulation's work before its compiled steps (stamp checks, joint sampling,
@@ -65,32 +66,6 @@ class StageClock:
         return timed
 
 
-def _instrumented(pipeline, clock: StageClock) -> None:
-    """Put the stage timers on one pipeline's simulation, /tf encoder and periodic messages."""
-    from jacket_cloth_ros.ros import pipeline as pipeline_module
-    sim = pipeline.sim
-    sim.prepare = clock.wrap('prepare', sim.prepare)
-    sim._advance_kernel = clock.wrap('step', sim._advance_kernel)
-    sim.complete = clock.wrap('complete', sim.complete)
-    sim.bones = clock.wrap('bones', sim.bones)
-    pipeline._tf.encode = clock.wrap('tf', pipeline._tf.encode)
-    pipeline._diagnostics = clock.wrap('diagnostics', pipeline._diagnostics)
-    markers = pipeline_module.messages.marker_array
-    pipeline_module.messages = _MessagesWith(clock.wrap('markers', markers))
-
-
-class _MessagesWith:
-    """The pipeline's ``messages`` module with ``marker_array`` timed (restored by the run)."""
-
-    def __init__(self, marker_array: Callable) -> None:
-        from jacket_cloth_ros.ros import messages
-        self._module = messages
-        self.marker_array = marker_array
-
-    def __getattr__(self, name: str):
-        return getattr(self._module, name)
-
-
 def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = False,
                       overrides: Dict | None = None, record: bool = True) -> Dict:
     """Run a walk through the pipeline with stage timers; return CPU per input by stage.
@@ -113,15 +88,19 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.recording.writer import SessionRecorder
     from jacket_cloth_ros.ros import cdr
-    from jacket_cloth_ros.ros import pipeline as pipeline_module
     from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
     fabrics = load_fabrics()
     values = dict(default_values(fabrics['tweed_jacket']), **(overrides or {}))
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
     clock = StageClock()
-    messages_module = pipeline_module.messages
-    _instrumented(pipeline, clock)
+    # The markers' share of publishing and their skinning (within the markers stage), timed
+    # again apart (markers_cost).
+    markers_clock = StageClock()
+
+    def stage_timer(name, function):
+        return (markers_clock if name == 'skinning' else clock).wrap(name, function)
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False,
+                               stage_timer=stage_timer)
     read = clock.wrap('decode', cdr.JointStateReader().read)
     raws = []
     for k in range(int(seconds * INPUT_RATE)):
@@ -138,12 +117,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
                 recorder.add_topic(name, kind, qos)
             write = clock.wrap('record', recorder.write if record else _no_write)
             publish = clock.wrap('publish', ros.publish) if ros else None
-            # The markers' share of publishing and their skinning, timed again apart
-            # (markers_cost); the rig's outfit is shared, so its timer comes off after.
-            markers_clock = StageClock()
             publish_markers = markers_clock.wrap('publish', publish) if ros else None
-            outfit = messages_module.outfit(pipeline.sim.rig)
-            outfit.draw_jacket = markers_clock.wrap('skinning', outfit.draw_jacket)
             for k, raw in enumerate(raws):
                 if k == skip:
                     for name in clock.ns:
@@ -166,8 +140,6 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             recorder.close()
             all_ns = time.process_time_ns() - cpu
     finally:
-        pipeline_module.messages = messages_module
-        vars(messages_module.outfit(pipeline.sim.rig)).pop('draw_jacket', None)
         if ros:
             ros.close()
     counted = len(raws) - skip

@@ -12,6 +12,7 @@ import pytest
 
 from jacket_cloth_lab import host_probe, speed
 from jacket_cloth_lab.host_probe import LOOPS, phases, quiet, summary
+from jacket_cloth_lab.speed import kernel as speed_kernel
 
 
 def test_a_pass_is_quiet_only_with_both_readings_near_the_lowest():
@@ -54,7 +55,7 @@ def _cycle(i):
 
 def test_the_kernel_is_compared_with_the_yardstick_over_the_quiet_passes_only(monkeypatch):
     host = _ScriptedHost(_cycle)
-    monkeypatch.setattr(speed, 'kernel_step_ns', host.kernel_step_ns)
+    monkeypatch.setattr(speed_kernel, 'kernel_step_ns', host.kernel_step_ns)
     got = speed.in_rounds([()], host, 9, 12, 8, probe=host)
     # A quiet pass after a quiet one counts; each round runs until 20 count.
     rounds = speed.KERNEL_TARGET['rounds']
@@ -74,7 +75,7 @@ def test_a_run_that_begins_in_the_slow_phase_judges_its_first_rounds_again(monke
     # the first round counts slow passes; against the run's lowest it is not quiet, and a
     # round more is run in its place.
     host = _ScriptedHost(lambda i: i < 30 or _cycle(i))
-    monkeypatch.setattr(speed, 'kernel_step_ns', host.kernel_step_ns)
+    monkeypatch.setattr(speed_kernel, 'kernel_step_ns', host.kernel_step_ns)
     got = speed.in_rounds([()], host, 9, 12, 8, probe=host)
     assert got['quiet'][0] is False and sum(got['quiet']) == speed.KERNEL_TARGET['rounds']
     assert len(got['ratios']) > speed.KERNEL_TARGET['rounds']
@@ -85,7 +86,7 @@ def test_a_host_never_quiet_leaves_item_4_unmeasured(monkeypatch):
     # Every pass has a slow reading on one side: no pass counts, the run stops at its most
     # rounds, and item 4 is neither met nor missed.
     host = _ScriptedHost(lambda i: False, readings=lambda i: 2.0 if i % 2 else 1.0)
-    monkeypatch.setattr(speed, 'kernel_step_ns', host.kernel_step_ns)
+    monkeypatch.setattr(speed_kernel, 'kernel_step_ns', host.kernel_step_ns)
     got = speed.in_rounds([()], host, 9, 12, 8, probe=host)
     assert len(got['ratios']) == speed.MOST_ROUNDS and not any(got['quiet'])
     assert got['counted'] == 'every round'

@@ -126,7 +126,7 @@ def _rung(n, held, cpu=300.0, p99=4000.0):
 
 def test_the_full_runs_parts_render_as_the_quick_run_does_not_give_them():
     # The parts only a full `bench speed` gives (the node against its floor, the starts, the
-    # yardstick, the crowd's ladders), in the shapes speed.py and crowd.py return.
+    # yardstick, the crowd's ladders), in the shapes speed/ and crowd.py return.
     ladder = [12, [_rung(4, True), _rung(8, True), _rung(12, True), _rung(16, False, p99=1e4)]]
     crowd = {'cores': 2, 'cost': [_rung(1, True), _rung(16, True)],
              'single_cost': [_rung(1, True, cpu=2000.0)], 'crowd_one_core': ladder,

@@ -25,7 +25,7 @@ from .bundles import CrowdSlot, JointSample, StepOutput, ints, steady_intake
 from .compiled import FixedTypes
 from .inputs import Sample
 from .physics import crowd as crowd_steps
-from .simulation import Bones, StepJob, StepReport
+from .simulation import Bones, StageTimer, StepJob, StepReport
 
 # GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
 # the executor thread and the machine's other processes; read when the pool first starts.
@@ -104,6 +104,21 @@ class CrowdSteps:
             self._set_slot(index, slot)         # crowd_steps.put loaded now too
             self._set_intake(index, self._my_intakes[index])
         return index
+
+    def time_stages(self, timer: StageTimer) -> None:
+        """Run every round's compiled call through a profiler's ``timer`` from now on.
+
+        The stage ``step`` (physics.crowd.advance_crowd, all the round's simulations) is
+        replaced by what ``timer('step', call)`` returns; a crowd never given a timer makes
+        the call directly, as before.
+
+        :param timer: called with the stage's name and callable; returns the callable to run
+            in its place.
+        :raises ValueError: before the second simulation, which loads the call.
+        """
+        if self._call is None:
+            raise ValueError('a crowd of fewer than two simulations has no compiled call')
+        self._call = timer('step', self._call)
 
     @staticmethod
     def _key(sim):

@@ -12,7 +12,7 @@ skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -171,6 +171,11 @@ class StepReport:
     sweeps: int = 0                    # relaxation sweeps run (over all steps and substeps)
     substeps: int = 0                  # substeps run (over all steps)
     lod_level: int = 0                 # level of detail of these steps (core/lod.py)
+
+
+# A profiler's hook (JacketSimulation.time_stages, ros.pipeline.SessionPipeline): called once
+# per stage with the stage's name and callable, it returns the callable run in its place.
+StageTimer = Callable[[str, Callable], Callable]
 
 
 class JacketSimulation:
@@ -530,6 +535,21 @@ class JacketSimulation:
         return (f'the cloth is {kind} across from {since:.1f} s on: its horizontal edges\' '
                 f'p99 strain {watch.p99:.0%} for over {COLLAPSED_FOR_S:g} s (most at row {row}); '
                 f'{fix}')
+
+    def time_stages(self, timer: StageTimer) -> None:
+        """Run this simulation's stages through a profiler's ``timer`` from now on.
+
+        ``prepare``, ``step`` (the compiled steps, physics.step.advance), ``complete`` and
+        ``bones`` are each replaced, on this simulation only, by what ``timer(name, stage)``
+        returns. A simulation never given a timer calls its stages directly, as before.
+
+        :param timer: called once per stage with its name and callable; returns the callable
+            to run in its place (e.g. one that adds the stage's CPU time to a clock).
+        """
+        self.prepare = timer('prepare', self.prepare)
+        self._advance_kernel = timer('step', self._advance_kernel)
+        self.complete = timer('complete', self.complete)
+        self.bones = timer('bones', self.bones)
 
     # -- one input ----------------------------------------------------------------------------
     def process(self, stamp_ns: int, names: Sequence[str],

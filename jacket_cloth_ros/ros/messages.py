@@ -23,6 +23,8 @@ from ..core.jacket_mesh import LINING, SKIN, SkinnedMesh, jacket_mesh
 from ..core.physics import skinning
 
 if TYPE_CHECKING:           # for the annotations only
+    from collections.abc import Callable
+
     from builtin_interfaces.msg import Time
     from ..core.rig import Rig
     from ..core.simulation import Bones, JacketSimulation
@@ -345,7 +347,8 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = Fal
 
 
 def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
-                 reset: bool = False, debug: bool = False, body: bool = True) -> bytes:
+                 reset: bool = False, debug: bool = False, body: bool = True,
+                 draw_jacket: 'Callable | None' = None) -> bytes:
     """Return the MarkerArray's CDR bytes: its values written into a template laid out once.
 
     :param sim: the simulation, after its last step.
@@ -354,11 +357,16 @@ def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
     :param reset: whether a DELETEALL goes first in each namespace (after a reset).
     :param debug: add the method's scaffolding (see marker_layout).
     :param body: add the body.
+    :param draw_jacket: what skins the jacket into the message, called as
+        :meth:`Outfit.draw_jacket`; None: the rig's outfit's own. A profiler passes it timed
+        (SessionPipeline's ``stage_timer``), so the outfit the rig's pipelines share is left
+        as it is.
     """
     template = _marker_template(sim.rig, _layer_bones(sim), reset, frame, debug, body)
     if template.meshes:
         points, colors = template.meshes['jacket']
-        outfit(sim.rig).draw_jacket(sim.links, sim.bones().poses, points, colors)
+        (draw_jacket or outfit(sim.rig).draw_jacket)(sim.links, sim.bones().poses, points,
+                                                     colors)
     if debug:
         return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
     return template.encode(_FILL_BODY, (floats(sim.links), outfit(sim.rig).body_shapes,

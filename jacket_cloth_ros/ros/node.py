@@ -109,6 +109,10 @@ class JacketClothNode(Node):
         self._fabrics = {}              # fabrics file -> its presets
         self._told_compiling = False
         self._every = 1                 # the characters of the file (a crowd slices them)
+        # False: the watchdog's diagnostics are recorded when they say something new (the
+        # stamp left out); True: when they differ at all, the stamp too, so an idle node's are
+        # recorded every tick, as before issue 48 (benchmarks/idle_recording.py compares).
+        self.record_repeated_diagnostics = False
         # The watchdog and the robot_description fallback run on wall time: with use_sim_time
         # a simulator not started or paused stops the node's clock, and they must not stop.
         self._wall = Clock(clock_type=ClockType.STEADY_TIME)
@@ -582,7 +586,7 @@ class JacketClothNode(Node):
             c.diag_wall = now
             # Recorded when they say something new: without inputs they repeat at one stamp
             # (an idle crowd's filled a file by the hour). The stamp is the first 8 bytes.
-            said = out[_DIAG_STAMP_END:]
+            said = out if self.record_repeated_diagnostics else out[_DIAG_STAMP_END:]
             if said != c.diag_recorded:
                 c.diag_recorded = said
                 self.recording.write(self._topics['diagnostics'][0], out, stamp_ns)

@@ -9,12 +9,13 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 
 import functools
 import math
+import types
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.crowd import CrowdSteps, stepped
-from ..core.simulation import JacketSimulation, StepReport
+from ..core.simulation import JacketSimulation, StageTimer, StepReport
 from ..recording.writer import qos_profile_yaml
 from . import messages
 from .parameters import SIM_KEYS, fabric_from, sim_params_from
@@ -58,6 +59,10 @@ def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_clo
 
 # The diagnostics' owner when a recording does not name one: the node with its default name.
 DEFAULT_NODE = '/jacket_cloth_node'
+# What a pipeline's ``stage_timer`` is given, in the order they run for an input (``skinning``,
+# the jacket skinned into the markers, runs within ``markers``).
+TIMED_STAGES = ('prepare', 'step', 'complete', 'bones', 'tf', 'markers', 'skinning',
+                'diagnostics')
 
 
 class SessionPipeline:
@@ -65,7 +70,7 @@ class SessionPipeline:
 
     def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
                  values: dict, node_name: str = DEFAULT_NODE, timing: bool = True,
-                 output_phase: float = 0.0):
+                 output_phase: float = 0.0, stage_timer: StageTimer | None = None):
         """Set up the simulation.
 
         :param skeleton: the character's skeleton.
@@ -81,6 +86,11 @@ class SessionPipeline:
             come this share (0 to 0.9) of their period earlier than they would; a crowd gives
             its characters spread phases, so their markers and diagnostics do not all fall on
             one input's tick.
+        :param stage_timer: a profiler's hook (jacket_cloth_lab.profile): called once per
+            stage of :data:`TIMED_STAGES` with its name and callable, once the pipeline is set
+            up; what it returns runs in the stage's place, in this pipeline only (the /tf
+            template and the outfit that pipelines share stay as they are). None (the node,
+            replay): the stages are called directly, nothing is added to an input's work.
         """
         if not 0.0 <= output_phase <= 0.9:
             raise ValueError(f'output_phase {output_phase} is not in [0, 0.9]')
@@ -113,6 +123,8 @@ class SessionPipeline:
         # Asked when markers are due; False: not built this time (the live nodes: no
         # subscriber and no recording). None: always built, as a replay writes them.
         self.markers_wanted: 'Callable[[], bool] | None' = None
+        self._stage_timer = None
+        self._marker_array = messages.marker_array
         self._tf = self._tf_template()
         self._world_tf = None
         # Load the encoders' compiled parts now rather than on the first input's outputs.
@@ -122,11 +134,27 @@ class SessionPipeline:
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
                               debug=self.values.get('markers_debug', False),
                               body=self.draws_body())
+        if stage_timer is not None:
+            self._time_stages(stage_timer)
 
     def _tf_template(self):
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
-        return messages.tf_template(tuple(self.sim.bone_names), tuple(self.sim.bone_parents),
-                                    self.values['frame_prefix'])
+        template = messages.tf_template(tuple(self.sim.bone_names),
+                                        tuple(self.sim.bone_parents), self.values['frame_prefix'])
+        if self._stage_timer is None:
+            return template
+        # Timed for this pipeline alone: the template is shared by every pipeline of its bones.
+        return types.SimpleNamespace(encode=self._stage_timer('tf', template.encode))
+
+    def _time_stages(self, timer):
+        """Put ``timer`` around each of TIMED_STAGES (see ``stage_timer``), once set up."""
+        self._stage_timer = timer
+        self.sim.time_stages(timer)
+        self._tf = self._tf_template()
+        draw_jacket = timer('skinning', messages.outfit(self.sim.rig).draw_jacket)
+        self._marker_array = timer('markers', functools.partial(messages.marker_array,
+                                                                draw_jacket=draw_jacket))
+        self._diagnostics = timer('diagnostics', self._diagnostics)
 
     def draws_body(self) -> bool:
         """Tell whether the markers carry the body: ``markers_body``, auto without visuals."""
@@ -263,7 +291,7 @@ class SessionPipeline:
         rate = self.values['markers_rate']
         if self._finite and rate > 0 and self._due(self._marker_clocks, stamp_ns, rate):
             if self.markers_wanted is None or self.markers_wanted():
-                out.append(('markers', messages.marker_array(
+                out.append(('markers', self._marker_array(
                     self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset,
                     debug=self.values.get('markers_debug', False), body=self.draws_body())))
                 self._marker_reset = False
