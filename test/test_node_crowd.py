@@ -709,3 +709,33 @@ def test_a_crowd_takes_a_new_name_list_object_each_message_the_steady_way():
     assert got == want
     # The first character's, but for its first two (a reset, then armed); none of the second's.
     assert crowd.steps.steady_inputs == 22
+
+
+def test_an_inputs_markers_asked_for_after_its_character_stepped_on_are_refused():
+    """A live crowd makes an input's markers and diagnostics after every /tf went out, or at
+    once when its character has another input in the batch: asked for after that input
+    instead, they would describe its state silently; they are refused. Made at once, they are
+    what the character alone makes."""
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import CrowdPipeline
+    skeleton = Skeleton(shipped_character_urdf())
+    fabrics = load_fabrics()
+    values = dict(default_values(fabrics['tweed_jacket']), markers_rate=240.0)
+
+    def pipeline():
+        return SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
+    for characters in (1, 2):
+        crowd, alone = CrowdPipeline(1), pipeline()
+        for _ in range(characters):
+            crowd.add(pipeline())
+        msgs = [cdr.JointStateContent(_stamp(k), tuple(skeleton.joint_names),
+                                      np.zeros(len(skeleton.joint_names))) for k in range(3)]
+        first, second = crowd.step_and_tf([(0, msgs[0]), (0, msgs[1])])
+        want = [alone.on_joint_state(m, m.stamp_ns)[1] for m in msgs[:2]]
+        assert first[1] + first[2]() == want[0] and second[1] + second[2]() == want[1]
+        assert any(key == 'markers' for key, _ in second[2]())   # the same list, once made
+        (_, _, later), = crowd.step_and_tf([(0, msgs[2])])
+        crowd.step_and_tf([(0, cdr.JointStateContent(_stamp(3), msgs[2].name,
+                                                      msgs[2].position))])
+        with pytest.raises(RuntimeError, match='took another input'):
+            later()

@@ -469,6 +469,37 @@ def spread_phase(index: int) -> float:
     return 0.9 * ((index * 0.6180339887498949) % 1.0)
 
 
+class Periodic:
+    """An accounted input's markers and diagnostics (periodic_outputs), made once, when due.
+
+    Made when called, so that a live crowd sends every /tf first, or at once (``now``) when
+    its character takes another input before they would be asked for. Asked for after that
+    other input, they would describe its state instead: that is refused, not returned.
+
+    :param pipeline: the input's character's pipeline, the input just accounted (account_tf).
+    :param report: the input's step report.
+    :param stamp_ns: the input's stamp, ns.
+    :param now: make them now.
+    """
+
+    __slots__ = ('_pipeline', '_report', '_stamp_ns', '_inputs', '_made')
+
+    def __init__(self, pipeline: SessionPipeline, report: StepReport, stamp_ns: int,
+                 now: bool = False):
+        self._pipeline, self._report, self._stamp_ns = pipeline, report, stamp_ns
+        self._inputs = pipeline.inputs
+        self._made = pipeline.periodic_outputs(report, stamp_ns) if now else None
+
+    def __call__(self) -> list[tuple[str, bytes]]:
+        """Return the outputs, made on the first call; the same ones on any later call."""
+        if self._made is None:
+            if self._pipeline.inputs != self._inputs:
+                raise RuntimeError('markers and diagnostics asked for after their character '
+                                   'took another input')
+            self._made = self._pipeline.periodic_outputs(self._report, self._stamp_ns)
+        return self._made
+
+
 class CrowdPipeline:
     """The pipelines of many characters, their inputs' steps run together (core.crowd).
 
@@ -507,7 +538,7 @@ class CrowdPipeline:
         return [(r, tf + later()) for r, tf, later in self.step_and_tf(inputs)]
 
     def step_and_tf(self, inputs: 'Sequence[tuple[int, JointStateContent]]') -> list[
-            tuple[StepReport, list[tuple[str, bytes]], 'Callable[[], list]']]:
+            tuple[StepReport, list[tuple[str, bytes]], Periodic]]:
         """Process inputs as :meth:`on_joint_states` does; (report, /tf outputs, later) of each.
 
         ``later()`` returns the input's markers and diagnostics: a live crowd sends every /tf
@@ -526,11 +557,7 @@ class CrowdPipeline:
                 i, m = inputs[k]
                 pipeline, report = self.pipelines[i], reports[k]
                 tf = pipeline.account_tf(report, m.stamp_ns)
-                if last:
-                    later = functools.partial(pipeline.periodic_outputs, report, m.stamp_ns)
-                else:
-                    later = functools.partial(list, pipeline.periodic_outputs(report, m.stamp_ns))
-                out[k] = (report, tf, later)
+                out[k] = (report, tf, Periodic(pipeline, report, m.stamp_ns, now=not last))
         stepped(self.steps, [(i, m.stamp_ns, self._steady_names(i, m.name), m.position)
                              for i, m in inputs], after_round)
         return out
@@ -543,8 +570,7 @@ class CrowdPipeline:
         pipeline = self.pipelines[0]
         report = pipeline.sim.process(msg.stamp_ns, msg.name, msg.position)
         tf = pipeline.account_tf(report, msg.stamp_ns)
-        later = functools.partial(pipeline.periodic_outputs, report, msg.stamp_ns)
-        return report, tf, later if last else functools.partial(list, later())
+        return report, tf, Periodic(pipeline, report, msg.stamp_ns, now=not last)
 
     def _steady_names(self, index, names):
         """Return a character's name list as the crowd's steady intake can take it on.
