@@ -735,7 +735,7 @@ def test_an_inputs_markers_asked_for_after_its_character_stepped_on_are_refused(
         assert first[1] + first[2]() == want[0] and second[1] + second[2]() == want[1]
         assert any(key == 'markers' for key, _ in second[2]())   # the same list, once made
         (_, _, later), = crowd.step_and_tf([(0, msgs[2])])
-        crowd.step_and_tf([(0, cdr.JointStateContent(_stamp(3), msgs[2].name,
-                                                      msgs[2].position))])
+        fourth = cdr.JointStateContent(_stamp(3), msgs[2].name, msgs[2].position)
+        crowd.step_and_tf([(0, fourth)])
         with pytest.raises(RuntimeError, match='took another input'):
             later()
