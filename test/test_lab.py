@@ -52,19 +52,20 @@ def test_stress_command_writes_the_matrix(tmp_path, capsys):
     assert 'unknown method' in capsys.readouterr().err
 
 
-def test_a_cloth_still_moving_after_a_roll_on_the_floor_is_not_called_held(skeleton, rig):
-    # A scene that ends lying on the floor is judged by whether the cloth comes to rest: the
-    # skinned pose puts the hem inside the floor. After a full roll the default's eight
-    # Gauss-Seidel sweeps keep cycling (the hem moves centimetres every half second), which
-    # the matrix called a recovery problem of the yardstick; sixteen sweeps settle.
+def test_a_cloth_that_keeps_moving_on_the_floor_is_not_called_held(skeleton, rig):
+    # A scene that ends lying on the floor is set against the converged cloth, not the
+    # skinned pose inside the floor, and must come to rest. After a full roll the default's
+    # eight Gauss-Seidel sweeps keep cycling (the hem's path several cm every half second,
+    # whatever the phase the scene ends in); sixteen sweeps lie still.
     from jacket_cloth_lab.stress import SETTLE_M, floor_scenes
     rolling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: rolling')
     assert rolling.ends_on_floor
     verdict, figures = run_scene(skeleton, rig, rolling, 'hard_pass')
-    assert verdict == ('did not settle' if figures['hem_moved_end_m'] > SETTLE_M else 'holds')
+    assert verdict == 'did not settle' and figures['hem_path_end_m'] > 4 * SETTLE_M, figures
+    assert figures['yardstick'] == 'converged'
     verdict, figures = run_scene(skeleton, rig, dataclasses.replace(
         rolling, fabric={'iterations': 16}), 'hard_pass')
-    assert verdict == 'holds' and figures['hem_moved_end_m'] < 0.001, figures
+    assert verdict == 'holds' and figures['hem_path_end_m'] < 0.1 * SETTLE_M, figures
 
 
 def test_xpbd_with_the_hard_pass_holds_where_methods_break(skeleton, rig, stress_scenes):
