@@ -28,6 +28,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from jacket_cloth_lab import crowd_intake, lab_domain
+from jacket_cloth_lab.proc import cpu_seconds
 from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 
 RATE = 120.0
@@ -35,12 +36,6 @@ STEP_US = 1e6 / RATE
 COUNTS = (1, 4, 16, 64, 256)               # cost per character against N
 CROWD_LADDER = (4, 8, 12, 16, 20, 24, 28, 32, 40, 48, 56, 64, 72, 80, 88, 96, 112, 128, 192, 256)
 SINGLE_LADDER = (1, 2, 4, 8, 16, 32)
-
-
-def _cpu_s(pid):
-    with open(f'/proc/{pid}/stat', encoding='ascii') as f:
-        fields = f.read().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def _rss_mb(pid):
@@ -198,10 +193,10 @@ def live(skeleton: Skeleton, commands: Sequence[list[str]], characters: int, sec
                                f'{start_limit_s:g} s')
         send_for(1.5)                                   # warm-up, past the first windows
         first = {k: len(v) for k, v in windows.items()}
-        cpu0 = sum(_cpu_s(p.pid) for p in procs)
+        cpu0 = sum(cpu_seconds(p.pid) for p in procs)
         sent0 = sent[0]
         send_for(seconds)
-        cpu1 = sum(_cpu_s(p.pid) for p in procs)
+        cpu1 = sum(cpu_seconds(p.pid) for p in procs)
         rss = sum(_rss_mb(p.pid) for p in procs)
         n = sent[0] - sent0
         end = time.monotonic() + 1.2

@@ -18,8 +18,9 @@ from jacket_cloth_ros.core.fabric import load_fabric
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_lab.floor_node import kernel_stepper
 from jacket_cloth_lab.profile import limit_lines
+from jacket_cloth_lab.proc import cpu_seconds, cpu_ticks
 from jacket_cloth_lab.speed import (
-    _cpu_s, _cpu_ticks, captured_steps, endurance, in_rounds, summary, targets)
+    captured_steps, endurance, in_rounds, summary, targets)
 from jacket_cloth_lab.cli import main
 
 
@@ -189,11 +190,11 @@ def test_cpu_of_a_process_is_read_from_proc():
     # time, the reading moves by about as much.
     import os
     import time
-    before = _cpu_s(os.getpid())
+    before = cpu_seconds(os.getpid())
     start = time.process_time()
     while time.process_time() - start < 0.1:
         pass
-    assert 0.05 <= _cpu_s(os.getpid()) - before <= 1.0
+    assert 0.05 <= cpu_seconds(os.getpid()) - before <= 1.0
 
 
 def test_steal_is_read_from_proc_stat():
@@ -201,7 +202,7 @@ def test_steal_is_read_from_proc_stat():
     # only grow, read before and after.
     with open('/proc/stat', encoding='ascii') as f:
         fields = [int(v) for v in f.readline().split()[1:]]
-    steal, total = _cpu_ticks()
+    steal, total = cpu_ticks()
     assert fields[7] <= steal <= fields[7] + 1000 and sum(fields[:8]) <= total
 
 

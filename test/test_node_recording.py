@@ -187,4 +187,5 @@ def test_a_file_whose_channels_cannot_be_added_is_closed_not_left_open(tmp_path,
     recording, logger = _recording()
     assert not recording.open(path)
     assert recording.recorder is None and closed == [path]
+    assert not os.path.exists(path)         # a second try at the path is not refused as taken
     assert 'cannot record to' in recording.problem and logger.lines[-1][0] == 'error'

@@ -36,10 +36,10 @@ from .host import host_phases
 from .kernel import (
     GRIDS, ITERATIONS, KERNEL_TARGET, LIMIT_SOURCE, MOST_PASSES, MOST_ROUNDS, ROUND_STEPS,
     Yardstick, in_rounds, kernel_vs_limit, limit_source, limit_steps)
-from .live import _cpu_s, cold_start, live_node, live_nodes, node_vs_floor, stop_processes
+from .live import cold_start, live_node, live_nodes, node_vs_floor, stop_processes
 from .markers import LOWER_MARKERS_RATES, MARKERS_AT_MOST, markers_cost
 from .measure import (
-    RATE, ROUND_REPEATS, STEP_US, Steal, _cpu_ticks, beside_kernel, captured_steps,
+    RATE, ROUND_REPEATS, STEP_US, Steal, beside_kernel, captured_steps,
     kernel_step_ns)
 from .per_input import input_vs_kernel
 from .replay import replay_of_limit, replay_scaling
@@ -50,7 +50,7 @@ from .targets import COST_ONLY, NODE_OVER_FLOOR, REPLAY_TARGETS, targets
 __all__ = [
     'COST_ONLY', 'GRIDS', 'ITERATIONS', 'KERNEL_TARGET', 'LIMIT_SOURCE', 'LOWER_MARKERS_RATES',
     'MARKERS_AT_MOST', 'MOST_PASSES', 'MOST_ROUNDS', 'NODE_OVER_FLOOR', 'RATE', 'REPLAY_TARGETS',
-    'ROUND_REPEATS', 'ROUND_STEPS', 'STEP_US', 'Steal', 'Yardstick', '_cpu_s', '_cpu_ticks',
+    'ROUND_REPEATS', 'ROUND_STEPS', 'STEP_US', 'Steal', 'Yardstick',
     'beside_kernel', 'captured_steps', 'cold_start', 'endurance', 'host_phases',
     'in_rounds', 'input_vs_kernel', 'kernel_step_ns', 'kernel_vs_limit', 'limit_source',
     'limit_steps', 'live_node', 'live_nodes', 'main', 'markers_cost', 'node_vs_floor',

@@ -17,13 +17,8 @@ from typing import Iterable
 
 from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 from .. import lab_domain
+from ..proc import cpu_seconds
 from .measure import RATE
-
-
-def _cpu_s(pid):
-    with open(f'/proc/{pid}/stat', encoding='ascii') as f:
-        fields = f.read().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], seconds: float,
@@ -113,11 +108,11 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
         msgs = [m for _, m in itertools.islice(walk, int((seconds + 1.0) * RATE))]
         send_paced(msgs[:int(RATE)])                    # a second of warm-up
         n = len(msgs) - int(RATE)
-        cpu0 = {name: _cpu_s(p.pid) for name, p in procs.items()}
+        cpu0 = {name: cpu_seconds(p.pid) for name, p in procs.items()}
         tf0 = dict(tf_count)
         latencies.clear()
         send_paced(msgs[int(RATE):])
-        cpu1 = {name: _cpu_s(p.pid) for name, p in procs.items()}
+        cpu1 = {name: cpu_seconds(p.pid) for name, p in procs.items()}
         end = time.monotonic() + 0.5
         while time.monotonic() < end:
             ex.spin_once(timeout_sec=0.05)

@@ -11,6 +11,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..proc import cpu_ticks
 from jacket_cloth_ros.core.bundles import copied
 from jacket_cloth_ros.core.compiled import FixedTypes
 from jacket_cloth_ros.core.fabric import Fabric
@@ -25,16 +26,6 @@ STEP_US = 1e6 / RATE           # one step: the latency target
 ROUND_REPEATS = 20                 # passes over the captured states in one kernel round
 
 
-def _cpu_ticks():
-    """(steal, total) jiffies of all CPUs since boot, from /proc/stat; (0, 0) elsewhere."""
-    try:
-        with open('/proc/stat', encoding='ascii') as f:
-            fields = [int(v) for v in f.readline().split()[1:]]
-    except (OSError, ValueError):
-        return 0, 0
-    return (fields[7] if len(fields) > 7 else 0), sum(fields[:8])
-
-
 class Steal:
     """The share of CPU time the hypervisor gave to other guests while a section ran.
 
@@ -44,7 +35,7 @@ class Steal:
     """
 
     def __enter__(self) -> 'Steal':
-        self._start = _cpu_ticks()
+        self._start = cpu_ticks()
         self.percent = float('nan')
         return self
 
@@ -53,7 +44,7 @@ class Steal:
 
         :param exc: the exception's type, value and traceback, if one ended the section.
         """
-        steal, total = (b - a for a, b in zip(self._start, _cpu_ticks()))
+        steal, total = (b - a for a, b in zip(self._start, cpu_ticks()))
         self.percent = 100.0 * steal / total if total else float('nan')
         return False
 

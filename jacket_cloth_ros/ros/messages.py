@@ -140,7 +140,9 @@ class Outfit:
         return {'jacket': self.jacket, 'body': self.body}
 
     def corners(self, name: str) -> int:
-        """Return how many triangle-list points a mesh's marker has.
+        """Return how many triangle-list points a mesh drawn whole has (:meth:`triangles`).
+
+        The live jacket's marker has :meth:`marker_corners`.
 
         :param name: ``jacket`` or ``body``.
         """
@@ -153,8 +155,10 @@ class Outfit:
     def lined(self, corners: np.ndarray, colors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Return the live jacket's triangles with the lining put back, as pictures draw it.
 
-        Each lined outer face gets its back face after it, :meth:`draw`'s way: wound the
-        other way, ``LINING_GAP`` inside, in the lining's colour lit from its side (flat).
+        Each lined outer face gets its back face after it, as :meth:`draw` orders them: wound
+        the other way, ``LINING_GAP`` inside along the face's own normal, in the lining's
+        colour lit from its side, one shade per face (draw moves and lights each vertex by its
+        averaged normal; the recorded corners carry no normals).
 
         :param corners: (:meth:`marker_corners`,3) the markers' jacket (:meth:`draw_jacket`).
         :param colors: (:meth:`marker_corners`,4) their colours.

@@ -482,18 +482,21 @@ class Periodic:
     :param now: make them now.
     """
 
-    __slots__ = ('_pipeline', '_report', '_stamp_ns', '_inputs', '_made')
+    __slots__ = ('_pipeline', '_report', '_stamp_ns', '_inputs', '_last', '_made')
 
     def __init__(self, pipeline: SessionPipeline, report: StepReport, stamp_ns: int,
                  now: bool = False):
         self._pipeline, self._report, self._stamp_ns = pipeline, report, stamp_ns
-        self._inputs = pipeline.inputs
+        # Its character's inputs accounted and its last sample: either moves with the next
+        # input (the sample as soon as that input's steps are taken back).
+        self._inputs, self._last = pipeline.inputs, pipeline.sim.last
         self._made = pipeline.periodic_outputs(report, stamp_ns) if now else None
 
     def __call__(self) -> list[tuple[str, bytes]]:
         """Return the outputs, made on the first call; the same ones on any later call."""
         if self._made is None:
-            if self._pipeline.inputs != self._inputs:
+            if (self._pipeline.inputs != self._inputs
+                    or self._pipeline.sim.last is not self._last):
                 raise RuntimeError('markers and diagnostics asked for after their character '
                                    'took another input')
             self._made = self._pipeline.periodic_outputs(self._report, self._stamp_ns)

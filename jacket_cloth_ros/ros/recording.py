@@ -154,8 +154,11 @@ class NodeRecording:
             return False
         except OSError as e:
             if self.recorder is not None:       # made, then a channel failed: let it go
-                with contextlib.suppress(OSError):
+                with contextlib.suppress(Exception):
                     self.recorder.close()
+                if path.endswith('.mcap'):      # made a moment ago, with nothing in it
+                    with contextlib.suppress(OSError):
+                        os.remove(path)
             self.recorder = None
             self.problem = f'cannot record to {path!r} ({e})'
             self.logger.error(f'cannot record to {path!r} ({e}); running without recording')
