@@ -15,6 +15,7 @@ import yaml
 
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.measures import COLLAPSED_STRAIN, CollapseWatch
+from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros import messages
 from jacket_cloth_ros.tools.cli import main
@@ -140,3 +141,64 @@ def test_a_plain_walk_says_nothing(walk, tmp_path, capsys):
     assert main(['replay', str(walk), '-o', str(out)]) == 0
     assert 'across from' not in capsys.readouterr().err
     assert {s.message for s in _diagnostics(out)} == {'ok'}
+
+
+def _held_still(scene, extra_s):
+    """A stress scene's inputs, then its last pose held ``extra_s`` more at 60 Hz."""
+    stamp, names, pos = scene.inputs[-1]
+    return list(scene.inputs) + [(stamp + int(k * 1e9 / 60), names, pos)
+                                 for k in range(1, int(extra_s * 60) + 1)]
+
+
+@pytest.mark.parametrize('scene_name, fabric, warned', [
+    ('floor: rolling', {}, True),               # the default's sweeps cycle there
+    ('floor: rolling', {'iterations': 16}, False),
+    ('walk looped for 60 s', {}, False),        # a hem standing up swings down, then rests
+])
+def test_a_cloth_that_never_rests_on_a_still_body_is_named(scene_name, fabric, warned):
+    # Lying still on the floor after a roll, the default's eight sweeps keep the hem moving
+    # for as long as the body lies there; every per-input bound holds, so nothing said so.
+    from jacket_cloth_lab.stress import scenes
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    skeleton = load_shipped_character()
+    scene = next(s for s in scenes(skeleton, 3.0) if s.name.split(' for ')[0] ==
+                 scene_name.split(' for ')[0])
+    sim = JacketSimulation(skeleton, load_rig(skeleton),
+                           load_fabric('tweed_jacket').with_values(**fabric), SimParams())
+    said = []
+    for stamp, names, pos in _held_still(scene, 5.0):
+        said += [text for code, text in sim.process(stamp, names, pos).warnings
+                 if code == 'restless']
+    assert said == sim.faults.restless and len(said) == int(warned), said
+    if warned:
+        assert 'keeps moving with the body still' in said[0]
+        assert 'raise fabric.iterations (8 now)' in said[0]
+
+
+def test_a_restless_cloth_is_a_warn_in_the_diagnostics_while_it_lasts():
+    # The node's diagnostics (the pipeline's) say it from then on, as for a collapse.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_lab.stress import floor_scenes
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    skeleton = load_shipped_character()
+    fabrics = load_fabrics()
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+                               default_values(fabrics['tweed_jacket']), timing=False)
+    rolling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: rolling')
+    levels = []
+    for stamp, names, pos in _held_still(rolling, 5.0):
+        pipeline.on_joint_state(JointStateContent(stamp, tuple(names), np.asarray(pos)), stamp)
+        status = deserialize_message(pipeline.diagnostics_now(stamp), DiagnosticArray).status[0]
+        levels.append((status.level, status.message))
+    said = pipeline.sim.faults.restless
+    assert len(said) == 1
+    first = next(k for k, (_, text) in enumerate(levels) if said[0] in text)
+    assert all(level == bytes([messages.WARN]) and said[0] in text
+               for level, text in levels[first:])

@@ -184,3 +184,73 @@ class CollapseWatch:
         rows = np.bincount(self.b[over] // cols) if over.any() else np.zeros(1, np.int64)
         stretched = int((self._strain[over] > 0).sum()) >= int((self._strain[over] < 0).sum())
         return int(np.argmax(rows)), stretched
+
+
+# A cloth that keeps moving with the body still: its hem's mean path over the last
+# RESTLESS_WINDOW_S faster than RESTLESS_SPEED (m/s) once every link of the body has moved
+# slower than BODY_STILL_SPEED (m/s) from look to look for RESTLESS_FOR_S. A hem standing up
+# after a violent motion has slowed well under that by then; a cloth cycling on the floor
+# never does.
+RESTLESS_SPEED = 0.01
+RESTLESS_WINDOW_S = 1.0
+BODY_STILL_SPEED = 0.01
+RESTLESS_FOR_S = 3.0
+
+
+class RestlessWatch:
+    """Tell when the cloth keeps moving while the body stays still: a cycle, not a swing.
+
+    Each input brings the hem's path over its steps (the compiled steps sum it, step by step,
+    so a cycle turning within an input counts); a look (every LOOK_EVERY_S of the inputs'
+    stamps) checks that the body's links stayed still since the last. Once the body has been
+    still for RESTLESS_FOR_S, a hem whose path over the last RESTLESS_WINDOW_S is faster than
+    RESTLESS_SPEED is said once, until the body moves or the cloth is reset. Wind moves a
+    cloth on a still body too: the caller does not watch with wind.
+    """
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget what was seen (the cloth was put back on the body: a reset)."""
+        self._body_last = self.looked_ns = self.still_ns = None
+        self._path = 0.0            # the hem's path since the last look, m
+        self._moves = []            # (stamp, the hem's path since the look before), body still
+        self.restless = False       # said, until the body moves or the cloth is reset
+        self.speed = 0.0            # the hem's mean speed over the window when said, m/s
+
+    def note(self, hem_path: float, links: np.ndarray, root: np.ndarray, stamp_ns: int) -> bool:
+        """Take an input's hem path; return True when the cloth has just been restless long.
+
+        :param hem_path: the hem's mean path over the input's steps, m.
+        :param links: the skeleton's link transforms (L, 4, 4) in the simulation's frame.
+        :param root: that frame's pose in the world (4, 4): a body rolling over turns it, its
+            links hardly moving in it.
+        :param stamp_ns: the input's stamp, ns.
+        """
+        self._path += hem_path
+        last = self.looked_ns
+        if last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9:
+            return False
+        body = links[:, :3, 3] @ root[:3, :3].T + root[:3, 3]
+        still = (last is not None and stamp_ns > last
+                 and float(np.abs(body - self._body_last).max())
+                 < BODY_STILL_SPEED * (stamp_ns - last) * 1e-9)
+        if still:
+            if self.still_ns is None:
+                self.still_ns = last
+            self._moves.append((stamp_ns, self._path))
+        else:
+            self.still_ns, self._moves, self.restless = None, [], False
+        self.looked_ns, self._body_last, self._path = stamp_ns, body, 0.0
+        if (not still or self.restless
+                or (stamp_ns - self.still_ns) * 1e-9 < RESTLESS_FOR_S):
+            return False
+        start = stamp_ns - RESTLESS_WINDOW_S * 1e9
+        while self._moves and self._moves[0][0] <= start:
+            self._moves.pop(0)
+        speed = sum(m for _, m in self._moves) / RESTLESS_WINDOW_S
+        if speed <= RESTLESS_SPEED:
+            return False
+        self.restless, self.speed = True, speed
+        return True

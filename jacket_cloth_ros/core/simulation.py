@@ -25,7 +25,8 @@ from .bundles import (
 from .compiled import FixedTypes
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
-from .measures import COLLAPSED_FOR_S, CollapseWatch, collider_labels, depth_inside, edge_strain
+from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessWatch,
+                       collider_labels, depth_inside, edge_strain)
 from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
@@ -153,6 +154,15 @@ class Faults:
     overruns: int = 0               # inputs whose steps were capped (max_steps_per_input)
     rig: list = field(default_factory=list)     # the rig's, at load and at the first input
     collapse: list = field(default_factory=list)    # each time the cloth stayed collapsed
+    restless: list = field(default_factory=list)    # each time it kept moving, body still
+
+
+@dataclass(slots=True)
+class Watches:
+    """What watches the cloth over many inputs for a failure no one input shows."""
+
+    collapse: CollapseWatch         # bunched or stretched across for a second
+    restless: RestlessWatch         # moving on while the body stays still
 
 
 @dataclass(slots=True)
@@ -224,7 +234,8 @@ class JacketSimulation:
         self._grid_rotations[:, 3] = 1.0
         self._advance_kernel = FixedTypes(step.advance)
         c = self.model.cloth        # issue 47 item 5a: no silent collapse
-        self.collapse = CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest)
+        self.watches = Watches(CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest),
+                               RestlessWatch())
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
@@ -382,7 +393,8 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.ready_bones = None
-        self.collapse.clear()
+        self.watches.collapse.clear()
+        self.watches.restless.clear()
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)
@@ -518,7 +530,7 @@ class JacketSimulation:
         colliders push out there and which folds between; a shorter reach at the hem (M11)
         folds it more, not less.
         """
-        rig, watch = self.rig, self.collapse
+        rig, watch = self.rig, self.watches.collapse
         row, stretched = watch.worst_row(rig.cols)
         tilt = rig.body_tilt(self.links[:, :3, 3], sample.root[:3, :3])
         if tilt is not None:
@@ -604,7 +616,7 @@ class JacketSimulation:
         if report.reset:
             first = report.reset == 'first sample'
             if first:
-                self.collapse.first_ns = sample.stamp_ns
+                self.watches.collapse.first_ns = sample.stamp_ns
             at_load = len(self.faults.rig)      # said at load (the node logs them then)
             if first:
                 self.faults.rig += self._lying_down(sample)
@@ -660,10 +672,30 @@ class JacketSimulation:
         if not finite:
             report.reset = 'non-finite cloth state'
             self._reset(job.sample)
-        elif self.collapse.note(self.x, job.sample.stamp_ns):
-            line = self._collapsed(job.sample)
-            self.faults.collapse.append(line)
-            report.warnings.append(('collapse', line))
+        else:
+            if self.watches.collapse.note(self.x, job.sample.stamp_ns):
+                line = self._collapsed(job.sample)
+                self.faults.collapse.append(line)
+                report.warnings.append(('collapse', line))
+            if not self._windy() and self.watches.restless.note(
+                    float(out.stats[step.HEM_PATH]), self.links, self.root,
+                    job.sample.stamp_ns):
+                line = self._restless()
+                self.faults.restless.append(line)
+                report.warnings.append(('restless', line))
+
+    def _windy(self):
+        """Tell whether wind moves the cloth: then a cloth moving on a still body is right."""
+        p = self.params
+        return p.wind_gust > 0.0 or any(p.wind)
+
+    def _restless(self) -> str:
+        """Say that the cloth keeps moving on a still body, and the setting that rests it."""
+        watch = self.watches.restless
+        return (f'the cloth keeps moving with the body still: its hem at '
+                f'{100 * watch.speed:.1f} cm/s after {RESTLESS_FOR_S:g} s still; raise '
+                f'fabric.iterations ({self.fabric.iterations} now): its sweeps do not converge '
+                'against the body and the floor, and more bring it to rest')
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:

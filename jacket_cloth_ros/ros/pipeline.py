@@ -112,6 +112,7 @@ class SessionPipeline:
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         self._collapses_said = 0    # the simulation's collapse lines the diagnostics have said
+        self._restless_said = 0     # and its restless lines
         self._costs = []
         self._latencies = []
         # The grid each periodic output is due on, per clock the stamps come on (most recent
@@ -388,8 +389,11 @@ class SessionPipeline:
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
         said = self.sim.faults.collapse
-        if self.sim.collapse.collapsed or len(said) > self._collapses_said:
+        if self.sim.watches.collapse.collapsed or len(said) > self._collapses_said:
             problems.append(said[-1])       # issue 47 item 5a: no silent collapse
+        restless = self.sim.faults.restless
+        if self.sim.watches.restless.restless or len(restless) > self._restless_said:
+            problems.append(restless[-1])   # a cloth that never rests on a still body
         if problems:
             return messages.WARN, '; '.join(problems)
         return messages.OK, 'ok' if w['inputs'] else 'no input'
@@ -430,6 +434,7 @@ class SessionPipeline:
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)
         self._collapses_said = len(sim.faults.collapse)
+        self._restless_said = len(sim.faults.restless)
         return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
 
 

@@ -145,6 +145,7 @@ class SessionFigures:
             'nonfinite_count': self.nonfinite,
             'rig_warnings': list(pipeline.sim.faults.rig),
             'collapsed': list(pipeline.sim.faults.collapse),
+            'restless': list(pipeline.sim.faults.restless),
             'resets': len(self.reset_reasons),
             'reset_reasons': self.reset_reasons,
             'step_time_us': {

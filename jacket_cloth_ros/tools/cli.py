@@ -262,7 +262,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     session = _session(args, listed)
     pipeline, took = replay(session, args.output, args.force)
     sim = pipeline.sim
-    _warn_rig(args, sim.faults.rig + sim.faults.collapse)
+    _warn_rig(args, sim.faults.rig + sim.faults.collapse + sim.faults.restless)
     first, last = session.stamp_range()
     span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
@@ -338,7 +338,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     report = _analyze_into(args.out, args.force, sessions, args.moments)
     for r in report.get('sessions', [report]):
         _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}),
-                  r['rig_warnings'] + r['collapsed'])
+                  r['rig_warnings'] + r['collapsed'] + r.get('restless', []))
     print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 

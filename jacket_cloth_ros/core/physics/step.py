@@ -25,8 +25,10 @@ from .pose import (
     _transform_point, forward_kinematics, quat_matrix, quat_slerp, relative_move,
     share_world_motion, skinned_pose, solve_layer)
 
-DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE = range(5)       # the ``stats`` slots
-STAT_SLOTS = NON_FINITE + 1
+# The ``stats`` slots; HEM_PATH: the hem's mean move summed step by step (a cloth that keeps
+# moving on a still body, measures.RestlessWatch).
+DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE, HEM_PATH = range(6)
+STAT_SLOTS = HEM_PATH + 1
 
 
 class _Scratch(NamedTuple):
@@ -84,8 +86,10 @@ def advance(model, tuning, state, before, motion, out):
     dt_ns = motion.dt_ns
     dt = dt_ns * 1e-9
     t_sim = motion.t_sim
+    hem_before = np.empty((cols, 3))
     for step in range(motion.steps):
         t_sim += dt_ns
+        hem_before[:] = x[nv - cols:]
         _pose_skeleton(model, motion, t_sim, work, out.links)
         # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
         # vertex's offset from its column's top before the world share moves it.
@@ -129,9 +133,20 @@ def advance(model, tuning, state, before, motion, out):
                     for k in range(3):
                         x[i, k] += skin * (work.ride[i, k] - x[i, k])
         hood_step(out.links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp)
+        out.stats[HEM_PATH] += _mean_move(x[nv - cols:], hem_before)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         out.stats[NON_FINITE] = 1.0
     return t_sim
+
+
+@njit(cache=True)
+def _mean_move(now, before):
+    """Return the mean distance between two (K,3) sets of points."""
+    total = 0.0
+    for i in range(now.shape[0]):
+        total += np.sqrt((now[i, 0] - before[i, 0]) ** 2 + (now[i, 1] - before[i, 1]) ** 2
+                         + (now[i, 2] - before[i, 2]) ** 2)
+    return total / max(now.shape[0], 1)
 
 
 @njit(cache=True)
