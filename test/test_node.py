@@ -713,7 +713,7 @@ def test_a_live_session_replays_to_the_same_bones(harness, tmp_path):
     h.spin_until(lambda: h.c.inputs == 60)
     h.node.close()
     session = load_session(str(path))
-    assert session.setup.values['fabric.damping'] != 0.2       # the value at the start
+    assert session.setup.values.fabric.damping != 0.2       # the value at the start
     recorded = {m.log_time: m.data for m in read_messages(session.recording.path)[0]
                 if m.topic == '/tf'}
     assert len(recorded) == 60
@@ -721,7 +721,7 @@ def test_a_live_session_replays_to_the_same_bones(harness, tmp_path):
     pipeline = run_session(session, probe=lambda p, r, stamp, outs: same.extend(
         recorded[stamp] == data for key, data in outs if key == 'tf'))
     assert len(same) == 60 and all(same)
-    assert pipeline.values['fabric.damping'] == 0.2 and pipeline.sim.params.wind == (0, 5, 0)
+    assert pipeline.values.fabric.damping == 0.2 and pipeline.sim.params.wind == (0, 5, 0)
 
 
 def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, tmp_path):
