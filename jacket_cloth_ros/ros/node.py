@@ -369,8 +369,8 @@ class JacketClothNode(Node):
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
         if self.program == 'jacket_cloth_node':
-            # The bundle's own check: it refuses what rclpy lets through within a tolerance
-            # of a range's end, which the simulation would not take.
+            # The bundle the change makes must be one (_apply_parameters makes it, after the
+            # change is taken): its checks are those above, so it refuses nothing more.
             try:
                 self.characters[0].values.with_changes(self._values(params))
             except ValueError as e:

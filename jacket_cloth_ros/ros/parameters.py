@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The node's parameters: names, types, ranges and descriptions in one table."""
 
+import math
 import os
 import sys
 from dataclasses import fields
@@ -76,6 +77,8 @@ NODE_PARAMETERS = {
 
 
 MIN_MARKERS_RATE = 0.01
+# rclpy's Node.PARAM_REL_TOL: a double parameter this close to an end of its range is in it.
+RCLPY_REL_TOL = 1e-6
 BODY_CHOICES = ('auto', 'on', 'off')
 # The longest frame_prefix, world_frame or world_joint taken.
 MAX_NAME = 256
@@ -375,14 +378,16 @@ def typed_value(name: str, value: object, current: object, where: str,
     return value
 
 
-def value_and_reason(name: str, value: object, current: object,
-                     raw: str | None = None) -> tuple[object, str]:
+def value_and_reason(name: str, value: object, current: object, raw: str | None = None,
+                     rel_tol: float = 0.0) -> tuple[object, str]:
     """Return ``value`` typed as ``current``, and why it is not valid for ``name`` (or '').
 
     :param name: the parameter's name.
     :param value: the value given.
     :param current: a value of its type.
     :param raw: the text the value came from, shown in the reason; None: the value's repr.
+    :param rel_tol: a number this close (relative) to an end of its range is in it; rclpy
+        takes ``RCLPY_REL_TOL``.
     """
     shown = repr(raw) if raw is not None else repr(value)
     if isinstance(current, bool):
@@ -402,6 +407,7 @@ def value_and_reason(name: str, value: object, current: object,
         return value, f'{shown} is not a {type(current).__name__}'
     spec = NODE_PARAMETERS.get(name)
     rng = spec[2] if spec else FABRIC_RANGES.get(name[len('fabric.'):])
-    if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1]:
+    if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1] \
+            and not (rel_tol and any(math.isclose(value, end, rel_tol=rel_tol) for end in rng)):
         return value, f'{value} is outside [{rng[0]}, {rng[1]}]'
     return value, check_value(name, value)

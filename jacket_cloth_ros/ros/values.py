@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, fields, replace
 from ..core.fabric import Fabric
 from ..core.params import SIM_FIELDS, SimParams
 from ..recording.writer import Compression
-from .parameters import NODE_PARAMETERS, value_and_reason
+from .parameters import NODE_PARAMETERS, RCLPY_REL_TOL, value_and_reason
 
 _FABRIC_FIELDS = tuple(f.name for f in fields(Fabric))
 
@@ -35,7 +35,9 @@ class NodeValues:
     The fields' meanings, ranges and defaults are NODE_PARAMETERS' (the README's table);
     ``sim`` holds the simulation's parameters (``wind``, ``sim_rate``...: SimParams fields)
     and ``fabric`` the ``fabric.*`` values, the preset ``fabric_preset`` with its overrides.
-    A value that the node would refuse raises ValueError with the node's reason.
+    A value that the node would refuse raises ValueError with the node's reason; a number
+    within rclpy's tolerance of an end of its range (``RCLPY_REL_TOL``) is taken, as the node
+    takes it.
     """
 
     # Read at start (read-only parameters).
@@ -60,7 +62,8 @@ class NodeValues:
 
     def __post_init__(self) -> None:
         for name in _OWN:
-            value, reason = value_and_reason(name, getattr(self, name), _default(name))
+            value, reason = value_and_reason(name, getattr(self, name), _default(name),
+                                             rel_tol=RCLPY_REL_TOL)
             if reason:
                 raise ValueError(reason if reason.startswith(name) else f'{name}: {reason}')
             object.__setattr__(self, name, value)
@@ -72,7 +75,8 @@ class NodeValues:
         for name in _FABRIC_FIELDS:
             given = getattr(self.fabric, name)
             value, reason = value_and_reason('fabric.' + name, given,
-                                             1 if name == 'iterations' else 1.0)
+                                             1 if name == 'iterations' else 1.0,
+                                             rel_tol=RCLPY_REL_TOL)
             if reason:
                 raise ValueError(f'fabric.{name}: {reason}')
             if type(value) is not type(given):         # 2 for a float: 2.0, as rclpy has it
@@ -109,9 +113,9 @@ class NodeValues:
 
         The recording's ``parameters_json`` is this, so a replay reads what the node ran.
         """
-        out = {name: getattr(self, name) for name in _OWN}
-        for name in SIM_FIELDS:
-            value = getattr(self.sim, name)
+        out = {}
+        for name in NODE_PARAMETERS:        # in VALUE_NAMES' order
+            value = getattr(self.sim if name in SIM_FIELDS else self, name)
             out[name] = list(value) if isinstance(value, tuple) else value
         out.update(('fabric.' + name, getattr(self.fabric, name)) for name in _FABRIC_FIELDS)
         return out
