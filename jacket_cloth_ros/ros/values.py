@@ -17,7 +17,6 @@ from dataclasses import dataclass, field, fields, replace
 
 from ..core.fabric import Fabric
 from ..core.params import SIM_FIELDS, SimParams
-from ..recording.writer import Compression
 from .parameters import NODE_PARAMETERS, RCLPY_REL_TOL, value_and_reason
 
 _FABRIC_FIELDS = tuple(f.name for f in fields(Fabric))
@@ -119,11 +118,6 @@ class NodeValues:
             out[name] = list(value) if isinstance(value, tuple) else value
         out.update(('fabric.' + name, getattr(self.fabric, name)) for name in _FABRIC_FIELDS)
         return out
-
-    @property
-    def compression(self) -> Compression:
-        """``record_compression`` as its enum."""
-        return Compression.parse(self.record_compression, 'record_compression')
 
     def draws_body(self, has_visuals: bool) -> bool:
         """Tell whether the markers carry the body: ``markers_body``, auto without visuals.
