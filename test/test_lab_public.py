@@ -117,7 +117,7 @@ def test_a_profile_leaves_the_package_as_it_found_it():
     assert got['us']['step'] > 0 and got['us']['tf'] > 0 and got['us']['markers'] > 0
     assert got['markers_skinning_us'] > 0
     bones = bone_set(skeleton, load_rig(skeleton))
-    prefix = _defaults()[1]['frame_prefix']
+    prefix = _defaults().frame_prefix
     template = messages.tf_template(tuple(bones.names), tuple(bones.parents), prefix)
     assert 'encode' not in vars(template)
     outfits = [o for o in gc.get_objects() if isinstance(o, messages.Outfit)]
