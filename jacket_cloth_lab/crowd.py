@@ -441,7 +441,7 @@ def crowd_picture(png_path: str, at_s: float = 1.15) -> None:
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.ros.cdr import JointStateContent
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import CrowdPipeline, SessionPipeline
     from jacket_cloth_ros.tools.picture import draw_filmstrip, sim_frame
     fabrics = load_fabrics()
@@ -454,8 +454,8 @@ def crowd_picture(png_path: str, at_s: float = 1.15) -> None:
         else:
             skeleton = Skeleton(shipped_character_urdf())
             rig = load_rig(skeleton)
-        values = dict(default_values(fabrics[fabric]), fabric_preset=fabric)
-        crowd.add(SessionPipeline(skeleton, rig, fabrics, values, name, timing=False))
+        crowd.add(SessionPipeline(skeleton, rig, default_values(fabrics[fabric], fabric), name,
+                                  timing=False))
     rate, start = 60.0, 10 ** 10
     for k in range(int(at_s * rate) + 1):
         stamp = start + int(round(k / rate * 1e9))

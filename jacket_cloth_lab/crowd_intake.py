@@ -41,13 +41,13 @@ def intake_vs_process(skeleton: Skeleton, characters: int = 8, inputs: int = 600
     from jacket_cloth_ros.core.rig import load_rig
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.ros import cdr
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import CrowdPipeline, SessionPipeline
     fabrics = load_fabrics()
     values = default_values(fabrics['tweed_jacket'])
 
     def pipeline():
-        return SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
+        return SessionPipeline(skeleton, load_rig(skeleton), values, timing=False)
     lone = pipeline()
     crowds = {way: CrowdPipeline(1) for way in WAYS}
     for crowd in crowds.values():

@@ -88,10 +88,10 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.recording.writer import SessionRecorder
     from jacket_cloth_ros.ros import cdr
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
     fabrics = load_fabrics()
-    values = dict(default_values(fabrics['tweed_jacket']), **(overrides or {}))
+    values = default_values(fabrics['tweed_jacket']).with_changes(overrides or {})
     clock = StageClock()
     # The markers' share of publishing and their skinning (within the markers stage), timed
     # again apart (markers_cost).
@@ -99,7 +99,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
 
     def stage_timer(name, function):
         return (markers_clock if name == 'skinning' else clock).wrap(name, function)
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False,
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), values, timing=False,
                                stage_timer=stage_timer)
     read = clock.wrap('decode', cdr.JointStateReader().read)
     raws = []
@@ -153,7 +153,7 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
             'markers_publish_us': markers_clock.ns['publish'] / counted / 1e3,
             'markers_skinning_us': markers_clock.ns.get('skinning', 0) / counted / 1e3,
             'sweeps_per_input': sweeps / counted, 'substeps_per_input': substeps / counted,
-            'steps_per_input': values['sim_rate'] / INPUT_RATE}
+            'steps_per_input': values.sim.sim_rate / INPUT_RATE}
 
 
 def _no_write(*_: object) -> None:

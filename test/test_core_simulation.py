@@ -239,13 +239,13 @@ def _not_finite_once(bones):
 def test_the_pipeline_publishes_and_warns_for_bones_that_were_not_finite(skeleton, make_sim):
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.ros.cdr import JointStateContent
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
     from jacket_cloth_ros.ros import messages
     # Issue 35 item 5: it went out with no /tf and diagnostics ok.
     sim, names, pos = flattened_hem_sim(skeleton, make_sim)
     fabrics = load_fabrics()
-    pipe = SessionPipeline(skeleton, sim.rig, fabrics, default_values(fabrics['tweed_jacket']))
+    pipe = SessionPipeline(skeleton, sim.rig, default_values(fabrics['tweed_jacket']))
     pipe.sim.bones = _not_finite_once(pipe.sim.bones)
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.serialization import deserialize_message

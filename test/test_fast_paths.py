@@ -35,7 +35,7 @@ from jacket_cloth_ros.recording.definitions import ros2msg_schema
 from jacket_cloth_ros.recording.writer import SessionRecorder
 from jacket_cloth_ros.ros import cdr, messages
 from jacket_cloth_ros.ros.cdr_bounds import _Walker
-from jacket_cloth_ros.ros.parameters import default_values
+from jacket_cloth_ros.ros.values import default_values
 from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
 
 # Seconds that need 31 bits and nanoseconds that are not round: a stamp split wrongly shows.
@@ -87,8 +87,9 @@ def _time(stamp_ns):
 
 def _pipeline(skeleton, rig, timing=True, node_name='/jacket_cloth_node', **values):
     fabrics = load_fabrics()
-    return SessionPipeline(skeleton, rig, fabrics, {**default_values(fabrics['tweed_jacket']),
-                                                    **values}, node_name, timing)
+    return SessionPipeline(skeleton, rig,
+                           default_values(fabrics['tweed_jacket']).with_changes(values),
+                           node_name, timing)
 
 
 def _inputs(pipe, count, clip='walk', rate=60):

@@ -685,14 +685,14 @@ def test_fuzz_characters_files_load_or_name_the_file(tmp_path):
 
     from jacket_cloth_ros.core.fabric import load_fabric
     from jacket_cloth_ros.ros.characters import load_characters
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     rng = random.Random(SEED)
     folder = tmp_path / 'config'
     shutil.copytree(os.path.dirname(shipped('crowd.yaml')), folder)  # its files beside it
     with open(shipped('crowd.yaml'), encoding='utf-8') as f:
         text = f.read()
     path = folder / 'fuzz.yaml'
-    known = set(default_values(load_fabric('tweed_jacket')))
+    known = set(default_values(load_fabric('tweed_jacket')).by_name())
     for case in _until(SECONDS):
         if rng.random() < 0.5:
             data = yaml.safe_load(text)
@@ -705,8 +705,8 @@ def test_fuzz_characters_files_load_or_name_the_file(tmp_path):
         try:
             characters = load_characters(str(path))
             for c in characters:        # what loads is a character the node can run
-                assert set(c.values) <= known, (SEED, sorted(set(c.values) - known))
-            prefixes = [c.values['frame_prefix'] for c in characters]
+                assert set(c.values.by_name()) <= known, (SEED, c.values)
+            prefixes = [c.values.frame_prefix for c in characters]
             assert len(prefixes) == len(set(prefixes)), (SEED, prefixes)
         except ConfigError as e:
             message = str(e)

@@ -117,7 +117,7 @@ def test_a_profile_leaves_the_package_as_it_found_it():
     assert got['us']['step'] > 0 and got['us']['tf'] > 0 and got['us']['markers'] > 0
     assert got['markers_skinning_us'] > 0
     bones = bone_set(skeleton, load_rig(skeleton))
-    prefix = _defaults()[1]['frame_prefix']
+    prefix = _defaults().frame_prefix
     template = messages.tf_template(tuple(bones.names), tuple(bones.parents), prefix)
     assert 'encode' not in vars(template)
     outfits = [o for o in gc.get_objects() if isinstance(o, messages.Outfit)]
@@ -127,9 +127,8 @@ def test_a_profile_leaves_the_package_as_it_found_it():
 
 def _defaults():
     from jacket_cloth_ros.core.fabric import load_fabrics
-    from jacket_cloth_ros.ros.parameters import default_values
-    fabrics = load_fabrics()
-    return fabrics, default_values(fabrics['tweed_jacket'])
+    from jacket_cloth_ros.ros.values import default_values
+    return default_values(load_fabrics()['tweed_jacket'])
 
 
 def test_a_timed_pipeline_gives_the_same_messages_and_times_each_stage():
@@ -147,8 +146,8 @@ def test_a_timed_pipeline_gives_the_same_messages_and_times_each_stage():
             calls[name] += 1
             return stage(*args, **kwargs)
         return counted
-    plain = SessionPipeline(skeleton, rig, *_defaults(), timing=False)
-    timed = SessionPipeline(skeleton, rig, *_defaults(), timing=False, stage_timer=timer)
+    plain = SessionPipeline(skeleton, rig, _defaults(), timing=False)
+    timed = SessionPipeline(skeleton, rig, _defaults(), timing=False, stage_timer=timer)
     read = JointStateReader().read
     for stamp, msg in clip_messages(skeleton, 'walk', 60.0, 1.5, 10 ** 10):
         content = read(serialize_message(msg))
@@ -173,12 +172,12 @@ def test_a_timed_crowd_gives_the_same_messages_and_times_its_compiled_call():
             return call(*args)
         return counted
     crowds = CrowdPipeline(threads=1), CrowdPipeline(threads=1)
-    crowds[0].add(SessionPipeline(skeleton, rig, *_defaults(), timing=False))
+    crowds[0].add(SessionPipeline(skeleton, rig, _defaults(), timing=False))
     with pytest.raises(ValueError, match='fewer than two'):
         crowds[0].steps.time_stages(timer)          # one character: no compiled call yet
     for crowd in crowds:
         while len(crowd.pipelines) < 2:
-            crowd.add(SessionPipeline(skeleton, rig, *_defaults(), timing=False))
+            crowd.add(SessionPipeline(skeleton, rig, _defaults(), timing=False))
     crowds[1].steps.time_stages(timer)
     read = JointStateReader().read
     for stamp, msg in clip_messages(skeleton, 'walk', 60.0, 0.5, 10 ** 10):

@@ -265,6 +265,34 @@ def test_parameters_validated_and_applied_live_without_reset(harness):
     assert h.c.sim.resets == resets
 
 
+def test_a_live_parameter_change_reaches_the_simulation_through_one_bundle(harness):
+    # Issue 49 item 3: a character's values were held four times (rclpy's, the spec's dict,
+    # the pipeline's dict, the simulation's). Now rclpy's and one bundle, whose SimParams and
+    # Fabric are the simulation's own; a change replaces the bundle whole.
+    h = harness()
+    before = h.c.pipeline.values
+    assert h.c.values is before
+    assert h.c.sim.params is before.sim and h.c.sim.fabric is before.fabric
+    ok = h.node.set_parameters([Parameter('wind', value=[2.0, 0.0, 0.0]),
+                                Parameter('fabric.damping', value=0.3),
+                                Parameter('markers_rate', value=10.0)])
+    assert all(r.successful for r in ok)
+    after = h.c.pipeline.values
+    assert after is not before and h.c.values is after
+    assert h.c.sim.params is after.sim and h.c.sim.fabric is after.fabric
+    assert after.sim.wind == (2.0, 0.0, 0.0) and after.fabric.damping == 0.3
+    assert after.markers_rate == 10.0 and before.markers_rate == 30.0
+    # A node value alone: the simulation keeps the objects it runs on.
+    assert h.node.set_parameters([Parameter('markers_debug', value=True)])[0].successful
+    assert h.c.values.markers_debug and h.c.sim.params is after.sim
+    # Refused as before, with the reason the bundle gives for the same value.
+    bad = h.node.set_parameters([Parameter('markers_body', value='sideways')])[0]
+    assert not bad.successful and bad.reason == 'markers_body must be one of auto, on, off'
+    with pytest.raises(ValueError, match=f'^{bad.reason}$'):
+        h.c.values.with_changes({'markers_body': 'sideways'})
+    assert h.c.values.markers_body == 'auto'
+
+
 def test_a_huge_joint_name_is_cut_in_the_log_and_a_huge_frame_refused(harness, capfd):
     # A megabyte joint name made a megabyte log line; a megabyte frame_prefix made every /tf
     # tens of megabytes.
@@ -713,7 +741,7 @@ def test_a_live_session_replays_to_the_same_bones(harness, tmp_path):
     h.spin_until(lambda: h.c.inputs == 60)
     h.node.close()
     session = load_session(str(path))
-    assert session.setup.values['fabric.damping'] != 0.2       # the value at the start
+    assert session.setup.values.fabric.damping != 0.2       # the value at the start
     recorded = {m.log_time: m.data for m in read_messages(session.recording.path)[0]
                 if m.topic == '/tf'}
     assert len(recorded) == 60
@@ -721,7 +749,7 @@ def test_a_live_session_replays_to_the_same_bones(harness, tmp_path):
     pipeline = run_session(session, probe=lambda p, r, stamp, outs: same.extend(
         recorded[stamp] == data for key, data in outs if key == 'tf'))
     assert len(same) == 60 and all(same)
-    assert pipeline.values['fabric.damping'] == 0.2 and pipeline.sim.params.wind == (0, 5, 0)
+    assert pipeline.values.fabric.damping == 0.2 and pipeline.sim.params.wind == (0, 5, 0)
 
 
 def test_a_live_session_whose_stamps_go_back_replays_to_the_same_bones(harness, tmp_path):

@@ -87,8 +87,7 @@ def _inputs(skeleton, clip, count, garbage=False, x=0.0, first=0):
 def _alone(spec, urdf, raws, viewer=None):
     """The /tf a character's own pipeline gives for these inputs, alone (and this viewer)."""
     skeleton = Skeleton(urdf)
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton, spec.rig),
-                               load_fabrics(spec.fabric_file), spec.values, spec.name)
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton, spec.rig), spec.values, spec.name)
     if viewer is not None:
         pipeline.set_viewer(np.array(viewer))
     reader = cdr.JointStateReader()
@@ -313,8 +312,8 @@ def test_a_nested_group_in_a_characters_file_is_applied_as_in_a_params_file(tmp_
     path.write_text('characters: [{name: a, fabric: down_jacket, '
                     'parameters: {fabric: {damping: 0.2}, markers_rate: 5.0}}]')
     [spec] = load_characters(str(path))
-    assert spec.values['fabric.damping'] == 0.2 and spec.values['markers_rate'] == 5.0
-    assert spec.values['fabric_preset'] == 'down_jacket'
+    assert spec.values.fabric.damping == 0.2 and spec.values.markers_rate == 5.0
+    assert spec.values.fabric_preset == 'down_jacket'
 
 
 def test_slices_of_a_crowd_cover_every_character_once():
@@ -334,7 +333,7 @@ def test_copies_are_characters_of_their_own(tmp_path):
     specs = load_characters(str(path))
     # The names docs/crowd.md gives, <name>_0 .. <name>_N-1, unpadded past 10 (issue 48).
     assert [s.name for s in specs] == [f'walker_{k}' for k in range(12)]
-    assert specs[11].values['frame_prefix'] == 'walker_11/'
+    assert specs[11].values.frame_prefix == 'walker_11/'
     assert specs[1].namespace == '/walker_1'
     assert len({s.namespace for s in specs}) == 12
     assert np.all([s.urdf == specs[0].urdf for s in specs])
@@ -685,13 +684,13 @@ def test_a_crowd_takes_a_new_name_list_object_each_message_the_steady_way():
     """rclpy's own deserialisation makes a new name list per message: the crowd still takes
     them the steady way; a list that really changes each message is never armed on (that
     cost more than the input's steps), and every character's /tf stays what it is alone."""
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import CrowdPipeline
     skeleton = Skeleton(shipped_character_urdf())
     fabrics = load_fabrics()
 
     def pipeline():
-        return SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+        return SessionPipeline(skeleton, load_rig(skeleton),
                                default_values(fabrics['tweed_jacket']), timing=False)
     crowd, alone = CrowdPipeline(1), [pipeline(), pipeline()]
     for _ in alone:
@@ -716,14 +715,14 @@ def test_an_inputs_markers_asked_for_after_its_character_stepped_on_are_refused(
     once when its character has another input in the batch: asked for after that input
     instead, they would describe its state silently; they are refused. Made at once, they are
     what the character alone makes."""
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import CrowdPipeline
     skeleton = Skeleton(shipped_character_urdf())
     fabrics = load_fabrics()
-    values = dict(default_values(fabrics['tweed_jacket']), markers_rate=240.0)
+    values = default_values(fabrics['tweed_jacket']).with_changes({'markers_rate': 240.0})
 
     def pipeline():
-        return SessionPipeline(skeleton, load_rig(skeleton), fabrics, values, timing=False)
+        return SessionPipeline(skeleton, load_rig(skeleton), values, timing=False)
     for characters in (1, 2):
         crowd, alone = CrowdPipeline(1), pipeline()
         for _ in range(characters):

@@ -115,3 +115,55 @@ def test_a_name_or_path_with_a_control_character_is_refused(name, char):
     assert reason.startswith(f'{name} holds a control character (U+{ord(char):04X}'), reason
     assert char not in reason
     assert check_value(name, 'npc1/ab') == ''
+
+
+def _bundle():
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.ros.values import default_values
+    return default_values(load_fabrics()['tweed_jacket'])
+
+
+@pytest.mark.parametrize('name, value', [
+    ('markers_body', 'sideways'), ('record_compression', 'gzip'), ('markers_rate', 1e-300),
+    ('frame_prefix', '/npc1/'), ('world_frame', ''), ('world_joint', 'a\nb'),
+    ('wind', [1e308, 0.0, 0.0]), ('stretch_limit', 'glue'), ('sim_rate', float('nan'))])
+def test_a_character_bundle_refuses_a_bad_value_with_the_nodes_reason(name, value):
+    # Issue 49 item 3: the values are held once, as one checked bundle; it refuses what the
+    # node refuses, saying why as the node's parameter callback does (check_value).
+    values = _bundle()
+    reason = check_value(name, value)
+    assert reason
+    with pytest.raises(ValueError) as e:
+        values.with_changes({name: value})
+    assert str(e.value) in (reason, f'{name}: {reason}')
+    with pytest.raises(ValueError, match='outside'):      # its range too, as rclpy's
+        values.with_changes({'fabric.damping': 2.0})
+    with pytest.raises(ValueError, match='not a parameter of a character'):
+        values.with_changes({'fabric': 'veil'})
+
+
+def test_a_character_bundle_is_typed_immutable_and_changed_whole():
+    import dataclasses
+
+    from jacket_cloth_ros.ros.values import VALUE_NAMES, NodeValues
+    values = _bundle()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        values.markers_rate = 5.0
+    # Every parameter of a character is a field: the node's own typed, sim and fabric once.
+    own = {f.name for f in dataclasses.fields(NodeValues)} - {'sim', 'fabric'}
+    assert own == set(NODE_PARAMETERS) - set(SIM_FIELDS)
+    assert list(values.by_name()) == list(VALUE_NAMES)
+    changed = values.with_changes({'markers_rate': 10, 'fabric.iterations': 4,
+                                   'wind': [1, 0, 0]})
+    assert changed.markers_rate == 10.0 and isinstance(changed.markers_rate, float)
+    assert changed.fabric.iterations == 4 and changed.sim.wind == (1.0, 0.0, 0.0)
+    assert values.markers_rate == 30.0 and values.sim.wind == (0.0, 0.0, 0.0)
+    # A part not changed is the same object: the simulation keeps its SimParams and Fabric.
+    node_only = values.with_changes({'markers_debug': True})
+    assert node_only.sim is values.sim and node_only.fabric is values.fabric
+    # What a recording holds: the names, and arrays as lists (parameters_json).
+    by_name = changed.by_name()
+    assert by_name['wind'] == [1.0, 0.0, 0.0] and by_name['fabric.iterations'] == 4
+    assert values.with_changes(by_name) == changed
+    # rclpy takes a double within its tolerance of a range's end: the bundle does too.
+    assert values.with_changes({'markers_rate': 240.0001}).markers_rate == 240.0001

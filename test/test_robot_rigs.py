@@ -334,7 +334,7 @@ def test_a_massless_fixed_root_is_the_world_not_a_bone():
     from jacket_cloth_ros.core.skeleton import Skeleton
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
     from jacket_cloth_ros.core.fabric import load_fabric
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     with open(fetched('g1_29dof_rev_1_0.urdf'), encoding='utf-8') as f:
         text = f.read()
     bolted = text.replace('<link name="pelvis">', '<link name="world"/><joint name="bolt" '
@@ -348,14 +348,13 @@ def test_a_massless_fixed_root_is_the_world_not_a_bone():
     assert len(body_proxy(sk).capsule_link) == len(body_proxy(plain).capsule_link)
     rig, lines, body = propose(sk)
     assert _chosen(lines)['pelvis'] == 'pelvis' and 'world' not in _rig_links(rig)
-    values = default_values(load_fabric('tweed_jacket'))
-    values['publish_world_tf'] = True
+    values = default_values(load_fabric('tweed_jacket')).with_changes(
+        {'publish_world_tf': True})
     pipeline = SessionPipeline(sk, Rig(yaml.safe_load(to_yaml(rig, lines, 'g1', body)), sk),
-                               {'tweed_jacket': load_fabric('tweed_jacket')}, values)
+                               values)
     assert pipeline.root_is_world_frame()
-    values['frame_prefix'] = 'npc1/'        # npc1/world is a frame of its own: published
-    assert not SessionPipeline(sk, pipeline.sim.rig, {'tweed_jacket': load_fabric(
-        'tweed_jacket')}, values).root_is_world_frame()
+    values = values.with_changes({'frame_prefix': 'npc1/'})    # npc1/world: a frame of its own
+    assert not SessionPipeline(sk, pipeline.sim.rig, values).root_is_world_frame()
 
 
 def test_an_arm_that_ends_at_the_elbow_gets_a_forearm_sleeve_to_the_links_end(tmp_path):

@@ -156,7 +156,7 @@ def _node_recording(path, stamps, clip='walk', rate=60.0):
     from jacket_cloth_ros.motion.clips import joint_state_content
     from jacket_cloth_ros.recording.writer import SessionRecorder
     from jacket_cloth_ros.ros.cdr import JointStateReader
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline, session_topics
     texts = {}
     for name in ('character.urdf', 'jacket_rig.yaml', 'fabrics.yaml'):
@@ -165,13 +165,13 @@ def _node_recording(path, stamps, clip='walk', rate=60.0):
     skeleton = Skeleton(texts['character.urdf'])
     fabrics = load_fabrics()
     values = default_values(fabrics['tweed_jacket'])
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics, values)
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton), values)
     topics = session_topics()
     recorder = SessionRecorder(str(path), compression='lz4')
     for topic, kind, qos in topics.values():
         recorder.add_topic(topic, kind, qos)
     recorder.add_session_config(texts['character.urdf'], texts['jacket_rig.yaml'],
-                                texts['fabrics.yaml'], values)
+                                texts['fabrics.yaml'], values.by_name())
     reader = JointStateReader()
     for k, stamp in enumerate(stamps):
         names, pos = joint_state_content(skeleton.joint_names, clip, k / rate)
@@ -455,17 +455,16 @@ def test_a_live_frame_prefix_change_renames_the_bones_on_the_next_tf(make_sim):
     from tf2_msgs.msg import TFMessage
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.motion.clips import joint_state_content
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
     from jacket_cloth_ros.ros.cdr import JointStateContent
     sim = make_sim()
     fabrics = load_fabrics()
-    pipe = SessionPipeline(sim.skeleton, sim.rig, fabrics,
-                           default_values(fabrics['tweed_jacket']))
+    pipe = SessionPipeline(sim.skeleton, sim.rig, default_values(fabrics['tweed_jacket']))
     names, pos = joint_state_content(sim.skeleton.joint_names, 'walk', 0.0)
     frames = []
     for k, prefix in enumerate(('', 'left/')):
-        pipe.apply({'frame_prefix': prefix})
+        pipe.apply(pipe.values.with_changes({'frame_prefix': prefix}))
         stamp = 10 ** 9 + k * 10 ** 7
         _, outputs = pipe.on_joint_state(JointStateContent(stamp, names, pos), stamp)
         frames.append(deserialize_message(dict(outputs)['tf'], TFMessage).transforms[0])
@@ -478,13 +477,12 @@ def test_two_sources_on_different_clocks_keep_the_output_rates(make_sim):
     # input (issue 38): each clock keeps its own grid, at the rates set.
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.motion.clips import joint_state_content
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
     from jacket_cloth_ros.ros.cdr import JointStateContent
     sim = make_sim()
     fabrics = load_fabrics()
-    pipe = SessionPipeline(sim.skeleton, sim.rig, fabrics,
-                           default_values(fabrics['tweed_jacket']))
+    pipe = SessionPipeline(sim.skeleton, sim.rig, default_values(fabrics['tweed_jacket']))
     counts = {'tf': 0, 'markers': 0, 'diagnostics': 0}
     for k in range(120):                    # 2 s of each clock, at 60 Hz, interleaved
         names, pos = joint_state_content(sim.skeleton.joint_names, 'walk', k / 60)
@@ -536,12 +534,12 @@ from jacket_cloth_ros.core.fabric import load_fabrics
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.ros import cdr, marker_kernel
-from jacket_cloth_ros.ros.parameters import default_values
+from jacket_cloth_ros.ros.values import default_values
 from jacket_cloth_ros.ros.pipeline import SessionPipeline
 from jacket_cloth_ros.motion.messages import clip_messages
 sk = Skeleton(open(shipped('character.urdf')).read())
 fabrics = load_fabrics()
-pipe = SessionPipeline(sk, load_rig(sk), fabrics, default_values(fabrics['tweed_jacket']))
+pipe = SessionPipeline(sk, load_rig(sk), default_values(fabrics['tweed_jacket']))
 modules = (cloth, colliders, hood, pose, sampling, step, cdr, marker_kernel)
 def loaded():
     return {(m.__name__, n) for m in modules for n, f in vars(m).items()
@@ -649,9 +647,9 @@ def test_overrides_read_numbers_as_numbers_and_name_unknown_presets(clip, tmp_pa
     # A preset named with -p seeds the fabric.* values, as --fabric does.
     session = load_session(str(clip), overrides=['fabric_preset:=veil'])
     veil = session.setup.fabrics['veil']
-    assert session.setup.values['fabric.damping'] == veil.damping
+    assert session.setup.values.fabric.damping == veil.damping
     session = load_session(str(clip), overrides=['fabric_preset:=veil', 'fabric.damping:=0.3'])
-    assert session.setup.values['fabric.damping'] == 0.3
+    assert session.setup.values.fabric.damping == 0.3
 
 
 def test_diagnosticsquantiles_are_numpys_on_lists_of_any_length():

@@ -15,7 +15,8 @@ from jacket_cloth_ros.core.fabric import load_fabrics
 from jacket_cloth_ros.core.transforms import quat_to_matrix
 from jacket_cloth_ros.motion.clips import joint_state_content
 from jacket_cloth_ros.ros.cdr import JointStateReader, joint_state
-from jacket_cloth_ros.ros.parameters import NODE_PARAMETERS, default_values
+from jacket_cloth_ros.ros.parameters import NODE_PARAMETERS
+from jacket_cloth_ros.ros.values import default_values
 from jacket_cloth_ros.ros.pipeline import SessionPipeline
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -24,8 +25,8 @@ VIEW = os.path.join(ROOT, 'config', 'view')
 
 def _tf_messages(skeleton, rig, rate=60, **values):
     fabrics = load_fabrics()
-    pipe = SessionPipeline(skeleton, rig, fabrics, {**default_values(fabrics['tweed_jacket']),
-                                                    **values})
+    pipe = SessionPipeline(skeleton, rig,
+                           default_values(fabrics['tweed_jacket']).with_changes(values))
     reader, sent = JointStateReader(), []
     for k in range(40):                 # the run clip moves the character through the world
         names, pos = joint_state_content(skeleton.joint_names, 'run', k / rate)

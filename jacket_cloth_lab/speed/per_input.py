@@ -24,12 +24,12 @@ def input_vs_kernel(skeleton: Skeleton, seconds: float = 10.0, paced_s: float = 
     :param paced_s: how long it then runs paced: the same pipeline fed at 120 Hz with the
         wait slept away, the cost a live node's callback sees.
     """
-    from jacket_cloth_ros.ros.parameters import default_values
+    from jacket_cloth_ros.ros.values import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
     from jacket_cloth_ros.motion.messages import clip_messages
     fabrics = load_fabrics()
     rig = rig_at_grid(skeleton, 9, 12)
-    pipe = SessionPipeline(skeleton, rig, fabrics, default_values(fabrics['tweed_jacket']),
+    pipe = SessionPipeline(skeleton, rig, default_values(fabrics['tweed_jacket']),
                            timing=False)
     messages = list(clip_messages(skeleton, 'walk', RATE, seconds + paced_s, 10 ** 10))
     split = int(seconds * RATE)

@@ -10,6 +10,7 @@ and its channels in the recording. ``CrowdInputs`` takes the JointStates of all 
 
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from rclpy.callback_groups import CallbackGroup
@@ -35,6 +36,7 @@ if TYPE_CHECKING:           # for the annotations only
     from ..core.simulation import JacketSimulation, StepReport
     from ..recording.writer import SessionRecorder
     from .pipeline import SessionPipeline
+    from .values import NodeValues
 
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE, history=HistoryPolicy.KEEP_LAST)
@@ -123,6 +125,21 @@ class Character:
         self._sequences = {}            # publisher gid -> the last sequence number it sent
 
     @property
+    def values(self) -> 'NodeValues':
+        """Return its parameter values: its pipeline's once loaded, else its set-up's."""
+        return self.spec.values if self.pipeline is None else self.pipeline.values
+
+    def set_values(self, values: 'NodeValues') -> None:
+        """Take changed parameter values: its pipeline's from the next input, once loaded.
+
+        :param values: its values now, made from :attr:`values`.
+        """
+        if self.pipeline is None:
+            self.spec = replace(self.spec, values=values)
+        else:
+            self.pipeline.apply(values)
+
+    @property
     def sim(self) -> 'JacketSimulation | None':
         return self.pipeline.sim if self.pipeline else None
 
@@ -167,7 +184,7 @@ class Character:
         self.description = node.create_subscription(
             String, self.names['robot_description'], lambda raw: on_description(self, raw),
             LATCHED, raw=True)
-        self.fallback = node.create_timer(self.spec.values['robot_description_timeout'],
+        self.fallback = node.create_timer(self.values.robot_description_timeout,
                                           lambda: on_timeout(self), clock=wall)
 
     def late_description(self) -> 'bytes | None':
@@ -230,7 +247,7 @@ class Character:
         for key in ('joint_states', 'markers'):
             recorder.add_topic(*self.topics[key])
         recorder.add_session_config(
-            self.urdf, *self.setup_texts, self.pipeline.values, self.config_name,
+            self.urdf, *self.setup_texts, self.values.by_name(), self.config_name,
             self.pipeline.output_phase, self.pipeline.node_name)
 
 

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 
 from ..core.config import ConfigError, Section, config_dir, load_yaml, shown
 from ..core.fabric import load_fabrics
-from .parameters import default_values, typed_value
+from .parameters import typed_value
+from .values import NodeValues, default_values
 
 MAX_CHARACTERS = 4096
 # The character's own keys: set there, not under ``parameters``; ``record`` is the crowd's.
@@ -44,7 +45,7 @@ class CharacterSpec:
     urdf: str | None            # a URDF file, or None: the robot_description topic
     rig: str | None             # a rig file, or None: the shipped rig
     fabric_file: str | None     # a fabrics file, or None: the shipped presets
-    values: dict                # every parameter's value, as a node's (frame_prefix...)
+    values: NodeValues          # its parameters' values, as a node's, until it is loaded
 
     @property
     def namespace(self) -> str:
@@ -124,18 +125,19 @@ def load_characters(path: str) -> list[CharacterSpec]:
                               f'{", ".join(fabrics)})')
         prefix = keys.get('frame_prefix')
         parameters = own.section('parameters', {})
-        values = default_values(fabrics[fabric])
-        values['fabric_preset'] = fabric
+        values = default_values(fabrics[fabric], fabric)
+        known = values.by_name()        # the file names them: typed at this boundary
+        given = {}
         for key, value in _flat(parameters._data):
-            if key not in values or key in _NOT_PARAMETERS:
+            if key not in known or key in _NOT_PARAMETERS:
                 raise ConfigError(f'{where}.parameters.{shown(key)}: not a character\'s '
                                   'parameter' + (' (a key of the character itself)'
                                                  if key in _NOT_PARAMETERS else ''))
             try:
-                values[key] = typed_value(key, value, values[key],
-                                          f'{where}.parameters.{key}')
+                given[key] = typed_value(key, value, known[key], f'{where}.parameters.{key}')
             except ValueError as e:
                 raise ConfigError(str(e)) from None
+        values = values.with_changes(given)
         for k in range(count):
             # Unpadded, as docs/crowd.md says: a publisher's loop names /walker_{k}, and a
             # count grown past 10 renames no character (padding made walker_1 walker_01).
@@ -143,18 +145,17 @@ def load_characters(path: str) -> list[CharacterSpec]:
             if each in names:
                 raise ConfigError(f'{where}.name: {shown(each)} is there twice')
             names.add(each)
-            mine = dict(values)
-            mine['frame_prefix'] = each + '/' if prefix is None else str(prefix)
             try:
-                mine['frame_prefix'] = typed_value('frame_prefix', mine['frame_prefix'], '',
-                                                   f'{where}.frame_prefix')
+                frame_prefix = typed_value('frame_prefix', each + '/' if prefix is None
+                                           else str(prefix), '', f'{where}.frame_prefix')
             except ValueError as e:
                 raise ConfigError(str(e)) from None
+            mine = values.with_changes({'frame_prefix': frame_prefix})
             # One prefix, one tree on /tf: two characters would publish the same frames.
-            other = prefixes.setdefault(mine['frame_prefix'], each)
+            other = prefixes.setdefault(frame_prefix, each)
             if other != each:
                 raise ConfigError(f'{where}.frame_prefix: characters {shown(other)} and '
-                                  f'{shown(each)} both have {shown(mine["frame_prefix"])} (the '
+                                  f'{shown(each)} both have {shown(frame_prefix)} (the '
                                   'same frames on /tf): give each its own')
             out.append(CharacterSpec(each, urdf, rig, fabric_file, mine))
             if len(out) > MAX_CHARACTERS:

@@ -47,6 +47,7 @@ from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PRE
                          unknown_reason)
 from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
 from .recording import NodeRecording
+from .values import VALUE_NAMES, default_values
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
 from .warm import kernels_cached
 from .warm import warm_kernels
@@ -205,8 +206,12 @@ class JacketClothNode(Node):
         self._refuse_unknown()
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        try:
+            values = default_values(fabrics[preset], preset).with_changes(self._values())
+        except ValueError as e:     # within rclpy's tolerance of a range, outside it
+            raise ConfigError(f'parameter {e}') from None
         spec = CharacterSpec(self.get_name(), None, self._p('rig_file') or None, fabric_file,
-                             self._values())
+                             values)
         # Relative, as robot_state_publisher publishes it: under a namespace the node hears
         # its own character's description, not another's.
         names = {'joint_states': 'joint_states', 'robot_description': 'robot_description',
@@ -244,17 +249,18 @@ class JacketClothNode(Node):
             self._fabrics[path] = load_fabrics(path)
         return self._fabrics[path]
 
-    def _values(self):
-        """Every parameter's current value, by name (arrays as lists)."""
-        out = {}
-        for name in self.list_parameters([], 0).names:
-            if name in NODE_PARAMETERS or name.startswith('fabric.'):
-                p = self.get_parameter(name)
-                out[name] = list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
-        return out
+    def _values(self, params=None):
+        """Return a character's parameters by name, arrays as lists: rclpy's, or ``params``.
+
+        Only the character's (VALUE_NAMES), not rclpy's own (``use_sim_time``...).
+        """
+        if params is None:
+            params = [self.get_parameter(n) for n in VALUE_NAMES if self.has_parameter(n)]
+        return {p.name: list(p.value) if p.type_ == Parameter.Type.DOUBLE_ARRAY else p.value
+                for p in params if p.name in _CHARACTER_NAMES}
 
     def _diagnostics_rate(self):
-        return max((c.spec.values['diagnostics_rate'] for c in self.characters), default=1.0)
+        return max((c.values.diagnostics_rate for c in self.characters), default=1.0)
 
     # -- characters ---------------------------------------------------------------------------
     def _on_description(self, c, raw):
@@ -309,8 +315,8 @@ class JacketClothNode(Node):
             skeleton = Skeleton(urdf)
             self._models[key] = (skeleton, load_rig(skeleton, spec.rig))
         skeleton, rig = self._models[key]
-        pipeline = SessionPipeline(skeleton, rig, self._fabrics_of(spec.fabric_file),
-                                   spec.values, self._diagnostics_owner(c), timing=True,
+        pipeline = SessionPipeline(skeleton, rig,
+                                   c.values, self._diagnostics_owner(c), timing=True,
                                    output_phase=spread_phase(len(self.crowd.pipelines)))
         # frame_prefix goes on bones and links alike, so only the rig's names can clash.
         clash = set(pipeline.sim.bone_names) & set(skeleton.link_names)
@@ -326,7 +332,7 @@ class JacketClothNode(Node):
         c.source = source
         for line in pipeline.sim.faults.rig:        # the rig's own, before any input
             self.get_logger().warning(c.label + line)
-        if spec.values['publish_world_tf'] and pipeline.root_is_world_frame():
+        if c.values.publish_world_tf and pipeline.root_is_world_frame():
             self.get_logger().info(
                 f'{c.label}the URDF root {pipeline.root_frame()!r} is world_frame itself: '
                 'publish_world_tf publishes no transform to it (the world is not its own child)')
@@ -362,6 +368,13 @@ class JacketClothNode(Node):
                 (self.recording.refusal(p.value) if p.name == 'record' else '')
             if reason:
                 return SetParametersResult(successful=False, reason=reason)
+        if self.program == 'jacket_cloth_node':
+            # The bundle the change makes must be one (_apply_parameters makes it, after the
+            # change is taken): its checks are those above, so it refuses nothing more.
+            try:
+                self.characters[0].values.with_changes(self._values(params))
+            except ValueError as e:
+                return SetParametersResult(successful=False, reason=str(e))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, params):
@@ -369,15 +382,14 @@ class JacketClothNode(Node):
         names = {p.name for p in params}
         if 'record' in names and self.recording.needs_open(self._p('record')):
             self._record_to(self._p('record'))
-        values = self._values()
-        changes = {n: values[n] for n in names if n in values}
         c = self.characters[0]
-        c.spec.values.update(changes)
+        # The character's bundle made anew from rclpy's values (checked by
+        # _validate_parameters), handed whole to its pipeline once it has one.
+        c.set_values(c.values.with_changes(self._values(params)))
         if 'diagnostics_rate' in names:
             self._diag_timer.timer_period_ns = int(1e9 / self._diagnostics_rate())
         if c.pipeline is None:
             return
-        c.pipeline.apply(changes)
         # Recorded at the last input's stamp: a replay applies them after the same input.
         stamp = self._last_input_stamp(0)
         self.recording.write(self._topics['parameter_events'][0], cdr.parameter_event(
@@ -464,7 +476,7 @@ class JacketClothNode(Node):
         point.
         """
         self.received['viewer'] += 1
-        frames = sorted({c.spec.values['world_frame'] for c in self.characters})
+        frames = sorted({c.values.world_frame for c in self.characters})
         readings = [read_viewer(raw, frame) for frame in frames]
         if all(r.position is None for r in readings):
             self.refused['viewer'] += 1
@@ -476,7 +488,7 @@ class JacketClothNode(Node):
             if reading.position is None:
                 continue
             for c in self.characters:
-                if c.spec.values['world_frame'] == frame:
+                if c.values.world_frame == frame:
                     c.viewer = reading.position
                     if c.pipeline is not None:
                         c.pipeline.set_viewer(reading.position)
@@ -577,7 +589,7 @@ class JacketClothNode(Node):
             # Due when none went out since the last tick and its own period is (nearly) over:
             # 1.2 periods since the last ones halved the rate (each tick came one period on).
             if c.diag_wall > since or \
-                    now - c.diag_wall < 1.0 / c.spec.values['diagnostics_rate'] - tick / 2:
+                    now - c.diag_wall < 1.0 / c.values.diagnostics_rate - tick / 2:
                 continue
             last = c.sim.last
             stamp_ns = last.stamp_ns if last else clock_ns
@@ -620,6 +632,7 @@ class JacketClothNode(Node):
             f'character it runs (from {c.source}); restart the node to take it')
 
 
+_CHARACTER_NAMES = frozenset(VALUE_NAMES)
 # CDR encapsulation (4 bytes) and the header's stamp (8): what follows is what diagnostics say.
 _DIAG_STAMP_END = 12
 

@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """The node's parameters: names, types, ranges and descriptions in one table."""
 
+import math
 import os
 import sys
 from dataclasses import fields
@@ -10,7 +11,7 @@ from rcl_interfaces.msg import ParameterType as T
 
 from ..core.config import control_character
 from ..core.fabric import FABRIC_RANGES, Fabric
-from ..core.params import SIM_FIELDS, SimParams, check_sim_value
+from ..core.params import SIM_FIELDS, check_sim_value
 from ..recording.writer import Compression
 
 # The ROS parameter type of each SimParams field's Python type.
@@ -32,9 +33,6 @@ def _sim_parameters():
         out[name] = (kind, default, rng, False, f.metadata['doc'])
     return out
 
-
-# Parameters that map onto SimParams; the rest are the node's own or read at start.
-SIM_KEYS = tuple(SIM_FIELDS)
 
 # name: (type, default, (lo, hi) or None, read_only, description)
 NODE_PARAMETERS = {
@@ -79,6 +77,8 @@ NODE_PARAMETERS = {
 
 
 MIN_MARKERS_RATE = 0.01
+# rclpy's Node.PARAM_REL_TOL: a double parameter this close to an end of its range is in it.
+RCLPY_REL_TOL = 1e-6
 BODY_CHOICES = ('auto', 'on', 'off')
 # The longest frame_prefix, world_frame or world_joint taken.
 MAX_NAME = 256
@@ -144,16 +144,6 @@ def fabric_parameters(fabric: Fabric) -> dict[str, tuple]:
     return out
 
 
-def default_values(fabric: Fabric) -> dict[str, object]:
-    """Every parameter's default, with ``fabric.*`` seeded from the preset ``fabric_preset``.
-
-    :param fabric: that preset.
-    """
-    values = {name: spec[1] for name, spec in NODE_PARAMETERS.items()}
-    values.update({name: spec[1] for name, spec in fabric_parameters(fabric).items()})
-    return values
-
-
 def check_value(name: str, value: object) -> str:
     """Why ``value`` is not valid for parameter ``name`` (beyond type and range), or ''.
 
@@ -184,18 +174,6 @@ def check_value(name: str, value: object) -> str:
     if name == 'world_frame' and value.startswith('/'):
         return 'frame ids must not start with "/"'
     return ''
-
-
-def sim_params_from(values: dict) -> SimParams:
-    """Return the simulation's settings among the parameters' values.
-
-    :param values: every parameter's value, by name.
-    """
-    sim = {k: values[k] for k in SIM_KEYS}
-    for name, f in SIM_FIELDS.items():         # arrays (wind, lod_distances) as tuples
-        if f.type is tuple:
-            sim[name] = tuple(float(w) for w in sim[name])
-    return SimParams(**sim)
 
 
 def unknown_reason(name: str, known: object, node: str) -> str:
@@ -350,15 +328,6 @@ def _rcl_refuses(args: list[str]) -> str:
     return ''
 
 
-def fabric_from(preset: Fabric, values: dict) -> Fabric:
-    """Return the preset with every ``fabric.<field>`` value applied.
-
-    :param preset: the fabric preset.
-    :param values: every parameter's value, by name.
-    """
-    return preset.with_values(**{f: values['fabric.' + f] for f in preset.__dataclass_fields__})
-
-
 def _as_float(value):
     """Return a number, or a string that is one (YAML 1.1 reads ``1e3`` as text), as a float."""
     if isinstance(value, bool):
@@ -403,6 +372,23 @@ def typed_value(name: str, value: object, current: object, where: str,
     :param where: what gave it, which every ValueError starts with.
     :param raw: the text the value came from, shown in errors; None: the value's repr.
     """
+    value, reason = value_and_reason(name, value, current, raw)
+    if reason:
+        raise ValueError(f'{where}: {reason}')
+    return value
+
+
+def value_and_reason(name: str, value: object, current: object, raw: str | None = None,
+                     rel_tol: float = 0.0) -> tuple[object, str]:
+    """Return ``value`` typed as ``current``, and why it is not valid for ``name`` (or '').
+
+    :param name: the parameter's name.
+    :param value: the value given.
+    :param current: a value of its type.
+    :param raw: the text the value came from, shown in the reason; None: the value's repr.
+    :param rel_tol: a number this close (relative) to an end of its range is in it; rclpy
+        takes ``RCLPY_REL_TOL``.
+    """
     shown = repr(raw) if raw is not None else repr(value)
     if isinstance(current, bool):
         ok = isinstance(value, bool)
@@ -418,12 +404,10 @@ def typed_value(name: str, value: object, current: object, where: str,
         value = [_as_float(v) for v in value] if ok else value
         ok = ok and all(isinstance(v, float) for v in value)
     if not ok:
-        raise ValueError(f'{where}: {shown} is not a {type(current).__name__}')
+        return value, f'{shown} is not a {type(current).__name__}'
     spec = NODE_PARAMETERS.get(name)
     rng = spec[2] if spec else FABRIC_RANGES.get(name[len('fabric.'):])
-    if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1]:
-        raise ValueError(f'{where}: {value} is outside [{rng[0]}, {rng[1]}]')
-    reason = check_value(name, value)
-    if reason:
-        raise ValueError(f'{where}: {reason}')
-    return value
+    if rng is not None and not isinstance(value, (list, str)) and not rng[0] <= value <= rng[1] \
+            and not (rel_tol and any(math.isclose(value, end, rel_tol=rel_tol) for end in rng)):
+        return value, f'{value} is outside [{rng[0]}, {rng[1]}]'
+    return value, check_value(name, value)

@@ -18,15 +18,14 @@ from ..core.crowd import CrowdSteps, stepped
 from ..core.simulation import JacketSimulation, StageTimer, StepReport
 from ..recording.writer import qos_profile_yaml
 from . import messages
-from .parameters import SIM_KEYS, fabric_from, sim_params_from
 
 if TYPE_CHECKING:           # for the annotations only
     from collections.abc import Callable, Sequence
 
-    from ..core.fabric import Fabric
     from ..core.rig import Rig
     from ..core.skeleton import Skeleton
     from .cdr import JointStateContent
+    from .values import NodeValues
 
 
 def session_topics(joint_states: str = '/joint_states', wind: str = '/jacket_cloth_node/wind',
@@ -68,15 +67,15 @@ TIMED_STAGES = ('prepare', 'step', 'complete', 'bones', 'tf', 'markers', 'skinni
 class SessionPipeline:
     """A simulation plus the cadence and content of its output messages."""
 
-    def __init__(self, skeleton: 'Skeleton', rig: 'Rig', fabrics: 'dict[str, Fabric]',
-                 values: dict, node_name: str = DEFAULT_NODE, timing: bool = True,
+    def __init__(self, skeleton: 'Skeleton', rig: 'Rig', values: 'NodeValues',
+                 node_name: str = DEFAULT_NODE, timing: bool = True,
                  output_phase: float = 0.0, stage_timer: StageTimer | None = None):
         """Set up the simulation.
 
         :param skeleton: the character's skeleton.
         :param rig: its rig.
-        :param fabrics: the fabric presets by name; the values' ``fabric`` picks one.
-        :param values: the simulation's parameter values by name.
+        :param values: the character's parameter values: the simulation runs on their
+            SimParams and Fabric.
         :param node_name: starts the diagnostics status name (``<node_name>: cloth
             simulation``): the node's fully qualified name, and in a crowd the character's
             name after it.
@@ -95,12 +94,12 @@ class SessionPipeline:
         if not 0.0 <= output_phase <= 0.9:
             raise ValueError(f'output_phase {output_phase} is not in [0, 0.9]')
         self.output_phase = output_phase
-        self.fabrics = fabrics
-        self.values = dict(values)
+        # Held here once (ros/values.py); apply() replaces it whole.
+        self.values = values
         self.node_name = node_name
         self.timing = timing
-        self.sim = JacketSimulation(skeleton, rig, self._fabric(), sim_params_from(values),
-                                    values['world_joint'])
+        self.sim = JacketSimulation(skeleton, rig, values.fabric, values.sim,
+                                    values.world_joint)
         self.inputs = 0
         self.dropped = 0
         self.undecodable = 0        # JointStates that did not decode (the node counts them)
@@ -133,7 +132,7 @@ class SessionPipeline:
         # The URDF's own visuals are read once: `auto` asks on every markers message.
         self._has_visuals = '<visual' in self.sim.skeleton.urdf_xml
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
-                              debug=self.values.get('markers_debug', False),
+                              debug=self.values.markers_debug,
                               body=self.draws_body())
         if stage_timer is not None:
             self._time_stages(stage_timer)
@@ -141,7 +140,7 @@ class SessionPipeline:
     def _tf_template(self):
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
         template = messages.tf_template(tuple(self.sim.bone_names),
-                                        tuple(self.sim.bone_parents), self.values['frame_prefix'])
+                                        tuple(self.sim.bone_parents), self.values.frame_prefix)
         if self._stage_timer is None:
             return template
         # Timed for this pipeline alone: the template is shared by every pipeline of its bones.
@@ -159,14 +158,11 @@ class SessionPipeline:
 
     def draws_body(self) -> bool:
         """Tell whether the markers carry the body: ``markers_body``, auto without visuals."""
-        choice = self.values.get('markers_body', 'auto')
-        if choice == 'auto':
-            return not self._has_visuals
-        return choice == 'on'
+        return self.values.draws_body(self._has_visuals)
 
     def root_frame(self) -> str:
         """Return the frame of the URDF root link as published: ``frame_prefix`` in front."""
-        return self.values['frame_prefix'] + self.sim.skeleton.link_names[0]
+        return self.values.frame_prefix + self.sim.skeleton.link_names[0]
 
     def root_is_world_frame(self) -> bool:
         """Tell whether the URDF root, as published, is ``world_frame`` itself.
@@ -174,24 +170,25 @@ class SessionPipeline:
         A robot description bolted to a massless ``world`` link: world_frame -> root would
         publish the world as a child of itself (issue 47 item 3), so it is not published.
         """
-        return self.root_frame() == self.values['world_frame']
+        return self.root_frame() == self.values.world_frame
 
-    def _fabric(self):
-        return fabric_from(self.fabrics[self.values['fabric_preset']], self.values)
+    def apply(self, values: 'NodeValues') -> None:
+        """Take changed parameter values, acting from the next step; never a reset.
 
-    def apply(self, changes: dict) -> None:
-        """Parameter changes (name -> value), acting from the next step; never a reset.
+        The simulation takes the bundle's SimParams and Fabric when they are new objects
+        (``NodeValues.with_changes`` makes one only when one of its values is given).
 
-        :param changes: new values by parameter name.
+        :param values: the character's values now, made from the ones held
+            (:meth:`NodeValues.with_changes`).
         """
-        self.values.update(changes)
-        if set(changes) & set(SIM_KEYS):
-            self.sim.set_params(sim_params_from(self.values))
-        if any(n.startswith('fabric.') for n in changes):
-            self.sim.set_fabric(self._fabric())
-        if 'world_joint' in changes:
-            self.sim.parser.set_world_joint(self.values['world_joint'])
-        if 'frame_prefix' in changes:
+        old, self.values = self.values, values
+        if values.sim is not old.sim:
+            self.sim.set_params(values.sim)
+        if values.fabric is not old.fabric:
+            self.sim.set_fabric(values.fabric)
+        if values.world_joint != old.world_joint:
+            self.sim.parser.set_world_joint(values.world_joint)
+        if values.frame_prefix != old.frame_prefix:
             self._tf = self._tf_template()
 
     def set_viewer(self, position: 'np.ndarray | None') -> None:
@@ -272,7 +269,7 @@ class SessionPipeline:
         if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
             return []
         out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
-        if self.values['publish_world_tf'] and not self.root_is_world_frame():
+        if self.values.publish_world_tf and not self.root_is_world_frame():
             out.append(('tf', self._world_transform(stamp_ns)))
         self._window['published'] += 1
         return out
@@ -289,15 +286,15 @@ class SessionPipeline:
         if not report.accepted:
             return []
         out = []
-        rate = self.values['markers_rate']
+        rate = self.values.markers_rate
         if self._finite and rate > 0 and self._due(self._marker_clocks, stamp_ns, rate):
             if self.markers_wanted is None or self.markers_wanted():
                 out.append(('markers', self._marker_array(
                     self.sim, stamp_ns, self.root_frame(), reset=self._marker_reset,
-                    debug=self.values.get('markers_debug', False), body=self.draws_body())))
+                    debug=self.values.markers_debug, body=self.draws_body())))
                 self._marker_reset = False
         # Diagnostics go out when nothing else does: a failing node must not fall silent.
-        if self._due(self._diag_clocks, stamp_ns, self.values['diagnostics_rate']):
+        if self._due(self._diag_clocks, stamp_ns, self.values.diagnostics_rate):
             out.append(('diagnostics', self._diagnostics(stamp_ns)))
         return out
 
@@ -310,7 +307,7 @@ class SessionPipeline:
         clock starts a new one, due at once (a restarted source), as does the first.
         """
         period = 1e9 / rate
-        span = max(self.values['reset_gap'] * 1e9, 2 * period)
+        span = max(self.values.sim.reset_gap * 1e9, 2 * period)
         ahead = [(stamp_ns - last, k) for k, last in enumerate(clocks)
                  if 0 <= stamp_ns - last <= span]
         k = min(ahead)[1] if ahead else 0 if clocks and stamp_ns >= clocks[0] else None
@@ -347,7 +344,7 @@ class SessionPipeline:
         ``frame_prefix``; ``world_frame`` is taken as given, the world the characters share.
         """
         root = self.root_frame()
-        key = (self.values['world_frame'], root)
+        key = (self.values.world_frame, root)
         if self._world_tf is None or self._world_tf[0] != key:
             self._world_tf = (key, messages.tf_template((root,), (key[0],), ''))
         last = self.sim.last
@@ -429,7 +426,7 @@ class SessionPipeline:
             'sim_steps': sim.steps_total,
             'lod_level': sim.lod.level,
             'viewer_distance_m': self._viewer_distance(),
-            'recording': (f'failed: {recording}' if recording else self.values['record']),
+            'recording': (f'failed: {recording}' if recording else self.values.record),
         })
         level, message = self._status(slow)
         self._window = dict.fromkeys(_WINDOW, 0)

@@ -14,8 +14,8 @@ from ..core.rig import load_rig
 from ..core.skeleton import load_shipped_character
 from ..motion.clips import joint_state_content
 from . import cdr
-from .parameters import default_values
 from .pipeline import CrowdPipeline, SessionPipeline
+from .values import default_values
 
 
 def kernels_cached(crowd: bool = True) -> bool:
@@ -46,7 +46,7 @@ def warm_kernels(crowd: bool = True) -> tuple:
     started = time.perf_counter()
     skeleton = load_shipped_character()
     fabrics = load_fabrics()
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton),
                                default_values(fabrics['tweed_jacket']))
     names, positions = joint_state_content(skeleton.joint_names, 'walk', 0.0)
     for k in range(3):              # a reset, then steps: every output of an input
@@ -58,7 +58,7 @@ def warm_kernels(crowd: bool = True) -> tuple:
     # The crowd's one call for many characters (jacket_cloth_crowd), compiled on its own.
     many = CrowdPipeline()              # of two: a crowd of one steps its character alone
     for _ in range(2):
-        many.add(SessionPipeline(skeleton, load_rig(skeleton), fabrics,
+        many.add(SessionPipeline(skeleton, load_rig(skeleton),
                                  default_values(fabrics['tweed_jacket'])))
     reader = cdr.JointStateReader()     # one name list: the fourth input takes the steady way
     for k in range(4):

@@ -128,7 +128,7 @@ class SessionFigures:
         """
         a = np.array(self.rows, dtype=float).reshape(-1, 9)
         step_us = a[:, 6][np.isfinite(a[:, 6])]
-        values = pipeline.values
+        values = pipeline.values.by_name()
         return {
             'file': os.path.abspath(self.session.recording.path),
             'complete': self.session.recording.complete,

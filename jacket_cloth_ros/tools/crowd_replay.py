@@ -21,8 +21,8 @@ from ..core.skeleton import skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG, SessionRecorder
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values
 from ..ros.pipeline import SessionPipeline, session_topics
+from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
 from .session import JOINT_STATE, recorded_parameters, setup_warnings
@@ -33,11 +33,15 @@ PREFIX = SESSION_CONFIG + '/'
 @dataclass
 class CrowdCharacter:
     name: str
-    values: dict
     pipeline: SessionPipeline
     topics: dict
     setup: dict                 # the recorded metadata, written again into the replay
     warnings: list              # one line each: what its set-up holds that is not known
+
+    @property
+    def values(self) -> NodeValues:
+        """Return its parameter values: its pipeline's, held there once."""
+        return self.pipeline.values
 
 
 def is_crowd(recording: Recording) -> bool:
@@ -75,22 +79,21 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         preset = recorded.get('fabric_preset')
         if preset not in fabrics:
             raise ConfigError(f'{where}: fabric_preset {preset!r} is not a preset')
-        values = default_values(fabrics[preset])
-        values.update({k: v for k, v in recorded.items() if k in values})
+        values = default_values(fabrics[preset]).with_changes(recorded)
         ns = '/' + name
         topics = session_topics(f'{ns}/joint_states', f'{ns}/jacket_cloth_node/wind',
                                 f'{ns}/jacket_cloth_node/markers')
         try:
             phase = float(meta.get('output_phase', 0.0))
             # Older crowd recordings named the diagnostics by the character alone.
-            pipeline = SessionPipeline(skeleton, rig, fabrics, values,
+            pipeline = SessionPipeline(skeleton, rig, values,
                                        meta.get('node_name') or name, timing=False,
                                        output_phase=phase)
         except ValueError:
             raise ConfigError(f'{where}: output_phase {meta.get("output_phase")!r} is not a '
                               'number from 0 to 0.9') from None
         characters[topics['joint_states'][0]] = CrowdCharacter(
-            name, values, pipeline, topics, dict(meta), setup_warnings(meta, ignored))
+            name, pipeline, topics, dict(meta), setup_warnings(meta, ignored))
     if not characters:
         raise RecordingError(f'{path}: not a crowd recording (no {PREFIX}<name> metadata)')
     return recording, characters
@@ -148,6 +151,6 @@ def replay_crowd(path: str, out_path: str,
 def _apply_viewer(characters, raw):
     """Set a recorded viewer on each character whose world frame it is in (as the node did)."""
     for c in characters:
-        reading = read_viewer(raw, c.values['world_frame'])
+        reading = read_viewer(raw, c.values.world_frame)
         if reading.position is not None:
             c.pipeline.set_viewer(reading.position)

@@ -96,7 +96,7 @@ def session_frames(session: SessionInput) -> tuple[Frames, object]:
         bones.append(poses)
 
     # Markers are output only and the export draws none: not making them saves their time.
-    session.setup.values['markers_rate'] = 0.0
+    session.setup.values = session.setup.values.with_changes({'markers_rate': 0.0})
     pipeline = run_session(session, probe=probe)
     if not stamps:
         raise ExportError(f'{session.recording.path}: the simulation took none of its '

@@ -31,14 +31,14 @@ def replay(session: SessionInput, out_path: str,
     with replacing(out_path, recording=True, force=force) as tmp:
         recorder = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(out_path)),
                                    background=True,
-                                   compression=session.setup.values['record_compression'],
+                                   compression=session.setup.values.record_compression,
                                    exclusive=False)
         try:
             for name, kind, qos in topics.values():
                 recorder.add_topic(name, kind, qos)
             setup = session.setup
             recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
-                                        setup.values, node_name=setup.node_name)
+                                        setup.values.by_name(), node_name=setup.node_name)
             started = time.perf_counter()
             pipeline = run_session(
                 session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data,

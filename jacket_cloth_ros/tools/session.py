@@ -25,8 +25,9 @@ from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
 from ..recording.reader import NO_MESSAGES, Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
-from ..ros.parameters import default_values, from_recording, parse_override, typed_value
+from ..ros.parameters import from_recording, parse_override, typed_value
 from ..ros.pipeline import DEFAULT_NODE, SessionPipeline, session_topics
+from ..ros.values import VALUE_NAMES, NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -39,7 +40,7 @@ class SessionSetup:
     urdf: str
     rig_yaml: str
     fabrics_yaml: str
-    values: dict
+    values: NodeValues
     skeleton: Skeleton
     rig: Rig
     fabrics: dict
@@ -139,21 +140,19 @@ def load_session(path: str, topic: str | None = None, urdf: str | None = None,
     preset = fabric or recorded_values.get('fabric_preset', 'tweed_jacket')
     if preset not in fabrics:
         raise ConfigError(f'fabric {preset!r} is not a preset (presets: {", ".join(fabrics)})')
-    values = default_values(fabrics[preset])
-    if fabric is None:
-        values.update(recorded_values)
-    else:        # a preset asked for: its fabric.* values, the recording's other parameters
-        values.update({k: v for k, v in recorded_values.items() if not k.startswith('fabric')})
-        values['fabric_preset'] = preset
-    given = dict(parse_override(text, values) for text in overrides)
+    if fabric is not None:      # a preset asked for: its fabric.*, the recording's others
+        recorded_values = {k: v for k, v in recorded_values.items() if not k.startswith('fabric')}
+    values = default_values(fabrics[preset], preset).with_changes(recorded_values)
+    known = values.by_name()        # -p names them: typed at this boundary
+    given = dict(parse_override(text, known) for text in overrides)
     chosen = given.get('fabric_preset')
     if chosen is not None:      # a preset named with -p seeds fabric.*, as --fabric does
         if chosen not in fabrics:
             raise ConfigError(f'-p fabric_preset: {chosen!r} is not a preset (presets: '
                               f'{", ".join(fabrics)})')
-        values.update((k, v) for k, v in default_values(fabrics[chosen]).items()
-                      if k.startswith('fabric.'))
-    values.update(given)
+        values = values.with_changes({k: v for k, v in default_values(
+            fabrics[chosen]).by_name().items() if k.startswith('fabric.')})
+    values = values.with_changes(given)
     setup = SessionSetup(urdf_text, rig_yaml, fabrics_yaml, values, skeleton, rig_obj, fabrics,
                          recorded.get('node_name') or DEFAULT_NODE)
     session = SessionInput(recording, topic, _events(recording, topic), setup)
@@ -236,7 +235,8 @@ def recorded_parameters(setup: dict, where: str, ignored: list | None = None) ->
         raise ConfigError(f'{where}s: not JSON ({shown(str(e))})') from None
     if not isinstance(data, dict):
         raise ConfigError(f'{where}s: not a JSON object of names and values')
-    known = default_values(Fabric(**{f.name: FABRIC_RANGES[f.name][0] for f in fields(Fabric)}))
+    known = default_values(Fabric(**{f.name: FABRIC_RANGES[f.name][0]
+                                     for f in fields(Fabric)})).by_name()
     values = from_recording(data)
     if ignored is not None:
         ignored.extend(sorted(name for name in values if name not in known))
@@ -273,7 +273,7 @@ def _check_joints(session):
     except DECODE_ERRORS as e:
         raise RecordingError(f'{session.recording.path}: {session.topic} does not decode as '
                              f'JointState ({e})') from None
-    world = session.setup.values['world_joint'] + '/'
+    world = session.setup.values.world_joint + '/'
     joints = [n for n in names if not n.startswith(world)]
     known = set(session.setup.skeleton.joint_names)
     unknown = [n for n in joints if n not in known]
@@ -325,16 +325,20 @@ def _events(recording, topic):
     return events
 
 
-def _parameter_changes(data, values):
+def _parameter_changes(data):
+    """Return a recorded parameter event's changes to a character's values, by name."""
     event = deserialize_message(data, ParameterEvent)
     changes = {}
     for msg in list(event.new_parameters) + list(event.changed_parameters):
         p = Parameter.from_parameter_msg(msg)
-        if p.name in values and p.name != 'record':
+        if p.name in _CHARACTER_NAMES and p.name != 'record':
             value = p.value
             changes[p.name] = [float(v) for v in value] if p.type_ == \
                 Parameter.Type.DOUBLE_ARRAY else value
     return changes
+
+
+_CHARACTER_NAMES = frozenset(VALUE_NAMES)
 
 
 def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] | None = None,
@@ -351,8 +355,8 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
         file then differs run to run.
     """
     setup = session.setup
-    pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.fabrics, setup.values,
-                               setup.node_name, timing=timing)
+    pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.values, setup.node_name,
+                               timing=timing)
     joint_states = JointStateReader()
     for stamp, _, kind, data in session.events:
         if kind == 'joint_states':
@@ -373,11 +377,11 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
             # Stamped as the node records them: at the last accepted input's stamp.
             last = pipeline.sim.last
             if kind == 'parameter_events':
-                pipeline.apply(_parameter_changes(data, pipeline.values))
+                pipeline.apply(pipeline.values.with_changes(_parameter_changes(data)))
                 stamp = last.stamp_ns if last else 0
             elif kind == 'viewer':
                 # The node recorded only viewers it took, and takes them as it does.
-                reading = read_viewer(data, pipeline.values['world_frame'])
+                reading = read_viewer(data, pipeline.values.world_frame)
                 if reading.position is not None:
                     pipeline.set_viewer(reading.position)
                 stamp = last.stamp_ns if last else reading.stamp_ns
