@@ -185,12 +185,11 @@ def test_a_restless_cloth_is_a_warn_in_the_diagnostics_while_it_lasts():
     from jacket_cloth_ros.core.fabric import load_fabrics
     from jacket_cloth_ros.core.skeleton import load_shipped_character
     from jacket_cloth_ros.ros.cdr import JointStateContent
-    from jacket_cloth_ros.ros.parameters import default_values
     from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
     skeleton = load_shipped_character()
-    fabrics = load_fabrics()
-    pipeline = SessionPipeline(skeleton, load_rig(skeleton), fabrics,
-                               default_values(fabrics['tweed_jacket']), timing=False)
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton),
+                               default_values(load_fabrics()['tweed_jacket']), timing=False)
     rolling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: rolling')
     levels = []
     for stamp, names, pos in _held_still(rolling, 5.0):
