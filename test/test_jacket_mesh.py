@@ -207,19 +207,23 @@ def test_the_body_is_closed_and_rides_on_its_links():
     assert np.einsum('ij,ij->i', t[:, 0], np.cross(t[:, 1], t[:, 2])).sum() > 0
 
 
+def _outfit_at_rest(sim):
+    """Return the simulation's meshes (messages.Outfit) and their joints at the rest pose."""
+    from jacket_cloth_ros.ros.messages import Outfit
+    bones = sim.bone_set
+    outfit = Outfit(sim.rig, bones.names, bones.parents, bones.grid)
+    parents = np.array([sim.skeleton.link_names.index(p) for p in bones.parents])
+    return outfit, jm.rest_joints(sim.skeleton, sim.rig, parents, bones.grid)
+
+
 def test_the_drawn_lining_lies_inside_the_jacket_not_on_it(body):
     # A lining on the front face's own points would fight it for the same depth wherever
     # both sides are drawn. Drawn (pictures), each lining corner lies inside its front
     # corner, along the outward normal, and no two triangles coincide.
-    from jacket_cloth_ros.ros.messages import LINING_GAP, Outfit
+    from jacket_cloth_ros.ros.messages import LINING_GAP
     name, sim, mesh = body
-    bones = sim.bone_set
-    outfit = Outfit(sim.rig, bones.names, bones.parents, bones.grid)
-    parents = np.array([sim.skeleton.link_names.index(p) for p in bones.parents])
-    joints = jm.rest_joints(sim.skeleton, sim.rig, parents, bones.grid)
-    corners = outfit.corners('jacket')
-    points, colors = np.empty((corners, 3)), np.empty((corners, 4), dtype=np.float32)
-    outfit.draw('jacket', joints, points, colors)
+    outfit, joints = _outfit_at_rest(sim)
+    points, _ = outfit.triangles('jacket', joints)
     tris = points.reshape(-1, 3, 3)
     front, back = tris[~mesh.back], tris[mesh.back]
     assert len(back) and np.isfinite(points).all()
@@ -240,12 +244,9 @@ def test_a_picture_puts_back_the_lining_the_live_markers_leave_out(body):
     # faces turned to it, so from a recording it puts the lining back: the same triangles in
     # the same order as the full mesh drawn, the lining within a few millimetres of it (a
     # face's normal for its vertices') and in the lining's colour.
-    from jacket_cloth_ros.ros.messages import LINING_GAP, Outfit
+    from jacket_cloth_ros.ros.messages import LINING_GAP
     name, sim, mesh = body
-    bones = sim.bone_set
-    outfit = Outfit(sim.rig, bones.names, bones.parents, bones.grid)
-    parents = np.array([sim.skeleton.link_names.index(p) for p in bones.parents])
-    joints = jm.rest_joints(sim.skeleton, sim.rig, parents, bones.grid)
+    outfit, joints = _outfit_at_rest(sim)
     full, full_colors = outfit.triangles('jacket', joints)
     outer = np.repeat(outfit.outer, 3)
     assert outer.sum() == outfit.marker_corners() < len(full)

@@ -164,6 +164,11 @@ class Watches:
     collapse: CollapseWatch         # bunched or stretched across for a second
     restless: RestlessWatch         # moving on while the body stays still
 
+    def clear(self) -> None:
+        """Forget what was seen (the cloth was put back on the body: a reset)."""
+        self.collapse.clear()
+        self.restless.clear()
+
 
 @dataclass(slots=True)
 class StepReport:
@@ -393,8 +398,7 @@ class JacketSimulation:
     def _reset(self, sample):
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.ready_bones = None
-        self.watches.collapse.clear()
-        self.watches.restless.clear()
+        self.watches.clear()
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)

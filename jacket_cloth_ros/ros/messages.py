@@ -3,9 +3,8 @@
 
 The markers a person sees: the skinned jacket and hood (``jacket``), a triangle list of its outer
 faces shaded per corner, on a simple body (``body``): its spheres and cylinders, which the viewer
-lights. The
-method's scaffolding (the M3 grid, the M10 colliders, the M8 pendulum, the M1/M2 bones) is the
-debug layer, sent with ``markers_debug``.
+lights. The method's scaffolding (the M3 grid, the M10 colliders, the M8 pendulum, the M1/M2
+bones) is the debug layer, sent with ``markers_debug``.
 """
 
 import functools

@@ -110,8 +110,8 @@ class SessionPipeline:
         self.recording_problem: 'Callable[[], str]' = _no_recording_problem
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
-        self._collapses_said = 0    # the simulation's collapse lines the diagnostics have said
-        self._restless_said = 0     # and its restless lines
+        # The simulation's collapse and restless lines (Faults) the diagnostics have said.
+        self._said = {'collapse': 0, 'restless': 0}
         self._costs = []
         self._latencies = []
         # The grid each periodic output is due on, per clock the stamps come on (most recent
@@ -365,7 +365,7 @@ class SessionPipeline:
             return ''
         return f'{math.dist(viewer, last.root[:3, 3]):.2f}'
 
-    def _status(self, slow):
+    def _status(self, slow, recording):
         """Level and message of the inputs since the last diagnostics."""
         w = self._window
         if w['accepted'] and not w['published']:
@@ -376,7 +376,6 @@ class SessionPipeline:
         if w['dropped'] and not w['accepted']:
             return messages.ERROR, 'every input dropped'
         problems = []
-        recording = self.recording_problem()
         if recording:
             problems.append(f'recording failed: {recording}')
         if slow:
@@ -385,12 +384,13 @@ class SessionPipeline:
             problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
-        said = self.sim.faults.collapse
-        if self.sim.watches.collapse.collapsed or len(said) > self._collapses_said:
-            problems.append(said[-1])       # issue 47 item 5a: no silent collapse
-        restless = self.sim.faults.restless
-        if self.sim.watches.restless.restless or len(restless) > self._restless_said:
-            problems.append(restless[-1])   # a cloth that never rests on a still body
+        # No silent collapse, no cloth that never rests: said while it lasts, and once after.
+        watches = self.sim.watches
+        for kind, lasts in (('collapse', watches.collapse.collapsed),
+                            ('restless', watches.restless.restless)):
+            said = getattr(self.sim.faults, kind)
+            if lasts or len(said) > self._said[kind]:
+                problems.append(said[-1])
         if problems:
             return messages.WARN, '; '.join(problems)
         return messages.OK, 'ok' if w['inputs'] else 'no input'
@@ -428,10 +428,9 @@ class SessionPipeline:
             'viewer_distance_m': self._viewer_distance(),
             'recording': (f'failed: {recording}' if recording else self.values.record),
         })
-        level, message = self._status(slow)
+        level, message = self._status(slow, recording)
         self._window = dict.fromkeys(_WINDOW, 0)
-        self._collapses_said = len(sim.faults.collapse)
-        self._restless_said = len(sim.faults.restless)
+        self._said = {kind: len(getattr(sim.faults, kind)) for kind in self._said}
         return messages.diagnostics(stamp_ns, self.node_name, values, level, message)
 
 
