@@ -359,4 +359,7 @@ def test_the_view_launch_runs_without_rviz_and_robot_state_publisher(running):
     launch.wait_for_all(expected)
     assert 'process has died' not in launch.output(), launch.output()
     launch.interrupt(group=False)
-    assert 'Traceback' not in launch.output(), launch.output()
+    # Our processes' lines, which launch prefixes with their names: launch's own interpreter
+    # may print a KeyboardInterrupt it ignored in a weakref callback as Ctrl-C lands.
+    ours = [line for line in launch.output().splitlines() if line.startswith('[jacket_cloth')]
+    assert not [line for line in ours if 'Traceback' in line], launch.output()
