@@ -832,12 +832,23 @@ def test_undecodable_wind_and_description_leave_the_node_running(harness):
 def _start_node(tmp_path, *params):
     import subprocess
     import sys
-    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2))
+    env = dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2), PYTHONFAULTHANDLER='1')
     args = [sys.executable, '-m', 'jacket_cloth_ros.ros.node', '--ros-args']
     for p in params:
         args += ['-p', p]
     return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, cwd=tmp_path)
+
+
+def _stderr_or_stacks(proc, guard_s=180):
+    """Return a started node's stderr once it exits; a hang fails with where it hung."""
+    import signal
+    import subprocess
+    try:
+        return proc.communicate(timeout=guard_s)[1]
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)     # faulthandler prints every thread's stack
+        pytest.fail('the node did not exit; its stderr and stacks:\n' + proc.communicate()[1])
 
 
 def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
@@ -859,11 +870,7 @@ def test_bad_start_parameters_are_one_line_and_exit_1(tmp_path):
     started = {case: _start_node(tmp_path, case, 'robot_description_timeout:=0.0')
                for case in cases}
     for case, proc in started.items():
-        try:
-            out, err = proc.communicate(timeout=60)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
+        err = _stderr_or_stacks(proc)
         lines = err.strip().splitlines()
         assert proc.returncode == 1 and len(lines) == 1, (case[:80], err)
         assert lines[0].startswith('jacket_cloth_node: ') and cases[case] in lines[0], \
