@@ -25,15 +25,17 @@ def cmd_stress(args: argparse.Namespace) -> int:
     :param args: the ``stress`` command's options.
     :returns: the exit status.
     """
-    from .stress import METHODS, XPBD_METHODS, stress, write_matrix
+    from .stress import METHODS, XPBD_METHODS, stress, write_cloth, write_matrix
     methods = tuple(args.methods.split(',')) if args.methods else METHODS + XPBD_METHODS
     known = METHODS + XPBD_METHODS
     unknown = [m for m in methods if m not in known]
     if unknown:
         raise LabError(f'unknown method(s) {", ".join(unknown)} (methods: {", ".join(known)})')
     loop = 3600.0 if args.full else args.loop
-    results = stress(methods, loop_s=loop)
+    end_frames, pictured = {}, 'hard_pass' if 'hard_pass' in methods else methods[0]
+    results = stress(methods, loop_s=loop, end_frames=end_frames, pictured=pictured)
     write_matrix(results, args.out, methods)
+    write_cloth(results, end_frames, pictured, args.out)
     failed = sorted({s for (s, m), (v, _) in results.items() if v != 'holds'})
     print(f'{os.path.join(args.out, "stress.md")}: {len(results)} runs, '
           f'{sum(v == "holds" for v, _ in results.values())} hold'
@@ -106,7 +108,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='command', required=True)
     st = sub.add_parser('stress', help='the scenes where methods fail, for every method')
-    st.add_argument('--out', default='out/stress', help='folder for stress.md/.json/.png')
+    st.add_argument('--out', default='out/stress',
+                    help="folder for stress.md/.json/.png and the scenes' pictures")
     st.add_argument('--methods', default=None,
                     help='comma-separated stretch limits, xpbd+<limit> for XPBD (default: all)')
     st.add_argument('--loop', type=float, default=60.0, help='s of looped walk (quick mode)')

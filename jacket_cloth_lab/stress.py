@@ -39,6 +39,7 @@ from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import Skeleton, load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content, smoothstep
+from jacket_cloth_ros.tools.picture import draw_filmstrip, sim_frame
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
@@ -276,7 +277,8 @@ def _converged_end(skeleton, rig, scene, fabric_name):
 
 
 def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
-              fabric_name: str = 'tweed_jacket') -> tuple[str, dict]:
+              fabric_name: str = 'tweed_jacket',
+              end_frames: list | None = None) -> tuple[str, dict]:
     """Judge one method on one scene: 'holds' or how it failed, and the figures.
 
     :param skeleton: the character.
@@ -284,6 +286,8 @@ def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
     :param scene: the inputs, and the parameters and fabric values it changes.
     :param method: a stretch limit, ``xpbd+<stretch limit>`` for XPBD as the solver.
     :param fabric_name: the fabric preset the scene's values change.
+    :param end_frames: if given, the scene's last moment is appended to it as a picture's
+        frame (tools.picture.Frame): the jacket and hood on the body.
     """
     fabric = load_fabric(fabric_name).with_values(**scene.fabric)
     solver, _, limit = method.rpartition('+')
@@ -311,6 +315,8 @@ def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
         worst_tunnel = max(worst_tunnel, deepest_inside(sim))
         worst_stretch = max(worst_stretch, edge_strain(sim.x, rig.vert_a, rig.vert_b,
                                                        rig.vert_rest)[0].value)
+    if end_frames is not None:
+        end_frames.append(sim_frame(sim, scene.inputs[-1][0]))
     ref = (_converged_end(skeleton, rig, scene, fabric_name) if scene.ends_on_floor
            else _skinned(sim))
     figures = {
@@ -345,19 +351,60 @@ def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
     return verdict, figures
 
 
-def stress(methods: Sequence[str] = METHODS, loop_s: float = 60.0) -> dict:
+def stress(methods: Sequence[str] = METHODS, loop_s: float = 60.0,
+           end_frames: dict | None = None, pictured: str = 'hard_pass') -> dict:
     """Every method on every scene: {(scene, method): (verdict, figures)}.
 
     :param methods: stretch limits, ``xpbd+<stretch limit>`` for XPBD as the solver.
     :param loop_s: how long the looped walk runs, seconds.
+    :param end_frames: if given, filled with {scene: its last moment} of ``pictured`` (the
+        pictures' cloth, tools.picture.Frame).
+    :param pictured: the method whose last moments are kept (the shipped default's).
     """
     skeleton = load_shipped_character()
     rig = load_rig(skeleton)
     out = {}
     for scene in scenes(skeleton, loop_s):
         for method in methods:
-            out[(scene.name, method)] = run_scene(skeleton, rig, scene, method)
+            frames = [] if end_frames is not None and method == pictured else None
+            out[(scene.name, method)] = run_scene(skeleton, rig, scene, method,
+                                                  end_frames=frames)
+            if frames:
+                end_frames[scene.name] = frames[0]
     return out
+
+
+def write_cloth(results: dict, end_frames: dict, method: str, out_dir: str) -> list[str]:
+    """stress_cloth.png and stress_floor.png: each scene's last moment, jacket on the body.
+
+    The scenes on their feet in one, those that end on the floor in the other; each column
+    titled with the scene and the method's verdict.
+
+    :param results: what :func:`stress` returned.
+    :param end_frames: the scenes' last moments, as :func:`stress` filled them.
+    :param method: the method they are of.
+    :param out_dir: the folder the pictures go to.
+    :returns: the pictures written.
+    """
+    import os
+
+    skeleton = load_shipped_character()
+    axes = load_rig(skeleton).view_axes()
+    floor = {s.name for s in floor_scenes(skeleton)}
+    written = []
+    for name, picked in (('stress_cloth.png', [n for n in end_frames if n not in floor]),
+                         ('stress_floor.png', [n for n in end_frames if n in floor])):
+        if not picked:
+            continue
+        path = os.path.join(out_dir, name)
+        draw_filmstrip([end_frames[n] for n in picked], skeleton, path, 0,
+                       title=f'each stress scene\'s last moment, {method}: the jacket and '
+                       'hood on the body',
+                       world_axes=axes, columns=[
+                           f'{n.removeprefix("floor: ")}\n{results[(n, method)][0]}'
+                           for n in picked])
+        written.append(path)
+    return written
 
 
 def write_matrix(results: dict, out_dir: str, methods: Sequence[str]) -> None:

@@ -46,6 +46,10 @@ def test_stress_command_writes_the_matrix(tmp_path, capsys):
     assert np.isfinite([r['max_offset_m'] for r in rows]).all()
     assert '| scene | hard_pass | none |' in (out / 'stress.md').read_text()
     assert (out / 'stress.png').stat().st_size > 5_000
+    # Each scene's cloth is pictured on the body: eight on their feet, seven on the floor.
+    for name, columns in (('stress_cloth.png', 8), ('stress_floor.png', 7)):
+        width, height = _png_size(out / name)
+        assert width > columns * 250 and height > 700, (name, width, height)
     table = rewritten(tmp_path, {'stress': out}, ('stress.matrix',))['stress.matrix']
     assert '| hard_pass | none |' in table and '| teleport 10 m | holds (' in table
     assert main(['stress', '--out', str(out), '--methods', 'glue']) == 1
@@ -73,3 +77,11 @@ def test_xpbd_with_the_hard_pass_holds_where_methods_break(skeleton, rig, stress
     for name in ('step 10x too large (12 Hz)', 'thigh through the cloth at 30 rad/s'):
         verdict, figures = run_scene(skeleton, rig, stress_scenes[name], 'xpbd+hard_pass')
         assert verdict == 'holds', (name, figures)
+
+
+def _png_size(path):
+    """Return a PNG's width and height in pixels, read from its header."""
+    with open(path, 'rb') as f:
+        head = f.read(24)
+    assert head[:8] == b'\x89PNG\r\n\x1a\n'
+    return int.from_bytes(head[16:20], 'big'), int.from_bytes(head[20:24], 'big')

@@ -135,11 +135,15 @@ def view_limits(frames: Sequence[Frame]) -> tuple[tuple[float, float], tuple[flo
     Measured in the world, as the frames are drawn: a URDF whose links are not Z-up, or one a
     world joint turns, is fitted all the same.
 
+    A body lying down is as wide as it is long: the views widen to its links.
+
     :param frames: the frames in view coordinates (in_view).
     """
     height = np.concatenate([f.links[:, 2] for f in frames])
     size = max(float(height.max() - height.min()), 0.5)
-    return ((-0.42 * size, 0.42 * size),
+    wide = max(float(np.abs(f.links[:, :2]).max()) for f in frames) + 0.15 * size
+    half = max(0.42 * size, wide)
+    return ((-half, half),
             (float(height.min()) - 0.05 * size, float(height.max()) + 0.35 * size))
 
 
