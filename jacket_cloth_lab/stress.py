@@ -39,7 +39,6 @@ from jacket_cloth_ros.core.measures import edge_strain
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
 from jacket_cloth_ros.core.skeleton import Skeleton, load_shipped_character
 from jacket_cloth_ros.motion.clips import joint_state_content, smoothstep
-from jacket_cloth_ros.tools.picture import draw_filmstrip, sim_frame
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
@@ -316,6 +315,7 @@ def run_scene(skeleton: Skeleton, rig: Rig, scene: Scene, method: str,
         worst_stretch = max(worst_stretch, edge_strain(sim.x, rig.vert_a, rig.vert_b,
                                                        rig.vert_rest)[0].value)
     if end_frames is not None:
+        from jacket_cloth_ros.tools.picture import sim_frame    # matplotlib: only if drawn
         end_frames.append(sim_frame(sim, scene.inputs[-1][0]))
     ref = (_converged_end(skeleton, rig, scene, fabric_name) if scene.ends_on_floor
            else _skinned(sim))
@@ -388,6 +388,7 @@ def write_cloth(results: dict, end_frames: dict, method: str, out_dir: str) -> l
     """
     import os
 
+    from jacket_cloth_ros.tools.picture import draw_filmstrip
     skeleton = load_shipped_character()
     axes = load_rig(skeleton).view_axes()
     floor = {s.name for s in floor_scenes(skeleton)}
