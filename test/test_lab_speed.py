@@ -38,8 +38,8 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     steal = results['steal_percent']
     # The host's phases are measured where a C compiler builds the probe.
     probed = {'host'} if shutil.which('cc') else set()
-    assert set(steal) == {'profile', 'markers', 'kernel', 'input', 'replay', 'endurance',
-                          'crowd'} | probed
+    assert set(steal) == {'profile', 'hops', 'markers', 'kernel', 'input', 'replay',
+                          'endurance', 'crowd'} | probed
     assert all(0.0 <= v <= 100.0 for v in steal.values()), steal
     printed = capsys.readouterr().out
     assert 'x the kernel' in printed and 'CPU steal' in printed
@@ -52,6 +52,14 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     assert said['replay / kernel-only limit, sessions of 5 s to under 15 s']['met'] in (
         True, False)
     assert "## Targets" in printed
+    # The hops of one steady input, the callback first; judged against 4 functions in 3 files.
+    hops = results['hops']
+    assert hops['chain'][0] == 'ros/node.py:on_joint_states' and hops['hops'] == len(
+        hops['chain']) and {'ros/node.py', 'ros/pipeline.py'} <= set(hops['files'])
+    row = said['from the JointState callback to the /tf publish: the deepest chain of the '
+               "package's calls, and the modules they ran in"]
+    assert row['met'] == (hops['hops'] <= 4 and len(hops['files']) <= 3)
+    assert 'From the JointState callback to the /tf publish' in printed
     # What the jacket's markers add to the node's CPU per input: timed with and without them,
     # the markers' own stage only on the side that draws them.
     for kind in ('live', 'recorded'):

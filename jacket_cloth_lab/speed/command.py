@@ -10,6 +10,7 @@ from jacket_cloth_ros.core.skeleton import load_shipped_character
 from .. import host_probe
 from ..crowd import crowd_bench
 from .endurance import endurance
+from .hops import hop_count
 from .host import host_phases
 from .kernel import GRIDS, ITERATIONS, Yardstick, kernel_vs_limit, limit_source
 from .live import cold_start, node_vs_floor
@@ -56,6 +57,8 @@ def run(quick: bool, out_dir: str, say: Callable[[str], None] = print,
         probe))
     section('profile', 'where one input\'s time goes (replay, node)', lambda: [
         profiled(skeleton, 5.0 if quick else 15.0, node=node) for node in (False, True)])
+    section('hops', 'the package\'s calls from the JointState callback to the /tf publish',
+            lambda: hop_count(skeleton))
     section('markers', 'what the jacket\'s markers add to the node', lambda: markers_cost(
         skeleton, 5.0 if quick else 15.0, 1 if quick else 3))
     section('input', 'pipeline per input', lambda: input_vs_kernel(

@@ -50,6 +50,11 @@ def summary(results: dict) -> str:
                         else 'n/a | n/a |'))
     if 'profile' in results:
         lines += [''] + profile.summary(results['profile'])
+    if 'hops' in results:
+        lines += ['', '## From the JointState callback to the /tf publish', '',
+                  'The deepest chain of the package\'s calls for one steady input: '
+                  + ' -> '.join(results['hops']['chain']) + '; modules run: '
+                  + ', '.join(results['hops']['files']) + '.']
     if 'input' not in results:           # --only a part
         crowd = crowd_summary(results['crowd']) if 'crowd' in results else []
         return '\n'.join(lines + crowd) + '\n'

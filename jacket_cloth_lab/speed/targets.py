@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``bench speed``'s targets (issue 37), each a ratio within one run, judged from its results."""
 
+from .hops import FILES_AT_MOST, HOPS_AT_MOST
 from .kernel import KERNEL_TARGET
 from .markers import MARKERS_AT_MOST
 from .measure import STEP_US
@@ -44,6 +45,14 @@ def targets(results: dict) -> list[dict]:
                                   f'{max(lat) / 1e3:.1f} ms') if lat else 'no window',
                      'target': f'none over one step ({STEP_US / 1e3:.1f} ms)',
                      'met': not over if lat else None})
+    if 'hops' in results:
+        h = results['hops']
+        rows.append({'figure': 'from the JointState callback to the /tf publish: the deepest '
+                     'chain of the package\'s calls, and the modules they ran in',
+                     'measured': f'{h["hops"]} functions in {len(h["files"])} files '
+                     f'({h["functions"]} functions ran)',
+                     'target': f'≤ {HOPS_AT_MOST} functions in ≤ {FILES_AT_MOST} files',
+                     'met': h['hops'] <= HOPS_AT_MOST and len(h['files']) <= FILES_AT_MOST})
     if 'markers' in results:
         for kind, what, target in (
                 ('live', 'at the node\'s defaults (a viewer\'s markers, nothing recorded)', True),
