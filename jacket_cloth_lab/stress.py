@@ -42,6 +42,7 @@ from jacket_cloth_ros.motion.clips import joint_state_content, smoothstep
 from .accuracy import deepest_inside
 
 EXPLODED_M = 1.0
+FLOOR = 'floor: '                  # the name of every scene where the body meets the floor
 TUNNEL_M = 0.02
 FLIPPED_SHARE = 0.10
 VERTICAL_BOUND = 0.10
@@ -221,22 +222,22 @@ def floor_scenes(skeleton: Skeleton) -> list[Scene]:
     def scene(name, *keys):
         # The calm tail holds the last pose: the idle joints at a root on the floor would
         # put the legs through it.
-        return Scene(name, _key_frames(skeleton, [_STAND, *keys, (CALM_S, keys[-1][1])]),
+        return Scene(FLOOR + name, _key_frames(skeleton, [_STAND, *keys, (CALM_S, keys[-1][1])]),
                      ends_on_floor=keys[-1][1] is not _STAND)
 
     rolling = [(0.25, _rolled(_BACK, np.pi * k / 8)) for k in range(1, 17)]
     crawling = [(0.5, _crawl(_ALL_FOURS, 0.12 * k, k % 2)) for k in range(1, 9)]
     return [
-        scene('floor: kneeling', (1.2, _KNEEL), (1.5, _KNEEL), (1.2, _STAND)),
-        scene('floor: sitting on the floor', (1.0, _SQUAT), (1.0, _SIT), (2.0, _SIT)),
-        scene('floor: lying on the back', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
+        scene('kneeling', (1.2, _KNEEL), (1.5, _KNEEL), (1.2, _STAND)),
+        scene('sitting on the floor', (1.0, _SQUAT), (1.0, _SIT), (2.0, _SIT)),
+        scene('lying on the back', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
               (2.0, _BACK)),
-        scene('floor: lying on the front', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
+        scene('lying on the front', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
               (2.0, _FRONT)),
-        scene('floor: rolling', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
+        scene('rolling', (1.0, _SQUAT), (1.0, _SIT), (1.2, _BACK),
               (0.5, _rolled(_BACK, 0.0)), *rolling, (1.0, _rolled(_BACK, 2 * np.pi))),
-        scene('floor: crawling', (1.2, _KNEEL), (1.2, _ALL_FOURS), *crawling),
-        scene('floor: getting up', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
+        scene('crawling', (1.2, _KNEEL), (1.2, _ALL_FOURS), *crawling),
+        scene('getting up', (1.2, _KNEEL), (1.2, _ALL_FOURS), (1.2, _FRONT),
               (1.0, _FRONT), (1.2, _ALL_FOURS), (1.2, _KNEEL), (1.2, _STAND)),
     ]
 
@@ -391,10 +392,10 @@ def write_cloth(results: dict, end_frames: dict, method: str, out_dir: str) -> l
     from jacket_cloth_ros.tools.picture import draw_filmstrip
     skeleton = load_shipped_character()
     axes = load_rig(skeleton).view_axes()
-    floor = {s.name for s in floor_scenes(skeleton)}
+    floor = [n for n in end_frames if n.startswith(FLOOR)]
     written = []
     for name, picked in (('stress_cloth.png', [n for n in end_frames if n not in floor]),
-                         ('stress_floor.png', [n for n in end_frames if n in floor])):
+                         ('stress_floor.png', floor)):
         if not picked:
             continue
         path = os.path.join(out_dir, name)
@@ -402,7 +403,7 @@ def write_cloth(results: dict, end_frames: dict, method: str, out_dir: str) -> l
                        title=f'each stress scene\'s last moment, {method}: the jacket and '
                        'hood on the body',
                        world_axes=axes, columns=[
-                           f'{n.removeprefix("floor: ")}\n{results[(n, method)][0]}'
+                           f'{n.removeprefix(FLOOR)}\n{results[(n, method)][0]}'
                            for n in picked])
         written.append(path)
     return written

@@ -84,6 +84,7 @@ def _traced(node, character, content, package):
     finally:
         sys.setprofile(None)
         node.tf.publish = publish
-    assert done, 'the input put nothing on /tf'
+    if not done:
+        raise RuntimeError('the input measured put nothing on /tf')
     return {'chain': [f'{f}:{name}' for f, name in deepest], 'hops': len(deepest),
             'files': sorted({f for f, _ in seen}), 'functions': len(seen)}
