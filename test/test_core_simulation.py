@@ -102,6 +102,23 @@ def test_m8_hood_small_amplitude_period(make_sim, rig, rest_input):
     assert period == pytest.approx(2 * np.pi * np.sqrt(rig.hood.length / 9.81), rel=0.01)
 
 
+def test_m8_hood_rests_on_the_floor_at_its_rod_length(make_sim, rig, rest_input):
+    """A hood anchored just above the floor lies on it instead of hanging through."""
+    from jacket_cloth_ros.core.physics.hood import hood_step
+    sim = make_sim()
+    names, pos = rest_input
+    sim.process(0, names, pos)
+    anchor, _ = sim.hood_anchor(sim.links)
+    up = np.array([0.0, 0.0, 1.0])
+    floor = (anchor - 0.05 * up)[None], up[None]        # 5 cm below the hood's anchor
+    p, pp = sim.hood_p.copy(), sim.hood_p.copy()
+    for _ in range(400):
+        hood_step(sim.links, sim.model.cloth, p, pp, -9.81 * up, sim.dt_ns * 1e-9, 0.02,
+                  *floor)
+    assert p[2] == pytest.approx(floor[0][0, 2], abs=1e-9)
+    assert np.linalg.norm(p - anchor) == pytest.approx(rig.hood.length, rel=1e-9)
+
+
 def test_bones_are_orthonormal_right_handed_and_on_their_vertices(make_sim, rig):
     sim = make_sim()
     play(sim, 'dodge', 60, 1.0)

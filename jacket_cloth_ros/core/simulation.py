@@ -825,8 +825,9 @@ class JacketSimulation:
         :param dt: the step's length, s.
         :param damping: the share of velocity lost in the step.
         """
+        now = self._posed(links, self.root)
         hood.hood_step(links, self.model.cloth, self.hood_p, self.hood_pp, floats(acc),
-                       float(dt), float(damping))
+                       float(dt), float(damping), now.plane_p, now.plane_n)
 
     def _posed(self, links, root, ref=None):
         """Colliders (and M11 references, zero if not given) in the simulation frame."""

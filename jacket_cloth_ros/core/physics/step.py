@@ -132,7 +132,8 @@ def advance(model, tuning, state, before, motion, out):
                 for i in range(cols, nv):
                     for k in range(3):
                         x[i, k] += skin * (work.ride[i, k] - x[i, k])
-        hood_step(out.links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp)
+        hood_step(out.links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp,
+                  work.now.plane_p, work.now.plane_n)
         out.stats[HEM_PATH] += _mean_move(x[nv - cols:], hem_before)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         out.stats[NON_FINITE] = 1.0
