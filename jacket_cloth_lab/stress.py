@@ -145,6 +145,9 @@ def scenes(skeleton: Skeleton, loop_s: float = 60.0) -> list[Scene]:
 # down, it sits one centimetre further from the floor than the shipped pelvis and torso
 # colliders reach (0.13-0.135 m front and back, 0.175-0.18 m to the sides): the body on the
 # floor, the cloth between them.
+# No joint (ankle, wrist) nearer the floor than this: the key poses' own lowest, all fours'
+# wrists, are a little above it.
+JOINT_CLEARANCE_M = 0.035
 _ARMS_DOWN = {'l_elbow': -0.1, 'r_elbow': -0.1}
 _STAND = (_ARMS_DOWN, (0.0, 0.0, 0.96), (0.0, 0.0))
 # Both knees on the floor (shin capsules 0.06), thighs upright, shins behind.
@@ -185,8 +188,14 @@ def _key_frames(skeleton, keys, start_s=10.0):
                  for j in set(a[0]) | set(b[0])}
             xyz = [(1 - w) * u + w * v for u, v in zip(a[1], b[1])]
             roll, pitch = ((1 - w) * u + w * v for u, v in zip(a[2], b[2]))
-            quat = matrix_to_quat(rpy_matrix([roll, 0.0, 0.0]) @ rpy_matrix([0.0, pitch, 0.0]))
-            pos = [q.get(j, 0.0) for j in skeleton.joint_names] + xyz + [float(v) for v in quat]
+            turn = rpy_matrix([roll, 0.0, 0.0]) @ rpy_matrix([0.0, pitch, 0.0])
+            joints = [q.get(j, 0.0) for j in skeleton.joint_names]
+            # Between two key poses a straight blend can put a foot or a hand through the
+            # floor: the body is lifted until every joint clears it, as a real one would be.
+            low = xyz[2] + (skeleton.forward(np.array(joints))[:, :3, 3] @ turn[2]).min()
+            xyz[2] += max(0.0, JOINT_CLEARANCE_M - low)
+            quat = matrix_to_quat(turn)
+            pos = joints + xyz + [float(v) for v in quat]
             out.append((int(round((start_s + t + k / RATE) * 1e9)), names, pos))
         t += n / RATE
     return out
