@@ -16,7 +16,8 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     """Replay ``loaded`` (tools.session.load_session) and measure the cloth after each input.
 
     Returns numpy arrays ``vertical_stretch``, ``horizontal_stretch``, ``inside_m`` (the rig's
-    colliders), ``body_inside_m`` (the body proxy, every vertex, as analyze's) (and ``x``, the
+    colliders), ``body_inside_m`` (the body proxy, every vertex, as analyze's),
+    ``hood_under_plane_m`` (the M8 hood particle's depth under the rig's planes) (and ``x``, the
     cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
     counts ``published`` (inputs that put bones on /tf) and ``inputs``. Every input must be
     accepted and leave a finite cloth.
@@ -25,7 +26,7 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     body = body_proxy(loaded.setup.skeleton, sleeved_links(loaded.setup.rig))
     everywhere = np.ones(loaded.setup.rig.n, dtype=bool)
     series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [],
-              'body_inside_m': [], 'x': []}
+              'body_inside_m': [], 'hood_under_plane_m': [], 'x': []}
     resets, published = [], 0
 
     def probe(pipeline, report, stamp, outputs):
@@ -42,6 +43,9 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
                                                sim.collider_frames(sim.links), labels).value)
         series['body_inside_m'].append(depth_inside(sim.x, everywhere, body.posed(sim.links),
                                                     body.labels).value)
+        planes = sim.collider_frames(sim.links)
+        series['hood_under_plane_m'].append(max(
+            [0.0, *(-(sim.hood_p - planes.plane_points) * planes.plane_normals).sum(axis=1)]))
         if keep_x:
             series['x'].append(sim.x.copy())
 

@@ -408,6 +408,9 @@ class JacketSimulation:
         self.contact[:] = False
         anchor, rot = self.hood_anchor(self.links)
         self.hood_p = anchor + rot @ self.rig.hood.rest_direction * self.rig.hood.length
+        planes = self._posed(self.links, self.root)     # a body lying down: on the floor
+        hood.rest_on_planes(self.hood_p, anchor, float(self.rig.hood.length), planes.plane_p,
+                            planes.plane_n)
         self.hood_pp = self.hood_p.copy()
         self.t_sim = sample.stamp_ns
         self.last = sample
@@ -819,6 +822,8 @@ class JacketSimulation:
 
     def hood_step(self, links: np.ndarray, acc: np.ndarray, dt: float, damping: float) -> None:
         """M8: one Verlet particle on a rod of fixed length from the hood bone's centre.
+
+        It rests on the rig's planes (the floor) where the rod reaches them.
 
         :param links: the link transforms (L, 4, 4) in the simulation frame.
         :param acc: the particle's acceleration (3,), m/s^2 in the simulation frame.

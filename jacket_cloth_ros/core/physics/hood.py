@@ -28,6 +28,12 @@ def hood_step(links, cloth, p, pp, acc, dt, damping, plane_p, plane_n):
     if n > 1e-9:
         for k in range(3):
             p[k] = anchor[k] + d[k] * (length / n)
+    rest_on_planes(p, anchor, length, plane_p, plane_n)
+
+
+@njit(cache=True)
+def rest_on_planes(p, anchor, length, plane_p, plane_n):
+    """Keep the particle ``p`` on its rod from ``anchor`` and on the planes' positive side."""
     for j in range(plane_p.shape[0]):
         _rest_on_plane(p, anchor, length, plane_p[j], plane_n[j])
 
@@ -41,7 +47,7 @@ def _rest_on_plane(p, anchor, length, point, normal):
     """
     below = ((p[0] - point[0]) * normal[0] + (p[1] - point[1]) * normal[1]
              + (p[2] - point[2]) * normal[2])
-    if below >= 0.0:
+    if not below < 0.0:         # above, or not finite: a NaN stays for the step to find
         return
     h = ((anchor[0] - point[0]) * normal[0] + (anchor[1] - point[1]) * normal[1]
          + (anchor[2] - point[2]) * normal[2])
