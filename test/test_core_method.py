@@ -124,6 +124,7 @@ def test_m3_the_coarse_grid_drives_the_bones(make_sim, rig):
     before = sim.bones().translations.copy()
     k = rig.bone_vertices().index((5, 4))
     sim.x[5 * rig.cols + 4] += [0.0, 0.0, -0.01]
+    sim.ready_bones = None                  # the input's bones were made before that move
     after = sim.bones().translations
     assert after[k] == pytest.approx(before[k] + [0.0, 0.0, -0.01])
     assert np.array_equal(np.delete(after, k, axis=0), np.delete(before, k, axis=0))

@@ -345,6 +345,8 @@ def stepped(steps: CrowdSteps,
             reports[k], job = sims[index].prepare(stamp, names, positions)
             if job is not None:
                 jobs.append((k, index, job))
+            elif reports[k].accepted:       # a reset, or no step due: its bones as they are
+                sims[index].check_bones(reports[k])
         results = steps.run([(index, job) for _, index, job in jobs], loaded)
         for (k, index, job), (out, status) in zip(jobs, results):
             sim = sims[index]

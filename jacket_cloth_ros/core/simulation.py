@@ -44,7 +44,7 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 # Fabrics are tuned at this rate: their damping is the share of velocity lost per 1/120 s and
 # their stiffness is what one step of this length does (see per_step and xpbd_compliance).
 DESIGN_RATE = 120.0
-# The reset reason of an input whose bones were not finite (check_bones).
+# The reset reason of an input whose bones were not finite (JacketSimulation.check_bones).
 NONFINITE_BONES = 'non-finite bones'
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
@@ -229,8 +229,8 @@ class JacketSimulation:
         self.resets = 0
         self.faults = Faults()
         self.steps_total = 0
-        # Bones a crowd's compiled call computed for the current state (core/crowd.py); any
-        # new input or reset drops them.
+        # The current state's bones, as an input's check left them (a crowd's compiled call
+        # makes them with its steps, core/crowd.py); any new input or reset drops them.
         self.ready_bones = None
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
@@ -423,25 +423,25 @@ class JacketSimulation:
         self.xp = self.x.copy()
         self.contact[:] = False
 
-    def check_bones(self, report: StepReport) -> Bones:
-        """Return the bones of the input ``report`` tells of, after making them finite if need be.
+    def check_bones(self, report: StepReport) -> None:
+        """Make the bones of the input ``report`` tells of finite if need be; once per input.
 
-        The door to publishing: bones that are not finite (a vertical edge of zero length gives
+        The door to publishing, run where an input's steps end (:meth:`process`, a crowd's
+        round), never again: bones that are not finite (a vertical edge of zero length gives
         its M9 bone no direction, as when rows of the hem lie flattened on the floor) reset the
         cloth to the skinned pose (M6, M11) as a non-finite cloth does; if that pose's bones are
         not finite either (its settling step flattened it again), the cloth is laid on the
         skinned pose as it is, before the colliders. Such an input is counted in ``faults``
         and ``report.reset`` says why. Bones still not finite (a degenerate skeleton pose) are
-        returned as they are: the caller publishes none.
+        left as they are (:meth:`bones` says so): the caller publishes none.
 
-        :param report: the report of the input just processed; its ``reset`` is set if the
-            cloth resets here. An input is checked once, however often this is called.
+        :param report: the report of the accepted input just processed; its ``reset`` is set
+            if the cloth resets here.
         """
         bones = self.bones()
-        if (bones.finite or not report.accepted or self.last is None
-                or report.reset.startswith(NONFINITE_BONES)):      # done for this input
-            self.ready_bones = bones        # the markers' skinning reads them again
-            return bones
+        if bones.finite or self.last is None:
+            self.ready_bones = bones        # /tf and the markers' skinning read them
+            return
         self.faults.nonfinite += 1
         report.reset = NONFINITE_BONES + self._degenerate_edge()
         self._reset(self.last)
@@ -454,7 +454,6 @@ class JacketSimulation:
             self.contact[:] = False
             bones = self.bones()
         self.ready_bones = bones
-        return bones
 
     def _degenerate_edge(self) -> str:
         """Say which vertical edge of the cloth is shortest when it has no length, else ''."""
@@ -575,6 +574,9 @@ class JacketSimulation:
                 positions: npt.ArrayLike) -> StepReport:
         """Advance the simulation to ``stamp_ns`` with one JointState's content.
 
+        An accepted input's bones are checked (:meth:`check_bones`): :meth:`bones` then gives
+        them, finite unless the skeleton's pose is degenerate.
+
         :param stamp_ns: the JointState's header stamp, ns.
         :param names: its joint names.
         :param positions: its positions, one per name (rad or m).
@@ -591,6 +593,8 @@ class JacketSimulation:
                 ran = False
             self.complete(report, job, out, ran)
         report.step_cost_ns = time.perf_counter_ns() - started
+        if report.accepted:
+            self.check_bones(report)
         return report
 
     def prepare(self, stamp_ns: int, names: Sequence[str],
