@@ -145,8 +145,9 @@ def scenes(skeleton: Skeleton, loop_s: float = 60.0) -> list[Scene]:
 # down, it sits one centimetre further from the floor than the shipped pelvis and torso
 # colliders reach (0.13-0.135 m front and back, 0.175-0.18 m to the sides): the body on the
 # floor, the cloth between them.
-# No joint (ankle, wrist) nearer the floor than this: the key poses' own lowest, all fours'
-# wrists, are a little above it.
+# No joint origin (ankle, wrist) nearer the floor than this. The still key poses' lowest, all
+# fours' wrists, are a little above it; the crawl's strides (a foot at 1.25 cm) and the roll
+# on its side (onto the lower arm) are lifted a few centimetres.
 JOINT_CLEARANCE_M = 0.035
 _ARMS_DOWN = {'l_elbow': -0.1, 'r_elbow': -0.1}
 _STAND = (_ARMS_DOWN, (0.0, 0.0, 0.96), (0.0, 0.0))
@@ -166,7 +167,6 @@ _FRONT = (_ARMS_DOWN, (0.6, 0.0, 0.145), (0.0, np.pi / 2))
 _ALL_FOURS = ({'l_hip_pitch': -1.5, 'r_hip_pitch': -1.5, 'l_knee': 1.55, 'r_knee': 1.55,
                'l_shoulder_pitch': -1.5, 'r_shoulder_pitch': -1.5, 'l_ankle': 0.5,
                'r_ankle': 0.5}, (0.15, 0.0, 0.56), (0.0, 1.5))
-_OVERHEAD = {'l_shoulder_roll': 2.8, 'r_shoulder_roll': -2.8, 'l_elbow': -0.2, 'r_elbow': -0.2}
 
 
 def _key_frames(skeleton, keys, start_s=10.0):
@@ -204,12 +204,13 @@ def _key_frames(skeleton, keys, start_s=10.0):
 def _rolled(pose, roll):
     """Return the lying ``pose`` turned about the world's x (its long axis) by ``roll``.
 
-    It is lifted so that the trunk's ellipse rests on the floor.
+    A log roll, the arms at the sides: it is lifted so that the trunk's ellipse rests on the
+    floor, and on its side _key_frames lifts it onto the lower arm (at most 4 cm).
     """
     joints, (x, y, _), (_, pitch) = pose
     depth, width = 0.135, 0.18
     z = np.hypot(depth * np.cos(roll), width * np.sin(roll)) + 0.01
-    return ({**joints, **_OVERHEAD}, (x, y, z), (roll, pitch))
+    return (joints, (x, y, z), (roll, pitch))
 
 
 def _crawl(pose, ahead, side):

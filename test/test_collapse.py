@@ -151,13 +151,13 @@ def _held_still(scene, extra_s):
 
 
 @pytest.mark.parametrize('scene_name, fabric, warned', [
-    ('floor: rolling', {}, True),               # the default's sweeps cycle there
-    ('floor: rolling', {'iterations': 16}, False),
+    ('floor: crawling', {}, True),              # the default's sweeps cycle there
+    ('floor: crawling', {'iterations': 16}, False),
     ('walk looped for 60 s', {}, False),        # a hem standing up swings down, then rests
 ])
 def test_a_cloth_that_never_rests_on_a_still_body_is_named(scene_name, fabric, warned):
-    # Lying still on the floor after a roll, the default's eight sweeps keep the hem moving
-    # for as long as the body lies there; every per-input bound holds, so nothing said so.
+    # Still on all fours after crawling, the default's eight sweeps keep the hem moving for
+    # as long as the body stays there; every per-input bound holds, so nothing said so.
     from jacket_cloth_lab.stress import scenes
     from jacket_cloth_ros.core.fabric import load_fabric
     from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
@@ -190,9 +190,9 @@ def test_a_restless_cloth_is_a_warn_in_the_diagnostics_while_it_lasts():
     skeleton = load_shipped_character()
     pipeline = SessionPipeline(skeleton, load_rig(skeleton),
                                default_values(load_fabrics()['tweed_jacket']), timing=False)
-    rolling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: rolling')
+    crawling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: crawling')
     levels = []
-    for stamp, names, pos in _held_still(rolling, 5.0):
+    for stamp, names, pos in _held_still(crawling, 5.0):
         pipeline.on_joint_state(JointStateContent(stamp, tuple(names), np.asarray(pos)), stamp)
         status = deserialize_message(pipeline.diagnostics_now(stamp), DiagnosticArray).status[0]
         levels.append((status.level, status.message))

@@ -84,3 +84,17 @@ def test_the_stress_verdict_of_the_default_on_the_floor(skeleton, rig, scenes, n
     verdict, figures = run_scene(skeleton, rig, scenes[name], 'hard_pass')
     assert verdict == 'holds', figures
     assert figures['nonfinite'] == 0 and figures['resets'] == 1
+
+
+def test_a_body_lying_at_its_first_input_has_its_hood_on_the_floor(skeleton, rig, scenes):
+    # M8 from the reset on: the hood's rest direction, seen from a body on its back, points
+    # through the floor; the reset lays it on the floor at its rod's length.
+    stamp, names, pos = scenes['lying on the back'].inputs[-1]
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    assert sim.process(stamp, names, pos).reset == 'first sample'
+    anchor, rot = sim.hood_anchor(sim.links)
+    rest = anchor + rot @ rig.hood.rest_direction * rig.hood.length
+    world = sim.root[:3, :3] @ np.array([sim.hood_p, rest]).T + sim.root[:3, 3:4]
+    assert world[2, 1] < -0.03                  # where the rest direction would put it
+    assert world[2, 0] == pytest.approx(0.0, abs=1e-9)
+    assert np.linalg.norm(sim.hood_p - anchor) == pytest.approx(rig.hood.length, rel=1e-9)

@@ -862,7 +862,9 @@ class JacketSimulation:
     def bones(self) -> Bones:
         """Return the M9 jacket bones and the M8 hood bone.
 
-        Jacket bones have x down the cloth, y left to right and z = x * y.
+        Jacket bones have x down the cloth, y left to right and z = x * y. After an input they
+        are that input's checked bones (``ready_bones``) until the next input or reset; a
+        caller that moves the cloth by hand in between drops them (``ready_bones = None``).
         """
         if self.ready_bones is not None:
             return self.ready_bones
