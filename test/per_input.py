@@ -39,13 +39,12 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
         vs, _, hs, _ = sim.edge_strains()
         series['vertical_stretch'].append(vs.value)
         series['horizontal_stretch'].append(hs.value)
-        series['inside_m'].append(depth_inside(sim.x, sim.rig.free,
-                                               sim.collider_frames(sim.links), labels).value)
+        frames = sim.collider_frames(sim.links)
+        series['inside_m'].append(depth_inside(sim.x, sim.rig.free, frames, labels).value)
         series['body_inside_m'].append(depth_inside(sim.x, everywhere, body.posed(sim.links),
                                                     body.labels).value)
-        planes = sim.collider_frames(sim.links)
         series['hood_under_plane_m'].append(max(
-            [0.0, *(-(sim.hood_p - planes.plane_points) * planes.plane_normals).sum(axis=1)]))
+            [0.0, *(-(sim.hood_p - frames.plane_points) * frames.plane_normals).sum(axis=1)]))
         if keep_x:
             series['x'].append(sim.x.copy())
 

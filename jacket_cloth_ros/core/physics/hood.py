@@ -61,15 +61,20 @@ def rest_on_planes(p, anchor, length, plane_p, plane_n):
 def _above_all(p, plane_p, plane_n):
     """Tell whether a point is on no plane's negative side (a point not finite is, too)."""
     for j in range(plane_p.shape[0]):
-        h = ((p[0] - plane_p[j, 0]) * plane_n[j, 0] + (p[1] - plane_p[j, 1]) * plane_n[j, 1]
-             + (p[2] - plane_p[j, 2]) * plane_n[j, 2])
-        if h < -ON_PLANE:
+        if _height(p, plane_p[j], plane_n[j]) < -ON_PLANE:
             return False
     return True
 
 
 # Rounding: a point this far (m) under a plane it was put on is on it.
 ON_PLANE = 1e-12
+
+
+@njit(cache=True, inline='always')
+def _height(p, point, normal):
+    """Return a point's signed height over a plane (a point on it and its unit normal)."""
+    return ((p[0] - point[0]) * normal[0] + (p[1] - point[1]) * normal[1]
+            + (p[2] - point[2]) * normal[2])
 
 
 @njit(cache=True)
@@ -88,8 +93,7 @@ def _on_circle(p, anchor, length, point, normal, out):
 
     Along the plane it goes the way the rod leans (a rod straight through the plane: any way).
     """
-    h = ((anchor[0] - point[0]) * normal[0] + (anchor[1] - point[1]) * normal[1]
-         + (anchor[2] - point[2]) * normal[2])
+    h = _height(anchor, point, normal)
     if not abs(h) < length:
         return False
     along = np.empty(3)
@@ -128,10 +132,7 @@ def _on_two(anchor, length, point_a, normal_a, point_b, normal_b, side, out):
     if dd < 1e-12:
         return False
     # The line's point nearest the anchor: the anchor moved onto both planes along them.
-    ha = ((anchor[0] - point_a[0]) * normal_a[0] + (anchor[1] - point_a[1]) * normal_a[1]
-          + (anchor[2] - point_a[2]) * normal_a[2])
-    hb = ((anchor[0] - point_b[0]) * normal_b[0] + (anchor[1] - point_b[1]) * normal_b[1]
-          + (anchor[2] - point_b[2]) * normal_b[2])
+    ha, hb = _height(anchor, point_a, normal_a), _height(anchor, point_b, normal_b)
     c = normal_a[0] * normal_b[0] + normal_a[1] * normal_b[1] + normal_a[2] * normal_b[2]
     det = 1.0 - c * c
     u = (ha - c * hb) / det
