@@ -3,7 +3,7 @@
 
 import numpy as np
 import pytest
-from conftest import body, play, stepwise
+from conftest import body, clip_inputs, play, stepwise
 
 from jacket_cloth_ros.core.transforms import quat_to_matrix
 from jacket_cloth_ros.motion.clips import joint_state_content
@@ -19,6 +19,31 @@ def test_fixed_step_interpolates_and_caps_steps(make_sim, rest_input):
     r = sim.process(1_533_333_334, names, pos)
     assert (r.steps, r.skipped_steps) == (12, 48)
     assert sim.faults.overruns == 1
+
+
+def test_m7_a_step_that_overstretches_a_row_runs_again_in_finer_substeps(make_sim, skeleton):
+    # A run stepped at 12 Hz moves the legs through the rows faster than one step resolves.
+    # Such a step, run again from its start in two substeps, ends exactly where the same
+    # step set to two substeps ends (unless that one too is run again), and is counted.
+    from jacket_cloth_ros.core.simulation import SimParams
+    inputs = clip_inputs(skeleton, 'run', 3.0)
+    first = make_sim(sim_rate=12.0)
+    retried = {}
+    for k, (stamp, names, pos) in enumerate(inputs):
+        report = first.process(stamp, names, pos)
+        if report.retried_steps:
+            assert report.steps == 1 and report.substeps == 1 + 2
+            retried[k] = first.x.copy()
+    compared = 0
+    for k, ended in list(retried.items())[:4]:
+        again = make_sim(sim_rate=12.0)
+        for stamp, names, pos in inputs[:k]:
+            again.process(stamp, names, pos)
+        again.set_params(SimParams(sim_rate=12.0, substeps=2))
+        if again.process(*inputs[k]).retried_steps == 0:
+            assert np.array_equal(again.x, ended)
+            compared += 1
+    assert compared
 
 
 def test_same_motion_at_30_60_120_hz_input_agrees_within_1cm(make_sim):

@@ -184,7 +184,8 @@ class StepReport:
     max_penetration: float = 0.0
     limited_vertices: int = 0          # M11 vertex-steps moved back to their bound
     sweeps: int = 0                    # relaxation sweeps run (over all steps and substeps)
-    substeps: int = 0                  # substeps run (over all steps)
+    substeps: int = 0                  # substeps run (over all steps), retries' included
+    retried_steps: int = 0             # steps run again in finer substeps (step.RETRIED)
     lod_level: int = 0                 # level of detail of these steps (core/lod.py)
 
 
@@ -676,6 +677,7 @@ class JacketSimulation:
             report.limited_vertices += int(stats[step.LIMITED])
             report.sweeps += int(stats[step.SWEEPS])
             report.substeps += int(stats[step.SUBSTEPS])
+            report.retried_steps += int(stats[step.RETRIED])
             report.steps = job.steps
             self.steps_total += job.steps
             self.last = job.sample

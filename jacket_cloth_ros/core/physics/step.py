@@ -26,9 +26,13 @@ from .pose import (
     share_world_motion, skinned_pose, solve_layer)
 
 # The ``stats`` slots; HEM_PATH: the hem's mean move summed step by step (a cloth that keeps
-# moving on a still body, measures.RestlessWatch).
-DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE, HEM_PATH = range(6)
-STAT_SLOTS = HEM_PATH + 1
+# moving on a still body, measures.RestlessWatch); RETRIED: steps run again in finer substeps.
+DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE, HEM_PATH, RETRIED = range(7)
+STAT_SLOTS = RETRIED + 1
+
+# A step that leaves a horizontal edge more than this many times the fabric's strain limit
+# over its rest length is run again from its start in twice the substeps.
+RETRY_OVER_LIMIT = 2.0
 
 
 class _Scratch(NamedTuple):
@@ -47,6 +51,10 @@ class _Scratch(NamedTuple):
     now: Posed                      # colliders and M11 references at this step
     damp: np.ndarray                # (N,) damping per substep
     ride: np.ndarray                # (N,3) the cloth riding its top row (level of detail)
+    x0: np.ndarray                  # (N,3) the cloth where the step starts, for a retry
+    xp0: np.ndarray
+    contact0: np.ndarray
+    before0: Posed                  # the colliders where the step starts, for a retry
 
 
 @njit(cache=True)
@@ -103,14 +111,11 @@ def advance(model, tuning, state, before, motion, out):
         _forces(cloth.up, tuning, state.root, t_sim, work)
         _pin_top_row(model, tuning, state.root, step == motion.steps - 1, work, out)
         substeps = _substeps_for(tuning, work.top, x, cols)
-        pin_from = x.copy() if substeps > 1 else x
+        work.x0[:] = x          # where the pinned row starts from, and a retry's start
+        work.xp0[:] = xp
+        work.contact0[:] = state.contact
         x[:cols] = work.top
         xp[:cols] = work.top
-        if substeps != damp_for:
-            e = tuning.design_exponent / substeps
-            lost_per_each(tuning.damping, e, work.damp)
-            contact_damp = lost_per(tuning.contact_damping, e)
-            damp_for = substeps
         # Beyond the far distance the cloth rides on its pinned top row with its last shape
         # and no cloth step runs; a change blends the simulated and the riding cloth over the
         # steps instead of popping.
@@ -126,8 +131,23 @@ def advance(model, tuning, state, before, motion, out):
             _copy_posed(work.now, before)
             state.started[0] = True
         else:
-            control = StepControl(work.acc, work.damp, contact_damp, dt, substeps, pin_from)
-            _simulate(model, tuning, state, before, work.now, control, out.stats)
+            started = state.started[0]
+            _copy_posed(before, work.before0)
+            damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
+                                                  work.damp)
+            _simulate(model, tuning, state, before, work.now,
+                      StepControl(work.acc, work.damp, contact_damp, dt, substeps, work.x0),
+                      out.stats)
+            if _overstretched(x, cloth, RETRY_OVER_LIMIT * tuning.horizontal_limit):
+                # Faster than its substeps resolve (a thigh swept through a row): again from
+                # the step's start in finer ones, rather than a stretch no later step undoes.
+                _restart(state, started, work, before)
+                damp_for, contact_damp = _damping_for(tuning, 2 * substeps, damp_for,
+                                                      contact_damp, work.damp)
+                _simulate(model, tuning, state, before, work.now,
+                          StepControl(work.acc, work.damp, contact_damp, dt, 2 * substeps,
+                                      work.x0), out.stats)
+                out.stats[RETRIED] += 1
             if skin > 0.0:
                 for i in range(cols, nv):
                     for k in range(3):
@@ -138,6 +158,50 @@ def advance(model, tuning, state, before, motion, out):
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         out.stats[NON_FINITE] = 1.0
     return t_sim
+
+
+@njit(cache=True)
+def _damping_for(tuning, substeps, damp_for, contact_damp, damp):
+    """Fill ``damp`` with the damping per substep of ``substeps`` unless it already holds it.
+
+    Returns (the substeps it holds now, the contact damping per substep).
+    """
+    if substeps == damp_for:
+        return damp_for, contact_damp
+    e = tuning.design_exponent / substeps
+    lost_per_each(tuning.damping, e, damp)
+    return substeps, lost_per(tuning.contact_damping, e)
+
+
+@njit(cache=True)
+def _overstretched(x, cloth, most):
+    """Tell whether a horizontal edge is over (1 + ``most``) times its rest length.
+
+    A negative ``most`` (the strain limit off) never is.
+    """
+    if most < 0.0:
+        return False
+    ha, hb, rest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
+    for j in range(ha.shape[0]):
+        a, b = ha[j], hb[j]
+        bound = (1.0 + most) * rest[j]
+        if ((x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
+                + (x[a, 2] - x[b, 2]) ** 2) > bound * bound:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _restart(state, started, work, before):
+    """Put the cloth and the colliders back where the step started, its pinned row posed."""
+    cols = work.top.shape[0]
+    state.x[:] = work.x0
+    state.xp[:] = work.xp0
+    state.contact[:] = work.contact0
+    state.x[:cols] = work.top
+    state.xp[:cols] = work.top
+    state.started[0] = started
+    _copy_posed(work.before0, before)
 
 
 @njit(cache=True)
@@ -161,7 +225,17 @@ def _scratch(model, motion, nv, cols):
                 np.empty((nv, 3)))
     return _Scratch(np.empty(motion.q_a.shape[0]), np.empty(4), np.eye(4), np.empty((4, 4)),
                     np.empty(3), np.empty(3), np.empty(3), np.empty((nv, 3)), np.empty(3),
-                    np.empty((cols, 3)), now, np.empty(nv), np.empty((nv, 3)))
+                    np.empty((cols, 3)), now, np.empty(nv), np.empty((nv, 3)),
+                    np.empty((nv, 3)), np.empty((nv, 3)), np.empty(nv, dtype=np.bool_),
+                    _posed_like(now))
+
+
+@njit(cache=True)
+def _posed_like(p):
+    """Return a new bundles.Posed with arrays of ``p``'s shapes."""
+    return Posed(np.empty(p.centers.shape), np.empty(p.axes.shape), np.empty(p.cap_a.shape),
+                 np.empty(p.cap_b.shape), np.empty(p.plane_p.shape), np.empty(p.plane_n.shape),
+                 np.empty(p.ref.shape))
 
 
 @njit(cache=True)
