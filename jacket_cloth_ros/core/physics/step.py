@@ -54,7 +54,6 @@ class _Scratch(NamedTuple):
     x0: np.ndarray                  # (N,3) the cloth where the step starts, for a retry
     xp0: np.ndarray
     contact0: np.ndarray
-    before0: Posed                  # the colliders where the step starts, for a retry
 
 
 @njit(cache=True)
@@ -131,8 +130,6 @@ def advance(model, tuning, state, before, motion, out):
             _copy_posed(work.now, before)
             state.started[0] = True
         else:
-            started = state.started[0]
-            _copy_posed(before, work.before0)
             damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
                                                   work.damp)
             _simulate(model, tuning, state, before, work.now,
@@ -141,13 +138,16 @@ def advance(model, tuning, state, before, motion, out):
             if _overstretched(x, cloth, RETRY_OVER_LIMIT * tuning.horizontal_limit):
                 # Faster than its substeps resolve (a thigh swept through a row): again from
                 # the step's start in finer ones, rather than a stretch no later step undoes.
-                _restart(state, started, work, before)
+                _restart(state, work)
                 damp_for, contact_damp = _damping_for(tuning, 2 * substeps, damp_for,
                                                       contact_damp, work.damp)
                 _simulate(model, tuning, state, before, work.now,
                           StepControl(work.acc, work.damp, contact_damp, dt, 2 * substeps,
                                       work.x0), out.stats)
                 out.stats[RETRIED] += 1
+            # Where the next step's substeps start from: this step's end.
+            _copy_posed(work.now, before)
+            state.started[0] = True
             if skin > 0.0:
                 for i in range(cols, nv):
                     for k in range(3):
@@ -192,16 +192,14 @@ def _overstretched(x, cloth, most):
 
 
 @njit(cache=True)
-def _restart(state, started, work, before):
-    """Put the cloth and the colliders back where the step started, its pinned row posed."""
+def _restart(state, work):
+    """Put the cloth back where the step started, its pinned row posed."""
     cols = work.top.shape[0]
     state.x[:] = work.x0
     state.xp[:] = work.xp0
     state.contact[:] = work.contact0
     state.x[:cols] = work.top
     state.xp[:cols] = work.top
-    state.started[0] = started
-    _copy_posed(work.before0, before)
 
 
 @njit(cache=True)
@@ -226,16 +224,7 @@ def _scratch(model, motion, nv, cols):
     return _Scratch(np.empty(motion.q_a.shape[0]), np.empty(4), np.eye(4), np.empty((4, 4)),
                     np.empty(3), np.empty(3), np.empty(3), np.empty((nv, 3)), np.empty(3),
                     np.empty((cols, 3)), now, np.empty(nv), np.empty((nv, 3)),
-                    np.empty((nv, 3)), np.empty((nv, 3)), np.empty(nv, dtype=np.bool_),
-                    _posed_like(now))
-
-
-@njit(cache=True)
-def _posed_like(p):
-    """Return a new bundles.Posed with arrays of ``p``'s shapes."""
-    return Posed(np.empty(p.centers.shape), np.empty(p.axes.shape), np.empty(p.cap_a.shape),
-                 np.empty(p.cap_b.shape), np.empty(p.plane_p.shape), np.empty(p.plane_n.shape),
-                 np.empty(p.ref.shape))
+                    np.empty((nv, 3)), np.empty((nv, 3)), np.empty(nv, dtype=np.bool_))
 
 
 @njit(cache=True)
@@ -323,14 +312,15 @@ def _substeps_for(tuning, top, x, cols):
 
 @njit(cache=True)
 def _simulate(model, tuning, state, before, now, control, stats):
-    """One cloth step (cloth.cloth_step, the colliders already posed in ``now``), its stats."""
+    """One cloth step (cloth.cloth_step, the colliders already posed in ``now``), its stats.
+
+    ``before`` is left where the step started (the caller moves it on), so a retry starts
+    from the same place.
+    """
     if not state.started[0]:        # no step before: substeps start where this one ends
         _copy_posed(now, before)
     deepest, limited, sweeps = cloth_step(model.cloth, model.colliders, tuning, state, control,
                                           now, before)
-    # Where the next step's substeps start from: this step's end.
-    _copy_posed(now, before)
-    state.started[0] = True
     stats[DEEPEST] = max(stats[DEEPEST], deepest)
     stats[LIMITED] += limited
     stats[SWEEPS] += sweeps
