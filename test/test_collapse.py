@@ -152,6 +152,7 @@ def _held_still(scene, extra_s):
 
 @pytest.mark.parametrize('scene_name, fabric, warned', [
     ('floor: crawling', {}, True),              # the default's sweeps cycle there
+    ('floor: crawling', {'edge_damping': 0.06}, False),   # as the line says
     ('floor: crawling', {'iterations': 16}, False),
     ('walk looped for 60 s', {}, False),        # a hem standing up swings down, then rests
 ])
@@ -174,7 +175,7 @@ def test_a_cloth_that_never_rests_on_a_still_body_is_named(scene_name, fabric, w
     assert said == sim.faults.restless and len(said) == int(warned), said
     if warned:
         assert 'keeps moving with the body still' in said[0]
-        assert 'raise fabric.iterations (8 now)' in said[0]
+        assert 'raise fabric.edge_damping (0.015 now, the rest 0.035)' in said[0]
 
 
 def test_a_restless_cloth_is_a_warn_in_the_diagnostics_while_it_lasts():

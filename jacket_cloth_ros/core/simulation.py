@@ -707,8 +707,9 @@ class JacketSimulation:
         watch = self.watches.restless
         return (f'the cloth keeps moving with the body still: its hem at '
                 f'{100 * watch.speed:.1f} cm/s after {RESTLESS_FOR_S:g} s still; raise '
-                f'fabric.iterations ({self.fabric.iterations} now): its sweeps do not converge '
-                'against the body and the floor, and more bring it to rest')
+                f'fabric.edge_damping ({self.fabric.edge_damping:g} now, the rest '
+                f'{self.fabric.damping:g}): its free edges, damped least, keep swinging where '
+                'the vertical pass fights the body and the floor')
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:
