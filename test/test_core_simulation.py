@@ -550,16 +550,18 @@ def test_m6_a_collider_over_the_pinned_row_lifts_it_and_its_column_stays_unstret
 
 def test_a_crowd_steps_each_character_to_the_bits_it_gets_alone(skeleton, rig):
     # core.crowd: the steps and bones of every character in one compiled call (parallel);
-    # each character's cloth and bones equal a lone simulation's, a reset and a NaN included.
+    # each character's cloth and bones equal a lone simulation's, a reset, a NaN and steps
+    # run again in finer substeps (the run at 12 Hz) included.
     from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
     from jacket_cloth_ros.core.fabric import load_fabric
     from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
-    clips = ('walk', 'run', 'dodge', 'jump')
+    clips = ('walk', 'run', 'dodge', 'jump', 'run')
+    fabrics = ('tweed_jacket', 'down_jacket', 'veil', 'tweed_jacket', 'tweed_jacket')
+    rates = (120.0, 120.0, 120.0, 120.0, 12.0)
     crowd = CrowdSteps(threads=2)
-    sims = [JacketSimulation(skeleton, rig, load_fabric(f), SimParams()) for f in (
-        'tweed_jacket', 'down_jacket', 'veil', 'tweed_jacket')]
-    alone = [JacketSimulation(skeleton, rig, load_fabric(f), SimParams()) for f in (
-        'tweed_jacket', 'down_jacket', 'veil', 'tweed_jacket')]
+    sims, alone = ([JacketSimulation(skeleton, rig, load_fabric(f), SimParams(sim_rate=r))
+                    for f, r in zip(fabrics, rates)] for _ in range(2))
+    retried = 0
     for sim in sims:
         crowd.add(sim)
     for k in range(40):
@@ -575,12 +577,13 @@ def test_a_crowd_steps_each_character_to_the_bits_it_gets_alone(skeleton, rig):
         reports = stepped(crowd, inputs)
         for (i, stamp, names, pos), report in zip(inputs, reports):
             mine = alone[i].process(stamp, names, pos)
-            assert (report.accepted, report.reset, report.steps) == (
-                mine.accepted, mine.reset, mine.steps)
+            assert (report.accepted, report.reset, report.steps, report.retried_steps) == (
+                mine.accepted, mine.reset, mine.steps, mine.retried_steps)
             assert np.array_equal(sims[i].x, alone[i].x)
             assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
+            retried += report.retried_steps
     assert crowd.calls == 39 and sims[3].ready_bones is not None     # the first: resets
-    assert [s.resets for s in sims] == [1, 1, 3, 1]
+    assert [s.resets for s in sims] == [1, 1, 3, 1, 1] and retried
 
 
 _COMPILED_ON_ADD = """
