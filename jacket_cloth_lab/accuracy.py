@@ -212,7 +212,9 @@ def run(skeleton: Skeleton, rig: Rig, fabric: Fabric, method: Method,
             strain[name].append(s[idx].max())
             strain_mean[name].append(s[idx].mean())
         inside.append(deepest_inside(sim))
-        h = sim.dt_ns * 1e-9 / max(report.substeps // max(report.steps, 1), 1)
+        # A step run again in twice the substeps counts them too (step.RETRIED).
+        runs = report.steps + 2 * report.retried_steps
+        h = sim.dt_ns * 1e-9 / max(report.substeps // max(runs, 1), 1)
         v = (x - sim.xp)[rig.free] / h     # xp is the last substep's
         kinetic.append(0.5 * float((v * v).sum()))
     return Trace(method, np.array(hem), np.array(cloth), np.array(hood),

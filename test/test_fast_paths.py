@@ -247,7 +247,7 @@ def test_diagnostics_bytes_are_rclpys_diagnostic_array_of_the_pipeline(skeleton,
                 ('worst_vertical_strain', f'{vertical:.4f}'),
                 ('worst_horizontal_strain', f'{horizontal:.4f}'),
                 ('inputs', pipe.inputs), ('dropped_inputs', 0), ('undecodable_inputs', 0),
-                ('lost_inputs', 0), ('sim_steps', sim.steps_total),
+                ('lost_inputs', 0), ('sim_steps', sim.steps_total), ('retried_steps', 0),
                 ('lod_level', sim.lod.level), ('viewer_distance_m', ''),
                 ('recording', '/tmp/odd name é.mcap')]
             reference = DiagnosticArray(status=[_status(

@@ -50,7 +50,8 @@ class SimParams:
         'gauss_seidel', 'constraint solver: gauss_seidel (the article, stiffness per sweep) or '
         'xpbd (compliance, the same softness at any rate and iteration count)', choices=Solver)
     substeps: int = _param(1, 'equal substeps per simulation step; with quality_tolerance, the '
-                           'most used', 1, 64)
+                           'most used; with M12 a step that overstretches a row runs again in '
+                           'twice as many', 1, 64)
     quality_tolerance: float = _param(
         0.0, 'm; > 0: automatic quality mode, fewer sweeps and substeps when the motion is '
         'calm; 0: fabric.iterations and substeps every step', 0.0, 0.5)

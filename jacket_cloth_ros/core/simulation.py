@@ -230,6 +230,7 @@ class JacketSimulation:
         self.resets = 0
         self.faults = Faults()
         self.steps_total = 0
+        self.steps_retried = 0     # run again in finer substeps (step.RETRIED)
         # The current state's bones, as an input's check left them (a crowd's compiled call
         # makes them with its steps, core/crowd.py); any new input or reset drops them.
         self.ready_bones = None
@@ -678,6 +679,7 @@ class JacketSimulation:
             report.sweeps += int(stats[step.SWEEPS])
             report.substeps += int(stats[step.SUBSTEPS])
             report.retried_steps += int(stats[step.RETRIED])
+            self.steps_retried += report.retried_steps
             report.steps = job.steps
             self.steps_total += job.steps
             self.last = job.sample
@@ -705,11 +707,16 @@ class JacketSimulation:
     def _restless(self) -> str:
         """Say that the cloth keeps moving on a still body, and the setting that rests it."""
         watch = self.watches.restless
+        f = self.fabric
+        if f.edge_damping < f.damping:
+            setting = (f'fabric.edge_damping ({f.edge_damping:g} now, the rest {f.damping:g}): '
+                       'its free edges, damped least,')
+        else:
+            setting = (f'fabric.damping and fabric.edge_damping ({f.damping:g} and '
+                       f'{f.edge_damping:g} now): it')
         return (f'the cloth keeps moving with the body still: its hem at '
                 f'{100 * watch.speed:.1f} cm/s after {RESTLESS_FOR_S:g} s still; raise '
-                f'fabric.edge_damping ({self.fabric.edge_damping:g} now, the rest '
-                f'{self.fabric.damping:g}): its free edges, damped least, keep swinging where '
-                'the vertical pass fights the body and the floor')
+                f'{setting} keep swinging where the vertical pass fights the body and the floor')
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:

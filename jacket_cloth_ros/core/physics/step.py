@@ -18,7 +18,7 @@ import numpy as np
 
 from ..bundles import Posed, StepControl
 from ..compiled import njit
-from .cloth import cloth_step, hold_pinned_row
+from .cloth import LIMIT_HARD_PASS, cloth_step, hold_pinned_row
 from .colliders import collider_poses, plane_poses, posed_body, push_out_points
 from .hood import hood_step
 from .pose import (
@@ -30,8 +30,9 @@ from .pose import (
 DEEPEST, LIMITED, SWEEPS, SUBSTEPS, NON_FINITE, HEM_PATH, RETRIED = range(7)
 STAT_SLOTS = RETRIED + 1
 
-# A step that leaves a horizontal edge more than this many times the fabric's strain limit
-# over its rest length is run again from its start in twice the substeps.
+# With M12, a step that starts with every horizontal edge within this many times the fabric's
+# strain limit over its rest length and ends with one beyond is run again from its start in
+# twice the substeps.
 RETRY_OVER_LIMIT = 2.0
 
 
@@ -90,6 +91,9 @@ def advance(model, tuning, state, before, motion, out):
     damp_for = 0
     contact_damp = 0.0
     hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
+    # Only M12 holds the rows; a stretch carried in from earlier steps no retry undoes.
+    retry_over = RETRY_OVER_LIMIT * tuning.horizontal_limit \
+        if tuning.limit_mode == LIMIT_HARD_PASS else -1.0
     dt_ns = motion.dt_ns
     dt = dt_ns * 1e-9
     t_sim = motion.t_sim
@@ -132,13 +136,17 @@ def advance(model, tuning, state, before, motion, out):
         else:
             damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
                                                   work.damp)
+            may_retry = retry_over >= 0.0 and not _overstretched(work.x0, cloth, retry_over)
+            deepest, limited = out.stats[DEEPEST], out.stats[LIMITED]
             _simulate(model, tuning, state, before, work.now,
                       StepControl(work.acc, work.damp, contact_damp, dt, substeps, work.x0),
                       out.stats)
-            if _overstretched(x, cloth, RETRY_OVER_LIMIT * tuning.horizontal_limit):
+            if may_retry and _overstretched(x, cloth, retry_over):
                 # Faster than its substeps resolve (a thigh swept through a row): again from
                 # the step's start in finer ones, rather than a stretch no later step undoes.
+                # The pass thrown away counts in the cost (sweeps, substeps), not the figures.
                 _restart(state, work)
+                out.stats[DEEPEST], out.stats[LIMITED] = deepest, limited
                 damp_for, contact_damp = _damping_for(tuning, 2 * substeps, damp_for,
                                                       contact_damp, work.damp)
                 _simulate(model, tuning, state, before, work.now,
