@@ -152,6 +152,7 @@ class Faults:
 
     nonfinite: int = 0              # inputs whose bones were not finite (check_bones)
     overruns: int = 0               # inputs whose steps were capped (max_steps_per_input)
+    retried: int = 0                # steps too fast for their substeps, run again finer
     rig: list = field(default_factory=list)     # the rig's, at load and at the first input
     collapse: list = field(default_factory=list)    # each time the cloth stayed collapsed
     restless: list = field(default_factory=list)    # each time it kept moving, body still
@@ -230,7 +231,6 @@ class JacketSimulation:
         self.resets = 0
         self.faults = Faults()
         self.steps_total = 0
-        self.steps_retried = 0     # run again in finer substeps (step.RETRIED)
         # The current state's bones, as an input's check left them (a crowd's compiled call
         # makes them with its steps, core/crowd.py); any new input or reset drops them.
         self.ready_bones = None
@@ -679,7 +679,7 @@ class JacketSimulation:
             report.sweeps += int(stats[step.SWEEPS])
             report.substeps += int(stats[step.SUBSTEPS])
             report.retried_steps += int(stats[step.RETRIED])
-            self.steps_retried += report.retried_steps
+            self.faults.retried += report.retried_steps
             report.steps = job.steps
             self.steps_total += job.steps
             self.last = job.sample

@@ -424,7 +424,7 @@ class SessionPipeline:
             'undecodable_inputs': self.undecodable,
             'lost_inputs': self.lost,
             'sim_steps': sim.steps_total,
-            'retried_steps': sim.steps_retried,
+            'retried_steps': sim.faults.retried,
             'lod_level': sim.lod.level,
             'viewer_distance_m': self._viewer_distance(),
             'recording': (f'failed: {recording}' if recording else self.values.record),

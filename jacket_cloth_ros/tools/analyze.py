@@ -137,7 +137,7 @@ class SessionFigures:
             'inputs': pipeline.inputs,
             'dropped_inputs': pipeline.dropped,
             'sim_steps': pipeline.sim.steps_total,
-            'retried_steps': pipeline.sim.steps_retried,
+            'retried_steps': pipeline.sim.faults.retried,
             'duration_s': float(a[-1, 0]) if len(a) else 0.0,
             'max_vertical_strain': float(a[:, 4].max()) if len(a) else 0.0,
             'max_horizontal_strain': float(a[:, 5].max()) if len(a) else 0.0,
