@@ -8,8 +8,8 @@ caches (docs/performance.md). Each step runs these stages:
   ``_pose_skeleton`` (M7 interpolation, forward kinematics) -> ``_follow_world`` (M14 world
   share) -> ``_forces`` (gravity, wind) -> ``_pin_top_row`` (M1/M2 layer, M6 pinned row and
   M11 references, colliders posed (M10) with the pinned row outside them) -> the cloth
-  (``cloth.cloth_step`` in ``_substeps_for`` substeps, or riding its top row far from the
-  viewer) -> M8 hood.
+  (``cloth.cloth_step`` in ``_substeps_for`` substeps, run again in twice as many when it
+  overstretched a row, or riding its top row far from the viewer) -> M8 hood.
 """
 
 from typing import NamedTuple
