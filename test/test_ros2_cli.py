@@ -213,7 +213,10 @@ def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
     # signals the node itself: that second SIGINT can land in the node's clean-up.
     code = launch.interrupt(group=False)
     out = launch.output()
-    assert code == 0 and 'Traceback' not in out, out
+    # The node's lines, which launch prefixes with its name: launch's own interpreter may
+    # print a KeyboardInterrupt it ignored in a weakref callback as Ctrl-C lands.
+    ours = [line for line in out.splitlines() if line.startswith('[jacket_cloth_node-1]')]
+    assert code == 0 and not [line for line in ours if 'Traceback' in line], out
     assert '[jacket_cloth_node-1]: process has finished cleanly' in out, out
 
 
