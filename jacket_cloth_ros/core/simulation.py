@@ -678,8 +678,9 @@ class JacketSimulation:
             report.limited_vertices += int(stats[step.LIMITED])
             report.sweeps += int(stats[step.SWEEPS])
             report.substeps += int(stats[step.SUBSTEPS])
-            report.retried_steps += int(stats[step.RETRIED])
-            self.faults.retried += report.retried_steps
+            retried = int(stats[step.RETRIED])
+            report.retried_steps += retried
+            self.faults.retried += retried
             report.steps = job.steps
             self.steps_total += job.steps
             self.last = job.sample

@@ -109,9 +109,7 @@ def _on_circle(p, anchor, length, point, normal, out):
             1 if abs(normal[1]) <= abs(normal[2]) else 2)
         axis = np.zeros(3)
         axis[k] = 1.0
-        along[0] = normal[1] * axis[2] - normal[2] * axis[1]
-        along[1] = normal[2] * axis[0] - normal[0] * axis[2]
-        along[2] = normal[0] * axis[1] - normal[1] * axis[0]
+        along = np.cross(normal, axis)
         a = np.sqrt(along[0] ** 2 + along[1] ** 2 + along[2] ** 2)
     reach = np.sqrt(length * length - h * h)
     for k in range(3):
@@ -125,9 +123,7 @@ def _on_two(anchor, length, point_a, normal_a, point_b, normal_b, side, out):
 
     ``side`` (-1 or 1) picks which; False if the planes are parallel or the line misses.
     """
-    d = np.array((normal_a[1] * normal_b[2] - normal_a[2] * normal_b[1],
-                  normal_a[2] * normal_b[0] - normal_a[0] * normal_b[2],
-                  normal_a[0] * normal_b[1] - normal_a[1] * normal_b[0]))
+    d = np.cross(normal_a, normal_b)
     dd = d[0] ** 2 + d[1] ** 2 + d[2] ** 2
     if dd < 1e-12:
         return False

@@ -136,12 +136,12 @@ def advance(model, tuning, state, before, motion, out):
         else:
             damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
                                                   work.damp)
-            may_retry = retry_over >= 0.0 and not _overstretched(work.x0, cloth, retry_over)
             deepest, limited = out.stats[DEEPEST], out.stats[LIMITED]
             _simulate(model, tuning, state, before, work.now,
                       StepControl(work.acc, work.damp, contact_damp, dt, substeps, work.x0),
                       out.stats)
-            if may_retry and _overstretched(x, cloth, retry_over):
+            if retry_over >= 0.0 and _overstretched(x, cloth, retry_over) \
+                    and not _overstretched(work.x0, cloth, retry_over):
                 # Faster than its substeps resolve (a thigh swept through a row): again from
                 # the step's start in finer ones, rather than a stretch no later step undoes.
                 # The pass thrown away counts in the cost (sweeps, substeps), not the figures.
