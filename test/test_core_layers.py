@@ -17,7 +17,7 @@ LAYERS = (
      'physics.crowd', 'physics.sampling', 'physics.skinning'),
     ('skeleton', 'bone_layer', 'urdf_colliders', 'rig', 'fabric', 'params', 'jacket_mesh',
      'body_mesh'),
-    ('inputs', 'lod', 'measures', 'body_proxy', 'simulation', 'crowd'),
+    ('inputs', 'lod', 'measures', 'body_proxy', 'stepping', 'simulation', 'crowd'),
 )
 LAYER_OF = {name: k for k, names in enumerate(LAYERS) for name in names}
 

@@ -643,10 +643,12 @@ def test_adding_characters_to_a_crowd_compiles_nothing_numba_would_not_cache():
     assert [f for f, cache in compiled if cache == 'NullCache'] == []
 
 
-def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
-    # core.crowd: an armed character's steady inputs are checked and loaded in one compiled
-    # call (physics.crowd.prepare_steady); every input it must not take goes to prepare.
-    # Each case below, on one character, against a lone simulation, bit for bit.
+def test_the_compiled_intake_matches_prepare_to_the_bit_alone_and_in_a_crowd(skeleton, rig):
+    # core.stepping: an armed character's steady inputs are checked and loaded by compiled
+    # code (physics.crowd.steady_input), alone (step_steady) and for a whole crowd in one call
+    # (prepare_steady); every input it must not take goes to prepare. Each case below, on one
+    # character, in a crowd against a lone simulation against one fed name lists as lists
+    # (never armed: every input through prepare), bit for bit.
     from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
     from jacket_cloth_ros.core.fabric import load_fabric
     from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
@@ -655,6 +657,8 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
             for _ in range(3)]
     alone = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'), SimParams())
              for _ in range(3)]
+    python_way = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'), SimParams())
+                  for _ in range(3)]
     for sim in sims:
         crowd.add(sim)
     names = tuple(skeleton.joint_names) + tuple(f'world_joint/{v}' for v in (
@@ -690,16 +694,16 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
                 use, pos = odd, pos[::-1].copy()
             elif case in ('viewer', 'no viewer'):
                 view = [40.0, 0.0, 0.0] if case == 'viewer' else None
-                sims[i].set_viewer(view)
-                alone[i].set_viewer(view)
+                for each in (sims, alone, python_way):
+                    each[i].set_viewer(view)
             elif case == 'turn':
                 pos[names.index('world_joint/rot_z')] = 1.0
                 pos[names.index('world_joint/rot_w')] = 0.0
             elif case == 'list':
                 use = list(names)
             elif case == 'params':
-                sims[i].set_params(SimParams(max_steps_per_input=6))
-                alone[i].set_params(SimParams(max_steps_per_input=6))
+                for each in (sims, alone, python_way):
+                    each[i].set_params(SimParams(max_steps_per_input=6))
             stamp[i] += step
             (outside if case == 'outside' else inputs).append((i, stamp[i], use, pos))
         reports = stepped(crowd, inputs)
@@ -708,19 +712,26 @@ def test_a_crowds_compiled_intake_matches_prepare_to_the_bit(skeleton, rig):
             reports.append(sims[i].process(at, use, pos))
         for (i, at, use, pos), report in zip(inputs, reports):
             mine = alone[i].process(at, use, pos)
-            assert (report.accepted, report.reset, report.steps, report.skipped_steps,
-                    report.warnings, report.lod_level, report.sweeps) == (
-                mine.accepted, mine.reset, mine.steps, mine.skipped_steps, mine.warnings,
-                mine.lod_level, mine.sweeps), (k, i)
-            assert sims[i].t_sim == alone[i].t_sim and sims[i].steps_total == alone[i].steps_total
-            assert np.array_equal(sims[i].x, alone[i].x), (k, i)
-            assert np.array_equal(sims[i].hood_p, alone[i].hood_p)
-            assert np.array_equal(sims[i].bones().poses, alone[i].bones().poses)
-            assert np.array_equal(sims[i].last.q, alone[i].last.q)
-            assert np.array_equal(sims[i].parser.last.root, alone[i].parser.last.root)
+            ref = python_way[i].process(at, list(use), pos)
+            for other, got in ((alone[i], mine), (python_way[i], ref)):
+                assert (report.accepted, report.reset, report.steps, report.skipped_steps,
+                        report.warnings, report.lod_level, report.sweeps) == (
+                    got.accepted, got.reset, got.steps, got.skipped_steps, got.warnings,
+                    got.lod_level, got.sweeps), (k, i)
+                assert sims[i].t_sim == other.t_sim
+                assert sims[i].steps_total == other.steps_total
+                assert np.array_equal(sims[i].x, other.x), (k, i)
+                assert np.array_equal(sims[i].hood_p, other.hood_p)
+                assert np.array_equal(sims[i].bones().poses, other.bones().poses)
+                assert np.array_equal(sims[i].last.q, other.last.q)
+                assert np.array_equal(sims[i].parser.last.root, other.parser.last.root)
     # Every case fell back (the bits above) and the rest went the compiled way: all but the
     # first two inputs of each character and, for each case, at most three inputs.
     assert 3 * 60 - 3 * 2 - 3 * len(cases) <= crowd.steady_inputs < 3 * 60 - 3 * 2
+    # Alone, the same inputs but for those the crowd took ('outside', stepped alone there).
+    taken = sum(s.steps.steady_inputs for s in alone)
+    assert 3 * 60 - 3 * 2 - 3 * len(cases) <= taken < 3 * 60 - 3 * 2
+    assert [s.steps.steady_inputs for s in python_way] == [0, 0, 0]
     assert [s.resets for s in sims] == [1, 6, 1]     # a teleport and a turn go and come back
 
 

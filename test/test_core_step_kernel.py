@@ -146,7 +146,7 @@ def test_the_compiled_step_is_typed_once_whatever_values_the_parameters_take(mak
             sim.x = np.asfortranarray(sim.x)
             sim.hood_p = sim.hood_p.astype(np.float32)
         assert not sim.process(stamp, names, pos).warnings
-    assert sim._advance_kernel._types is not None          # typed, then called directly
+    assert sim.steps.advance._types is not None and sim.steps.steady._types is not None
     other_skeleton = load_skeleton(shipped('examples/mannequin.urdf'))
     other = JacketSimulation(other_skeleton,
                              load_rig(other_skeleton, shipped('examples/mannequin_rig.yaml')),

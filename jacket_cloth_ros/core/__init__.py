@@ -12,5 +12,6 @@ Layers, each importing only those below it (test/test_core_layers.py holds them 
    (``model_of``), ``fabric``, ``params``, ``jacket_mesh`` and ``body_mesh`` (what a person
    sees);
 4. drivers: ``inputs``, ``lod``, ``measures``, ``body_proxy`` (the body the measures see),
-   ``simulation`` (JacketSimulation), ``crowd``.
+   ``stepping`` (a character's compiled call, alone or in a crowd), ``simulation``
+   (JacketSimulation), ``crowd``.
 """

@@ -1,18 +1,18 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Many simulations stepped together: one compiled call per round of inputs, in parallel.
 
-Each simulation prepares its input in Python as it does alone (JacketSimulation.prepare);
-the steps of all of them then run in crowd_steps.advance_crowd, spread over numba's threads;
-each takes its steps back (JacketSimulation.complete). Same inputs, same bits as alone.
+Each simulation's steps and bones run in the compiled call it runs alone (core/stepping.py,
+physics.crowd.advance_slot), here all of a round's in crowd_steps.advance_crowd, spread over
+numba's threads; each takes its steps back (JacketSimulation.finish). Same inputs, same bits
+as alone.
 
-A character whose last input went that way without a warning or reset is armed: its next
-inputs are checked and loaded for all such characters in one compiled call
-(crowd_steps.prepare_steady), which takes only what prepare would step without a word and
-leaves anything else (a new name list, a stamp gap, a teleport, a NaN, a viewer, ...) to
-prepare. The Python per input was most of a crowd character's cost (docs/crowd.md).
+The inputs of armed characters (core/stepping.py: the last input went the whole way without
+a warning or reset) are checked and loaded for all of them in one compiled call
+(crowd_steps.prepare_steady), which takes only what prepare would step without a word; the
+rest go through JacketSimulation.prepare. The Python per input was most of a crowd
+character's cost (docs/crowd.md).
 """
 
-import operator
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -21,11 +21,10 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from .bundles import CrowdSlot, JointSample, StepOutput, ints, steady_intake
 from .compiled import FixedTypes
-from .inputs import Sample
 from .physics import crowd as crowd_steps
-from .simulation import Bones, StageTimer, StepJob, StepReport
+from .simulation import StageTimer
+from .stepping import StepJob
 
 # GNU OpenMP's threads (numba's omp layer) spin between calls by default, taking a core from
 # the executor thread and the machine's other processes; read when the pool first starts.
@@ -59,6 +58,9 @@ def threading_layer() -> str:
 class CrowdSteps:
     """The compiled steps of many simulations, run together.
 
+    Each simulation's CrowdSlot and steady intake are its own (``sim.steps``, core/stepping.py);
+    the crowd keeps them in numba's typed lists for its calls, put again when one changes.
+
     :param threads: how many threads the call spreads over (0: all cores, as NUMBA_NUM_THREADS).
     """
 
@@ -73,11 +75,8 @@ class CrowdSteps:
         # as numba's typed.List did, so that an item of another type is refused, not misread.
         self._put_slot = FixedTypes(crowd_steps.put, check=True)
         self._put_intake = FixedTypes(crowd_steps.put, check=True)
-        self._keys = []
         self._call = None
-        self._load = FixedTypes(crowd_steps.load_motion)
         self._steady = FixedTypes(crowd_steps.prepare_steady)
-        self._armed = []            # per simulation: what its intake was armed with, or None
         self.calls = 0              # compiled calls made (one per round of inputs)
         self.steady_inputs = 0      # inputs the compiled intake took
 
@@ -88,11 +87,8 @@ class CrowdSteps:
         """
         index = len(self.sims)
         self.sims.append(sim)
-        slot, key = self._slot(sim)
-        self._keys.append(key)
-        self._armed.append(None)
-        self._set_slot(index, slot)
-        self._set_intake(index, steady_intake(slot))
+        self._set_slot(index, sim.steps.slot)
+        self._set_intake(index, sim.steps.intake)
         if self._call is None:      # typed once: every slot has the same types
             self._call = FixedTypes(crowd_steps.advance_crowd)
             # Both loaded now, not on the first inputs: that stalled the first batch by
@@ -101,8 +97,8 @@ class CrowdSteps:
             self._call(self._slots, none, none)
             self._steady(self._intakes, none, none, np.zeros(0), np.zeros(1, dtype=np.int64),
                          np.zeros(0, dtype=np.bool_))
-            self._set_slot(index, slot)         # crowd_steps.put loaded now too
-            self._set_intake(index, self._my_intakes[index])
+            self._set_slot(index, sim.steps.slot)         # crowd_steps.put loaded now too
+            self._set_intake(index, sim.steps.intake)
         return index
 
     def time_stages(self, timer: StageTimer) -> None:
@@ -119,38 +115,6 @@ class CrowdSteps:
         if self._call is None:
             raise ValueError('a crowd of fewer than two simulations has no compiled call')
         self._call = timer('step', self._call)
-
-    @staticmethod
-    def _key(sim):
-        return (sim.tuning,)            # the state is held once: only a new tuning is new
-
-    def _slot(self, sim):
-        """Make a slot on the simulation's own arrays, with motion and output arrays of its own."""
-        state = sim.state
-        q = len(sim.skeleton.joint_names)
-        out = sim.step_output()
-        layer = sim.rig.layer
-        parents = ints(layer.parent_index if layer else [])
-        slot = CrowdSlot(sim.model, sim.tuning, state, sim._before, np.zeros(q), np.zeros(q),
-                         np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3),
-                         np.zeros(5, dtype=np.int64), out, ints(sim.bone_set.grid), parents,
-                         _identity_poses(len(sim.bone_names)))
-        return slot, self._key(sim)
-
-    def _current(self, index):
-        """Return the slot of simulation ``index``, made again if its tuning changed.
-
-        A live parameter change makes a new Tuning; the state is held once, never replaced.
-        """
-        sim = self.sims[index]
-        key = self._key(sim)
-        if not all(map(operator.is_, key, self._keys[index])):
-            slot, key = self._slot(sim)
-            self._set_slot(index, slot)
-            self._keys[index] = key
-            self._set_intake(index, steady_intake(slot))
-            self._armed[index] = None
-        return self._mine[index]
 
     def _set_slot(self, index, slot):
         """Set (or append, for a new simulation) simulation ``index``'s slot."""
@@ -169,21 +133,19 @@ class CrowdSteps:
             JacketSimulation.prepare would have returned, their motion already in the slot (for
             :meth:`run`'s ``loaded``); the rest, in the same form as given, for prepare.
         """
-        armed, sims, mine = self._armed, self.sims, self._mine
+        sims = self.sims
         fast, rest = [], []
         for item in inputs:
             index = item[1]
-            sim, arm = sims[index], armed[index]
-            # Armed for this very name list, tuning and last sample (a simulation stepped
-            # outside the crowd, or reset, has another), no viewer, an int stamp, the slot on
-            # this tuning.
-            if (arm is not None and arm[0] is item[3] and arm[1] is sim.tuning
-                    and arm[2] is sim.parser.world_joint and arm[3] is sim.last
-                    and sim.lod.viewer is None and type(item[2]) is int
-                    and mine[index].tuning is sim.tuning):
+            sim = sims[index]
+            steps = sim.steps
+            if steps.ready_for(sim.steady_key(item[3]), item[2]):
                 fast.append(item)
+                if self._mine[index] is not steps.slot:
+                    self._set_slot(index, steps.slot)
+                if self._my_intakes[index] is not steps.intake:
+                    self._set_intake(index, steps.intake)
             else:
-                armed[index] = None         # prepare moves its last sample on
                 rest.append(item)
         if not fast:
             return [], rest
@@ -196,60 +158,20 @@ class CrowdSteps:
         out = []
         for item, ok in zip(fast, taken.tolist()):
             if ok:
-                out.append((item[0], item[1], *self._steady_job(item[1], item[2])))
+                out.append((item[0], item[1], *sims[item[1]].steady_job(item[2])))
             else:
-                armed[item[1]] = None
+                sims[item[1]].steps.armed = None
                 rest.append(item)
         self.steady_inputs += len(out)
         return out, rest
 
-    def _steady_job(self, index, stamp):
-        """Return the report and job prepare would have made of an input steady_input loaded."""
-        sim, slot = self.sims[index], self._mine[index]
-        sim.ready_bones = None
-        sample = Sample(stamp, slot.q_b.copy(), self._my_intakes[index].last.root.copy(),
-                        slot.quat_b.copy(), [])
-        sim.parser.last = JointSample(sample.q, sample.root, sample.root_quat)
-        clock = slot.clock
-        return StepReport(stamp), StepJob(sample, int(clock[4]), sim.last, int(clock[2]),
-                                          sim.dt_ns, sim.tuning)
-
-    def settle(self, index: int, names: Sequence[str], report: StepReport) -> None:
-        """After an input's steps: arm simulation ``index`` if its next input may be steady.
-
-        It may if prepare would take it on from here as steady_input does: this input was
-        stepped without a warning, reset or skipped step, at full detail with no viewer, and
-        its name list is a tuple (a list could change under the same object).
-
-        :param index: the simulation's index in the crowd.
-        :param names: the input's joint name list.
-        :param report: the input's step report.
-        """
-        sim = self.sims[index]
-        if (not isinstance(names, tuple) or not report.accepted or report.reset
-                or report.steps <= 0 or report.skipped_steps or report.warnings
-                or sim.lod.viewer is not None or sim.lod.level or sim.lod.skin
-                or self._mine[index].tuning is not sim.tuning):
-            self._armed[index] = None
-            return
-        arm = self._armed[index]
-        if arm is not None:             # steady_input moved its intake on itself
-            self._armed[index] = arm[:3] + (sim.last,)
-            return
-        (plan, _), last, p = sim.parser.plan(names), sim.last, sim.params
-        self._set_intake(index, steady_intake(
-            self._mine[index], plan, (last.q, last.root, last.root_quat),
-            (last.stamp_ns, sim.dt_ns, p.max_steps_per_input),
-            (p.reset_gap, sim.teleport_m, p.teleport_angle_deg)))
-        self._armed[index] = (names, sim.tuning, sim.parser.world_joint, last)
-
     def run(self, jobs: Sequence[tuple[int, 'StepJob']],
-            loaded: frozenset = frozenset()) -> list[tuple[StepOutput, int]]:
-        """Run each (simulation index, prepared job) in one call; returns (output, status) each.
+            loaded: frozenset = frozenset()) -> list[int]:
+        """Run each (simulation index, prepared job) in one call; returns the status of each.
 
-        The status is crowd_steps's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE). Each
-        output is that simulation's own arrays, written again by its next job:
-        JacketSimulation.complete takes them at once.
+        The status is crowd_steps's (STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE); the steps
+        and bones are in each simulation's slot, written again by its next job:
+        JacketSimulation.finish takes them at once.
 
         :param jobs: (simulation index, job from prepare), at most one job per simulation.
         :param loaded: the simulations whose job :meth:`prepare_steady` loaded.
@@ -258,40 +180,18 @@ class CrowdSteps:
             return []
         active = np.empty(len(jobs), dtype=np.int64)
         for j, (index, job) in enumerate(jobs):
-            if index in loaded:
-                active[j] = index
-                continue
-            slot = self._current(index)
-            if slot.tuning is not job.tuning:      # the level of detail's tuning, this input
-                slot = slot._replace(tuning=job.tuning)
-                self._set_slot(index, slot)
-            a, b = job.start, job.sample
-            self._load((slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),
-                       slot.clock, slot.out.stats, JointSample(a.q, a.root, a.root_quat),
-                       JointSample(b.q, b.root, b.root_quat),
-                       (a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns, job.steps))
             active[j] = index
+            if index not in loaded:
+                slot = self.sims[index].steps.load(job)
+                if self._mine[index] is not slot:   # a new tuning, or the level of detail's
+                    self._set_slot(index, slot)
         ran = np.zeros(len(jobs), dtype=np.int64)
         numba.set_num_threads(self.threads)
         # Characters handed out one at a time: a thread that the host slows takes fewer.
         numba.set_parallel_chunksize(1)
         self._call(self._slots, active, ran)
         self.calls += 1
-        out = []
-        for j, (index, _) in enumerate(jobs):
-            slot = self._mine[index]
-            self.sims[index].t_sim = int(slot.clock[2])
-            out.append((slot.out, int(ran[j])))
-        return out
-
-    def bones(self, index: int, finite: bool) -> Bones:
-        """Return simulation ``index``'s bones as the last call left them (a copy).
-
-        :param index: the simulation's index in the crowd.
-        :param finite: whether the call found the bones finite (its status), kept in the Bones.
-        """
-        sim = self.sims[index]
-        return Bones(sim.bone_names, sim.bone_parents, self._mine[index].bones.copy(), finite)
+        return ran.tolist()
 
 
 def _put(items, mine, put, index, item):
@@ -347,14 +247,12 @@ def stepped(steps: CrowdSteps,
                 jobs.append((k, index, job))
             elif reports[k].accepted:       # a reset, or no step due: its bones as they are
                 sims[index].check_bones(reports[k])
-        results = steps.run([(index, job) for _, index, job in jobs], loaded)
-        for (k, index, job), (out, status) in zip(jobs, results):
+        statuses = steps.run([(index, job) for _, index, job in jobs], loaded)
+        for (k, index, job), status in zip(jobs, statuses):
             sim = sims[index]
-            sim.complete(reports[k], job, out, status != crowd_steps.STEPS_FAILED)
-            if not reports[k].reset:        # the bones the call made are the state's
-                sim.ready_bones = steps.bones(index, status == crowd_steps.BONES_FINITE)
+            sim.finish(reports[k], job, status)
             sim.check_bones(reports[k])     # before settle: a reset is never steady
-            steps.settle(index, inputs[k][2], reports[k])
+            sim.settle(inputs[k][2], reports[k])
         cost = time.perf_counter_ns() - started
         for k in this:
             reports[k].step_cost_ns = cost
@@ -362,14 +260,3 @@ def stepped(steps: CrowdSteps,
         if after_round is not None:
             after_round(this, reports, not later)
     return reports
-
-
-def _identity_poses(n):
-    """Return ``n`` bone poses at the origin with no rotation.
-
-    A grid bone whose edges all lie flat keeps the rotation its slot holds (pose.grid_bones):
-    a unit quaternion before any other.
-    """
-    poses = np.zeros((n, 7))
-    poses[:, 6] = 1.0
-    return poses

@@ -21,8 +21,8 @@ import numpy.typing as npt
 
 from .bone_layer import LayerPose
 from .bundles import (
-    ClothState, Colliders, Motion, StepControl, StepOutput, Tuning, copied, floats, posed_like)
-from .compiled import FixedTypes
+    ClothState, Colliders, CrowdSlot, JointSample, StepControl, StepOutput, Tuning, copied,
+    floats, ints, posed_like)
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
 from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessWatch,
@@ -31,6 +31,8 @@ from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
 from .rig import model_of
+from .stepping import (BONES_FINITE, NOT_STEADY, STEPS_FAILED, StepJob, Stepper,
+                       identity_poses)
 
 if TYPE_CHECKING:           # for the annotations only
     from .fabric import Fabric
@@ -113,37 +115,6 @@ class BoneSet:
     names: list                # M9 cloth bones, M8 hood bone, M1/M2 layer bones
     parents: list              # each one's parent link
     grid: np.ndarray           # (G,2) int64: the M9 bones' (row, column) on the cloth grid
-
-
-@dataclass(slots=True)
-class StepJob:
-    """One input's compiled steps, prepared (JacketSimulation.prepare) and not yet run."""
-
-    sample: Sample             # the input they run to
-    steps: int
-    start: Sample              # the input they run from (the last one)
-    t_sim: int                 # ns of the last step run before them
-    dt_ns: int
-    tuning: Tuning             # the simulation's, or its level of detail's (core/lod.py)
-
-    @property
-    def motion(self) -> Motion:
-        """The steps as physics.step.advance takes them (a crowd loads them in place instead)."""
-        return motion_between(self.start, self.sample, self.t_sim, self.dt_ns, self.steps)
-
-
-def motion_between(a: Sample, b: Sample, t_sim: int, dt_ns: int, steps: int) -> Motion:
-    """Return the Motion of ``steps`` fixed steps from sample ``a`` towards ``b``.
-
-    :param a: the input the steps run from.
-    :param b: the input they run to.
-    :param t_sim: the time of the last step run before them, ns.
-    :param dt_ns: a step's length, ns.
-    :param steps: how many steps.
-    """
-    return Motion(floats(a.q), floats(b.q), floats(a.root_quat), floats(b.root_quat),
-                  floats(a.root[:3, 3]), floats(b.root[:3, 3]), int(a.stamp_ns),
-                  int(b.stamp_ns - a.stamp_ns), int(t_sim), int(dt_ns), int(steps))
 
 
 @dataclass(slots=True)
@@ -236,10 +207,14 @@ class JacketSimulation:
         self.ready_bones = None
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
-        # The grid bones' last finite rotations (x, y, z, w), kept for edges pressed flat.
-        self._grid_rotations = np.zeros((len(self.bone_set.grid), 4))
-        self._grid_rotations[:, 3] = 1.0
-        self._advance_kernel = FixedTypes(step.advance)
+        # The compiled steps and bones (physics.crowd.advance_slot), alone as in a crowd.
+        layer = rig.layer
+        q = len(skeleton.joint_names)
+        self.steps = Stepper(CrowdSlot(
+            self.model, self.tuning, self.state, self._before, np.zeros(q), np.zeros(q),
+            np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3), np.zeros(5, dtype=np.int64),
+            self.step_output(), ints(self.bone_set.grid),
+            ints(layer.parent_index if layer else []), identity_poses(len(self.bone_names))))
         c = self.model.cloth        # issue 47 item 5a: no silent collapse
         self.watches = Watches(CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest),
                                RestlessWatch())
@@ -319,6 +294,7 @@ class JacketSimulation:
         self.bones()
         self.t_sim = 0
         self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
+        self.steps.load_steady()
         state, before, self.links, self._layer = saved
         for kept, was in zip((*self.state, *self._before), (*state, *before)):
             kept[...] = was
@@ -332,6 +308,7 @@ class JacketSimulation:
         """
         self.fabric = fabric
         self.tuning = self._tuning()
+        self.steps.retune(self.tuning)
 
     def set_params(self, params: SimParams) -> None:
         """Live change of the simulation's parameters, as set_fabric.
@@ -340,6 +317,7 @@ class JacketSimulation:
         """
         self.params = params
         self.tuning = self._tuning()
+        self.steps.retune(self.tuning)
 
     # -- the skinned pose ---------------------------------------------------------------------
     def reference_points(self, links: np.ndarray,
@@ -559,15 +537,17 @@ class JacketSimulation:
     def time_stages(self, timer: StageTimer) -> None:
         """Run this simulation's stages through a profiler's ``timer`` from now on.
 
-        ``prepare``, ``step`` (the compiled steps, physics.step.advance), ``complete`` and
-        ``bones`` are each replaced, on this simulation only, by what ``timer(name, stage)``
-        returns. A simulation never given a timer calls its stages directly, as before.
+        ``prepare``, ``step`` (the compiled steps and bones, physics.crowd.advance_slot, with
+        a steady input's intake before them), ``complete`` and ``bones`` are each replaced, on
+        this simulation only, by what ``timer(name, stage)`` returns. A simulation never given
+        a timer calls its stages directly, as before.
 
         :param timer: called once per stage with its name and callable; returns the callable
             to run in its place (e.g. one that adds the stage's CPU time to a clock).
         """
         self.prepare = timer('prepare', self.prepare)
-        self._advance_kernel = timer('step', self._advance_kernel)
+        self.steps.advance = timer('step', self.steps.advance)
+        self.steps.steady = timer('step', self.steps.steady)
         self.complete = timer('complete', self.complete)
         self.bones = timer('bones', self.bones)
 
@@ -584,29 +564,90 @@ class JacketSimulation:
         :param positions: its positions, one per name (rad or m).
         """
         started = time.perf_counter_ns()
-        report, job = self.prepare(stamp_ns, names, positions)
+        status = self.steps.take(self.steady_key(names), stamp_ns, positions)
+        if status != NOT_STEADY:
+            report, job = self.steady_job(stamp_ns)
+        else:
+            report, job = self.prepare(stamp_ns, names, positions)
+            if job is not None:
+                status = self.steps.run(job)
         if job is not None:
-            out = self.step_output()
-            try:
-                self.t_sim = self._advance_kernel(self.model, job.tuning, self.state,
-                                                  self._before, job.motion, out)
-                ran = True
-            except ZeroDivisionError:       # numba's, where numpy would give inf or NaN
-                ran = False
-            self.complete(report, job, out, ran)
+            self.finish(report, job, status)
         report.step_cost_ns = time.perf_counter_ns() - started
         if report.accepted:
             self.check_bones(report)
+        self.settle(names, report)
         return report
+
+    def steady_key(self, names: Sequence[str]) -> tuple:
+        """Return what an input with ``names`` comes on, for the compiled intake.
+
+        (names, tuning, world_joint, last sample): Stepper.ready_for takes the input only for
+        the very objects it was armed for; with a viewer, the last sample is left out, so that
+        nothing matches.
+
+        :param names: the input's joint names.
+        """
+        return (names, self.tuning, self.parser.world_joint,
+                self.last if self.lod.viewer is None else None)
+
+    def settle(self, names: Sequence[str], report: StepReport) -> None:
+        """After an input: arm the compiled intake if the next input may be steady.
+
+        It may if prepare would take it on from here as physics.crowd.steady_input does: this
+        input was stepped without a warning, reset or skipped step, at full detail with no
+        viewer, and its name list is a tuple (a list could change under the same object).
+
+        :param names: the input's joint name list.
+        :param report: the input's step report.
+        """
+        lod, steps = self.lod, self.steps
+        if (not isinstance(names, tuple) or not report.accepted or report.reset
+                or report.steps <= 0 or report.skipped_steps or report.warnings
+                or lod.viewer is not None or lod.level or lod.skin
+                or steps.slot.tuning is not self.tuning):
+            steps.armed = None
+            return
+        key = self.steady_key(names)
+        if not steps.rearm(key):
+            p = self.params
+            steps.arm(key, self.parser.plan(names)[0], self.last,
+                      (self.dt_ns, p.max_steps_per_input),
+                      (p.reset_gap, self.teleport_m, p.teleport_angle_deg))
+
+    def steady_job(self, stamp_ns: int) -> tuple[StepReport, 'StepJob']:
+        """Return the report and job prepare would have made of an input the intake loaded.
+
+        :param stamp_ns: the input's stamp, ns.
+        """
+        sample = self.steps.taken(stamp_ns)
+        self.parser.last = JointSample(sample.q, sample.root, sample.root_quat)
+        clock = self.steps.slot.clock
+        return StepReport(stamp_ns), StepJob(sample, int(clock[4]), self.last, int(clock[2]),
+                                             self.dt_ns, self.tuning)
+
+    def finish(self, report: StepReport, job: 'StepJob', status: int) -> None:
+        """Take a job's steps and bones as the compiled call left them in the slot.
+
+        :param report: the input's report.
+        :param job: the steps run.
+        :param status: what the call returned (physics.crowd's STEPS_FAILED, BONES_FINITE or
+            BONES_NOT_FINITE).
+        """
+        slot = self.steps.slot
+        self.t_sim = int(slot.clock[2])
+        self.complete(report, job, slot.out, status != STEPS_FAILED)
+        if not report.reset:        # the bones the call made are the state's
+            self.ready_bones = Bones(self.bone_names, self.bone_parents, slot.bones.copy(),
+                                     status == BONES_FINITE)
 
     def prepare(self, stamp_ns: int, names: Sequence[str],
                 positions: npt.ArrayLike) -> tuple[StepReport, 'StepJob | None']:
         """Do an input's work before its compiled steps; return the report and the steps to run.
 
         No steps (a refused input, a reset, no step due): the input is done and the job None.
-        Else run the job's motion through physics.step.advance (alone ``job.motion``; a crowd
-        loads it into its slot, physics.crowd.load_motion) and hand the outcome to
-        :meth:`complete`.
+        Else run the job (``steps.run``, or a crowd's round) and hand the outcome to
+        :meth:`finish`.
 
         :param stamp_ns: the JointState's header stamp, ns.
         :param names: its joint names.
@@ -773,14 +814,14 @@ class JacketSimulation:
         self.lod.set_viewer(position)
 
     def _run_steps(self, a, b, n):
-        """Run ``n`` fixed steps from sample ``a`` towards ``b`` in one compiled call.
+        """Run ``n`` fixed steps from sample ``a`` towards ``b`` in the compiled call.
 
         The skeleton is interpolated at each step (M7), then M14, M1/M2, M6/M11, M10, the cloth
         and M8 (see step.advance). Returns its stats.
         """
-        out = self.step_output()
-        self.t_sim = self._advance_kernel(self.model, self.tuning, self.state, self._before,
-                                          motion_between(a, b, self.t_sim, self.dt_ns, n), out)
+        self.steps.run(StepJob(b, n, a, self.t_sim, self.dt_ns, self.tuning))
+        out = self.steps.slot.out
+        self.t_sim = int(self.steps.slot.clock[2])
         self._take_output(out)
         return out.stats
 
@@ -880,21 +921,14 @@ class JacketSimulation:
         if self.ready_bones is not None:
             return self.ready_bones
         layer = self.layer
-        n = len(self.bone_names)
-        poses = np.empty((n, 7))
         layer = _NO_LAYER_POSE if layer is None else layer
-        n_grid = len(self.bone_set.grid)
-        # A grid bone whose edges all lie flat keeps the rotation it had (pose.grid_bones).
-        poses[:n_grid, 3:] = self._grid_rotations
-        try:
-            finite = pose.bone_poses(self.x, self.hood_p, self.links, self.model.cloth,
-                                     self.bone_set.grid, layer.parents, layer.rotations,
-                                     layer.positions, poses)
-        except ZeroDivisionError:           # a degenerate frame (numba raises, numpy gives NaN)
-            finite = False
-        if finite:
-            self._grid_rotations[:] = poses[:n_grid, 3:]
-        return Bones(self.bone_names, self.bone_parents, poses, finite)
+        # Into the slot's poses, as the compiled call makes them: a grid bone whose edges all
+        # lie flat keeps the rotation it had there (pose.kept_bone_poses).
+        poses = self.steps.slot.bones
+        finite = pose.kept_bone_poses(self.x, self.hood_p, self.links, self.model.cloth,
+                                      self.bone_set.grid, layer.parents, layer.rotations,
+                                      layer.positions, poses)
+        return Bones(self.bone_names, self.bone_parents, poses.copy(), finite)
 
     def strain(self) -> tuple[float, float]:
         """Worst |length / rest - 1| of the vertical and horizontal stretch constraints."""

@@ -1,10 +1,11 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""The steps of every character of a crowd with an input, in one compiled call, in parallel.
+"""A character's steps and bones in one compiled call: alone, or every character of a crowd.
 
-Each character runs step.advance on its own bundles (core.bundles.CrowdSlot), as a
-character alone does, so its results are the same to the bit; numba's prange spreads the
-characters over the threads numba.set_num_threads allows. One call instead of one per
-character: the Python between calls, not the steps, was most of a small character's cost.
+Each character runs advance_slot on its own bundles (core.bundles.CrowdSlot), alone
+(JacketSimulation.process, its warm-up) as in a crowd, so its results are the same to the bit;
+for a crowd numba's prange spreads the characters over the threads numba.set_num_threads
+allows. One call instead of one per character: the Python between calls, not the steps, was
+most of a small character's cost.
 """
 
 from numba import prange
@@ -12,11 +13,12 @@ from numba.typed import List
 
 from ..bundles import Motion
 from ..compiled import njit
-from .pose import bone_poses
+from .pose import kept_bone_poses
 from .sampling import FILLED, fill_sample, root_jump
 from .step import advance
 
-STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE = range(3)      # what advance_slot returns
+# What advance_slot returns, and step_steady for an input it leaves to Python.
+STEPS_FAILED, BONES_FINITE, BONES_NOT_FINITE, NOT_STEADY = range(4)
 
 
 @njit(cache=True)
@@ -57,12 +59,9 @@ def advance_slot(slot):
         c[2] = advance(slot.model, slot.tuning, slot.state, slot.before, motion, slot.out)
     except Exception:  # noqa: BLE001 - numba names no exception object; only division raises
         return STEPS_FAILED
-    cloth, out, state, poses = slot.model.cloth, slot.out, slot.state, slot.bones
-    try:
-        finite = bone_poses(state.x, state.hood_p, out.links, cloth, slot.bone_rc,
-                            slot.layer_parents, out.layer_rot, out.layer_pos, poses)
-    except Exception:  # noqa: BLE001 - a degenerate frame, as in JacketSimulation.bones
-        finite = False
+    out, state = slot.out, slot.state
+    finite = kept_bone_poses(state.x, state.hood_p, out.links, slot.model.cloth, slot.bone_rc,
+                             slot.layer_parents, out.layer_rot, out.layer_pos, slot.bones)
     return BONES_FINITE if finite else BONES_NOT_FINITE
 
 
@@ -117,6 +116,17 @@ def steady_input(intake, stamp, positions):
     last.quat[:] = new.quat
     clock[0] = stamp
     return True
+
+
+@njit(cache=True)
+def step_steady(intake, slot, stamp, positions):
+    """steady_input, then advance_slot if it took the input; NOT_STEADY if it did not.
+
+    A character alone: one call from its JointState's content to its bones.
+    """
+    if not steady_input(intake, stamp, positions):
+        return NOT_STEADY
+    return advance_slot(slot)
 
 
 # numba's typed.List, used from Python, compiles its append and item assignment for each item

@@ -227,6 +227,26 @@ def bone_poses(x, hood_p, links, cloth, bone_rc, layer_parents, layer_rot, layer
 
 
 @njit(cache=True)
+def kept_bone_poses(x, hood_p, links, cloth, bone_rc, layer_parents, layer_rot, layer_pos, poses):
+    """bone_poses, but the grid rotations ``poses`` held stay if not every number is finite.
+
+    A grid bone whose edges lie flat keeps its last finite rotation (grid_bones): a failed
+    pose must not become that rotation. A degenerate frame (numba raises where numpy gives
+    NaN) is not finite either.
+    """
+    n_grid = bone_rc.shape[0]
+    kept = poses[:n_grid, 3:].copy()
+    try:
+        finite = bone_poses(x, hood_p, links, cloth, bone_rc, layer_parents, layer_rot,
+                            layer_pos, poses)
+    except Exception:  # noqa: BLE001 - numba names no exception object; only division raises
+        finite = False
+    if not finite:
+        poses[:n_grid, 3:] = kept
+    return finite
+
+
+@njit(cache=True)
 def _to_link(t, position, rotation, local_position, local_rotation):
     """Return a frame (position, rotation) in the root frame, seen from link pose ``t``."""
     for r in range(3):
