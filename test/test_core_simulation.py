@@ -735,6 +735,76 @@ def test_the_compiled_intake_matches_prepare_to_the_bit_alone_and_in_a_crowd(ske
     assert [s.resets for s in sims] == [1, 6, 1]     # a teleport and a turn go and come back
 
 
+def _armed_lone_simulation(skeleton, rig, names):
+    """A lone simulation after four steady inputs of a walk: the compiled intake armed."""
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    for k in range(4):
+        got, pos = joint_state_content(skeleton.joint_names, 'walk', k / 120)
+        given = dict(zip(got, pos))
+        sim.process(10 ** 10 + k * 8_333_333, names, np.array([given[n] for n in names]))
+    assert sim.steps.armed is not None
+    return sim
+
+
+@pytest.mark.parametrize('given', ['one value', 'one row'])
+def test_an_armed_character_refuses_positions_of_another_length_as_prepare_does(
+        skeleton, rig, given):
+    # numpy would broadcast one value, or a (1, N) row, over the intake's buffer: the
+    # compiled way would step what prepare refuses ('length'), and the cloth would move.
+    names = tuple(skeleton.joint_names)
+    sim = _armed_lone_simulation(skeleton, rig, names)
+    x, taken = sim.x.copy(), sim.steps.steady_inputs
+    bad = [0.0] if given == 'one value' else np.zeros((1, len(names)))
+    report = sim.process(10 ** 10 + 4 * 8_333_333, names, bad)
+    assert not report.accepted and [code for code, _ in report.warnings] == ['length']
+    assert sim.steps.steady_inputs == taken and np.array_equal(sim.x, x)
+
+
+def test_an_equal_name_tuple_in_a_new_object_each_input_goes_the_compiled_way(skeleton, rig):
+    # A publisher's name list decoded by rclpy is a new object each message: armed on an
+    # equal tuple, the intake takes it, rather than arming again on every input.
+    names = tuple(skeleton.joint_names)
+    sim = _armed_lone_simulation(skeleton, rig, names)
+    taken = sim.steps.steady_inputs
+    for k in range(4, 10):
+        got, pos = joint_state_content(skeleton.joint_names, 'walk', k / 120)
+        report = sim.process(10 ** 10 + k * 8_333_333, tuple(list(names)),
+                             np.array([dict(zip(got, pos))[n] for n in names]))
+        assert report.accepted and not report.warnings
+    assert sim.steps.steady_inputs == taken + 6
+
+
+def test_a_far_characters_slot_keeps_its_level_tuning_between_inputs(make_sim, skeleton):
+    # A crowd puts a character's slot into its typed list again when the slot object changes
+    # (about a millisecond a put): a far character's slot must stay the same object while its
+    # level's tuning does, not be made again for every input.
+    from dataclasses import replace
+
+    from jacket_cloth_ros.core.stepping import StepJob
+    sim = make_sim()
+    for stamp, names, pos in clip_inputs(skeleton, 'walk', 0.05):
+        sim.process(stamp, names, pos)
+    tuned = sim.tuning._replace(iterations=4)
+    sample = replace(sim.last, stamp_ns=sim.last.stamp_ns + sim.dt_ns)
+    job = StepJob(sample, 1, sim.last, sim.t_sim, sim.dt_ns, tuned)
+    first = sim.steps.load(job)
+    assert first.tuning is tuned and sim.steps.load(job) is first
+    assert sim.steps.load(replace(job, tuning=sim.tuning)) is sim.steps.slot
+
+
+@pytest.mark.parametrize('kind', [np.int64, np.uint64, float])
+def test_stamps_of_any_number_type_step_as_int_stamps_do(make_sim, skeleton, kind):
+    # The compiled steps' clock is typed int64 once (FixedTypes; the tests check every call):
+    # a stamp given as another number type is taken as its int, not passed on as it came.
+    ints, others = make_sim(), make_sim()
+    for stamp, names, pos in clip_inputs(skeleton, 'walk', 0.1):
+        ints.process(stamp, names, pos)
+        assert others.process(kind(stamp), names, pos).accepted
+    assert ints.t_sim == others.t_sim and np.array_equal(ints.x, others.x)
+
+
 def test_the_teleport_distance_scales_with_the_characters_height_unless_set():
     """Issue 35 item 6: a giant's stride was a teleport (a reset) at a person's threshold."""
     import re

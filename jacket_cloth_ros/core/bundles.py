@@ -289,9 +289,9 @@ class StepOutput(NamedTuple):
 
 
 class SteadyIntake(NamedTuple):
-    """A crowd character's input check and sample, compiled (physics.crowd.prepare_steady).
+    """A character's input check and sample, compiled (physics.crowd.steady_input).
 
-    Armed (core/crowd.py) after an input that went the whole way in Python without a warning
+    Armed (core/stepping.py) after an input that went the whole way in Python without a warning
     or reset: the plan of its name list (as InputParser's), its last sample and the limits its
     next input is checked against. An input that passes every check is written into the
     character's CrowdSlot motion arrays (shared here), as JacketSimulation.prepare and

@@ -85,9 +85,9 @@ class LevelOfDetail:
     def tuned(self, tuning: Tuning, step: LodStep) -> Tuning:
         """Return ``tuning`` at ``step``'s level, the same object while neither changes.
 
-        A crowd hands a character's tuning to its compiled slot only when the object changes
-        (core/crowd.py), so a new one per input would cost the far characters what the level
-        saves them.
+        A character's compiled slot takes a new tuning only when the object changes
+        (core/stepping.py), so a new one per input would cost the far characters what the
+        level saves them.
 
         :param tuning: the character's full-detail tuning.
         :param step: the level the input's steps run at.

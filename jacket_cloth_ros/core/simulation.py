@@ -202,8 +202,8 @@ class JacketSimulation:
         self.resets = 0
         self.faults = Faults()
         self.steps_total = 0
-        # The current state's bones, as an input's check left them (a crowd's compiled call
-        # makes them with its steps, core/crowd.py); any new input or reset drops them.
+        # The current state's bones, as an input's check left them (the compiled call makes
+        # them with its steps, core/stepping.py); any new input or reset drops them.
         self.ready_bones = None
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
@@ -623,7 +623,7 @@ class JacketSimulation:
         sample = self.steps.taken(stamp_ns)
         self.parser.last = JointSample(sample.q, sample.root, sample.root_quat)
         clock = self.steps.slot.clock
-        return StepReport(stamp_ns), StepJob(sample, int(clock[4]), self.last, int(clock[2]),
+        return StepReport(stamp_ns), StepJob(sample, int(clock[4]), self.last, self.t_sim,
                                              self.dt_ns, self.tuning)
 
     def finish(self, report: StepReport, job: 'StepJob', status: int) -> None:

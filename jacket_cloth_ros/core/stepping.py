@@ -48,6 +48,7 @@ class Stepper:
         # What the intake was armed for (names, tuning, world_joint, last sample), or None.
         self.armed = None
         self._positions = np.zeros(0)
+        self._tuned = slot          # the slot on the level of detail's tuning, while it lasts
         self._load = FixedTypes(slot_steps.load_motion)
         self.advance = FixedTypes(slot_steps.advance_slot)
         self.steady = FixedTypes(slot_steps.step_steady)
@@ -58,19 +59,21 @@ class Stepper:
 
         :param tuning: the simulation's new tuning.
         """
-        self.slot = self.slot._replace(tuning=tuning)
+        self.slot = self._tuned = self.slot._replace(tuning=tuning)
         self.armed = None
 
     def ready_for(self, key: tuple, stamp_ns: object) -> bool:
         """Tell whether an input may go the compiled way; if not, disarm.
 
         :param key: (names, tuning, world_joint, last sample) the input comes on: armed for
-            these very objects (a simulation stepped another way, or reset, has others).
+            these very objects (a simulation stepped another way, or reset, has others), but
+            for names an equal tuple will do (a tuple cannot change under the intake).
         :param stamp_ns: the input's stamp: an int.
         """
         arm = self.armed
-        if (arm is not None and arm[0] is key[0] and arm[1] is key[1] and arm[2] is key[2]
-                and arm[3] is key[3] and type(stamp_ns) is int):
+        if (arm is not None and arm[1] is key[1] and arm[2] is key[2] and arm[3] is key[3]
+                and (arm[0] is key[0] or (type(key[0]) is tuple and arm[0] == key[0]))
+                and type(stamp_ns) is int):
             return True
         self.armed = None
         return False
@@ -92,6 +95,8 @@ class Stepper:
             return NOT_STEADY
         buffer = self._positions
         try:        # copied: the kernel was typed for a writable C float64 array
+            if len(positions) != buffer.shape[0]:       # no broadcasting one value to all
+                raise ValueError('another length')
             buffer[:] = positions
         except (ValueError, TypeError):         # another length or not numbers: prepare says
             self.armed = None
@@ -118,12 +123,15 @@ class Stepper:
         """
         slot = self.slot
         if slot.tuning is not job.tuning:       # the level of detail's tuning, this input
-            slot = slot._replace(tuning=job.tuning)
+            if self._tuned.tuning is not job.tuning:
+                self._tuned = slot._replace(tuning=job.tuning)
+            slot = self._tuned
         a, b = job.start, job.sample
         self._load((slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b),
                    slot.clock, slot.out.stats, JointSample(a.q, a.root, a.root_quat),
                    JointSample(b.q, b.root, b.root_quat),
-                   (a.stamp_ns, b.stamp_ns - a.stamp_ns, job.t_sim, job.dt_ns, job.steps))
+                   (int(a.stamp_ns), int(b.stamp_ns - a.stamp_ns), int(job.t_sim),
+                    int(job.dt_ns), int(job.steps)))
         return slot
 
     def run(self, job: StepJob) -> int:

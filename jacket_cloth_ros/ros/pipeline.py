@@ -583,7 +583,7 @@ class CrowdPipeline:
         That intake is armed for one name list object. An equal list in a new object (rclpy's
         own deserialisation makes one per message) is replaced by the one it was armed for,
         and a list that differs from the last goes as a list, which is never armed on
-        (CrowdSteps.settle): arming on every input cost more than the input's steps.
+        (JacketSimulation.settle): arming on every input cost more than the input's steps.
         """
         last = self._names[index]
         if names is last:

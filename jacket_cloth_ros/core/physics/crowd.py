@@ -27,8 +27,8 @@ def load_motion(motion, clock, stats, a, b, timing):
 
     ``motion``: the slot's (q_a, q_b, quat_a, quat_b, pos_a, pos_b); ``a``, ``b``: the two
     bundles.JointSample; ``timing``: (stamp_a, span, t_sim, dt_ns, steps), into ``clock``.
-    What simulation.motion_between gives a character alone, in one call: as numpy copies,
-    one per array, they were the largest Python share of a crowd's character (docs/crowd.md).
+    In one call: as numpy copies, one per array, they were the largest Python share of a
+    crowd's character (docs/crowd.md).
     """
     q_a, q_b, quat_a, quat_b, pos_a, pos_b = motion
     q_a[:] = a.q
