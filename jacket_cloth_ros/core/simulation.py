@@ -620,6 +620,7 @@ class JacketSimulation:
 
         :param stamp_ns: the input's stamp, ns.
         """
+        self.ready_bones = None             # as prepare drops them: the state moved on
         sample = self.steps.taken(stamp_ns)
         self.parser.last = JointSample(sample.q, sample.root, sample.root_quat)
         clock = self.steps.slot.clock
