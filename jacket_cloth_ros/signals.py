@@ -5,10 +5,10 @@ The executables start here (setup.py's entry points), before anything heavy is i
 Python takes a second or more to import rclpy, numpy and numba, and a Ctrl-C then raised
 KeyboardInterrupt inside an import. While a program starts, a signal ends it at once with one
 line and 128 + the signal's number; once it runs, SIGINT raises KeyboardInterrupt as Python's
-default does (rclpy's own handler has shut its context down too), but not inside a block that
-must finish whole (:func:`uninterrupted`), SIGTERM is left to rclpy's handler, and while it
-stops a second signal (``ros2 launch`` forwards the terminal's Ctrl-C the process also got) is
-ignored.
+default does (rclpy's own handler has shut its context down too), but not inside a block or
+function that must finish whole (:func:`uninterrupted`, :func:`whole`), SIGTERM is left to
+rclpy's handler, and while it stops a second signal (``ros2 launch`` forwards the terminal's
+Ctrl-C the process also got) is ignored.
 """
 
 import contextlib
@@ -16,12 +16,13 @@ import importlib
 import os
 import signal
 import sys
-from typing import Iterator
+from typing import Callable, Iterator
 
 STARTING, RUNNING, STOPPING = 'starting', 'running', 'stopping'
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _now = {'program': sys.argv[0], 'phase': STARTING, 'doing': 'starting', 'held': 0,
         'pending': False}
+_whole = set()          # the code of each function marked whole()
 
 
 def _on_signal(signum: int, frame: object) -> None:
@@ -31,11 +32,47 @@ def _on_signal(signum: int, frame: object) -> None:
               flush=True)
         os._exit(128 + signum)
     if _now['phase'] == RUNNING and signum == signal.SIGINT:
-        if _now['held']:
+        if _now['held'] or _in_whole(frame):
             _now['pending'] = True          # raised as the block ends (uninterrupted)
             return
         _now['phase'] = STOPPING
         raise KeyboardInterrupt
+
+
+def whole(function: Callable) -> Callable:
+    """Mark ``function`` as one that finishes whole: a SIGINT while it runs waits for its end.
+
+    As :func:`uninterrupted`, but held by the function's code being on the stack when the
+    signal comes, so a call costs nothing and adds no frame (the node's JointState callback).
+    The function ends with :func:`raise_held`, in a ``finally``.
+
+    :param function: a plain function or method, returned as it is.
+    :returns: ``function``.
+    """
+    _whole.add(function.__code__)
+    return function
+
+
+def raise_held() -> None:
+    """Raise a SIGINT held while the calling :func:`whole` function ran, unless still held.
+
+    It stays held while an :func:`uninterrupted` block or another whole function below the
+    caller is still running.
+    """
+    caller = sys._getframe(1)
+    if _now['pending'] and not _now['held'] and not _in_whole(caller.f_back):
+        _now['pending'] = False
+        _now['phase'] = STOPPING
+        raise KeyboardInterrupt
+
+
+def _in_whole(frame: object) -> bool:
+    """Tell whether a :func:`whole` function is running at ``frame`` or below it."""
+    while frame is not None:
+        if frame.f_code in _whole:
+            return True
+        frame = frame.f_back
+    return False
 
 
 @contextlib.contextmanager
@@ -52,7 +89,7 @@ def uninterrupted() -> Iterator[None]:
         yield
     finally:
         _now['held'] -= 1
-        if not _now['held'] and _now['pending']:
+        if not _now['held'] and _now['pending'] and not _in_whole(sys._getframe()):
             _now['pending'] = False
             _now['phase'] = STOPPING
             raise KeyboardInterrupt

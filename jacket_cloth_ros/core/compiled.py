@@ -122,6 +122,9 @@ class FixedTypes:
         self._check = CHECK_TYPES if check is None else check
         self._entry = None
         self._types = None
+        # The entry point once typed, for a hot path that calls it with no Python frame of
+        # ours between (``(kernel.entry or kernel)(...)``); None while every call is checked.
+        self.entry = None
 
     def __call__(self, *args: object) -> object:
         """Call the kernel; the first call through numba's dispatcher, later ones straight in.
@@ -141,4 +144,6 @@ class FixedTypes:
         overload = self.dispatcher.overloads.get(types)
         if overload is not None:           # else numba converted an argument: keep typing
             self._entry, self._types = overload.entry_point, types
+            if not self._check:
+                self.entry = self._entry
         return result

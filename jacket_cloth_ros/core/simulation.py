@@ -566,13 +566,30 @@ class JacketSimulation:
         started = time.perf_counter_ns()
         status = self.steps.take(self.steady_key(names), stamp_ns, positions)
         if status != NOT_STEADY:
-            report, job = self.steady_job(stamp_ns)
-        else:
-            report, job = self.prepare(stamp_ns, names, positions)
-            if job is not None:
-                status = self.steps.run(job)
+            return self.took_steady(stamp_ns, names, status, started)
+        report, job = self.prepare(stamp_ns, names, positions)
         if job is not None:
-            self.finish(report, job, status)
+            self.finish(report, job, self.steps.run(job))
+        return self._checked(report, names, started)
+
+    def took_steady(self, stamp_ns: int, names: Sequence[str], status: int,
+                    started: int) -> StepReport:
+        """Finish an input the compiled intake took and stepped, as :meth:`process` does.
+
+        For a caller that ran the intake itself (``steps.steady``, or ros/steady_lane.py from
+        a JointState's bytes): the input's report, its bones checked.
+
+        :param stamp_ns: the input's stamp, ns.
+        :param names: its joint names (the armed ones).
+        :param status: what the compiled call returned (not NOT_STEADY).
+        :param started: ``time.perf_counter_ns()`` before that call, for the step cost.
+        """
+        report, job = self.steady_job(stamp_ns)
+        self.finish(report, job, status)
+        return self._checked(report, names, started)
+
+    def _checked(self, report, names, started):
+        """An input's end: its cost, its bones checked, the intake armed or not."""
         report.step_cost_ns = time.perf_counter_ns() - started
         if report.accepted:
             self.check_bones(report)

@@ -47,7 +47,10 @@ class Stepper:
         self.intake = steady_intake(slot)
         # What the intake was armed for (names, tuning, world_joint, last sample), or None.
         self.armed = None
-        self._positions = np.zeros(0)
+        self.positions = np.zeros(0)
+        # The positions buffer as bytes: a caller that reads them straight from a message
+        # (ros/steady_lane.py) copies them in without the alignment a float view needs.
+        self.positions_bytes = self.positions.view(np.uint8)
         self._tuned = slot          # the slot on the level of detail's tuning, while it lasts
         self._load = FixedTypes(slot_steps.load_motion)
         self.advance = FixedTypes(slot_steps.advance_slot)
@@ -70,17 +73,23 @@ class Stepper:
             for names an equal tuple will do (a tuple cannot change under the intake).
         :param stamp_ns: the input's stamp: an int.
         """
-        arm = self.armed
-        if (arm is not None and arm[1] is key[1] and arm[2] is key[2] and arm[3] is key[3]
-                and (arm[0] is key[0] or (type(key[0]) is tuple and arm[0] == key[0]))
-                and type(stamp_ns) is int):
+        if self.armed_for(key) and type(stamp_ns) is int:
             return True
         self.armed = None
         return False
 
+    def armed_for(self, key: tuple) -> bool:
+        """Tell whether the intake is armed for ``key`` (:meth:`ready_for`), disarming nothing.
+
+        :param key: (names, tuning, world_joint, last sample) an input comes on.
+        """
+        arm = self.armed
+        return (arm is not None and arm[1] is key[1] and arm[2] is key[2] and arm[3] is key[3]
+                and (arm[0] is key[0] or (type(key[0]) is tuple and arm[0] == key[0])))
+
     def load_steady(self) -> None:
         """Load the steady call now: the unarmed intake takes nothing and moves nothing."""
-        self.steady(self.intake, self.slot, 0, self._positions)
+        self.steady(self.intake, self.slot, 0, self.positions)
 
     def take(self, key: tuple, stamp_ns: int, positions: object) -> int:
         """Step an input the compiled way if it is steady; its status, or NOT_STEADY.
@@ -93,7 +102,7 @@ class Stepper:
         """
         if not self.ready_for(key, stamp_ns):
             return NOT_STEADY
-        buffer = self._positions
+        buffer = self.positions
         try:        # copied: the kernel was typed for a writable C float64 array
             if len(positions) != buffer.shape[0]:       # no broadcasting one value to all
                 raise ValueError('another length')
@@ -163,7 +172,8 @@ class Stepper:
         """
         self.intake = steady_intake(self.slot, plan, (last.q, last.root, last.root_quat),
                                     (last.stamp_ns, *clock), limits)
-        self._positions = np.zeros(len(key[0]))
+        self.positions = np.zeros(len(key[0]))
+        self.positions_bytes = self.positions.view(np.uint8)
         self.armed = key
 
 

@@ -255,6 +255,10 @@ class TfTemplate(_Template):
             w.f64s((0.0,) * 7)
         super().__init__(w, stamps)
         self._pose_at = np.array(poses)
+        # What ros/steady_lane.py writes a message into, in compiled code: the u32 view, the
+        # stamps' indices, the f64 view, the poses' indices; the message is then ``u8``'s bytes.
+        self.layout = (self._u32, self._stamp_at, self._f64, self._pose_at)
+        self.u8 = self._u8
 
     def encode(self, poses: np.ndarray, stamp_ns: int) -> bytes:
         """Return the message's bytes with these stamps and poses.
@@ -459,8 +463,11 @@ class JointStateReader:
     """
 
     def __init__(self):
-        self._names_bytes = b''
-        self._names = ()
+        # The name list last decoded, and its bytes as the message held them (as an array too,
+        # for ros/steady_lane.py, which recognises them in compiled code).
+        self.names_bytes = b''
+        self.names = ()
+        self.name_code = np.zeros(0, dtype=np.uint8)
 
     def read(self, raw: bytes) -> JointStateContent:
         """Return the stamp, names and positions of a JointState's CDR bytes; ValueError if bad.
@@ -474,12 +481,13 @@ class JointStateReader:
             raise ValueError('not a CDR message')
         sec, nanosec, frame_len = struct.unpack_from('<iII', raw, 4)
         at = _aligned(16 + frame_len, 4)
-        if self._names_bytes and raw.startswith(self._names_bytes, at):
-            names, at = self._names, at + len(self._names_bytes)
+        if self.names_bytes and raw.startswith(self.names_bytes, at):
+            names, at = self.names, at + len(self.names_bytes)
         else:
             start = at
             names, at = _strings(raw, at)
-            self._names_bytes, self._names = raw[start:at], names
+            self.names_bytes, self.names = raw[start:at], names
+            self.name_code = np.frombuffer(self.names_bytes, dtype=np.uint8)
         at = _aligned(at, 4)
         (count,) = struct.unpack_from('<I', raw, at)
         at = _aligned(at + 4, 8)

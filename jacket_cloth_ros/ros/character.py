@@ -23,7 +23,6 @@ from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from ..core.config import shipped
-from . import cdr
 from .characters import CharacterSpec
 from .pipeline import session_topics
 
@@ -117,7 +116,6 @@ class Character:
         self.source = ''                # where its URDF came from, for the log
         self.told_description = None    # the hash of the last late URDF said to be ignored
         self.waiting = ''               # why it still waits: the URDF its topic gave, refused
-        self.reader = cdr.JointStateReader()
         self.inputs = 0
         self.log_times = {}             # its throttled warnings: code -> when last logged
         self.diag_wall = 0.0            # when its diagnostics last went out (monotonic)

@@ -35,6 +35,7 @@ from ..core.config import ConfigError, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
+from ..core.stepping import NOT_STEADY
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
                         cut_line, input_problems, read_file, throttled)
@@ -45,7 +46,7 @@ from .parameters import (CROWD_PARAMETERS, NODE_PARAMETERS, ROS_OWN, ROS_OWN_PRE
                          check_value, descriptor, fabric_parameters,
                          params_file_for_another_node, params_file_problem, ros_args_problem,
                          unknown_reason)
-from .pipeline import CrowdPipeline, SessionPipeline, session_topics, spread_phase
+from .pipeline import CrowdPipeline, Periodic, SessionPipeline, session_topics, spread_phase
 from .recording import NodeRecording
 from .values import VALUE_NAMES, default_values
 from .viewer import VIEWER_LIVE_QOS, VIEWER_QOS, Deliveries, read_viewer
@@ -504,6 +505,7 @@ class JacketClothNode(Node):
         return default if self._last_stamp is None else self._last_stamp
 
     # -- the inputs ---------------------------------------------------------------------------
+    @signals.whole          # an input's /tf goes out, then it is recorded, even on a Ctrl-C
     def on_joint_states(self, batch: list) -> None:
         """Process (character, raw bytes, message info) JointStates together, as one batch.
 
@@ -514,21 +516,65 @@ class JacketClothNode(Node):
 
         :param batch: (character, raw CDR bytes, rmw message info) of each input, in order.
         """
-        with signals.uninterrupted():       # an input's /tf goes out, then it is recorded
-            self._joint_states(batch)
+        try:
+            if len(self.crowd.pipelines) == 1:
+                self._alone(batch)
+            else:
+                self._joint_states(batch)
+        finally:
+            signals.raise_held()
+
+    def _alone(self, batch):
+        """A lone character's inputs, in turn: each /tf goes out as soon as it is made.
+
+        A steady input's straight from its bytes (SessionPipeline.steady_tf), its bookkeeping
+        after; any other the crowd's way for one.
+        """
+        now = time.time_ns()
+        entries = []
+        for k, (c, raw, info) in enumerate(batch):
+            pipeline = c.pipeline
+            status, stamp, sent = pipeline.steady_tf(raw)
+            if sent is not None:
+                self.tf.publish(sent)
+                pipeline.note_latency(time.time_ns() - (info.get('received_timestamp') or now))
+            c.count_lost(info)
+            last = k == len(batch) - 1
+            if status != NOT_STEADY:
+                report, tf = pipeline.after_steady(status, stamp, sent)
+                later = Periodic(pipeline, report, stamp, now=not last)
+            else:
+                msg = self._read(c, raw)
+                if msg is None:
+                    continue
+                stamp = msg.stamp_ns
+                report, tf, later = self.crowd.alone(msg, last)
+            if sent is None and tf:
+                for _, out in tf:
+                    self.tf.publish(out)
+                pipeline.note_latency(time.time_ns() - (info.get('received_timestamp') or now))
+            c.inputs += 1
+            entries.append((c, raw, stamp, report, tf, later))
+        self._record_inputs(entries)
+
+    def _read(self, c, raw):
+        """A JointState's content, or None (counted and said) if it does not decode."""
+        try:
+            return c.pipeline.reader.read(raw)
+        except cdr.DECODE_ERRORS as e:
+            c.pipeline.note_undecodable()
+            c.warn(self.get_logger(), 'decode', f'a JointState that does not decode ({e}): '
+                   'message dropped')
+            return None
 
     def _joint_states(self, batch):
+        """A crowd's inputs: stepped together, every /tf out before any other output."""
         now = time.time_ns()
-        logger = self.get_logger()
         entries = []
         for c, raw, info in batch:
             c.count_lost(info)
-            try:
-                msg = c.reader.read(raw)
-            except cdr.DECODE_ERRORS as e:
-                c.pipeline.note_undecodable()
-                c.warn(logger, 'decode', f'a JointState that does not decode ({e}): '
-                       'message dropped')
+            msg = self._read(c, raw)
+            if msg is None:
                 continue
             c.inputs += 1
             entries.append((c, raw, msg, info.get('received_timestamp') or now))
@@ -543,8 +589,16 @@ class JacketClothNode(Node):
                 for _, out in tf:
                     self.tf.publish(out)
                 c.pipeline.note_latency(time.time_ns() - arrived)
-        for (c, raw, msg, _), (report, tf, later) in zip(entries, results):
-            stamp_ns = msg.stamp_ns
+        self._record_inputs([(c, raw, msg.stamp_ns, *result)
+                             for (c, raw, msg, _), result in zip(entries, results)])
+
+    def _record_inputs(self, entries):
+        """After a batch's /tf: each input recorded, its warnings said, its other outputs sent.
+
+        :param entries: (character, raw bytes, stamp ns, report, /tf outputs, later) each.
+        """
+        logger = self.get_logger()
+        for c, raw, stamp_ns, report, tf, later in entries:
             if report.accepted:
                 self._last_stamp = stamp_ns
             periodic = later()

@@ -9,15 +9,19 @@ Only wall-clock step costs differ between runs, so they go into diagnostics only
 
 import functools
 import math
+import time
 import types
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.compiled import FixedTypes
 from ..core.crowd import CrowdSteps, stepped
 from ..core.simulation import JacketSimulation, StageTimer, StepReport
+from ..core.stepping import NOT_STEADY
 from ..recording.writer import qos_profile_yaml
-from . import messages
+from . import messages, steady_lane
+from .cdr import JointStateReader
 
 if TYPE_CHECKING:           # for the annotations only
     from collections.abc import Callable, Sequence
@@ -125,6 +129,11 @@ class SessionPipeline:
         self.markers_wanted: 'Callable[[], bool] | None' = None
         self._stage_timer = None
         self._marker_array = messages.marker_array
+        # The character's JointStates are read here, node and replay alike: a steady input's
+        # bytes are recognised by its name list's (steady_tf).
+        self.reader = JointStateReader()
+        self._lane = FixedTypes(steady_lane.steady_tf)
+        self._started = 0           # before the last steady_tf's call, for its step cost
         self._tf = self._tf_template()
         self._world_tf = None
         # Load the encoders' compiled parts now rather than on the first input's outputs.
@@ -141,6 +150,10 @@ class SessionPipeline:
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
         template = messages.tf_template(tuple(self.sim.bone_names),
                                         tuple(self.sim.bone_parents), self.values.frame_prefix)
+        # Where steady_tf lays its /tf out; with a second /tf (the world's) to follow, it does
+        # not.
+        self._tf_layout = None if (self.values.publish_world_tf
+                                   and not self.root_is_world_frame()) else template
         if self._stage_timer is None:
             return template
         # Timed for this pipeline alone: the template is shared by every pipeline of its bones.
@@ -150,6 +163,8 @@ class SessionPipeline:
         """Put ``timer`` around each of TIMED_STAGES (see ``stage_timer``), once set up."""
         self._stage_timer = timer
         self.sim.time_stages(timer)
+        self._lane = timer('step', self._lane)
+        self._lane.entry = None         # every call through the timer
         self._tf = self._tf_template()
         draw_jacket = timer('skinning', messages.outfit(self.sim.rig).draw_jacket)
         self._marker_array = timer('markers', functools.partial(messages.marker_array,
@@ -188,7 +203,9 @@ class SessionPipeline:
             self.sim.set_fabric(values.fabric)
         if values.world_joint != old.world_joint:
             self.sim.parser.set_world_joint(values.world_joint)
-        if values.frame_prefix != old.frame_prefix:
+        if (values.frame_prefix != old.frame_prefix
+                or values.publish_world_tf != old.publish_world_tf
+                or values.world_frame != old.world_frame):
             self._tf = self._tf_template()
 
     def set_viewer(self, position: 'np.ndarray | None') -> None:
@@ -218,6 +235,60 @@ class SessionPipeline:
         self.lost += count
         self._window['lost'] += count
 
+    def steady_tf(self, raw: bytes) -> tuple[int, int, 'bytes | None']:
+        """Step a steady input from its bytes in one compiled call (ros/steady_lane.py).
+
+        The armed intake's input (core/stepping.py): the name list the reader last read, and
+        nothing JacketSimulation.process would say a word about. Its /tf comes back to be
+        published at once; :meth:`after_steady` then does the input's bookkeeping.
+
+        :param raw: the JointState's CDR bytes.
+        :returns: (status, stamp ns, /tf bytes or None). NOT_STEADY: nothing moved, the input
+            goes the reader's and :meth:`on_joint_state`'s way. Else the input is stepped; its
+            /tf is None when it waits for :meth:`after_steady` (a cloth reset first).
+        """
+        sim, reader, layout = self.sim, self.reader, self._tf_layout
+        steps = sim.steps
+        if layout is None or sim.lod.viewer is not None or not steps.armed_for(
+                (reader.names, sim.tuning, sim.parser.world_joint, sim.last)):
+            return NOT_STEADY, 0, None
+        self._started = time.perf_counter_ns()
+        status, stamp, laid = (self._lane.entry or self._lane)(
+            np.frombuffer(raw, dtype=np.uint8), reader.name_code,
+            (steps.positions, steps.positions_bytes), steps.intake, steps.slot, layout.layout)
+        if status == NOT_STEADY:
+            steps.armed = None          # as the intake's own refusal disarms it
+            return status, stamp, None
+        return status, stamp, layout.u8.tobytes() if laid else None
+
+    def after_steady(self, status: int, stamp_ns: int,
+                     tf: 'bytes | None') -> tuple[StepReport, list[tuple[str, bytes]]]:
+        """Finish and count an input :meth:`steady_tf` stepped: its report and /tf outputs.
+
+        :param status: what steady_tf returned.
+        :param stamp_ns: the input's stamp, ns.
+        :param tf: its /tf as steady_tf laid it out, or None: made here (:meth:`account_tf`).
+        :returns: (report, [('tf', bytes)]), the /tf steady_tf gave among them.
+        """
+        report = self.sim.took_steady(stamp_ns, self.reader.names, status, self._started)
+        return report, self.account_tf(report, stamp_ns, tf)
+
+    def on_raw(self, raw: bytes) -> tuple[StepReport, list[tuple[str, bytes]]]:
+        """Process one JointState's CDR bytes as the node does: (report, outputs).
+
+        A steady input by :meth:`steady_tf`, any other read and processed by
+        :meth:`on_joint_state`; the outputs are the same to the byte either way.
+
+        :param raw: the serialized JointState.
+        :raises ValueError: (cdr.DECODE_ERRORS) bytes that do not decode as a JointState.
+        """
+        status, stamp, tf = self.steady_tf(raw)
+        if status != NOT_STEADY:
+            report, out = self.after_steady(status, stamp, tf)
+            return report, out + self.periodic_outputs(report, stamp)
+        msg = self.reader.read(raw)
+        return self.on_joint_state(msg, msg.stamp_ns)
+
     def on_joint_state(self, msg: 'JointStateContent',
                        stamp_ns: int) -> tuple[StepReport, list[tuple[str, bytes]]]:
         """Process one JointState; returns (StepReport, [(output key, CDR bytes), ...]).
@@ -239,7 +310,8 @@ class SessionPipeline:
         """
         return self.account_tf(report, stamp_ns) + self.periodic_outputs(report, stamp_ns)
 
-    def account_tf(self, report: StepReport, stamp_ns: int) -> list[tuple[str, bytes]]:
+    def account_tf(self, report: StepReport, stamp_ns: int,
+                   encoded: 'bytes | None' = None) -> list[tuple[str, bytes]]:
         """Count a processed input and return its /tf outputs (none for a non-finite pose).
 
         The part after the simulation that a listener waits for: a crowd (CrowdPipeline)
@@ -247,6 +319,7 @@ class SessionPipeline:
 
         :param report: the input's step report.
         :param stamp_ns: the input's stamp, ns, which its outputs carry.
+        :param encoded: its bones' /tf, laid out already (:meth:`steady_tf`); None: made here.
         """
         self.inputs += 1
         self._window['inputs'] += 1
@@ -268,7 +341,9 @@ class SessionPipeline:
         self._finite = bones.finite
         if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
             return []
-        out = [('tf', self._tf.encode(bones.poses, stamp_ns))]
+        if encoded is None:
+            encoded = self._tf.encode(bones.poses, stamp_ns)
+        out = [('tf', encoded)]
         if self.values.publish_world_tf and not self.root_is_world_frame():
             out.append(('tf', self._world_transform(stamp_ns)))
         self._window['published'] += 1
@@ -554,7 +629,7 @@ class CrowdPipeline:
         :param inputs: (character index, JointState) each.
         """
         if len(self.pipelines) == 1:
-            return [self._alone(m, k == len(inputs) - 1) for k, (_, m) in enumerate(inputs)]
+            return [self.alone(m, k == len(inputs) - 1) for k, (_, m) in enumerate(inputs)]
         out = [None] * len(inputs)
 
         def after_round(ks, reports, last):
@@ -567,10 +642,14 @@ class CrowdPipeline:
                              for i, m in inputs], after_round)
         return out
 
-    def _alone(self, msg, last):
+    def alone(self, msg: 'JointStateContent', last: bool) -> tuple[
+            StepReport, list[tuple[str, bytes]], Periodic]:
         """Step the only character by its simulation's ``process``, as its pipeline alone.
 
-        Its markers and diagnostics are made now unless it is the ``last`` input of the batch.
+        :param msg: the input.
+        :param last: whether it is the last input of its batch; if not, its markers and
+            diagnostics are made now.
+        :returns: (report, /tf outputs, later), as :meth:`step_and_tf` gives each input.
         """
         pipeline = self.pipelines[0]
         report = pipeline.sim.process(msg.stamp_ns, msg.name, msg.position)

@@ -13,7 +13,7 @@ from ..core.physics import crowd as crowd_physics, step
 from ..core.rig import load_rig
 from ..core.skeleton import load_shipped_character
 from ..motion.clips import joint_state_content
-from . import cdr
+from . import cdr, steady_lane
 from .pipeline import CrowdPipeline, SessionPipeline
 from .values import default_values
 
@@ -26,7 +26,7 @@ def kernels_cached(crowd: bool = True) -> bool:
     :param crowd: whether the crowd's one call for many characters (jacket_cloth_crowd) counts
         too.
     """
-    wanted = (step.advance,)
+    wanted = (step.advance, steady_lane.steady_tf)
     if crowd:
         wanted += (crowd_physics.advance_crowd, crowd_physics.prepare_steady)
     try:
@@ -49,10 +49,8 @@ def warm_kernels(crowd: bool = True) -> tuple:
     pipeline = SessionPipeline(skeleton, load_rig(skeleton),
                                default_values(fabrics['tweed_jacket']))
     names, positions = joint_state_content(skeleton.joint_names, 'walk', 0.0)
-    for k in range(3):              # a reset, then steps: every output of an input
-        content = cdr.JointStateReader().read(cdr.joint_state(10**9 + k * 10**7, names,
-                                                              positions))
-        pipeline.on_joint_state(content, content.stamp_ns)
+    for k in range(4):      # a reset, steps, then steady inputs: every output of an input
+        pipeline.on_raw(cdr.joint_state(10**9 + k * 10**7, names, positions))
     if not crowd:
         return time.perf_counter() - started, cached
     # The crowd's one call for many characters (jacket_cloth_crowd), compiled on its own.

@@ -20,7 +20,7 @@ from ..core.rig import Rig
 from ..core.skeleton import skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG, SessionRecorder
-from ..ros.cdr import DECODE_ERRORS, JointStateReader
+from ..ros.cdr import DECODE_ERRORS
 from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
@@ -124,7 +124,6 @@ def replay_crowd(path: str, out_path: str,
                     recorder.add_topic(*c.topics[key])
                 recorder.add_metadata(PREFIX + c.name, c.setup)
             started = time.perf_counter()
-            readers = {topic: JointStateReader() for topic in characters}
             for m in recording.messages:
                 c = characters.get(m.topic)
                 if c is None:
@@ -133,14 +132,13 @@ def replay_crowd(path: str, out_path: str,
                         recorder.write(m.topic, m.data, m.log_time)
                     continue
                 try:
-                    msg = readers[m.topic].read(m.data)
+                    report, outputs = c.pipeline.on_raw(m.data)
                 except DECODE_ERRORS:
                     c.pipeline.note_undecodable()       # recorded only if it decoded: never
                     continue
-                _, outputs = c.pipeline.on_joint_state(msg, msg.stamp_ns)
-                recorder.write(m.topic, m.data, msg.stamp_ns)
+                recorder.write(m.topic, m.data, report.stamp_ns)
                 for key, data in outputs:
-                    recorder.write(c.topics[key][0], data, msg.stamp_ns)
+                    recorder.write(c.topics[key][0], data, report.stamp_ns)
             recorder.close()
             took = time.perf_counter() - started
         finally:

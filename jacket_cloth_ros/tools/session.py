@@ -357,16 +357,14 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
     setup = session.setup
     pipeline = SessionPipeline(setup.skeleton, setup.rig, setup.values, setup.node_name,
                                timing=timing)
-    joint_states = JointStateReader()
     for stamp, _, kind, data in session.events:
         if kind == 'joint_states':
-            try:
-                msg = joint_states.read(data)
+            try:        # as the node takes it: a steady input from its bytes in one call
+                report, outputs = pipeline.on_raw(data)
             except DECODE_ERRORS as e:
                 raise RecordingError(f'{session.recording.path}: a {session.topic} message at '
                                      f'{stamp} ns does not decode as JointState ({e})') from None
-            stamp = msg.stamp_ns            # the node's time: the header stamp, never log time
-            report, outputs = pipeline.on_joint_state(msg, stamp)
+            stamp = report.stamp_ns         # the node's time: the header stamp, never log time
             if sink:
                 sink('joint_states', data, stamp)
                 for key, out in outputs:
