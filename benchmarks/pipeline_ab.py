@@ -6,10 +6,11 @@
 Each round starts one process per tree at the same moment, each pinned to its own core (the
 cores swapped every round), so both see the same host: on the shared machine the speed of one
 process after another drifts by more than the difference between builds. Each process feeds a
-60 Hz walk through a SessionPipeline (no recording) three times and prints its best median
-main-thread CPU per input; with ``--crowd N``, N characters (walk, run, idle, dodge in turn)
-through one CrowdPipeline on one thread, each tick's inputs as one batch, and the process's CPU
-per character-input. Both trees must have their kernels compiled.
+60 Hz walk's bytes through a SessionPipeline (no recording) as the tree's replay takes them
+(``on_raw`` where it has one, else its reader and ``on_joint_state``) three times and prints
+its best median main-thread CPU per input; with ``--crowd N``, N characters (walk, run, idle,
+dodge in turn) through one CrowdPipeline on one thread, each tick's inputs as one batch, and the
+process's CPU per character-input. Both trees must have their kernels compiled.
 """
 
 import argparse
@@ -50,10 +51,14 @@ for _ in range(3):
     else:
         reader = JointStateReader()
         pipeline = SessionPipeline(skeleton, rig, default_values(fabric), timing=False)
+        raw_way = getattr(pipeline, 'on_raw', None)     # as each tree's replay takes bytes
         for data in clips[0]:
             started = time.thread_time_ns()
-            msg = reader.read(data)
-            pipeline.on_joint_state(msg, msg.stamp_ns)
+            if raw_way:
+                raw_way(data)
+            else:
+                msg = reader.read(data)
+                pipeline.on_joint_state(msg, msg.stamp_ns)
             spent.append(time.thread_time_ns() - started)
     best.append(statistics.median(spent[60:]))      # past the first second's resets
 print(min(best) * 1e-3)

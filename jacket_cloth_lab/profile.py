@@ -14,7 +14,7 @@ pipeline alone; the decode, record, take and publish timers are the profile's ow
   for a steady input the one call from its bytes to its /tf (``ros/steady_lane.py``);
 - complete: taking the steps' outcome into the simulation;
 - bones: the jacket and hood bones from the cloth;
-- tf: /tf encoded;
+- tf: /tf encoded (a steady input's is laid out within its step);
 - markers, diagnostics: those messages encoded, when due;
 - record: handing every message to the MCAP recorder (its writer thread's CPU is given apart);
 - take, publish (the node only): each JointState taken from a subscription as the node

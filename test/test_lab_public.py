@@ -114,7 +114,8 @@ def test_a_profile_leaves_the_package_as_it_found_it():
     from jacket_cloth_ros.ros import messages, pipeline
     skeleton = load_shipped_character()
     got = per_input_profile(skeleton, seconds=1.0)
-    assert got['us']['step'] > 0 and got['us']['tf'] > 0 and got['us']['markers'] > 0
+    # (A steady input's /tf is laid out within its step: the tf stage reads none here.)
+    assert got['us']['step'] > 0 and got['us']['markers'] > 0
     assert got['markers_skinning_us'] > 0
     bones = bone_set(skeleton, load_rig(skeleton))
     prefix = _defaults().frame_prefix

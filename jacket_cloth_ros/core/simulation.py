@@ -589,7 +589,7 @@ class JacketSimulation:
         return self._checked(report, names, started)
 
     def _checked(self, report, names, started):
-        """An input's end: its cost, its bones checked, the intake armed or not."""
+        """End an input: its cost, its bones checked, the intake armed or not."""
         report.step_cost_ns = time.perf_counter_ns() - started
         if report.accepted:
             self.check_bones(report)

@@ -525,7 +525,7 @@ class JacketClothNode(Node):
             signals.raise_held()
 
     def _alone(self, batch):
-        """A lone character's inputs, in turn: each /tf goes out as soon as it is made.
+        """Process a lone character's inputs in turn, each /tf out as soon as it is made.
 
         A steady input's straight from its bytes (SessionPipeline.steady_tf), its bookkeeping
         after; any other the crowd's way for one.
@@ -558,7 +558,7 @@ class JacketClothNode(Node):
         self._record_inputs(entries)
 
     def _read(self, c, raw):
-        """A JointState's content, or None (counted and said) if it does not decode."""
+        """Return a JointState's content, or None (counted and said) if it does not decode."""
         try:
             return c.pipeline.reader.read(raw)
         except cdr.DECODE_ERRORS as e:
@@ -568,7 +568,7 @@ class JacketClothNode(Node):
             return None
 
     def _joint_states(self, batch):
-        """A crowd's inputs: stepped together, every /tf out before any other output."""
+        """Process a crowd's inputs: stepped together, every /tf out before any other output."""
         now = time.time_ns()
         entries = []
         for c, raw, info in batch:
