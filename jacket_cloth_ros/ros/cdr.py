@@ -439,6 +439,10 @@ def diagnostic_array(stamp_ns: int, statuses: Sequence[tuple]) -> bytes:
 DECODE_ERRORS = (ValueError, struct.error, UnicodeDecodeError)
 
 
+class Undecodable(ValueError):
+    """JointState bytes that do not decode: any of DECODE_ERRORS, raised as one."""
+
+
 class JointStateContent:
     """What the simulation reads of a sensor_msgs/JointState: stamp, names, positions.
 
@@ -467,7 +471,7 @@ class JointStateReader:
         # for ros/steady_lane.py, which recognises them in compiled code).
         self.names_bytes = b''
         self.names = ()
-        self.name_code = np.zeros(0, dtype=np.uint8)
+        self.name_code = np.frombuffer(b'', dtype=np.uint8)    # read-only, as all later ones
 
     def read(self, raw: bytes) -> JointStateContent:
         """Return the stamp, names and positions of a JointState's CDR bytes; ValueError if bad.

@@ -517,45 +517,41 @@ class JacketClothNode(Node):
         :param batch: (character, raw CDR bytes, rmw message info) of each input, in order.
         """
         try:
-            if len(self.crowd.pipelines) == 1:
-                self._alone(batch)
-            else:
+            if len(batch) == 1 and len(self.crowd.pipelines) == 1:
+                self._alone(*batch[0])
+            else:       # a backlog, or a crowd: every input counted and stepped, then sent
                 self._joint_states(batch)
         finally:
             signals.raise_held()
 
-    def _alone(self, batch):
-        """Process a lone character's inputs in turn, each /tf out as soon as it is made.
+    def _alone(self, c, raw, info):
+        """Process a lone character's one input; a steady one's /tf goes out before the rest.
 
-        A steady input's straight from its bytes (SessionPipeline.steady_tf), its bookkeeping
-        after; any other the crowd's way for one.
+        Straight from its bytes (SessionPipeline.steady_tf), its bookkeeping after; any other
+        input the crowd's way for one.
         """
-        now = time.time_ns()
-        entries = []
-        for k, (c, raw, info) in enumerate(batch):
-            pipeline = c.pipeline
-            status, stamp, sent = pipeline.steady_tf(raw)
-            if sent is not None:
-                self.tf.publish(sent)
-                pipeline.note_latency(time.time_ns() - (info.get('received_timestamp') or now))
-            c.count_lost(info)
-            last = k == len(batch) - 1
-            if status != NOT_STEADY:
-                report, tf = pipeline.after_steady(status, stamp, sent)
-                later = Periodic(pipeline, report, stamp, now=not last)
-            else:
-                msg = self._read(c, raw)
-                if msg is None:
-                    continue
-                stamp = msg.stamp_ns
-                report, tf, later = self.crowd.alone(msg, last)
-            if sent is None and tf:
-                for _, out in tf:
-                    self.tf.publish(out)
-                pipeline.note_latency(time.time_ns() - (info.get('received_timestamp') or now))
-            c.inputs += 1
-            entries.append((c, raw, stamp, report, tf, later))
-        self._record_inputs(entries)
+        arrived = info.get('received_timestamp') or time.time_ns()
+        pipeline = c.pipeline
+        status, stamp, sent = pipeline.steady_tf(raw)
+        if sent is not None:
+            self.tf.publish(sent)
+            pipeline.note_latency(time.time_ns() - arrived)
+        c.count_lost(info)
+        if status != NOT_STEADY:
+            report, tf = pipeline.after_steady(status, stamp, sent)
+            later = Periodic(pipeline, report, stamp)
+        else:
+            msg = self._read(c, raw)
+            if msg is None:
+                return
+            stamp = msg.stamp_ns
+            report, tf, later = self.crowd.alone(msg, True)
+        if sent is None and tf:
+            for _, out in tf:
+                self.tf.publish(out)
+            pipeline.note_latency(time.time_ns() - arrived)
+        c.inputs += 1
+        self._record_inputs([(c, raw, stamp, report, tf, later)])
 
     def _read(self, c, raw):
         """Return a JointState's content, or None (counted and said) if it does not decode."""

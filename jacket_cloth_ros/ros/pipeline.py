@@ -21,7 +21,7 @@ from ..core.simulation import JacketSimulation, StageTimer, StepReport
 from ..core.stepping import NOT_STEADY
 from ..recording.writer import qos_profile_yaml
 from . import messages, steady_lane
-from .cdr import JointStateReader
+from .cdr import DECODE_ERRORS, JointStateReader, Undecodable
 
 if TYPE_CHECKING:           # for the annotations only
     from collections.abc import Callable, Sequence
@@ -133,11 +133,16 @@ class SessionPipeline:
         # bytes are recognised by its name list's (steady_tf).
         self.reader = JointStateReader()
         self._lane = FixedTypes(steady_lane.steady_tf)
-        self._started = 0           # before the last steady_tf's call, for its step cost
+        self._lane_ns = 0           # the last steady_tf's compiled call took, for its step cost
         self._tf = self._tf_template()
         self._world_tf = None
-        # Load the encoders' compiled parts now rather than on the first input's outputs.
+        # Load the encoders' compiled parts now rather than on the first input's outputs, and
+        # the steady lane's call (bytes too short to read move nothing) before its first input.
         self._tf.encode(self.sim.bones().poses, 0)
+        steps = self.sim.steps
+        self._lane(np.frombuffer(b'', dtype=np.uint8), self.reader.name_code,
+                   (steps.positions, steps.positions_bytes), steps.intake, steps.slot,
+                   self._tf_plain.layout)
         # The URDF's own visuals are read once: `auto` asks on every markers message.
         self._has_visuals = '<visual' in self.sim.skeleton.urdf_xml
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
@@ -152,6 +157,7 @@ class SessionPipeline:
                                         tuple(self.sim.bone_parents), self.values.frame_prefix)
         # Where steady_tf lays its /tf out; with a second /tf (the world's) to follow, it does
         # not.
+        self._tf_plain = template
         self._tf_layout = None if (self.values.publish_world_tf
                                    and not self.root_is_world_frame()) else template
         if self._stage_timer is None:
@@ -249,13 +255,18 @@ class SessionPipeline:
         """
         sim, reader, layout = self.sim, self.reader, self._tf_layout
         steps = sim.steps
-        if layout is None or sim.lod.viewer is not None or not steps.armed_for(
-                (reader.names, sim.tuning, sim.parser.world_joint, sim.last)):
+        # Bytes only: another buffer (a bytearray, a view) would type the kernel anew.
+        if layout is None or type(raw) is not bytes or sim.lod.viewer is not None or \
+                not steps.armed_for((reader.names, sim.tuning, sim.parser.world_joint,
+                                     sim.last)):
             return NOT_STEADY, 0, None
-        self._started = time.perf_counter_ns()
+        started = time.perf_counter_ns()
         status, stamp, laid = (self._lane.entry or self._lane)(
             np.frombuffer(raw, dtype=np.uint8), reader.name_code,
             (steps.positions, steps.positions_bytes), steps.intake, steps.slot, layout.layout)
+        # The call's own time: the step cost leaves out whatever the caller does before
+        # after_steady (the node's publish).
+        self._lane_ns = time.perf_counter_ns() - started
         if status == NOT_STEADY:
             steps.armed = None          # as the intake's own refusal disarms it
             return status, stamp, None
@@ -270,7 +281,8 @@ class SessionPipeline:
         :param tf: its /tf as steady_tf laid it out, or None: made here (:meth:`account_tf`).
         :returns: (report, [('tf', bytes)]), the /tf steady_tf gave among them.
         """
-        report = self.sim.took_steady(stamp_ns, self.reader.names, status, self._started)
+        report = self.sim.took_steady(stamp_ns, self.reader.names, status,
+                                      time.perf_counter_ns() - self._lane_ns)
         return report, self.account_tf(report, stamp_ns, tf)
 
     def on_raw(self, raw: bytes) -> tuple[StepReport, list[tuple[str, bytes]]]:
@@ -280,13 +292,16 @@ class SessionPipeline:
         :meth:`on_joint_state`; the outputs are the same to the byte either way.
 
         :param raw: the serialized JointState.
-        :raises ValueError: (cdr.DECODE_ERRORS) bytes that do not decode as a JointState.
+        :raises cdr.Undecodable: bytes that do not decode as a JointState.
         """
         status, stamp, tf = self.steady_tf(raw)
         if status != NOT_STEADY:
             report, out = self.after_steady(status, stamp, tf)
             return report, out + self.periodic_outputs(report, stamp)
-        msg = self.reader.read(raw)
+        try:
+            msg = self.reader.read(raw)
+        except DECODE_ERRORS as e:
+            raise Undecodable(str(e)) from None
         return self.on_joint_state(msg, msg.stamp_ns)
 
     def on_joint_state(self, msg: 'JointStateContent',

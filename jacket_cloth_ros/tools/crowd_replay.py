@@ -20,7 +20,7 @@ from ..core.rig import Rig
 from ..core.skeleton import skeleton_from
 from ..recording.reader import Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG, SessionRecorder
-from ..ros.cdr import DECODE_ERRORS
+from ..ros.cdr import Undecodable
 from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
@@ -133,7 +133,7 @@ def replay_crowd(path: str, out_path: str,
                     continue
                 try:
                     report, outputs = c.pipeline.on_raw(m.data)
-                except DECODE_ERRORS:
+                except Undecodable:
                     c.pipeline.note_undecodable()       # recorded only if it decoded: never
                     continue
                 recorder.write(m.topic, m.data, report.stamp_ns)

@@ -24,7 +24,7 @@ from ..core.simulation import StepReport
 from ..core.skeleton import Skeleton, shipped_character_urdf, skeleton_from
 from ..recording.reader import NO_MESSAGES, Recording, RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
-from ..ros.cdr import DECODE_ERRORS, JointStateReader
+from ..ros.cdr import DECODE_ERRORS, JointStateReader, Undecodable
 from ..ros.parameters import from_recording, parse_override, typed_value
 from ..ros.pipeline import DEFAULT_NODE, SessionPipeline, session_topics
 from ..ros.values import VALUE_NAMES, NodeValues, default_values
@@ -361,7 +361,7 @@ def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] |
         if kind == 'joint_states':
             try:        # as the node takes it: a steady input from its bytes in one call
                 report, outputs = pipeline.on_raw(data)
-            except DECODE_ERRORS as e:
+            except Undecodable as e:
                 raise RecordingError(f'{session.recording.path}: a {session.topic} message at '
                                      f'{stamp} ns does not decode as JointState ({e})') from None
             stamp = report.stamp_ns         # the node's time: the header stamp, never log time
