@@ -564,7 +564,7 @@ class JacketClothNode(Node):
             return None
 
     def _joint_states(self, batch):
-        """Process a crowd's inputs: stepped together, every /tf out before any other output."""
+        """Process a crowd's inputs, or a backlog: stepped together, all /tf out first."""
         now = time.time_ns()
         entries = []
         for c, raw, info in batch:
