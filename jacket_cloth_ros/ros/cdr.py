@@ -225,8 +225,7 @@ class _Template:
         return (byte_at - 4) // 8 + np.arange(count)
 
     def _bytes(self, stamp_ns):
-        _put_stamps(self._u32, self._stamp_at, (stamp_ns // 1_000_000_000) & 0xFFFFFFFF,
-                    stamp_ns % 1_000_000_000)            # seconds as int32 bits
+        put_stamp(self._u32, self._stamp_at, stamp_ns)
         return self._u8.tobytes()
 
 
@@ -267,21 +266,26 @@ class TfTemplate(_Template):
             its parent's frame.
         :param stamp_ns: every transform's stamp, ns.
         """
-        _put_rows(self._f64, self._pose_at, poses)
+        put_rows(self._f64, self._pose_at, poses)
         return self._bytes(stamp_ns)
 
 
 # Compiled scatters: numpy's fancy-index assignments cost a few us each per message, several
 # times that when the node wakes to each input with cold caches (/tf at 120 Hz).
+# Public: ros/steady_lane.py lays its /tf out with them.
 @njit(cache=True)
-def _put_stamps(u32, stamp_at, sec, nanosec):
+def put_stamp(u32, stamp_at, stamp_ns):
+    """Write a stamp as its seconds (int32 bits) and nanoseconds at each of ``stamp_at``."""
+    sec = (stamp_ns // 1_000_000_000) & 0xFFFFFFFF
+    nanosec = stamp_ns % 1_000_000_000
     for i in range(stamp_at.shape[0]):
         u32[stamp_at[i, 0]] = sec
         u32[stamp_at[i, 1]] = nanosec
 
 
 @njit(cache=True)
-def _put_rows(f64, at, rows):
+def put_rows(f64, at, rows):
+    """Write ``rows[i, k]`` at ``f64[at[i, k]]``."""
     for i in range(at.shape[0]):
         for k in range(at.shape[1]):
             f64[at[i, k]] = rows[i, k]

@@ -142,7 +142,7 @@ class SessionPipeline:
         steps = self.sim.steps
         self._lane(np.frombuffer(b'', dtype=np.uint8), self.reader.name_code,
                    (steps.positions, steps.positions_bytes), steps.intake, steps.slot,
-                   self._tf_plain.layout)
+                   self._template.layout)
         # The URDF's own visuals are read once: `auto` asks on every markers message.
         self._has_visuals = '<visual' in self.sim.skeleton.urdf_xml
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
@@ -155,11 +155,9 @@ class SessionPipeline:
         # Held here: looking it up by its 68 names and parents was half of each /tf's encoding.
         template = messages.tf_template(tuple(self.sim.bone_names),
                                         tuple(self.sim.bone_parents), self.values.frame_prefix)
-        # Where steady_tf lays its /tf out; with a second /tf (the world's) to follow, it does
-        # not.
-        self._tf_plain = template
-        self._tf_layout = None if (self.values.publish_world_tf
-                                   and not self.root_is_world_frame()) else template
+        # Where steady_tf lays its /tf out; not with a second /tf (the world's) to follow.
+        self._template = template
+        self._world_tf_due = self.values.publish_world_tf and not self.root_is_world_frame()
         if self._stage_timer is None:
             return template
         # Timed for this pipeline alone: the template is shared by every pipeline of its bones.
@@ -253,24 +251,26 @@ class SessionPipeline:
             goes the reader's and :meth:`on_joint_state`'s way. Else the input is stepped; its
             /tf is None when it waits for :meth:`after_steady` (a cloth reset first).
         """
-        sim, reader, layout = self.sim, self.reader, self._tf_layout
+        sim, reader, template = self.sim, self.reader, self._template
         steps = sim.steps
-        # Bytes only: another buffer (a bytearray, a view) would type the kernel anew.
-        if layout is None or type(raw) is not bytes or sim.lod.viewer is not None or \
+        # Bytes only: another buffer (a bytearray, a view) would type the kernel anew. The key
+        # is JacketSimulation.steady_key's, made here: calling it would take the callback's
+        # way to the /tf publish through one more module.
+        if self._world_tf_due or type(raw) is not bytes or sim.lod.viewer is not None or \
                 not steps.armed_for((reader.names, sim.tuning, sim.parser.world_joint,
                                      sim.last)):
             return NOT_STEADY, 0, None
         started = time.perf_counter_ns()
         status, stamp, laid = (self._lane.entry or self._lane)(
             np.frombuffer(raw, dtype=np.uint8), reader.name_code,
-            (steps.positions, steps.positions_bytes), steps.intake, steps.slot, layout.layout)
+            (steps.positions, steps.positions_bytes), steps.intake, steps.slot, template.layout)
         # The call's own time: the step cost leaves out whatever the caller does before
         # after_steady (the node's publish).
         self._lane_ns = time.perf_counter_ns() - started
         if status == NOT_STEADY:
             steps.armed = None          # as the intake's own refusal disarms it
             return status, stamp, None
-        return status, stamp, layout.u8.tobytes() if laid else None
+        return status, stamp, template.u8.tobytes() if laid else None
 
     def after_steady(self, status: int, stamp_ns: int,
                      tf: 'bytes | None') -> tuple[StepReport, list[tuple[str, bytes]]]:
@@ -359,7 +359,7 @@ class SessionPipeline:
         if encoded is None:
             encoded = self._tf.encode(bones.poses, stamp_ns)
         out = [('tf', encoded)]
-        if self.values.publish_world_tf and not self.root_is_world_frame():
+        if self._world_tf_due:
             out.append(('tf', self._world_transform(stamp_ns)))
         self._window['published'] += 1
         return out

@@ -16,7 +16,7 @@ import numpy as np
 from ..core.compiled import njit
 from ..core.physics import step
 from ..core.physics.crowd import BONES_FINITE, NOT_STEADY, step_steady
-from .cdr import _put_rows, _put_stamps
+from .cdr import put_rows, put_stamp
 
 
 @njit(cache=True)
@@ -90,6 +90,6 @@ def steady_tf(raw, names, positions, intake, slot, tf):
     if status != BONES_FINITE or slot.out.stats[step.NON_FINITE] != 0.0:
         return status, stamp, False
     u32, stamp_at, f64, pose_at = tf
-    _put_rows(f64, pose_at, slot.bones)
-    _put_stamps(u32, stamp_at, (stamp // 1_000_000_000) & 0xFFFFFFFF, stamp % 1_000_000_000)
+    put_rows(f64, pose_at, slot.bones)
+    put_stamp(u32, stamp_at, stamp)
     return status, stamp, True
