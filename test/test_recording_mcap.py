@@ -117,6 +117,27 @@ def test_chunk_buffers_grow_and_are_reused_without_mixing_chunks():
     assert got == [(i, bytes([i + 1]) * size) for i, size in enumerate(sizes)]
 
 
+def test_a_message_is_recorded_as_it_was_when_given_though_its_buffer_changes_after():
+    # A message's bytes wait in the chunk's list until the writing side lays the chunk out;
+    # a caller's buffer (a bytearray, a view) is copied when given, a ``bytes`` is held.
+    out, deferred = io.BytesIO(), []
+    w = McapWriter(out, compression='', run=lambda work, *args: deferred.append((work, args)))
+    w.start()
+    channel = w.register_channel('/reused', 'cdr', 0)
+    buffer = bytearray(b'first')
+    w.add_message(channel, 1, buffer, 1, sequence=0)
+    buffer[:] = b'other'
+    w.add_message(channel, 2, memoryview(buffer), 2, sequence=1)
+    buffer[:] = b'third'
+    w.add_message(channel, 3, bytes(buffer), 3, sequence=2)
+    buffer[:] = b'fifth'
+    w.finish()
+    for work, args in deferred:
+        work(*args)
+    got = [m.data for _, _, m in SeekingReader(io.BytesIO(out.getvalue()),
+                                               validate_crcs=True).iter_messages()]
+    assert got == [b'first', b'other', b'third']
+
 def test_the_reader_refuses_damage_and_keeps_the_readable_part_of_a_cut(tmp_path):
     from jacket_cloth_ros.recording.reader import RecordingError, read_recording
     data, sent = _written('')

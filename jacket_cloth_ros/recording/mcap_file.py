@@ -1,5 +1,5 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""A chunked MCAP writer whose per-message path is one struct pack and one buffer append.
+"""A chunked MCAP writer whose per-message path is one struct pack and a list append.
 
 Why not ``mcap.writer.Writer``: it builds a ``Message`` record object and writes it field by
 field through a BytesIO, which made the recording a large share of each replayed input
@@ -93,8 +93,9 @@ class McapWriter:
     Messages go into a chunk until ``flush()`` (or ``chunk_bytes``); ``finish()`` writes the
     summary (schemas, channels, statistics, chunk and metadata indexes) and the footer.
 
-    Messages are packed in the caller's thread. Everything that touches the stream (a closed
-    chunk's compression, CRC and write; the other records) goes through ``run``.
+    A message's head is packed in the caller's thread and its bytes held as they are (copied
+    only if not ``bytes``). Everything else (laying a closed chunk out, its compression, CRC
+    and write; the other records) goes through ``run``.
 
     :param stream: the binary stream the file is written to.
     :param compression: the chunks' codec: 'lz4', 'zstd' or '' (none).
@@ -133,15 +134,17 @@ class McapWriter:
         self._held = []                         # chunks the file had no room for, in order
         self.unwritten = 0                      # messages finish() found no room for
         # Chunk buffers are kept and reused: a fresh bytearray grown message by message cost
-        # the live node 4.6 page faults per input (its pages, mapped anew each second). A
-        # buffer goes back to ``_spare`` once its chunk is written (list append, pop: atomic).
+        # the live node 4.6 page faults per input (its pages, mapped anew each second). Only
+        # the writing side takes and returns them.
         self._spare = []
-        self._chunk = None
         self._new_chunk()
 
     def _new_chunk(self):
-        self._chunk = self._spare.pop() if self._spare else bytearray(_FIRST_CHUNK_BUFFER)
-        self._used = 0                      # bytes of ``_chunk`` holding this chunk's records
+        # The chunk's records as the caller gave them (each message's head, then its bytes),
+        # laid into a buffer only where the chunk is written: copying a markers message into
+        # the chunk in the caller's thread was most of its recording's cost.
+        self._parts = []
+        self._used = 0                      # bytes of this chunk's records
         self._index = {}                    # channel id -> [(log time, offset in chunk), ...]
         self._chunk_start = self._chunk_end = None
 
@@ -212,13 +215,12 @@ class McapWriter:
         :param publish_time: when it was published, ns.
         :param sequence: its sequence number on the channel.
         """
+        if type(data) is not bytes:     # held until the chunk is written: the caller's may change
+            data = bytes(data)
         offset = self._used
         end = offset + _MESSAGE.size + len(data)
-        if end > len(self._chunk):
-            self._chunk += bytes(max(end, 2 * len(self._chunk)) - len(self._chunk))
-        _MESSAGE.pack_into(self._chunk, offset, Opcode.MESSAGE, 22 + len(data), channel_id,
-                           sequence, log_time, publish_time)
-        self._chunk[offset + _MESSAGE.size:end] = data
+        self._parts += (_MESSAGE.pack(Opcode.MESSAGE, 22 + len(data), channel_id, sequence,
+                                      log_time, publish_time), data)
         self._used = end
         index = self._index.get(channel_id)
         if index is None:
@@ -261,14 +263,21 @@ class McapWriter:
             return
         start, end = self._chunk_start, self._chunk_end
         try:
-            self._run(self._write_chunk, self._chunk, self._used, self._index, start, end)
+            self._run(self._write_chunk, self._parts, self._used, self._index, start, end)
         except OSError as e:
             if no_room(e):
                 self._new_chunk()       # that one is held: it is not written twice
             raise
         self._new_chunk()
 
-    def _write_chunk(self, buffer, used, message_indexes, start, end):
+    def _write_chunk(self, parts, used, message_indexes, start, end):
+        buffer = self._spare.pop() if self._spare else bytearray(_FIRST_CHUNK_BUFFER)
+        if used > len(buffer):
+            buffer += bytes(max(used, 2 * len(buffer)) - len(buffer))
+        at = 0
+        for part in parts:
+            buffer[at:at + len(part)] = part
+            at += len(part)
         with memoryview(buffer) as view, view[:used] as raw:
             if self._held:              # after one that found no room: in order, at finish
                 self._held.append(_Held(bytes(raw), message_indexes, start, end))
