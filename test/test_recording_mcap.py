@@ -138,6 +138,7 @@ def test_a_message_is_recorded_as_it_was_when_given_though_its_buffer_changes_af
                                                validate_crcs=True).iter_messages()]
     assert got == [b'first', b'other', b'third']
 
+
 def test_the_reader_refuses_damage_and_keeps_the_readable_part_of_a_cut(tmp_path):
     from jacket_cloth_ros.recording.reader import RecordingError, read_recording
     data, sent = _written('')
