@@ -51,6 +51,7 @@ class Stepper:
         # The positions buffer as bytes: a caller that reads them straight from a message
         # (ros/steady_lane.py) copies them in without the alignment a float view needs.
         self.positions_bytes = self.positions.view(np.uint8)
+        self.lane = self._held()
         self._tuned = slot          # the slot on the level of detail's tuning, while it lasts
         self._load = FixedTypes(slot_steps.load_motion)
         self.advance = FixedTypes(slot_steps.advance_slot)
@@ -174,7 +175,19 @@ class Stepper:
                                     (last.stamp_ns, *clock), limits)
         self.positions = np.zeros(len(key[0]))
         self.positions_bytes = self.positions.view(np.uint8)
+        self.lane = self._held()
         self.armed = key
+
+    def _held(self):
+        """Return the steady lane's arrays in a typed list of one (ros/steady_lane.py).
+
+        (positions, their bytes, intake, slot): numba unboxes a typed list as one pointer,
+        where the bundles passed as they are cost a conversion of each of their arrays on
+        every call, several times the lane's own reading and laying out. Made anew when the
+        intake is armed: an unarmed intake takes no input, whatever slot it holds.
+        """
+        return slot_steps.listed((self.positions, self.positions_bytes, self.intake,
+                                  self.slot))
 
 
 def identity_poses(n: int) -> np.ndarray:

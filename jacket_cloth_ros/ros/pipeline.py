@@ -139,10 +139,8 @@ class SessionPipeline:
         # Load the encoders' compiled parts now rather than on the first input's outputs, and
         # the steady lane's call (bytes too short to read move nothing) before its first input.
         self._tf.encode(self.sim.bones().poses, 0)
-        steps = self.sim.steps
         self._lane(np.frombuffer(b'', dtype=np.uint8), self.reader.name_code,
-                   (steps.positions, steps.positions_bytes), steps.intake, steps.slot,
-                   self._template.layout)
+                   self.sim.steps.lane, self._template.layout)
         # The URDF's own visuals are read once: `auto` asks on every markers message.
         self._has_visuals = '<visual' in self.sim.skeleton.urdf_xml
         messages.marker_array(self.sim, 0, self.sim.skeleton.link_names[0], reset=True,
@@ -262,8 +260,7 @@ class SessionPipeline:
             return NOT_STEADY, 0, None
         started = time.perf_counter_ns()
         status, stamp, laid = (self._lane.entry or self._lane)(
-            np.frombuffer(raw, dtype=np.uint8), reader.name_code,
-            (steps.positions, steps.positions_bytes), steps.intake, steps.slot, template.layout)
+            np.frombuffer(raw, dtype=np.uint8), reader.name_code, steps.lane, template.layout)
         # The call's own time: the step cost leaves out whatever the caller does before
         # after_steady (the node's publish).
         self._lane_ns = time.perf_counter_ns() - started

@@ -74,19 +74,21 @@ def read_steady(raw, names, positions):
 
 
 @njit(cache=True, nogil=True)
-def steady_tf(raw, names, positions, intake, slot, tf):
+def steady_tf(raw, names, lane, tf):
     """One steady input from its bytes to its /tf's bytes: (status, stamp ns, /tf laid out).
 
-    ``positions``: the intake's buffer, as (float64 values, their bytes); ``tf``: the /tf
+    ``lane``: core.stepping.Stepper.lane, a typed list of one (the intake's positions buffer
+    as float64 values and as bytes, the intake, the slot); ``tf``: the /tf
     template's (u32 view, stamp indices, f64 view, pose indices) (cdr.TfTemplate.layout).
     NOT_STEADY: nothing moved. Else physics.crowd's status of the steps run; the /tf is laid
     out only for bones the simulation publishes as they are (finite, from a finite cloth):
     any other outcome is reset first, in Python, and its /tf made there.
     """
-    stamp = read_steady(raw, names, positions[1])
+    positions, positions_bytes, intake, slot = lane[0]
+    stamp = read_steady(raw, names, positions_bytes)
     if stamp < 0:
         return NOT_STEADY, stamp, False
-    status = step_steady(intake, slot, stamp, positions[0])
+    status = step_steady(intake, slot, stamp, positions)
     if status != BONES_FINITE or slot.out.stats[step.NON_FINITE] != 0.0:
         return status, stamp, False
     u32, stamp_at, f64, pose_at = tf
