@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from jacket_cloth_ros.core.config import shipped
-from jacket_cloth_ros.core.measures import COLLAPSED_STRAIN, CollapseWatch
+from jacket_cloth_ros.core.measures import COLLAPSED_STRAIN, CollapseWatch, RestlessWatch
 from jacket_cloth_ros.core.rig import load_rig
 from jacket_cloth_ros.recording.reader import read_messages
 from jacket_cloth_ros.ros import messages
@@ -61,6 +61,37 @@ def test_one_edge_over_or_a_cloth_at_rest_is_no_collapse():
     one[8, 4:, 0] += 0.03                         # one edge 30 % longer, out of 88
     said, watch = _watch_over(one.reshape(-1, 3), 2.0)
     assert said == [] and watch.p99 < COLLAPSED_STRAIN
+
+
+def test_the_watch_p99_is_numpys_quantile_of_the_edges_strain_to_the_bit():
+    # The look is compiled: it must give the strain numpy gives, bit for bit, NaN included.
+    rng = np.random.default_rng(3)
+    x, a, b, rest = _grid()
+    for k in range(20):
+        moved = x + rng.normal(scale=0.02, size=x.shape)
+        if k == 19:
+            moved[a[5]] = np.nan
+        watch = CollapseWatch(a, b, rest)
+        watch.note(moved, 0)
+        d = moved[a] - moved[b]
+        size = np.sort(np.abs(np.sqrt(np.sum(d * d, axis=1)) / rest - 1.0))
+        at = (len(size) - 1) * 0.99             # numpy's linear quantile, as the watch takes it
+        lo, hi = size[int(at)], size[int(at) + 1]
+        want = lo + (hi - lo) * (at - int(at))
+        assert watch.p99 == want or (k == 19 and np.isnan(watch.p99) and np.isnan(want))
+
+
+def test_a_body_whose_links_are_not_numbers_is_never_still():
+    # A NaN link must not read as a body at rest (the compiled look keeps it).
+    links = np.tile(np.eye(4), (5, 1, 1))
+    watch = RestlessWatch()
+    for k in range(12):                 # 1.2 s of looks on a still body
+        watch.note(0.0, links, np.eye(4), k * 10 ** 8)
+    assert watch.still_ns is not None
+    bad = links.copy()
+    bad[2, 1, 3] = np.nan
+    watch.note(0.0, bad, np.eye(4), 12 * 10 ** 8)
+    assert watch.still_ns is None
 
 
 def test_the_watch_comes_back_after_the_cloth_recovers():

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, NamedTuple, Sequence
 import numpy as np
 
 from .bundles import Colliders
+from .compiled import njit
 
 if TYPE_CHECKING:           # for the annotations only
     from .rig import Rig
@@ -125,7 +126,6 @@ class CollapseWatch:
         self.a, self.b = np.asarray(a, np.int64), np.asarray(b, np.int64)
         self.rest = np.asarray(rest, float)
         n = len(self.a)
-        self._pa, self._pb = np.empty((n, 3)), np.empty((n, 3))
         self._strain, self._size = np.empty(n), np.empty(n)
         at = (n - 1) * 0.99                     # numpy's default (linear) quantile
         self._lo, self._share = int(at), at - int(at)
@@ -150,16 +150,8 @@ class CollapseWatch:
         if len(self.a) == 0 or (last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9):
             return False
         self.looked_ns = stamp_ns
-        pa, pb, s, size = self._pa, self._pb, self._strain, self._size
-        np.take(x, self.a, axis=0, out=pa)
-        np.take(x, self.b, axis=0, out=pb)
-        np.subtract(pa, pb, out=pa)
-        np.multiply(pa, pa, out=pa)
-        np.sum(pa, axis=1, out=s)
-        np.sqrt(s, out=s)
-        np.divide(s, self.rest, out=s)
-        np.subtract(s, 1.0, out=s)
-        np.abs(s, out=size)
+        size = self._size
+        edge_strains_into(x, self.a, self.b, self.rest, self._strain, size)
         size.partition((self._lo, self._hi))
         lo = size[self._lo]
         self.p99 = float(lo + (size[self._hi] - lo) * self._share)
@@ -232,10 +224,11 @@ class RestlessWatch:
         last = self.looked_ns
         if last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9:
             return False
-        body = links[:, :3, 3] @ root[:3, :3].T + root[:3, 3]
+        body = np.zeros((links.shape[0], 3))
+        moved = links_in_world(links, root, body if self._body_last is None else self._body_last,
+                               body)
         still = (last is not None and stamp_ns > last
-                 and float(np.abs(body - self._body_last).max())
-                 < BODY_STILL_SPEED * (stamp_ns - last) * 1e-9)
+                 and moved < BODY_STILL_SPEED * (stamp_ns - last) * 1e-9)
         if still:
             if self.still_ns is None:
                 self.still_ns = last
@@ -254,3 +247,40 @@ class RestlessWatch:
             return False
         self.restless, self.speed = True, speed
         return True
+
+
+# The watches look every LOOK_EVERY_S: as a dozen numpy calls each, a look cost several inputs'
+# share of the whole glue.
+@njit(cache=True)
+def edge_strains_into(x, a, b, rest, strain, size):
+    """Each edge's ``length / rest - 1`` into ``strain`` and its size into ``size``."""
+    for j in range(a.shape[0]):
+        d0 = x[a[j], 0] - x[b[j], 0]
+        d1 = x[a[j], 1] - x[b[j], 1]
+        d2 = x[a[j], 2] - x[b[j], 2]
+        s = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) / rest[j] - 1.0
+        strain[j] = s
+        size[j] = abs(s)
+
+
+@njit(cache=True)
+def links_in_world(links, root, last, out):
+    """Each link's origin in the world into ``out``; return the most any moved from ``last``.
+
+    :param links: (L,4,4) in the simulation's frame.
+    :param root: (4,4) that frame's pose in the world.
+    :param last: (L,3) the origins at the last look (``out`` itself at the first).
+    :param out: (L,3) written.
+    :returns: the largest move along an axis; NaN if any is not a number (never still).
+    """
+    most = 0.0
+    number = True
+    for i in range(links.shape[0]):
+        for k in range(3):
+            now = (links[i, 0, 3] * root[k, 0] + links[i, 1, 3] * root[k, 1]
+                   + links[i, 2, 3] * root[k, 2] + root[k, 3])
+            move = abs(now - last[i, k])
+            out[i, k] = now
+            number = number and move == move
+            most = max(most, move)
+    return most if number else np.nan
