@@ -394,6 +394,8 @@ class SessionPipeline:
         clock starts a new one, due at once (a restarted source), as does the first.
         """
         period = 1e9 / rate
+        if len(clocks) == 1 and 0 <= stamp_ns - clocks[0] < 0.95 * period:
+            return False        # one source, not due yet: what the rest would say, unchanged
         span = max(self.values.sim.reset_gap * 1e9, 2 * period)
         ahead = [(stamp_ns - last, k) for k, last in enumerate(clocks)
                  if 0 <= stamp_ns - last <= span]
