@@ -81,6 +81,18 @@ def test_the_watch_p99_is_numpys_quantile_of_the_edges_strain_to_the_bit():
         assert watch.p99 == want or (k == 19 and np.isnan(watch.p99) and np.isnan(want))
 
 
+def test_an_edge_of_no_rest_length_is_watched_as_numpy_would_not_raised():
+    # A rig may have one (a row drawn to a point); the compiled look must not raise there.
+    x, a, b, rest = _grid()
+    rest = rest.copy()
+    rest[:3] = 0.0
+    watch = CollapseWatch(a, b, rest)
+    x = x.copy()
+    x[b[0]] = x[a[0]]                   # 0 / 0: NaN; the others inf
+    assert watch.note(x, 0) is False
+    assert np.isinf(watch.p99) or np.isnan(watch.p99)
+
+
 def test_a_body_whose_links_are_not_numbers_is_never_still():
     # A NaN link must not read as a body at rest (the compiled look keeps it).
     links = np.tile(np.eye(4), (5, 1, 1))

@@ -529,6 +529,7 @@ def test_a_new_pipeline_has_loaded_every_kernel_its_inputs_use():
     script = '''
 from numba.core.registry import CPUDispatcher
 from jacket_cloth_ros.core.physics import cloth, colliders, hood, pose, sampling, step
+from jacket_cloth_ros.core import measures
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabrics
 from jacket_cloth_ros.core.rig import load_rig
@@ -540,7 +541,7 @@ from jacket_cloth_ros.motion.messages import clip_messages
 sk = Skeleton(open(shipped('character.urdf')).read())
 fabrics = load_fabrics()
 pipe = SessionPipeline(sk, load_rig(sk), default_values(fabrics['tweed_jacket']))
-modules = (cloth, colliders, hood, pose, sampling, step, cdr, marker_kernel)
+modules = (cloth, colliders, hood, pose, sampling, step, cdr, marker_kernel, measures)
 def loaded():
     return {(m.__name__, n) for m in modules for n, f in vars(m).items()
             if isinstance(f, CPUDispatcher) and f.signatures}

@@ -165,6 +165,13 @@ class CollapseWatch:
         self.collapsed = True
         return True
 
+    def load(self, x: np.ndarray) -> None:
+        """Load the compiled look now, with what is watched unchanged (not on the first input).
+
+        :param x: the vertices' positions, (N, 3) in m, as :meth:`note` takes them.
+        """
+        edge_strains_into(x, self.a, self.b, self.rest, self._strain, self._size)
+
     def worst_row(self, cols: int) -> tuple[int, bool]:
         """Return the grid row most edges over the limit are on, and whether they are stretched.
 
@@ -211,6 +218,15 @@ class RestlessWatch:
         self.restless = False       # said, until the body moves or the cloth is reset
         self.speed = 0.0            # the hem's mean speed over the window when said, m/s
 
+    def load(self, links: np.ndarray, root: np.ndarray) -> None:
+        """Load the compiled look now, with what is watched unchanged (not on the first input).
+
+        :param links: the link transforms, as :meth:`note` takes them.
+        :param root: the frame's pose in the world, as :meth:`note` takes it.
+        """
+        scratch = np.zeros((links.shape[0], 3))
+        links_in_world(links, root, scratch, scratch)
+
     def note(self, hem_path: float, links: np.ndarray, root: np.ndarray, stamp_ns: int) -> bool:
         """Take an input's hem path; return True when the cloth has just been restless long.
 
@@ -250,8 +266,9 @@ class RestlessWatch:
 
 
 # The watches look every LOOK_EVERY_S: as a dozen numpy calls each, a look cost several inputs'
-# share of the whole glue.
-@njit(cache=True)
+# share of the whole glue. numpy's error model: a rest length of zero (a rig may have one) gives
+# inf or NaN, as numpy did, instead of raising.
+@njit(cache=True, error_model='numpy')
 def edge_strains_into(x, a, b, rest, strain, size):
     """Each edge's ``length / rest - 1`` into ``strain`` and its size into ``size``."""
     for j in range(a.shape[0]):

@@ -295,6 +295,8 @@ class JacketSimulation:
         self.t_sim = 0
         self._run_steps(still, replace(still, stamp_ns=self.dt_ns), 1)
         self.steps.load_steady()
+        self.watches.collapse.load(self.x)
+        self.watches.restless.load(self.links, self.root)
         state, before, self.links, self._layer = saved
         for kept, was in zip((*self.state, *self._before), (*state, *before)):
             kept[...] = was
