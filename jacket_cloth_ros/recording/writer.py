@@ -76,8 +76,9 @@ def qos_profile_yaml(reliable: bool = True, transient_local: bool = False,
 class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
-    In the background, messages are still packed into the open chunk by the caller. The replay
-    uses it: compression and file writes release the GIL, so they run on the second core. One
+    In the background, the caller still packs each message's head and holds its bytes; a closed
+    chunk is laid out, compressed and written by the writer thread. The replay uses it:
+    compression and file writes release the GIL, so they run on the second core. One
     hand-over per chunk: handing over each message cost the replay more CPU in thread switches
     than the writing itself. A write error then shows at the next chunk or at ``close()``.
 
