@@ -204,11 +204,42 @@ def _send_until_bones(domain, node):
         rclpy.shutdown(context=ctx)
 
 
+def _heard_diagnostics(domain, launch):
+    """Wait for a DiagnosticArray on /diagnostics: the launched node is up, its start said.
+
+    Why before a SIGINT to ``ros2 launch``: launch's own Ctrl-C handling hung twice when the
+    signal landed while it was handling a child's line (its warning printed, its Shutdown
+    never processed, no signal sent on), a race in launch, not in the node.
+    """
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    peer = rclpy.create_node('launch_peer', context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(peer)
+    heard = []
+    peer.create_subscription(DiagnosticArray, '/diagnostics', heard.append, 10)
+    try:
+        deadline = time.monotonic() + 60
+        while not heard:
+            assert time.monotonic() < deadline, f'no diagnostics:\n{launch.output()}'
+            ex.spin_once(timeout_sec=0.1)
+    finally:
+        ex.shutdown()
+        peer.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
 def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
     launch = running(DOMAIN_ID + 5, 'launch', *_launch('jacket_cloth.launch.py'),
                      'fabric:=down_jacket')
     line = launch.wait_for(LOADED)
     assert line.startswith('[jacket_cloth_node-1]'), line
+    _heard_diagnostics(DOMAIN_ID + 5, launch)
     # launch stops its nodes with a SIGINT each, as on Ctrl-C. Ctrl-C in a terminal also
     # signals the node itself: that second SIGINT can land in the node's clean-up.
     code = launch.interrupt(group=False)
@@ -345,6 +376,7 @@ def test_the_crowd_launch_finds_a_bare_characters_name_in_the_shipped_config(run
                      'characters:=crowd.yaml', cwd=str(tmp_path))   # no crowd.yaml here
     line = launch.wait_for('characters (slice 0 of 1)')
     assert line.startswith('[jacket_cloth_crowd-1]'), line
+    _heard_diagnostics(DOMAIN_ID + 10, launch)
     assert launch.interrupt(group=False) == 0, launch.output()
 
 
@@ -360,6 +392,7 @@ def test_the_view_launch_runs_without_rviz_and_robot_state_publisher(running):
         except PackageNotFoundError:
             expected.append(f'jacket_cloth_view: {package} is not installed: running without')
     launch.wait_for_all(expected)
+    _heard_diagnostics(DOMAIN_ID + 11, launch)
     assert 'process has died' not in launch.output(), launch.output()
     launch.interrupt(group=False)
     # Our processes' lines, which launch prefixes with their names: launch's own interpreter
