@@ -6,6 +6,7 @@ The real ros2 command line, against the ament prefix the package is installed in
 of its own, stopped with SIGINT.
 """
 
+import contextlib
 import os
 import queue
 import shutil
@@ -166,28 +167,40 @@ def test_ros2_run_starts_the_node_which_publishes_bones_and_stops_on_ctrl_c(runn
     assert 'Traceback' not in node.output(), node.output()
 
 
-def _send_until_bones(domain, node):
-    """Send the node JointStates until its bones come back on /tf."""
+@contextlib.contextmanager
+def _peer(domain, name):
+    """A node of the test's own on ``domain`` and its executor; shut down on leaving."""
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
+
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    peer = rclpy.create_node(name, context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(peer)
+    try:
+        yield peer, ex
+    finally:
+        ex.shutdown()
+        peer.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
+def _send_until_bones(domain, node):
+    """Send the node JointStates until its bones come back on /tf."""
     from sensor_msgs.msg import JointState
     from tf2_msgs.msg import TFMessage
 
     from jacket_cloth_ros.core.skeleton import load_shipped_character
     from jacket_cloth_ros.motion.clips import joint_state_content
 
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain)
-    peer = rclpy.create_node('ros2_run_peer', context=ctx)
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(peer)
-    frames = set()
-    peer.create_subscription(TFMessage, '/tf', lambda m: frames.update(
-        t.child_frame_id for t in m.transforms), 100)
-    pub = peer.create_publisher(JointState, 'joint_states', 10)
     names, pos = joint_state_content(load_shipped_character().joint_names, 'idle', 0.0)
-    try:
+    with _peer(domain, 'ros2_run_peer') as (peer, ex):
+        frames = set()
+        peer.create_subscription(TFMessage, '/tf', lambda m: frames.update(
+            t.child_frame_id for t in m.transforms), 100)
+        pub = peer.create_publisher(JointState, 'joint_states', 10)
         deadline = time.monotonic() + 60
         k = 0
         while 'hood' not in frames:       # best effort input: send until bones come back
@@ -198,10 +211,6 @@ def _send_until_bones(domain, node):
                 pub.publish(msg)
                 k += 1
             ex.spin_once(timeout_sec=0.05)
-    finally:
-        ex.shutdown()
-        peer.destroy_node()
-        rclpy.shutdown(context=ctx)
 
 
 def _heard_diagnostics(domain, launch):
@@ -211,27 +220,15 @@ def _heard_diagnostics(domain, launch):
     signal landed while it was handling a child's line (its warning printed, its Shutdown
     never processed, no signal sent on), a race in launch, not in the node.
     """
-    import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
 
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain)
-    peer = rclpy.create_node('launch_peer', context=ctx)
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(peer)
-    heard = []
-    peer.create_subscription(DiagnosticArray, '/diagnostics', heard.append, 10)
-    try:
+    with _peer(domain, 'launch_peer') as (peer, ex):
+        heard = []
+        peer.create_subscription(DiagnosticArray, '/diagnostics', heard.append, 10)
         deadline = time.monotonic() + 60
         while not heard:
             assert time.monotonic() < deadline, f'no diagnostics:\n{launch.output()}'
             ex.spin_once(timeout_sec=0.1)
-    finally:
-        ex.shutdown()
-        peer.destroy_node()
-        rclpy.shutdown(context=ctx)
 
 
 def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
@@ -332,9 +329,6 @@ def test_a_params_file_with_the_old_preset_name_is_one_line_and_exit_1(running, 
 
 
 def test_motion_takes_ros_args_a_namespace_and_a_node_name(running):
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, QoSProfile
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
@@ -343,29 +337,21 @@ def test_motion_takes_ros_args_a_namespace_and_a_node_name(running):
     motion = running(domain, 'run', PACKAGE, 'jacket_cloth', 'motion', '--clip', 'walk',
                      '--duration', '3600', '--wait', '0', '--ros-args', '-r', '__ns:=/npc1',
                      '-r', '__node:=motion')
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain)
-    peer = rclpy.create_node('motion_peer', context=ctx)
-    ex = SingleThreadedExecutor(context=ctx)
-    ex.add_node(peer)
     got = {'joint_states': 0, 'robot_description': 0}
 
     def count(key):
         return lambda msg: got.__setitem__(key, got[key] + 1)
-    peer.create_subscription(JointState, '/npc1/joint_states', count('joint_states'), 10)
-    peer.create_subscription(String, '/npc1/robot_description', count('robot_description'),
-                             QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-    try:
+    with _peer(domain, 'motion_peer') as (peer, ex):
+        peer.create_subscription(JointState, '/npc1/joint_states', count('joint_states'), 10)
+        peer.create_subscription(
+            String, '/npc1/robot_description', count('robot_description'),
+            QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         deadline = time.monotonic() + START_TIMEOUT
         while not (all(got.values()) and
                    ('motion', '/npc1') in peer.get_node_names_and_namespaces()):
             assert motion.proc.poll() is None, motion.output()
             assert time.monotonic() < deadline, f'{got}:\n{motion.output()}'
             ex.spin_once(timeout_sec=0.05)
-    finally:
-        ex.shutdown()
-        peer.destroy_node()
-        rclpy.shutdown(context=ctx)
     motion.interrupt()
     assert 'Traceback' not in motion.output(), motion.output()
 
