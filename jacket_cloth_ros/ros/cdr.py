@@ -472,8 +472,8 @@ class JointStateReader:
 
     def __init__(self):
         # The name list last decoded, and its bytes as the message held them (as an array too,
-        # for ros/steady_lane.py, which recognises them in compiled code).
-        self.names_bytes = b''
+        # public for ros/steady_lane.py, which recognises them in compiled code).
+        self._names_bytes = b''
         self.names = ()
         self.name_code = np.frombuffer(b'', dtype=np.uint8)    # read-only, as all later ones
 
@@ -489,13 +489,13 @@ class JointStateReader:
             raise ValueError('not a CDR message')
         sec, nanosec, frame_len = struct.unpack_from('<iII', raw, 4)
         at = _aligned(16 + frame_len, 4)
-        if self.names_bytes and raw.startswith(self.names_bytes, at):
-            names, at = self.names, at + len(self.names_bytes)
+        if self._names_bytes and raw.startswith(self._names_bytes, at):
+            names, at = self.names, at + len(self._names_bytes)
         else:
             start = at
             names, at = _strings(raw, at)
-            self.names_bytes, self.names = raw[start:at], names
-            self.name_code = np.frombuffer(self.names_bytes, dtype=np.uint8)
+            self._names_bytes, self.names = raw[start:at], names
+            self.name_code = np.frombuffer(self._names_bytes, dtype=np.uint8)
         at = _aligned(at, 4)
         (count,) = struct.unpack_from('<I', raw, at)
         at = _aligned(at + 4, 8)
