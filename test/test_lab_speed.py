@@ -85,6 +85,12 @@ def test_bench_speed_quick_prints_ratios_and_charts(tmp_path, capsys):
     # Set against the bare kernel timed beside it: how far the simulation alone, with no
     # output, is from the replay's kernel-only limit (the bound issue 37's item 2 meets).
     assert replay['kernel_step_us'] > 0 and replay['steps_per_input'] == 2.0
+    # Judged on a second run without the stage timers: the replay's whole main thread, the
+    # node's less take and publish.
+    assert set(node['untimed']['us']) == {'take', 'publish', 'other'}
+    assert set(replay['untimed']['us']) == {'other'}
+    assert [said[f]['met'] in (True, False) for f in said if 'main thread per 60 Hz' in f] == [
+        True, True]
     assert 'doing only decode to complete (the simulation with no output) would be at' in printed
     # The crowd part: every character of every run answered its inputs, and the crowd's cost
     # per character is printed against the single-character node's.
@@ -170,6 +176,24 @@ def test_the_profile_bounds_any_replay_of_its_stages_by_the_kernel_only_limit():
     only = summary({'profile': [_profile(200.0, kernel_step_us=80.0, steps_per_input=2.0)]})
     assert 'Where one input\'s CPU goes' in only and 'kernel-only limit' in only
     assert 'Replay of a walk' not in only
+
+
+def test_the_main_threads_share_of_the_limit_is_judged_on_the_run_without_stage_timers():
+    # Two 110 us kernel steps an input: a 220 us limit. The timed run's own figures (300 us an
+    # input here) are not what is judged: the untimed run's, the node's less take and publish.
+    def run(node, main_us, **us):
+        return _profile(200.0, node=node, kernel_step_us=80.0, steps_per_input=2.0, untimed={
+            'us_per_input': main_us, 'us': us, 'kernel_step_us': 110.0})
+    rows = targets({'profile': [run(False, 400.0), run(True, 500.0, take=30.0, publish=30.0)]})
+    assert [(r['measured'].split(' ')[0], r['target'], r['met']) for r in rows] == [
+        ('0.55', '≥ 0.55', True), ('0.50', '≥ 0.5', True)], rows
+    rows = targets({'profile': [run(False, 401.0), run(True, 500.0, take=30.0, publish=29.0)]})
+    assert [r['met'] for r in rows] == [False, False], rows
+    # Its line in the summary names the node's figure less take and publish.
+    assert '440.0 us per input, 0.50 of its limit' in summary({'profile': [
+        run(False, 400.0), run(True, 500.0, take=30.0, publish=30.0)]})
+    # A speed.json from before the untimed run judges nothing.
+    assert targets({'profile': [_profile(200.0, kernel_step_us=80.0, steps_per_input=2.0)]}) == []
 
 
 class _FailingYardstick:

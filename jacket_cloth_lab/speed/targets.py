@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """``bench speed``'s targets (issue 37), each a ratio within one run, judged from its results."""
 
+from ..profile import MAIN_THREAD_AT_LEAST, main_thread_share
 from .hops import FILES_AT_MOST, HOPS_AT_MOST
 from .kernel import KERNEL_TARGET
 from .markers import MARKERS_AT_MOST
@@ -45,6 +46,17 @@ def targets(results: dict) -> list[dict]:
                                   f'{max(lat) / 1e3:.1f} ms') if lat else 'no window',
                      'target': f'none over one step ({STEP_US / 1e3:.1f} ms)',
                      'met': not over if lat else None})
+    for p in results.get('profile', ()):
+        share = main_thread_share(p)
+        if share is None:
+            continue                # a speed.json from before the untimed pass
+        at_least = MAIN_THREAD_AT_LEAST[p['node']]
+        which = ("the node's main thread per 60 Hz input less rclpy's take and publish"
+                 if p['node'] else "the replay's main thread per 60 Hz input")
+        rows.append({'figure': f'{which} (the profile\'s walk, no stage timers), over the '
+                     'kernel-only limit timed beside it',
+                     'measured': f'{share[0]:.2f} ({share[1]:.0f} us of limit, {share[2]:.0f} '
+                     'us taken)', 'target': f'≥ {at_least:g}', 'met': share[0] >= at_least})
     if 'hops' in results:
         h = results['hops']
         rows.append({'figure': 'from the JointState callback to the /tf publish: the deepest '
