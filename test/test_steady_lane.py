@@ -248,3 +248,12 @@ def test_a_steady_inputs_tf_goes_out_within_four_calls_of_the_callback(skeleton,
     got = hop_count(skeleton)
     assert got['hops'] <= HOPS_AT_MOST and len(got['files']) <= FILES_AT_MOST, got
     assert got['chain'][-2:] == ['ros/pipeline.py:steady_tf', 'core/stepping.py:armed_for']
+
+
+def test_the_hop_count_says_why_when_its_input_would_not_be_steady(skeleton):
+    # After the first input only (the cloth reset), the next goes through prepare: counting it
+    # would read as the steady path grown longer; the count says what kept it off instead.
+    from jacket_cloth_lab.speed.hops import hop_count
+    with pytest.raises(RuntimeError, match="would not go the steady way: intake armed False.*"
+                       "the last reset 'first sample'"):
+        hop_count(skeleton, warm_inputs=1)

@@ -49,10 +49,28 @@ def hop_count(skeleton: Skeleton, warm_inputs: int = 3) -> dict:
         character = node.characters[0]
         for content in raw[:-1]:
             node.on_joint_states([(character, content, {})])
+        _say_if_not_steady(character.pipeline)
         return _traced(node, character, raw[-1], package)
     finally:
         node.destroy_node()
         rclpy.shutdown(context=ctx)
+
+
+def _say_if_not_steady(pipeline):
+    """Raise, saying why, if the next input of the walk would not go the steady way.
+
+    A count of another path would read as the steady path's grown longer.
+    """
+    sim = pipeline.sim
+    armed = sim.steps.armed_for(sim.steady_key(pipeline.reader.names))
+    world_tf = pipeline.values.publish_world_tf and not pipeline.root_is_world_frame()
+    if armed and not world_tf and sim.lod.viewer is None:
+        return
+    raise RuntimeError(
+        f'the input to measure would not go the steady way: intake armed {armed}, a world '
+        f'/tf {world_tf}, a viewer {sim.lod.viewer is not None}, the last reset '
+        f'{pipeline.last_reset_reason!r}, {sim.steps.steady_inputs} steady inputs so far, '
+        f'faults {sim.faults}')
 
 
 def _traced(node, character, content, package):
