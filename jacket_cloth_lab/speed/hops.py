@@ -27,20 +27,21 @@ def hop_count(skeleton: Skeleton, warm_inputs: int = 3) -> dict:
     """
     import rclpy
     from rclpy.parameter import Parameter
-    from rclpy.serialization import serialize_message
 
     import jacket_cloth_ros
     from jacket_cloth_ros.core.skeleton import shipped_character_urdf
     from jacket_cloth_ros.motion.clips import joint_state_content
-    from jacket_cloth_ros.motion.messages import joint_state_message
+    from jacket_cloth_ros.ros import cdr
     from jacket_cloth_ros.ros.node import JacketClothNode
     from .. import lab_domain
     package = os.path.dirname(jacket_cloth_ros.__file__)
     raw = []
+    # The package's encoder, whose string padding is zeros: rclpy's serialisation leaves it
+    # as the buffer held it, and the reader knows a name list again by its bytes, padding too,
+    # so two of rclpy's messages of one list may not be one list to it.
     for k in range(warm_inputs + 1):
         names, pos = joint_state_content(skeleton.joint_names, 'walk', k / 60.0)
-        raw.append(serialize_message(joint_state_message(
-            names, pos, 10 ** 10 + int(round(k * 1e9 / 60.0)))))
+        raw.append(cdr.joint_state(10 ** 10 + int(round(k * 1e9 / 60.0)), names, pos))
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=lab_domain('profile'))     # a profile of one path
     node = JacketClothNode(context=ctx, parameter_overrides=[
