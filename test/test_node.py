@@ -355,6 +355,24 @@ def test_malformed_urdf_parameter_is_a_clear_error_at_start():
         rclpy.shutdown(context=ctx)
 
 
+def test_a_refused_start_takes_its_half_made_node_down_before_raising():
+    # Left for the interpreter's exit, after rclpy's shutdown, a refused start's node crashed
+    # the process there now and then (exit -11 after the one line, in a make test run).
+    from rclpy.exceptions import InvalidHandle
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=DOMAIN_ID)
+    try:
+        with pytest.raises(ConfigError, match='solver') as e:
+            JacketClothNode(context=ctx, parameter_overrides=[Parameter('solver', value='bogus')])
+        made = [f.frame.f_locals['self'] for f in e.traceback
+                if isinstance(f.frame.f_locals.get('self'), JacketClothNode)]
+        assert made
+        with pytest.raises(InvalidHandle):
+            made[0].get_publisher_names_and_types_by_node(made[0].get_name(), '')
+    finally:
+        rclpy.shutdown(context=ctx)
+
+
 def _start_error(**params):
     """The ConfigError of a node started with ``params`` (a params file's flattened keys)."""
     ctx = Context()

@@ -100,6 +100,18 @@ class JacketClothNode(Node):
     def __init__(self, crowd: bool = False, **kwargs: object):
         self.program = 'jacket_cloth_crowd' if crowd else 'jacket_cloth_node'
         super().__init__(self.program, **kwargs)
+        try:
+            self._set_up(crowd)
+        except BaseException:
+            # A refused start takes down what it made while rclpy still runs: left to the
+            # interpreter's exit, after rclpy's shutdown, the half-made node crashed it there.
+            if hasattr(self, 'recording'):
+                self.close()
+            self.destroy_node()
+            raise
+
+    def _set_up(self, crowd):
+        """Everything the node holds beyond rclpy's Node; ConfigError where a start is refused."""
         # Before anything is opened: a file for another node set nothing (rcl says nothing).
         problem = params_file_for_another_node(sys.argv, self.get_fully_qualified_name())
         if problem:
