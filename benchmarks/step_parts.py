@@ -34,6 +34,7 @@ from jacket_cloth_ros.core.physics.crowd import advance_slot  # noqa: E402
 from jacket_cloth_ros.core.physics.hood import hood_step  # noqa: E402
 from jacket_cloth_ros.core.physics.pose import (  # noqa: E402
     forward_kinematics, kept_bone_poses, share_world_motion, skinned_pose, solve_layer)
+from jacket_cloth_ros.core.physics.step import copy_posed  # noqa: E402
 from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.simulation import JacketSimulation  # noqa: E402
 from jacket_cloth_ros.core.skeleton import load_shipped_character  # noqa: E402
@@ -53,7 +54,7 @@ PER_INPUT = {'upper-jacket layer, in full at the last step', 'bones (M9, per inp
 @njit
 def _put_back(slot, kept, was):
     """Put the slot's state, clock and last colliders back as ``kept`` and ``was`` hold them."""
-    state, before = slot.state, slot.before
+    state = slot.state
     state.x[:] = kept[0]
     state.xp[:] = kept[1]
     state.hood_p[:] = kept[2][0]
@@ -61,13 +62,7 @@ def _put_back(slot, kept, was):
     state.root[:] = kept[3]
     state.contact[:] = kept[4]
     slot.clock[:] = kept[5]
-    before.centers[:] = was.centers
-    before.axes[:] = was.axes
-    before.cap_a[:] = was.cap_a
-    before.cap_b[:] = was.cap_b
-    before.plane_p[:] = was.plane_p
-    before.plane_n[:] = was.plane_n
-    before.ref[:] = was.ref
+    copy_posed(was, slot.before)
 
 
 @njit

@@ -131,7 +131,7 @@ def advance(model, tuning, state, before, motion, out):
                 for k in range(3):
                     xp[i, k] = x[i, k]
                     x[i, k] = work.ride[i, k]
-            _copy_posed(work.now, before)
+            copy_posed(work.now, before)
             state.started[0] = True
         else:
             damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
@@ -154,7 +154,7 @@ def advance(model, tuning, state, before, motion, out):
                                       work.x0), out.stats)
                 out.stats[RETRIED] += 1
             # Where the next step's substeps start from: this step's end.
-            _copy_posed(work.now, before)
+            copy_posed(work.now, before)
             state.started[0] = True
             if skin > 0.0:
                 for i in range(cols, nv):
@@ -326,7 +326,7 @@ def _simulate(model, tuning, state, before, now, control, stats):
     from the same place.
     """
     if not state.started[0]:        # no step before: substeps start where this one ends
-        _copy_posed(now, before)
+        copy_posed(now, before)
     deepest, limited, sweeps = cloth_step(model.cloth, model.colliders, tuning, state, control,
                                           now, before)
     stats[DEEPEST] = max(stats[DEEPEST], deepest)
@@ -336,7 +336,7 @@ def _simulate(model, tuning, state, before, now, control, stats):
 
 
 @njit(cache=True)
-def _copy_posed(src, dst):
+def copy_posed(src, dst):
     """Every array of one bundles.Posed into another's."""
     dst.centers[:] = src.centers
     dst.axes[:] = src.axes
