@@ -466,16 +466,17 @@ class JointStateReader:
 
     Why not rclpy's deserialize_message: it builds the whole message object, velocities and
     efforts included, a visible share of an input. A publisher sends the same name list
-    every time, so the names are decoded once and then recognised by their bytes. Big-endian
+    every time, so the names are decoded once and then recognised by their bytes, all but the
+    padding between them: rclpy's serializer leaves it as its buffer held it. Big-endian
     bytes go through rclpy; malformed bytes raise ValueError (callers name the message).
     """
 
     def __init__(self):
-        # The name list last decoded, and its bytes as the message held them (as an array too,
-        # public for ros/steady_lane.py, which recognises them in compiled code).
+        # The name list last decoded and its bytes as the last message held them; their code
+        # is public for ros/steady_lane.py, which recognises the list in compiled code.
         self._names_bytes = b''
         self.names = ()
-        self.name_code = np.frombuffer(b'', dtype=np.uint8)    # read-only, as all later ones
+        self.name_code = _name_code(b'')
 
     def read(self, raw: bytes) -> JointStateContent:
         """Return the stamp, names and positions of a JointState's CDR bytes; ValueError if bad.
@@ -494,8 +495,9 @@ class JointStateReader:
         else:
             start = at
             names, at = _strings(raw, at)
-            self._names_bytes, self.names = raw[start:at], names
-            self.name_code = np.frombuffer(self._names_bytes, dtype=np.uint8)
+            self._names_bytes = raw[start:at]
+            if names != self.names or not len(self.name_code):   # not just other padding
+                self.names, self.name_code = names, _name_code(self._names_bytes)
         at = _aligned(at, 4)
         (count,) = struct.unpack_from('<I', raw, at)
         at = _aligned(at + 4, 8)
@@ -531,6 +533,23 @@ def _joint_state_by_rclpy(raw):
 
 def _aligned(at, n):
     return at + (-(at - 4) % n)
+
+
+def _name_code(names_bytes):
+    """Return a sequence<string>'s bytes as read-only int16, -1 on the padding between them.
+
+    -1 matches any byte (steady_lane.read_steady): serializers need not zero padding.
+    """
+    code = np.frombuffer(names_bytes, dtype=np.uint8).astype(np.int16)
+    at = 4                                  # the count; each string starts 4-aligned
+    while at < len(code):
+        (n,) = struct.unpack_from('<I', names_bytes, at)
+        at += 4 + n
+        pad = -at % 4
+        code[at:at + pad] = -1
+        at += pad
+    code.flags.writeable = False
+    return code
 
 
 def _strings(raw, at):

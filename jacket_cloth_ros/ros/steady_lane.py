@@ -42,9 +42,10 @@ def read_steady(raw, names, positions):
     """Read a JointState's stamp and positions if it has these name bytes; else -1.
 
     As cdr.JointStateReader.read does: CDR_LE only, the name sequence recognised by its bytes
-    (``names``, as the reader last decoded them), the positions copied into ``positions`` (the
-    intake's buffer as bytes), whose length they must have. Returns the stamp, ns, or -1 when
-    the bytes are anything else (the reader then reads them, or says why it cannot).
+    (``names``, the reader's name_code: -1 where any byte will do), the positions copied into
+    ``positions`` (the intake's buffer as bytes), whose length they must have. Returns the
+    stamp, ns, or -1 when the bytes are anything else (the reader then reads them, or says why
+    it cannot).
     """
     n = raw.shape[0]
     if n < 16 or raw[0] != 0 or raw[1] != 1 or names.shape[0] == 0:
@@ -58,7 +59,7 @@ def read_steady(raw, names, positions):
     if at + m > n:
         return -1
     for i in range(m):
-        if raw[at + i] != names[i]:
+        if names[i] >= 0 and raw[at + i] != names[i]:
             return -1
     at = _aligned(at + m, 4)
     if at + 4 > n:
