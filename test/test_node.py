@@ -4,7 +4,6 @@
 import gc
 import math
 import os
-import sys
 import time
 
 import pytest
@@ -372,28 +371,6 @@ def test_a_refused_start_takes_its_half_made_node_down_before_raising():
             made[0].get_publisher_names_and_types_by_node(made[0].get_name(), '')
     finally:
         rclpy.shutdown(context=ctx)
-
-
-def test_a_node_process_hands_the_gil_to_its_callbacks_sooner_than_cpythons_default(
-        monkeypatch):
-    # The recorder's writer thread lays each chunk out in Python: at CPython's default switch
-    # interval, a JointState taken while it did so waited for it (5.99 ms for an input of
-    # 0.3 ms in a replay loop; 1.20 ms at this interval). Set before the node is made; here
-    # the node is refused, and nothing of the test process's own is changed.
-    from jacket_cloth_ros.ros import node as node_module
-    set_to = []
-    monkeypatch.setattr(sys, 'setswitchinterval', set_to.append)
-    for name in ('guard', 'doing', 'running', 'stopping'):
-        monkeypatch.setattr(node_module.signals, name, lambda *a: None)
-    monkeypatch.setattr(node_module, 'kernels_cached', lambda crowd: True)
-    monkeypatch.setattr(node_module.rclpy, 'init', lambda args: set_to.append('init'))
-    monkeypatch.setattr(node_module.rclpy, 'try_shutdown', lambda: None)
-
-    def refused():
-        raise ConfigError('refused')
-    assert node_module.run('jacket_cloth_node', refused, ['jacket_cloth_node'], False) == 1
-    assert set_to == [node_module.GIL_SWITCH_S, 'init']
-    assert node_module.GIL_SWITCH_S < 0.005            # CPython's default
 
 
 def _start_error(**params):

@@ -697,10 +697,6 @@ class JacketClothNode(Node):
 _CHARACTER_NAMES = frozenset(VALUE_NAMES)
 # CDR encapsulation (4 bytes) and the header's stamp (8): what follows is what diagnostics say.
 _DIAG_STAMP_END = 12
-# The interpreter's thread switch interval in a node's process (s): the JointState callbacks'
-# thread waits no longer than this for the GIL while the recorder's writer thread lays a
-# chunk out in Python (at CPython's default, an input waited behind most of a chunk).
-GIL_SWITCH_S = 0.0005
 
 
 def main(args: list[str] | None = None) -> int:
@@ -749,7 +745,6 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
               '`jacket_cloth warm` does it ahead)', file=sys.stderr)
         warm_kernels(crowd=crowd)
         signals.doing('starting')
-    sys.setswitchinterval(GIL_SWITCH_S)
     rclpy.init(args=argv)
     node = None
     try:
