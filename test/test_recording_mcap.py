@@ -351,3 +351,49 @@ def test_a_bag_closed_on_a_full_disk_has_no_metadata_yaml_rather_than_a_cut_one(
     rec.close()
     assert rec.metadata_lost and not (bag / 'metadata.yaml').exists()
     assert len(read_recording(str(bag)).messages) == 50
+
+
+class _FillingFile:
+    """A recorder's file on a disk that fills after ``room`` bytes: what fits, then ENOSPC."""
+
+    def __init__(self, file, room):
+        self.file, self.room = file, room
+
+    def write(self, data):
+        free = self.room - self.file.tell()
+        if free <= 0:
+            raise OSError(errno.ENOSPC, 'No space left on device')
+        return self.file.write(bytes(data)[:free])
+
+    def __getattr__(self, name):
+        return getattr(self.file, name)
+
+
+@pytest.mark.parametrize('background', [False, True])
+def test_a_full_disk_ends_a_recording_finished_with_or_without_its_writer_thread(
+        tmp_path, background):
+    # The node writes on a writer thread: a full disk's error came back at the next chunk and
+    # the close, which then left the file without its end. Now, as in the caller's thread, the
+    # writer says it once and holds the chunks with no room, and the close writes what fits.
+    from jacket_cloth_ros.recording.writer import SessionRecorder
+    path = tmp_path / 'session.mcap'
+    rec = SessionRecorder(str(path), background=background, compression='lz4')
+    rec.add_topic('/t', 'std_msgs/msg/String')
+    rec._writer._stream = _FillingFile(rec._writer._stream, rec._writer._stream.tell() + 300_000)
+    rng = random.Random(38)
+    sent, heard = [], []
+    for i in range(1000):                       # a chunk each 100 (a second of stamps)
+        sent.append(rng.randbytes(1000))        # in the chunk even if its close finds no room
+        try:
+            rec.write('/t', sent[-1], 10 ** 7 * i)
+        except OSError as e:
+            heard.append(e.errno)
+            break
+    rec.close()
+    # In the caller's thread the write that found no room says so; the writer thread's error
+    # is heard at a later chunk or (on a quick run) not before the close, which counts it.
+    assert heard == [errno.ENOSPC] or background and heard in ([], [errno.ENOSPC])
+    with open(path, 'rb') as f:
+        got = [m.data for _, _, m in SeekingReader(f, validate_crcs=True).iter_messages()]
+    assert got == sent[:len(got)] and len(got) + rec.unwritten == len(sent)
+    assert 200 < len(got) < len(sent)           # what fit, in pieces of the chunk it filled

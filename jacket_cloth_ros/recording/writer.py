@@ -77,10 +77,12 @@ class SessionRecorder:
     """Write CDR-serialised messages to one MCAP file; ``close()`` completes it.
 
     In the background, the caller still packs each message's head and holds its bytes; a closed
-    chunk is laid out, compressed and written by the writer thread. The replay uses it:
-    compression and file writes release the GIL, so they run on the second core. One
-    hand-over per chunk: handing over each message cost the replay more CPU in thread switches
-    than the writing itself. A write error then shows at the next chunk or at ``close()``.
+    chunk is laid out, compressed and written by the writer thread. The node and the replay use
+    it: compression and file writes release the GIL, so they run on the second core, off the
+    input's path. One hand-over per chunk: handing over each message cost the replay more CPU
+    in thread switches than the writing itself. A write error then shows at the next chunk or
+    at ``close()``, once, and the close ends the file as it does without the thread (a full
+    disk's chunks held and written as far as the room goes, the file finished if its end fits).
 
     :param path: the recording: a ``.mcap`` file, else a bag folder (made here).
     :param flush_period_ns: the span of stamps (ns) after which the open chunk is closed.
@@ -131,6 +133,7 @@ class SessionRecorder:
         st = os.fstat(self._file.fileno())
         self._identity = (st.st_dev, st.st_ino)
         self._queue = self._thread = self._error = None
+        self._told = False              # whether the caller has heard the writer thread's error
         if background:
             self._queue = queue.SimpleQueue()
             self._thread = threading.Thread(target=self._drain, name='mcap_writer', daemon=True)
@@ -152,20 +155,26 @@ class SessionRecorder:
         if self._queue is None:
             work(*args)
             return
-        if self._error is not None:
-            raise self._error
-        self._queue.put((work, args))
+        error = self._error
+        if error is not None and not self._told:
+            self._told = True           # said once, as a write in the caller's thread says it
+            raise error
+        if error is None or no_room(error):     # a full disk's chunks are held, not lost
+            self._queue.put((work, args))
 
     def _drain(self):
         while True:
             item = self._queue.get()
             if item is None:
                 return
-            if self._error is None:         # after an error, drop the rest and say so once
+            # After an error the rest is dropped; after a full disk's the writer holds each
+            # chunk, which the close writes as far as the room goes.
+            if self._error is None or no_room(self._error):
                 try:
                     item[0](*item[1])
                 except Exception as e:  # noqa: BLE001 - whatever it is, the caller must hear
-                    self._error = e
+                    if self._error is None or not no_room(e):
+                        self._error, self._told = e, False
 
     def add_topic(self, topic: str, type_name: str, qos_yaml: str | None = None) -> None:
         """Register a topic's channel (and its type's schema) unless it is registered.
@@ -281,15 +290,16 @@ class SessionRecorder:
         self._closed = True
         metadata = []
         try:
-            if self._error is None:
-                self._writer.finish(lambda counts, span: {'rosbag2': {
-                    'serialized_metadata': _last(metadata, self._bag_metadata(counts, span))}})
-        finally:
             if self._thread is not None:
                 self._queue.put(None)
                 self._thread.join()
+                self._queue = None          # the end is written here, as without the thread
+            self._writer.finish(lambda counts, span: {'rosbag2': {
+                'serialized_metadata': _last(metadata, self._bag_metadata(counts, span))}})
+        finally:
             self._file.close()
-        if self._error is not None:
+        # An error the caller has not heard yet; a full disk's the close has said (unwritten).
+        if self._error is not None and not self._told and not no_room(self._error):
             raise self._error
         if self._folder is not None:
             self._write_bag_metadata(metadata[-1])
