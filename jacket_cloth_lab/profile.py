@@ -16,7 +16,9 @@ pipeline alone; the decode, record, take and publish timers are the profile's ow
 - bones: the jacket and hood bones from the cloth;
 - tf: /tf encoded (a steady input's is laid out within its step);
 - markers, diagnostics: those messages encoded, when due;
-- record: handing every message to the MCAP recorder (its writer thread's CPU is given apart);
+- record: handing every message to the MCAP recorder, as the node and the replay record
+  (their ``record_compression``; each closed chunk laid out, compressed and written by a
+  writer thread, whose CPU is given apart);
 - take, publish (the node only): each JointState taken from a subscription as the node
   takes it, and each output handed to rclpy as serialized bytes, on a real DDS context in
   this process (the inputs are sent before the run, so a take never waits).
@@ -84,7 +86,8 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
         ``us`` holds the node's ``take`` and ``publish`` and ``other``, all the rest: the
         main thread without the timers' own cost, which the kernel-only limit is judged on.
     :returns: ``{'inputs', 'us_per_input', 'us': {stage: us per input}, 'share': {stage:
-        share of the main thread}, 'writer_thread_us', 'markers_publish_us' (of 'publish'),
+        share of the main thread}, 'writer_thread_us' (the process's other threads: the
+        recorder's writer thread, and the node's DDS), 'markers_publish_us' (of 'publish'),
         'markers_skinning_us' (of 'markers': the jacket skinned, shaded and laid out),
         'sweeps_per_input',
         'substeps_per_input', 'steps_per_input'}`` (``bench speed`` adds
@@ -122,7 +125,8 @@ def per_input_profile(skeleton: Skeleton, seconds: float = 15.0, node: bool = Fa
     sweeps = substeps = 0
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            recorder = SessionRecorder(os.path.join(tmp, 'profile.mcap'), background=True)
+            recorder = SessionRecorder(os.path.join(tmp, 'profile.mcap'), background=True,
+                                       compression=values.record_compression)
             for name, kind, qos in topics.values():
                 recorder.add_topic(name, kind, qos)
             write = recorder.write if record else _no_write

@@ -284,3 +284,20 @@ def test_the_crowds_floor_steps_each_characters_own_cloth_as_the_crowd_core_does
     assert step.crowd.steady_inputs >= 3
     assert not np.array_equal(sims[0].x, x0) and not np.array_equal(sims[1].x, x1)
     assert sims[0].t_sim > sims[1].t_sim
+
+
+def test_the_profile_records_as_the_replay_and_the_node_do(skeleton, monkeypatch):
+    # Both hand each closed chunk to a writer thread (tools/replay.py, ros/recording.py) and
+    # compress with the record_compression they run with; the profile compressed with zstd,
+    # and the node wrote its chunks in the callback that closed them, which it left out.
+    from jacket_cloth_lab.profile import per_input_profile
+    from jacket_cloth_ros.recording import writer
+    made, real = [], writer.SessionRecorder
+
+    def recorder(path, **options):
+        made.append(options)
+        return real(path, **options)
+    monkeypatch.setattr(writer, 'SessionRecorder', recorder)
+    for node in (False, True):
+        per_input_profile(skeleton, seconds=0.6, node=node, stages=False)
+    assert made == [{'background': True, 'compression': 'lz4'}] * 2

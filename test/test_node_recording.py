@@ -133,13 +133,15 @@ def test_a_close_that_fails_after_the_context_is_gone_is_printed(tmp_path, capsy
     path = str(tmp_path / 'session.mcap')
     recording, logger = _recording(alive=lambda: False)
     recording.open(path)
-    recording.recorder._error = OSError(errno.ENOSPC, 'No space left on device')
+    # As its writer thread leaves an error the node has not heard yet (a full disk's is said
+    # by the count of messages it had no room for instead).
+    recording.recorder._error = OSError(errno.EIO, 'Input/output error')
     recording.close(on_close=OnClose.SAY)
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f'jacket_cloth_crowd: recording {path} closed with an error: [Errno 28] No '
-                   'space left on device']
+    assert err == [f'jacket_cloth_crowd: recording {path} closed with an error: [Errno 5] '
+                   'Input/output error']
     assert recording.state is RecordingState.FAILED
-    assert recording.problem == f'{path} closed with an error: [Errno 28] No space left on device'
+    assert recording.problem == f'{path} closed with an error: [Errno 5] Input/output error'
     assert len(logger.lines) == 1
 
 
@@ -189,3 +191,25 @@ def test_a_file_whose_channels_cannot_be_added_is_closed_not_left_open(tmp_path,
     assert recording.recorder is None and closed == [path]
     assert not os.path.exists(path)         # a second try at the path is not refused as taken
     assert 'cannot record to' in recording.problem and logger.lines[-1][0] == 'error'
+
+
+def test_a_chunk_is_compressed_and_written_off_the_thread_that_hands_it_over(tmp_path):
+    # The node laid each chunk out, compressed and wrote it in the JointState callback that
+    # closed it: most of the callback's CPU with the markers recorded, and a stall a chunk.
+    import threading
+    recording, _ = _recording()
+    recording.open(str(tmp_path / 'session.mcap'), compression='lz4')
+    writer = recording.recorder._writer
+    compress, threads = writer._compress, []
+
+    def compressed(raw):
+        threads.append(threading.current_thread())
+        return compress(raw)
+    writer._compress = compressed
+    for k in range(30):                         # stamps over 2 s: a chunk a second
+        recording.write('/tf', b'\0\1\0\0' + bytes([k]) * 8, 10 ** 8 * k)
+    recording.close()
+    # The close writes the last one and the end itself, as it does on a full disk.
+    main = threading.current_thread()
+    assert len(threads) == 3 and main not in threads[:-1] and threads[-1] is main
+    assert read_recording(str(tmp_path / 'session.mcap')).complete

@@ -141,7 +141,7 @@ class NodeRecording:
             self._refuse(problem)
             return False
         try:
-            self.recorder = SessionRecorder(path, compression=compression)
+            self.recorder = SessionRecorder(path, compression=compression, background=True)
             for topic, kind, qos in self.topics.values():
                 self.recorder.add_topic(topic, kind, qos)
             self.problem = ''
