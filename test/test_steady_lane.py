@@ -146,15 +146,16 @@ def test_the_lane_takes_a_name_list_whatever_its_padding_holds(skeleton, rig):
         got, pos = joint_state_content(skeleton.joint_names, 'walk', k / 60)
         stamp = 10 ** 10 + k * STEP
         junky = _junk_padded(stamp, names, pos, junk=0x11 * (k % 15 + 1))
-        assert reader_content(junky) == reader_content(cdr.joint_state(stamp, names, pos))
+        assert _reader_content(junky) == _reader_content(cdr.joint_state(stamp, names, pos))
         mine, ours = lane.on_raw(junky)
         ref, theirs = twin.on_raw(cdr.joint_state(stamp, names, pos))
         assert ours == theirs and (mine.accepted, mine.steps) == (ref.accepted, ref.steps), k
     assert lane.read == twin.read == 2
     assert lane.sim.steps.steady_inputs == 10
+    assert (lane.reader.name_code == -1).any()      # the padding it passed over
 
 
-def reader_content(raw):
+def _reader_content(raw):
     """What a fresh reader reads of ``raw``: stamp, names, positions."""
     msg = cdr.JointStateReader().read(raw)
     return msg.stamp_ns, msg.name, list(msg.position)

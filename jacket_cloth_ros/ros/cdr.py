@@ -466,9 +466,11 @@ class JointStateReader:
 
     Why not rclpy's deserialize_message: it builds the whole message object, velocities and
     efforts included, a visible share of an input. A publisher sends the same name list
-    every time, so the names are decoded once and then recognised by their bytes, all but the
-    padding between them: rclpy's serializer leaves it as its buffer held it. Big-endian
-    bytes go through rclpy; malformed bytes raise ValueError (callers name the message).
+    every time, so the names are decoded once and then recognised by their bytes; a list in
+    other padding (rclpy's serializer leaves it as its buffer held it) is decoded again and
+    kept if its names are the same, and ``name_code`` lets the steady lane pass over the
+    padding. Big-endian bytes go through rclpy; malformed bytes raise ValueError, struct.error
+    or UnicodeDecodeError (DECODE_ERRORS; callers name the message).
     """
 
     def __init__(self):
