@@ -13,6 +13,7 @@ every character with an input in one compiled call over the cores; a lone charac
 
 import argparse
 import gc
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -747,6 +748,7 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
         signals.doing('starting')
     rclpy.init(args=argv)
     node = None
+    refused = False
     try:
         node = make_node()
         signals.running()
@@ -755,7 +757,7 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
         pass
     except ConfigError as e:
         print(f'{program}: {e}', file=sys.stderr)
-        return 1
+        refused = True
     except Exception:
         if rclpy.ok():
             raise
@@ -766,6 +768,12 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
             node.close()
             node.destroy_node()
         rclpy.try_shutdown()
+    if refused:
+        # Nothing is left to tear down, and the interpreter's teardown of rclpy's extension
+        # modules now and then crashed a refused start after its line (a segfault, exit -11).
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(1)
     return 0
 
 
