@@ -1,6 +1,7 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
 """Shared fixtures. DDS traffic stays on this machine and in a domain of this test run."""
 
+import errno
 import os
 import signal
 
@@ -37,6 +38,22 @@ from jacket_cloth_ros.core.rig import load_rig  # noqa: E402
 from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams  # noqa: E402
 from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf  # noqa: E402
 from jacket_cloth_ros.motion.clips import joint_state_content  # noqa: E402
+
+
+class FillingFile:
+    """A recorder's file on a disk that fills after ``room`` bytes: what fits, then ENOSPC."""
+
+    def __init__(self, file, room):
+        self.file, self.room = file, room
+
+    def write(self, data):
+        free = self.room - self.file.tell()
+        if free <= 0:
+            raise OSError(errno.ENOSPC, 'No space left on device')
+        return self.file.write(bytes(data)[:free])
+
+    def __getattr__(self, name):
+        return getattr(self.file, name)
 
 
 @pytest.fixture(scope='session')

@@ -8,7 +8,7 @@ import time
 
 import pytest
 import rclpy
-from conftest import DOMAIN_ID
+from conftest import DOMAIN_ID, FillingFile
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
@@ -525,22 +525,6 @@ def test_record_refuses_a_file_made_between_its_check_and_its_open(
         'choose another path')
 
 
-class _FillingFile:
-    """The recorder's file on a disk that fills after ``room`` bytes: what fits, then ENOSPC."""
-
-    def __init__(self, file, room):
-        self.file, self.room = file, room
-
-    def write(self, data):
-        free = self.room - self.file.tell()
-        if free <= 0:
-            raise OSError(28, 'No space left on device')
-        return self.file.write(bytes(data)[:free])
-
-    def __getattr__(self, name):
-        return getattr(self.file, name)
-
-
 def test_a_disk_filling_while_recording_leaves_a_finished_file(harness, tmp_path):
     # The chunk being written when the disk filled was lost, and the file had no end.
     from jacket_cloth_ros.recording.reader import read_recording
@@ -548,7 +532,7 @@ def test_a_disk_filling_while_recording_leaves_a_finished_file(harness, tmp_path
     h = harness(record=str(path))
     writer = h.node.recording.recorder._writer
     # Room for about a quarter of the session: the jacket's markers dominate each chunk.
-    writer._stream = _FillingFile(writer._stream, writer._stream.tell() + 4_000_000)
+    writer._stream = FillingFile(writer._stream, writer._stream.tell() + 4_000_000)
     h.send_clip('idle', 60, 6.0)
     h.spin_until(lambda: h.node.recording.recorder is None)
     assert 'closed on a full disk: a finished file without its last' in \

@@ -8,6 +8,7 @@ import struct
 import zlib
 
 import pytest
+from conftest import FillingFile
 from mcap.reader import NonSeekingReader, SeekingReader
 from mcap.records import Chunk, ChunkIndex, DataEnd, MessageIndex
 from mcap.stream_reader import StreamReader, get_chunk_data_stream
@@ -353,22 +354,6 @@ def test_a_bag_closed_on_a_full_disk_has_no_metadata_yaml_rather_than_a_cut_one(
     assert len(read_recording(str(bag)).messages) == 50
 
 
-class _FillingFile:
-    """A recorder's file on a disk that fills after ``room`` bytes: what fits, then ENOSPC."""
-
-    def __init__(self, file, room):
-        self.file, self.room = file, room
-
-    def write(self, data):
-        free = self.room - self.file.tell()
-        if free <= 0:
-            raise OSError(errno.ENOSPC, 'No space left on device')
-        return self.file.write(bytes(data)[:free])
-
-    def __getattr__(self, name):
-        return getattr(self.file, name)
-
-
 @pytest.mark.parametrize('background', [False, True])
 def test_a_full_disk_ends_a_recording_finished_with_or_without_its_writer_thread(
         tmp_path, background):
@@ -379,7 +364,7 @@ def test_a_full_disk_ends_a_recording_finished_with_or_without_its_writer_thread
     path = tmp_path / 'session.mcap'
     rec = SessionRecorder(str(path), background=background, compression='lz4')
     rec.add_topic('/t', 'std_msgs/msg/String')
-    rec._writer._stream = _FillingFile(rec._writer._stream, rec._writer._stream.tell() + 300_000)
+    rec._writer._stream = FillingFile(rec._writer._stream, rec._writer._stream.tell() + 300_000)
     rng = random.Random(38)
     sent, heard = [], []
     for i in range(1000):                       # a chunk each 100 (a second of stamps)
