@@ -38,7 +38,7 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
     :param start_limit_s: how long the processes may take to publish their first /tf.
     :returns: name -> {cpu_us_per_message, start_s (to its first /tf), answered, sent,
         latency_by_status (each diagnostics status's p99 per window), latency_us_p99 (those
-        of the only status, if one)}.
+        of the only status, if one), latency_us_max (its slowest input per window)}.
     """
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -57,6 +57,7 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
     first_tf = {}
     tf_count = dict.fromkeys(commands, 0)
     latencies = {}                  # the diagnostics' status name -> p99 per window
+    slowest = {}                    # the diagnostics' status name -> max per window
 
     def counter(name):
         def on_tf(raw):
@@ -69,6 +70,8 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
             for kv in status.values:
                 if kv.key == 'latency_us_p99':
                     latencies.setdefault(status.name, []).append(float(kv.value))
+                elif kv.key == 'latency_us_max':
+                    slowest.setdefault(status.name, []).append(float(kv.value))
     for name, (_, topic) in commands.items():
         node.create_subscription(TFMessage, topic, counter(name), 100, raw=True)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 10)
@@ -111,6 +114,7 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
         cpu0 = {name: cpu_seconds(p.pid) for name, p in procs.items()}
         tf0 = dict(tf_count)
         latencies.clear()
+        slowest.clear()
         send_paced(msgs[int(RATE):])
         cpu1 = {name: cpu_seconds(p.pid) for name, p in procs.items()}
         end = time.monotonic() + 0.5
@@ -125,7 +129,8 @@ def live_nodes(skeleton: Skeleton, commands: dict[str, tuple[list[str], str]], s
                    'start_s': first_tf[name] - started, 'answered': tf_count[name] - tf0[name],
                    'sent': n, 'latency_by_status': latencies,
                    # with one node on /diagnostics, its windows
-                   'latency_us_p99': next(iter(latencies.values())) if len(latencies) == 1 else []}
+                   'latency_us_p99': next(iter(latencies.values())) if len(latencies) == 1 else [],
+                   'latency_us_max': next(iter(slowest.values())) if len(slowest) == 1 else []}
             for name in commands}
 
 
@@ -187,7 +192,8 @@ def node_vs_floor(skeleton: Skeleton, seconds: float, kernel_us: float, record_d
     middle = sorted(runs, key=lambda x: x['ratio'])[len(runs) // 2]
     return dict(middle, rounds=runs, kernel_us=kernel_us, node=alone,
                 ratios=[x['ratio'] for x in runs], warm_ratios=[x['warm_ratio'] for x in runs],
-                latency_windows=alone['latency_us_p99'], start_s=alone['start_s'])
+                latency_windows=alone['latency_us_p99'],
+                latency_max_windows=alone['latency_us_max'], start_s=alone['start_s'])
 
 
 def cold_start(skeleton: Skeleton, seconds: float = 1.0, warmed: bool = False) -> float:
