@@ -126,12 +126,14 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument('--endurance', type=float, default=None,
                    help='speed: simulated s through the node (default 600; 3600 for the hour)')
     b.add_argument('--only', default=None,
-                   choices=('host', 'kernel', 'profile', 'hops', 'markers', 'crowd'),
+                   choices=('host', 'kernel', 'profile', 'hops', 'markers', 'endurance',
+                            'crowd'),
                    help='speed: run this part only (host: what the host\'s phases slow; '
                    'kernel: against the yardstick; profile: one input\'s stages against '
                    'the kernel-only limit; hops: the package\'s calls from the JointState '
                    'callback to the /tf publish; markers: what the jacket\'s markers add to '
-                   'the node; crowd)')
+                   'the node; endurance: --endurance s through the node\'s callback, '
+                   'recording; crowd)')
     b.set_defaults(func=cmd_bench)
     add_tables_parser(sub).set_defaults(func=cmd_tables)
     return p

@@ -142,6 +142,30 @@ def test_issue_37s_targets_are_judged_on_the_runs_own_figures():
     assert missed[0]['measured'] == '0.45 (5 s)' and missed[1]['measured'] == '0.75 (15 s)'
 
 
+def test_the_latency_target_shows_the_slowest_input_beside_the_worst_p99():
+    # A p99 window hides up to 1 % of its inputs: the run's slowest one is shown as well, when
+    # the node's diagnostics gave it, and the verdict stays on the p99.
+    results = _results([(5.0, 0.1)], [0.5], latency_us=(2000.0, 3000.0))
+    results['node']['latency_max_windows'] = [2500.0, 12400.0]
+    row = next(t for t in targets(results) if t['figure'].startswith('latency p99'))
+    assert row['measured'] == '0 of 2 windows over a step, worst 3.0 ms; the slowest input 12.4 ms'
+    assert row['met'] is True
+
+
+def test_the_endurance_part_alone_prints_its_hour_and_says_a_file_left_unended():
+    # `bench speed --only endurance --endurance 3600` runs the hour alone: its summary must
+    # carry the figures, and a recording that never got its end must not read as a good one.
+    windows = [{'simulated_s': 60.0 * (k + 1), 'rss_mb': mb, 'input_us_median': 300.0}
+               for k, mb in enumerate((293.0, 299.5, 299.0))]
+    part = {'windows': windows, 'inputs': 21600, 'tf': 21600, 'complete': True}
+    text = summary({'steal_percent': {'endurance': 0.0}, 'endurance': part})
+    assert ('Endurance: 180 s simulated through the node callback with recording on; RSS '
+            '293.0 -> 299.0 MB (most 299.5); input median 300 -> 300 us; 21600 JointState and '
+            '21600 /tf recorded.') in text
+    part['complete'] = False
+    assert 'recorded, the file left without its end.' in summary({'endurance': part})
+
+
 def test_a_target_the_run_did_not_measure_is_neither_met_nor_missed():
     # One kernel round is not the median of several, however fast; a run without a 5 s
     # session or a latency window judges neither.

@@ -56,6 +56,8 @@ def summary(results: dict) -> str:
                   + ' -> '.join(results['hops']['chain']) + '; modules run: '
                   + ', '.join(results['hops']['files']) + '.']
     if 'input' not in results:           # --only a part
+        if 'endurance' in results:
+            lines += _endurance(results['endurance'])
         crowd = crowd_summary(results['crowd']) if 'crowd' in results else []
         return '\n'.join(lines + crowd) + '\n'
     i = results['input']
@@ -77,12 +79,7 @@ def summary(results: dict) -> str:
         lines.append(f'| {r["session_s"]:g} | {r["replay_s"]:.2f} | {r["realtime_x"]:.1f} | '
                      f'{per_step:.1f} | ' + (f'{per_step / (ref[0]["limit_ns"] / 1e3):.2f}x | '
                                              if ref else 'n/a | ') + f'{share:.2f} |')
-    e = results['endurance']
-    w = e['windows']
-    lines += ['', f'Endurance: {w[-1]["simulated_s"]:.0f} s simulated through the node '
-              f'callback with recording on; RSS {w[0]["rss_mb"]:.1f} -> {w[-1]["rss_mb"]:.1f} MB; '
-              f'input median {w[0]["input_us_median"]:.0f} -> {w[-1]["input_us_median"]:.0f} '
-              f'us; {e["inputs"]} JointState and {e["tf"]} /tf recorded.']
+    lines += _endurance(results['endurance'])
     if 'node' in results:
         n = results['node']
         lat = n['latency_windows']
@@ -101,7 +98,8 @@ def summary(results: dict) -> str:
                   f'window ({len(lat)} windows, the node alone): median '
                   f'{np.median(lat) if lat else float("nan"):.0f} us, worst '
                   f'{max(lat) if lat else float("nan"):.0f} us, '
-                  f'{sum(v > STEP_US for v in lat)} over one step ({STEP_US:.0f} us). '
+                  f'{sum(v > STEP_US for v in lat)} over one step ({STEP_US:.0f} us); '
+                  f'the slowest single input {_worst(n.get("latency_max_windows"))} us. '
                   f'First /tf {n["start_s"]:.2f} s after start (warm), '
                   f'{results["cold_start_s"]:.2f} s cold, {results["after_warm_s"]:.2f} s after '
                   '`jacket_cloth warm` (the set-up).']
@@ -149,3 +147,19 @@ def write(results: dict, out_dir: str) -> None:
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, 'speed.png'), dpi=100)
     plt.close(fig)
+
+
+def _worst(windows):
+    """Return the largest of a run's per-window figures, shown as whole us ('nan' if none)."""
+    return f'{max(windows):.0f}' if windows else 'nan'
+
+
+def _endurance(e):
+    """Return the endurance part's lines: memory and input cost, first window to last."""
+    w = e['windows']
+    return ['', f'Endurance: {w[-1]["simulated_s"]:.0f} s simulated through the node callback '
+            f'with recording on; RSS {w[0]["rss_mb"]:.1f} -> {w[-1]["rss_mb"]:.1f} MB (most '
+            f'{max(x["rss_mb"] for x in w):.1f}); input median {w[0]["input_us_median"]:.0f} -> '
+            f'{w[-1]["input_us_median"]:.0f} us; {e["inputs"]} JointState and {e["tf"]} /tf '
+            f'recorded' + ('' if e.get('complete', True) else ', the file left without its end')
+            + '.']
