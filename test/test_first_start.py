@@ -132,6 +132,25 @@ def _wait_for_library(pid, name, timeout=120.0):
         time.sleep(0.005)
 
 
+def test_python_dash_m_jacket_cloth_is_guarded_from_its_start():
+    # The docs and the Makefile run the tools as `python -m jacket_cloth_ros`, which went to
+    # the tools' main without the entry point's guard: a Ctrl-C while it imported numpy and
+    # numba was a KeyboardInterrupt traceback and exit -2.
+    tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'warm', '--help'],
+                            cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_library(tool.pid, '_multiarray_umath')
+        tool.send_signal(signal.SIGINT)
+        err = tool.communicate(timeout=120)[1]
+    finally:
+        if tool.poll() is None:
+            tool.kill()
+            tool.wait()
+    assert tool.returncode == 130 and 'Traceback' not in err, err
+    assert err.strip().splitlines() == ['jacket_cloth: stopped while starting'], err
+
+
 def test_the_demos_node_is_guarded_from_its_start(tmp_path, monkeypatch):
     # `jacket_cloth demo` ran its node with `python -m`, which imports everything before the
     # guard: a Ctrl-C then was a KeyboardInterrupt traceback.
