@@ -739,3 +739,45 @@ def test_a_mimic_cycle_is_named_as_one_and_a_mimic_of_a_mimic_follows_its_source
     assert sk.joint_names == ['c']
     assert sk.mult[1:].tolist() == [6.0, 3.0, 1.0]
     assert sk.offset[1:].tolist() == pytest.approx([0.5, 0.2, 0.0])
+
+
+def test_an_animation_named_as_its_filmstrip_is_refused_before_either_is_written(
+        clip, tmp_path, capsys):
+    # --animate writes <name>.gif beside the filmstrip: with -o x.gif the animation replaced
+    # the filmstrip just written, and both were reported written (a hostile probe).
+    for name in ('strip.gif', 'strip.GIF'):          # one file where case is not told apart
+        out = tmp_path / name
+        err = _one_line_error(capsys, ['picture', str(clip), '-o', str(out), '--animate'])
+        assert err == (f'jacket_cloth picture: --animate writes the animation to '
+                       f'{tmp_path / "strip.gif"}, the filmstrip\'s own name: give the '
+                       'filmstrip another extension (.png)')
+        assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize('name', ['strip', 'strip.txt'])
+def test_a_picture_whose_name_names_no_format_is_refused_up_front(
+        clip, tmp_path, capsys, name):
+    # An extension-less name failed at the save with matplotlib's "Format 'partial' is not
+    # supported", the suffix of the tool's own temporary file.
+    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / name)])
+    assert 'partial' not in err and 'end the name in .png' in err, err
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_rig_whose_picture_cannot_be_made_is_not_written_either(tmp_path, capsys,
+                                                                  monkeypatch):
+    # The rig's YAML was put in place before its picture was drawn: a picture that failed (a
+    # bad extension, a full disk) left a rig that the run again then refused to overwrite.
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.rigging import picture
+    urdf = shipped('character.urdf')
+    argv = ['rig', '--urdf', urdf, '-o', str(tmp_path / 'rig.yaml')]
+    err = _one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.txt')])
+    assert 'rig.txt: .txt is not a picture format' in err, err
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, 'No space left on device')
+    monkeypatch.setattr(picture, 'draw_rig', full_disk)
+    err = _one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.png')])
+    assert 'No space left on device' in err, err
+    assert os.listdir(tmp_path) == []

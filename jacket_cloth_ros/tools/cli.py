@@ -5,6 +5,7 @@ Every failure ends in one readable line on stderr and a non-zero exit, never a t
 """
 
 import argparse
+import contextlib
 import os
 import signal
 import subprocess
@@ -206,13 +207,17 @@ def cmd_picture(args: argparse.Namespace) -> int:
     :param args: the ``picture`` command's options.
     """
     from ..tools.picture import render_filmstrip
-    from .outputs import replacing
+    from .outputs import OutputError, check_picture, replacing, same_name
     from .session import recorded_character
+    check_picture(args.output)
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
-    skeleton, rig = recorded_character(args.input, args.urdf, args.rig)
     gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
+    if gif and same_name(gif, args.output):
+        raise OutputError(f'--animate writes the animation to {gif}, the filmstrip\'s own '
+                          'name: give the filmstrip another extension (.png)')
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
+    skeleton, rig = recorded_character(args.input, args.urdf, args.rig)
     with replacing(args.output, force=args.force) as tmp:
         render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig,
                          style=args.style)
@@ -421,9 +426,10 @@ def cmd_rig(args: argparse.Namespace) -> int:
     from ..core.rig import Rig
     from ..core.skeleton import load_skeleton
     from ..rigging.propose import propose, to_yaml
-    from .outputs import replacing
+    from .outputs import check_picture, replacing
     _check_output(args.output, args.force, [args.urdf, args.motion])
     if args.picture:
+        check_picture(args.picture)
         _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
     skeleton = load_skeleton(args.urdf)
     for line in skeleton.warnings:
@@ -436,18 +442,22 @@ def cmd_rig(args: argparse.Namespace) -> int:
         loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
     except ConfigError as e:
         raise ToolError(f'the proposed rig does not load ({e})') from None
-    with replacing(args.output, force=args.force) as tmp:
-        with open(tmp, 'w', encoding='utf-8') as f:
-            f.write(text)
+    # Both files are written before either is put in place: a picture that fails (a full
+    # disk) leaves no rig beside it that a second run would refuse to overwrite.
+    with (replacing(args.picture, force=args.force) if args.picture
+          else contextlib.nullcontext()) as picture:
+        with replacing(args.output, force=args.force) as tmp:
+            with open(tmp, 'w', encoding='utf-8') as f:
+                f.write(text)
+            if picture:
+                from ..rigging.picture import draw_rig
+                draw_rig(loaded, body.up, body.forward, picture,
+                         title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
     for line in lines:
         print(line)
     print(f'wrote {args.output} ({body.height:.2f} m tall'
           + (f', up {rig["up"]}' if 'up' in rig else '') + ')')
     if args.picture:
-        from ..rigging.picture import draw_rig
-        with replacing(args.picture, force=args.force) as tmp:
-            draw_rig(loaded, body.up, body.forward, tmp,
-                     title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
         print(f'wrote {args.picture}')
     return 0
 

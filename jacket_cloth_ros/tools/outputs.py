@@ -56,6 +56,29 @@ def check_output(path: str | os.PathLike, force: bool, inputs: Iterable[str | No
             raise OutputError(f'{path} exists (use --force to overwrite)')
 
 
+def check_picture(path: str | os.PathLike) -> None:
+    """Refuse a picture's path unless its extension names a format matplotlib writes.
+
+    Checked before anything is written: the format is known only from the name, and a tool
+    that found out at the save had already put its other outputs in place.
+
+    :param path: the picture file.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    ext = os.path.splitext(os.fspath(path))[1].lower().lstrip('.')
+    formats = FigureCanvasAgg.get_supported_filetypes()
+    if ext not in formats:
+        said = f'.{ext} is not a picture format' if ext else 'no extension names its format'
+        raise OutputError(f'{path}: {said}; end the name in .png, .jpg, .svg, .pdf, .gif or '
+                          'another format matplotlib writes')
+
+
+def same_name(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Tell whether two paths name one file, or would on a file system blind to case."""
+    return (os.path.normcase(os.path.abspath(a)).lower()
+            == os.path.normcase(os.path.abspath(b)).lower())
+
+
 def check_output_folder(folder: str | os.PathLike, names: Iterable[str], force: bool,
                         inputs: Iterable[str | None] = ()) -> None:
     """Run ``check_output`` for each of the files ``names`` a tool writes into ``folder``.
