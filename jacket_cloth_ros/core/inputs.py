@@ -45,18 +45,41 @@ class Sample:
     warnings: list = field(default_factory=list)   # (code, text) of usable-but-odd input
 
 
+def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike') -> np.ndarray:
+    """Return the root's world pose that stands the skeleton on the world's floor, unturned.
+
+    The root goes up until the lowest link origin of the zero pose is at the world's origin
+    along ``up`` (a root already at or below every link stays there): a source that sends only
+    the joints (joint_state_publisher) had a humanoid's pelvis at the origin, its legs under
+    the rig's floor, which held the cloth flailing.
+
+    :param skeleton: the character.
+    :param up: the world's up, (3,) unit.
+    :returns: (4,4) the root's pose in the world.
+    """
+    up = np.asarray(up, dtype=float)
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    root = np.eye(4)
+    root[:3, 3] = -min(0.0, float((rest[:, :3, 3] @ up).min())) * up
+    return root
+
+
 class InputParser:
     """Maps names to skeleton joints; holds the last value of joints a message leaves out.
 
     :param skeleton: the skeleton whose joints the messages move.
     :param world_joint: the prefix of the root's world pose variables (``world_joint/trans_x``).
+    :param up: the world's up: until a message gives the world pose, the root stands the zero
+        pose on the world's floor (:func:`standing_root`); None: the root at the origin.
     """
 
-    def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint'):
+    def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint',
+                 up: 'npt.ArrayLike | None' = None):
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
         # The last sample: joints and a world pose that a message leaves out keep these.
-        self.last = JointSample(np.zeros(len(skeleton.joint_names)), np.eye(4),
+        root = np.eye(4) if up is None else standing_root(skeleton, up)
+        self.last = JointSample(np.zeros(len(skeleton.joint_names)), root,
                                 np.array([0.0, 0.0, 0.0, 1.0]))
 
     def set_world_joint(self, name: str) -> None:
