@@ -510,6 +510,22 @@ def test_record_never_overwrites_a_file_at_start_or_live(harness, tmp_path):
     assert h.node.recording.recorder is recorder
 
 
+def test_a_live_record_in_a_missing_folder_is_refused_and_the_recording_goes_on(
+        harness, tmp_path):
+    # It was reported successful: the running recording closed, the new one never opened,
+    # and only the log and the diagnostics said so (a hostile probe).
+    path = tmp_path / 'session.mcap'
+    h = harness(record=str(path))
+    recorder = h.node.recording.recorder
+    for asked in (tmp_path / 'nodir' / 'y.mcap', tmp_path / 'nodir' / 'bag'):
+        result = h.node.set_parameters([Parameter('record', value=str(asked))])[0]
+        assert not result.successful and result.reason == (
+            f"record: folder {str(tmp_path / 'nodir')!r} does not exist: make it first or "
+            'choose another path')
+        assert h.node.recording.recorder is recorder and h.node.get_parameter(
+            'record').value == str(path)
+
+
 def test_record_refuses_a_file_made_between_its_check_and_its_open(
         harness, tmp_path, monkeypatch):
     # The check saw no file, then open(path, 'wb') truncated the one made meanwhile.

@@ -56,6 +56,20 @@ def overwrite_problem(path: str) -> str:
     return _exists(path) if os.path.lexists(path) else ''
 
 
+def folder_problem(path: str) -> str:
+    """Why ``path`` cannot be recorded to: its folder is missing or not one ('' if it is there).
+
+    Asked before a live ``record`` is taken: found only at the open, the change was reported
+    successful while the node's recording had stopped and no new one started.
+
+    :param path: the ``record`` value asked for (a file, or a bag folder to make).
+    """
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(folder):
+        return ''
+    return (f'record: folder {folder!r} does not exist: make it first or choose another path')
+
+
 def _exists(path):
     return (f'record: {path!r} exists (the node never overwrites a recording): move it or '
             'choose another path')
@@ -101,15 +115,17 @@ class NodeRecording:
         return RecordingState.CLOSED if self.asked else RecordingState.OFF
 
     def refusal(self, path: str) -> str:
-        """Why ``record`` cannot be set to ``path`` ('' if it can): something there, not ours.
+        """Why ``record`` cannot be set to ``path`` ('' if it can): taken, or in no folder.
 
-        The file being recorded now is the one exception: setting it again keeps it going.
+        Something there that is not ours, or a folder that does not exist: refused with the
+        reason, the file being recorded going on. The file being recorded now is the one
+        exception: setting it again keeps it going.
 
         :param path: the ``record`` value asked for ('' turns recording off: always taken).
         """
         if not path or (path == self.asked and self.recorder is not None):
             return ''
-        return overwrite_problem(path)
+        return overwrite_problem(path) or folder_problem(path)
 
     def needs_open(self, path: str) -> bool:
         """Tell whether ``record`` set to ``path`` opens anew: not the file being recorded.
