@@ -18,7 +18,7 @@ from jacket_cloth_ros.core.skeleton import Skeleton
 from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
 from jacket_cloth_ros.ros.cdr import joint_state
 from jacket_cloth_ros.tools.cli import main
-from jacket_cloth_ros.tools.export import key_times
+from jacket_cloth_ros.tools.export import key_times, key_times_32
 from jacket_cloth_ros.tools.session import load_session, run_session
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -235,3 +235,23 @@ def test_keys_rise_where_the_stamps_go_back():
     seconds, restarts = key_times(np.array([100, 110, 120, 40, 50, 60]) * ms)
     assert restarts == 1
     assert np.allclose(seconds, [0.0, 0.01, 0.02, 0.03, 0.04, 0.05])
+
+
+def test_keys_that_32_bit_floats_make_one_time_are_refused():
+    # A wide gap in the stamps (or a session of days at its rate): rounded to glTF's 32-bit
+    # floats, neighbouring keys became one time, which glTF forbids, and the file was written.
+    seconds = np.array([0.0, 1.0, 1e6, 1e6 + 1 / 60])
+    with pytest.raises(ValueError, match=r'the keys at 1000000\.000000 s and 1000000\.016667 '
+                                         r's are one time'):
+        key_times_32(seconds)
+    assert key_times_32(seconds[:3]).dtype == np.float32
+
+
+def test_a_world_position_beyond_32_bit_floats_is_one_line_and_no_file(tmp_path, capsys):
+    # Written as it was, the root's translation keys were infinities in a file said written.
+    session, out = tmp_path / 'far.mcap', tmp_path / 'far.glb'
+    _still_session(session, shipped('character.urdf'), lift=1e300)
+    err = _one_line_error(capsys, ['export', str(session), '-o', str(out)])
+    assert err == ('jacket_cloth export: the root\'s world position of 1e+300 is beyond '
+                   'glTF\'s 32-bit floats')
+    assert not out.exists()

@@ -172,6 +172,31 @@ def _continuous(q: np.ndarray) -> np.ndarray:
     return q
 
 
+def _within_float32(values: np.ndarray, what: str = 'a value') -> None:
+    """Refuse values glTF's 32-bit floats cannot hold: cast, they were infinities in the file."""
+    over = np.abs(values[np.isfinite(values)])
+    if over.size and over.max() > np.finfo(np.float32).max:
+        raise ValueError(f'{what} of {over.max():.3g} is beyond glTF\'s 32-bit floats')
+
+
+def key_times_32(seconds: np.ndarray) -> np.ndarray:
+    """Return the keys' times as glTF holds them (32-bit floats), refused unless they rise.
+
+    Rounded to 32 bits, neighbouring keys of a long session (or after a wide gap in its
+    stamps) become one time, which glTF forbids: said in one line, not written.
+
+    :param seconds: (F,) the keys' times, s, strictly increasing (key_times).
+    """
+    keys = seconds.astype(np.float32)
+    tied = np.flatnonzero(np.diff(keys) <= 0)
+    if len(tied):
+        k = int(tied[0])
+        raise ValueError(f'the keys at {seconds[k]:.6f} s and {seconds[k + 1]:.6f} s are one '
+                         'time in glTF\'s 32-bit floats: the session runs too long at its '
+                         'rate, or a gap in its stamps is too wide')
+    return keys
+
+
 class _Blob:
     """The binary chunk: arrays appended 4-byte aligned, each with its buffer view."""
 
@@ -192,6 +217,8 @@ class _Blob:
     def accessor(self, data: np.ndarray, kind: str, component: int,
                  target: int | None = None, bounds: bool = False) -> int:
         dtype = {FLOAT: np.float32, UBYTE: np.uint8, USHORT: np.uint16, UINT: np.uint32}
+        if component == FLOAT:
+            _within_float32(np.asarray(data, dtype=float))
         data = np.ascontiguousarray(data, dtype=dtype[component])
         count = len(data)
         flat = data.reshape(count, -1)
@@ -332,7 +359,8 @@ def build_gltf(session: SessionInput, frames: Frames, bone_names: list, bone_par
 def _animation(gltf, blob, frames, parent_of, n_links, t_rest, q_rest):
     """Add the session's animation: the root's world pose, every link and bone at each key."""
     link0 = 2
-    times = blob.accessor(frames.seconds, gl.SCALAR, FLOAT, bounds=True)
+    _within_float32(frames.root[:, :3, 3], 'the root\'s world position')
+    times = blob.accessor(key_times_32(frames.seconds), gl.SCALAR, FLOAT, bounds=True)
     # Each link in its parent link (the root link in the character's root).
     local = frames.links.copy()
     local[:, 1:] = np.linalg.inv(frames.links[:, parent_of[1:n_links]]) @ frames.links[:, 1:]
