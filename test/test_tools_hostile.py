@@ -781,3 +781,25 @@ def test_a_rig_whose_picture_cannot_be_made_is_not_written_either(tmp_path, caps
     err = _one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.png')])
     assert 'No space left on device' in err, err
     assert os.listdir(tmp_path) == []
+
+
+def test_a_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(tmp_path, capsys):
+    # Every input refused (non-finite positions): the replay wrote a file of the inputs alone,
+    # no /tf, markers or diagnostics, and exited 0 (a hostile probe).
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    names = list(load_shipped_character().joint_names)
+    session, out = tmp_path / 'nan.mcap', tmp_path / 'out.mcap'
+    recorder = SessionRecorder(str(session))
+    recorder.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    for k in range(30):
+        stamp = 10 ** 10 + k * 10 ** 9 // 60
+        recorder.write('/joint_states', joint_state(stamp, names, [float('nan')] * len(names)),
+                       stamp)
+    recorder.close()
+    err = _one_line_error(capsys, ['replay', str(session), '-o', str(out)])
+    assert err.startswith(f'jacket_cloth replay: {session}: the simulation took none of its 30 '
+                          'JointState messages (the first: non-finite position for '), err
+    assert err.endswith('message dropped); nothing written'), err
+    assert sorted(os.listdir(tmp_path)) == ['nan.mcap']
