@@ -803,3 +803,31 @@ def test_a_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(tmp_pa
                           'JointState messages (the first: non-finite position for '), err
     assert err.endswith('message dropped); nothing written'), err
     assert sorted(os.listdir(tmp_path)) == ['nan.mcap']
+
+
+def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_path):
+    # SIGTERM ended the process where it stood: the output's hidden temporary file stayed.
+    import signal
+    import subprocess
+    import sys
+    import time
+    clip, out = tmp_path / 'walk.mcap', tmp_path / 'out.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '20', '-o', str(clip)]) == 0
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'replay', str(clip),
+                             '-o', str(out)], cwd=root, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not any('.partial' in name for name in os.listdir(tmp_path)):   # replaying
+            assert tool.poll() is None and time.monotonic() < deadline, 'no replay started'
+            time.sleep(0.01)
+        tool.send_signal(signal.SIGTERM)
+        err = tool.communicate(timeout=120)[1]
+    finally:
+        if tool.poll() is None:
+            tool.kill()
+            tool.wait()
+    assert tool.returncode == 143, err
+    assert err.strip().splitlines() == ['jacket_cloth replay: stopped by SIGTERM'], err
+    assert os.listdir(tmp_path) == ['walk.mcap']

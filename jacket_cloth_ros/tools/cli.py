@@ -10,6 +10,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from typing import TYPE_CHECKING
 
@@ -652,6 +653,10 @@ def main(argv: list[str] | None = None) -> int:
     own, ros = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(own)
     args.ros_args = ros
+    # SIGTERM stops a command as Ctrl-C does, its outputs' temporary files removed on the way
+    # out: by default it ended the process where it stood and left them behind.
+    main_thread = threading.current_thread() is threading.main_thread()   # where signals go
+    previous = signal.signal(signal.SIGTERM, _terminated) if main_thread else None
     try:
         check_numbers(args)
         return args.func(args)
@@ -663,6 +668,13 @@ def main(argv: list[str] | None = None) -> int:
         return 128 + e.signum
     except KeyboardInterrupt:
         return 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminated(signum: int, frame: object) -> None:
+    raise Stopped(signum)
 
 
 if __name__ == '__main__':
