@@ -59,6 +59,16 @@ def test_recorded_parameter_events_decode_in_rclpy_and_rosbags(value):
     assert decoded.changed_parameters[0].name == 'p' and decoded.node == expected.node
 
 
+def test_a_name_with_a_trailing_separator_is_a_bag_folder_to_the_writer_too(tmp_path):
+    # `-o x.mcap/` was a folder to the check and a file to the writer: the rename into place
+    # failed with an error naming the tool's temporary folder.
+    from jacket_cloth_ros.tools.cli import main
+    out = tmp_path / 'session.mcap'
+    assert main(['motion', '--clip', 'walk', '--duration', '0.5', '-o', f'{out}/']) == 0
+    assert sorted(p.name for p in out.iterdir()) == ['metadata.yaml', 'session.mcap_0.mcap']
+    assert [p.name for p in tmp_path.iterdir()] == ['session.mcap']
+
+
 def test_a_bag_folder_is_laid_out_as_rosbag2_does_and_every_reader_opens_it(tmp_path):
     # Without .mcap the output is a bag folder: NAME/NAME_0.mcap and metadata.yaml (version 9,
     # with its files and QoS profiles), as `ros2 bag record -s mcap -o NAME` lays it out.

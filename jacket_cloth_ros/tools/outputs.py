@@ -213,7 +213,9 @@ def _replacing_folder(path, force):
     scratch = tempfile.mkdtemp(prefix=f'.{name}.', suffix='.partial', dir=parent)
     tmp = os.path.join(scratch, name)
     try:
-        yield tmp
+        # With its separator: a bag asked for as ``x.mcap/`` is a folder to its writer too,
+        # not a file the rename into a folder then failed on.
+        yield os.path.join(tmp, '')
         if force:
             _swap_folder(tmp, path, os.path.join(scratch, name + '.old'))
             return
