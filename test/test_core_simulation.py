@@ -420,6 +420,19 @@ def test_a_joint_named_twice_takes_its_last_value_and_warns(make_sim, skeleton, 
     assert [c for c, _ in r.warnings] == ['duplicate']
 
 
+def test_a_teleport_too_far_to_square_says_its_distance_not_inf(skeleton, make_sim):
+    # A world position of 1e300 m said "moved inf m" in the log and /diagnostics: the
+    # distance's square overflowed (a hostile probe).
+    sim = make_sim()
+    names, pos = joint_state_content(skeleton.joint_names, 'idle', 0.0)
+    pos = np.asarray(pos, dtype=float)
+    sim.process(1_000_000_000, names, pos)
+    far = pos.copy()
+    far[names.index('world_joint/trans_x')] = -1.7e308
+    report = sim.process(1_016_000_000, names, far)
+    assert report.reset == 'teleport: moved 1.7e+308 m between two inputs'
+
+
 def test_teleport_resets_to_the_skinned_pose_instead_of_exploding(make_sim):
     sim = make_sim()
     reports = play(sim, 'teleport', 60, 3.0)

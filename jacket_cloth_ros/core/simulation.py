@@ -803,7 +803,12 @@ class JacketSimulation:
         """Why the world move from sample a to b is too big to simulate through, or ''."""
         move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
         if move > self.teleport_m:
-            return f'teleport: moved {move:.2f} m between two inputs'
+            if not np.isfinite(move):       # its square overflowed: measured again, scaled
+                d = b.root[:3, 3] - a.root[:3, 3]
+                size = np.abs(d).max()
+                move = size * np.linalg.norm(d / size) if np.isfinite(size) else size
+            shown = f'{move:.2f}' if move < 1e6 else f'{move:.3g}'
+            return f'teleport: moved {shown} m between two inputs'
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
