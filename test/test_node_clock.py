@@ -150,6 +150,12 @@ def test_a_different_urdf_after_the_fallback_is_one_line(harness, urdf_text, cap
     h.spin_until(lambda: h.node.received['robot_description'] == 4)
     assert 'different URDF' not in capfd.readouterr().err
     assert h.c.sim.skeleton.name == 'jacket_character'
+    # One that does not load is said so, not given the restart a restart would refuse.
+    pub.publish(String(data=urdf_text.replace('</robot>', '')))
+    h.spin_until(lambda: h.node.received['robot_description'] == 5)
+    lines = [x for x in capfd.readouterr().err.splitlines() if 'URDF' in x]
+    assert len(lines) == 1 and 'a URDF that does not load came on /robot_description (URDF: ' \
+        'malformed robot description' in lines[0] and 'restart' not in lines[0], lines
 
 
 def test_a_recording_replaced_by_another_writer_is_said_and_saved(harness, tmp_path, capfd):

@@ -690,6 +690,13 @@ class JacketClothNode(Node):
             return
         c.told_description = told
         self.refused['robot_description'] += 1
+        try:        # a restart would refuse one that does not load: not the advice to give
+            Skeleton(text)
+        except ConfigError as e:
+            self.get_logger().warning(
+                f'{c.label}a URDF that does not load came on {topic} ({e}): not taken, the '
+                f'node keeps the character it runs (from {c.source})')
+            return
         self.get_logger().warning(
             f'{c.label}a different URDF came on {topic}: not taken, the node keeps the '
             f'character it runs (from {c.source}); restart the node to take it')
