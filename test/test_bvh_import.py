@@ -152,6 +152,23 @@ def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
     assert not out.exists() and not (tmp_path / 'c.urdf').exists()
 
 
+def test_a_hierarchy_missing_a_brace_is_refused_not_read_as_another_skeleton(tmp_path, capsys):
+    # pybvh read a HIERARCHY with a '}' missing as a different skeleton (1.74 m tall where the
+    # capture is 1.67 m) and the import wrote it (a hostile probe).
+    with open(fetched('test_mocapbank.bvh'), encoding='utf-8') as f:
+        text = f.read()
+    head, motion = text.split('MOTION', 1)
+    cut = head.rindex('}', 0, head.rindex('}'))          # a brace inside, not the last
+    bad = tmp_path / 'bad.bvh'
+    bad.write_text(head[:cut] + head[cut + 1:] + 'MOTION' + motion)
+    out = tmp_path / 'out.mcap'
+    assert main(['import', str(bad), '-o', str(out), '--urdf-out', str(tmp_path / 'c.urdf')]) \
+        == 1
+    err = capsys.readouterr().err
+    assert err == f'jacket_cloth import: {bad}: its HIERARCHY opens 24 braces and closes 23\n'
+    assert not out.exists() and not (tmp_path / 'c.urdf').exists()
+
+
 def test_a_mocap_session_replays_with_the_jacket_fitted_to_its_skeleton(tmp_path):
     src = str(tmp_path / 'mocapbank.bvh')
     shutil.copy(fetched('test_mocapbank.bvh'), src)

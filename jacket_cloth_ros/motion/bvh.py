@@ -96,10 +96,12 @@ def read_bvh(path: str) -> Bvh:
         raise BvhError(f'{path}: no such file')
     if os.path.getsize(path) == 0:
         raise BvhError(f'{path}: empty file')
-    links = _urdf_links(path)
+    links, opened, closed = _hierarchy_counts(path)
     if links > MAX_LINKS:           # before the reader spends seconds on it
         raise BvhError(f'{path}: its skeleton would be {links} links as a URDF, over the '
                        f'{MAX_LINKS} a character may have')
+    if opened != closed:            # the reader guesses where a brace was missing
+        raise BvhError(f'{path}: its HIERARCHY opens {opened} braces and closes {closed}')
     try:
         with warnings.catch_warnings():
             # The capture is Y-up by the format's convention: no guessing, so no warning.
@@ -122,13 +124,13 @@ def read_bvh(path: str) -> Bvh:
     return bvh
 
 
-def _urdf_links(path):
-    """Count the links the import would make of the file's HIERARCHY, read up to MOTION.
+def _hierarchy_counts(path):
+    """Read the file's HIERARCHY up to MOTION: (links as a URDF, braces opened, closed).
 
-    The root, one a rotation channel of every other joint, and one an End Site; a file that
-    is no BVH counts few, and the reader says what is wrong with it.
+    The links: the root, one a rotation channel of every other joint, and one an End Site.
+    A file that is no BVH counts few, and the reader says what is wrong with it.
     """
-    links, channels_seen = 1, 0
+    links, channels_seen, opened, closed = 1, 0, 0, 0
     try:
         with open(path, encoding='utf-8', errors='replace') as f:
             for line in f:
@@ -137,6 +139,8 @@ def _urdf_links(path):
                     continue
                 if words[0] == 'MOTION':
                     break
+                opened += line.count('{')
+                closed += line.count('}')
                 if words[0] == 'End':
                     links += 1
                 elif words[0] == 'CHANNELS':
@@ -144,8 +148,8 @@ def _urdf_links(path):
                     if channels_seen > 1:       # the root's are the world joint's
                         links += sum(w.endswith('rotation') for w in words[2:])
     except OSError:
-        return 0                    # the reader says so
-    return links
+        return 0, 0, 0              # the reader says so
+    return links, opened, closed
 
 
 def rest_offsets(bvh: Bvh) -> np.ndarray:
