@@ -170,6 +170,19 @@ def test_a_bag_listing_one_file_twice_is_refused(clip, tmp_path, capsys):
         assert f'{bag / "metadata.yaml"}: lists ' in err and 'twice' in err, err
 
 
+def test_a_bag_whose_metadata_lists_no_files_says_so(clip, tmp_path, capsys):
+    # It said "a directory without .mcap files" of a folder holding one (a hostile probe).
+    import shutil
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    shutil.copy(clip, bag / 'bag_0.mcap')
+    (bag / 'metadata.yaml').write_text('rosbag2_bagfile_information:\n  storage_identifier: '
+                                       'mcap\n  relative_file_paths: []\n')
+    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    assert err == (f'jacket_cloth replay: {bag / "metadata.yaml"}: lists no files '
+                   '(relative_file_paths is empty)')
+
+
 @pytest.fixture(scope='module')
 def replayed(clip, tmp_path_factory):
     """The clip's replay: its inputs and the set-up record the node writes."""

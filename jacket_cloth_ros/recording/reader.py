@@ -100,7 +100,9 @@ def mcap_files(path: str) -> list[str]:
     else:
         files = sorted(os.path.join(path, p) for p in os.listdir(path) if p.endswith('.mcap'))
     if not files:
-        raise RecordingError(f'{path}: a directory without .mcap files')
+        raise RecordingError(f'{meta}: lists no files (relative_file_paths is empty)'
+                             if os.path.isfile(meta) else
+                             f'{path}: a directory without .mcap files')
     seen = {}
     for one in files:           # by real path: a link or ../ naming a listed file again too
         real = os.path.realpath(one)
