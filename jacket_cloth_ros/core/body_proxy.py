@@ -111,3 +111,25 @@ def body_proxy(skeleton: 'Skeleton', leave_out: Sequence[int] = ()) -> BodyProxy
         np.array([c[1] for c in caps], dtype=float).reshape(-1, 3),
         np.array([c[2] for c in caps], dtype=float).reshape(-1, 3),
         np.array([c[3] for c in caps], dtype=float), [e[4] for e in ell] + [c[4] for c in caps])
+
+
+def lowest_reach(skeleton: 'Skeleton', rest: np.ndarray, up: np.ndarray) -> float:
+    """Return how far down ``up`` the body reaches at a pose: the soles, as its shapes say.
+
+    Its collision shapes, else capsules on its bones (:func:`body_proxy`), else its links:
+    what stands a character on the floor, the retargeted clips and a pose sent without its
+    world pose alike.
+
+    :param skeleton: the character.
+    :param rest: (L,4,4) its links at the pose, in the root's frame.
+    :param up: (3,) the world's up, unit.
+    """
+    shapes = body_proxy(skeleton).posed(rest)
+    low = [float((rest[:, :3, 3] @ up).min())]
+    if len(shapes.centers):
+        reach = np.linalg.norm(np.einsum('kij,i->kj', shapes.axes, up) * shapes.radii, axis=1)
+        low.append(float((shapes.centers @ up - reach).min()))
+    if len(shapes.capsule_a):
+        ends = np.minimum(shapes.capsule_a @ up, shapes.capsule_b @ up)
+        low.append(float((ends - shapes.capsule_radii).min()))
+    return min(low)

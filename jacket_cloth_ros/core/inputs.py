@@ -48,19 +48,21 @@ class Sample:
 def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike') -> np.ndarray:
     """Return the root's world pose that stands the skeleton on the world's floor, unturned.
 
-    The root goes up until the lowest link origin of the zero pose is at the world's origin
-    along ``up`` (a root already at or below every link stays there): a source that sends only
-    the joints (joint_state_publisher) had a humanoid's pelvis at the origin, its legs under
-    the rig's floor, which held the cloth flailing.
+    The root goes up until the zero pose's soles (body_proxy.lowest_reach: its collision
+    shapes, as the retargeted clips stand it) are at the world's origin along ``up``; a body
+    that reaches nowhere below its root stays there. A source that sends only the joints
+    (joint_state_publisher) had a humanoid's pelvis at the origin, its legs under the rig's
+    floor, which held the cloth flailing.
 
     :param skeleton: the character.
     :param up: the world's up, (3,) unit.
     :returns: (4,4) the root's pose in the world.
     """
+    from .body_proxy import lowest_reach
     up = np.asarray(up, dtype=float)
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
     root = np.eye(4)
-    root[:3, 3] = -min(0.0, float((rest[:, :3, 3] @ up).min())) * up
+    root[:3, 3] = -min(0.0, lowest_reach(skeleton, rest, up)) * up
     return root
 
 

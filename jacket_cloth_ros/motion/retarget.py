@@ -14,6 +14,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..core.body_proxy import lowest_reach
 from ..core.skeleton import Skeleton, load_shipped_character
 from ..core.transforms import matrix_to_quat, quat_to_matrix
 from ..rigging.propose import find_body
@@ -51,7 +52,7 @@ class _Roles:
                                                   body.knees[s]), body.ankles[s])
                      for s in ('left', 'right')}
         pts = rest[:, :3, 3]
-        self.stand = float(pts[body.pelvis] @ body.up) - _lowest(skeleton, rest, body.up)
+        self.stand = float(pts[body.pelvis] @ body.up) - lowest_reach(skeleton, rest, body.up)
         thigh, knee, ankle = (pts[k] for k in self.legs['left'])
         self.leg = float(np.linalg.norm(knee - thigh) + np.linalg.norm(ankle - knee))
 
@@ -186,23 +187,6 @@ class Retarget:
         names = list(self.skeleton.joint_names) + [f'{world_joint}/{v}'
                                                    for v in WORLD_VARIABLES]
         return names, [float(v) for v in q] + list(root)
-
-
-def _lowest(skeleton, rest, up):
-    """Return how far down ``up`` the body reaches at rest: the soles, as its shapes say.
-
-    Its collision shapes, else capsules on its bones (core.body_proxy), else its links.
-    """
-    from ..core.body_proxy import body_proxy
-    shapes = body_proxy(skeleton).posed(rest)
-    low = [float((rest[:, :3, 3] @ up).min())]
-    if len(shapes.centers):
-        reach = np.linalg.norm(np.einsum('kij,i->kj', shapes.axes, up) * shapes.radii, axis=1)
-        low.append(float((shapes.centers @ up - reach).min()))
-    if len(shapes.capsule_a):
-        ends = np.minimum(shapes.capsule_a @ up, shapes.capsule_b @ up)
-        low.append(float((ends - shapes.capsule_radii).min()))
-    return min(low)
 
 
 def _unit(v):

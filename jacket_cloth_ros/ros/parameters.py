@@ -53,7 +53,8 @@ NODE_PARAMETERS = {
     'frame_prefix': (T.PARAMETER_STRING, '', None, False, 'prepended to every bone frame id'),
     'publish_world_tf': (T.PARAMETER_BOOL, False, None, False,
                          'also publish world_frame -> the URDF root on /tf, from the '
-                         'world_joint variables, so a world fixed frame works in a viewer'),
+                         'world_joint variables (without them, standing on the world\'s floor), '
+                         'so a world fixed frame works in a viewer'),
     'world_frame': (T.PARAMETER_STRING, 'world', None, False,
                     'the parent frame of that transform'),
     'markers_rate': (T.PARAMETER_DOUBLE, 30.0, (0.0, 240.0), False,
