@@ -109,6 +109,9 @@ class SessionPipeline:
         self.undecodable = 0        # JointStates that did not decode (the node counts them)
         self.lost = 0               # JointStates their publisher numbered that never arrived
         self.last_reset_reason = ''
+        # Why the first JointState the simulation refused was refused ('' until one was): a
+        # tool says it when the simulation took none (tools.session.took_nothing).
+        self.first_refusal = ''
         # Why the recording the values name is not being written ('' when it is, or none):
         # asked of the live node's recording (ros/recording.py), which holds it once.
         self.recording_problem: 'Callable[[], str]' = _no_recording_problem
@@ -338,6 +341,8 @@ class SessionPipeline:
         if not report.accepted:
             self.dropped += 1
             self._window['dropped'] += 1
+            if not self.first_refusal:
+                self.first_refusal = '; '.join(text for _, text in report.warnings) or 'refused'
             return []
         self._window['accepted'] += 1
         bones = self.sim.bones()        # checked where the steps ended (check_bones)

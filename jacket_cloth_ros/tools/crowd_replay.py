@@ -25,7 +25,8 @@ from ..ros.pipeline import SessionPipeline, session_topics
 from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
-from .session import JOINT_STATE, recorded_parameters, setup_warnings
+from .session import (JOINT_STATE, ReplayError, recorded_parameters, setup_warnings,
+                      took_nothing)
 
 PREFIX = SESSION_CONFIG + '/'
 
@@ -141,6 +142,11 @@ def replay_crowd(path: str, out_path: str,
                     recorder.write(c.topics[key][0], data, report.stamp_ns)
             recorder.close()
             took = time.perf_counter() - started
+            problems = [took_nothing(f'{path}: {c.name}', c.pipeline)
+                        for c in characters.values()]
+            if all(problems):
+                raise ReplayError(f'{problems[0]}, nor of any other character\'s; nothing '
+                                  'written')
         finally:
             recorder.close()
     return characters, took

@@ -27,7 +27,7 @@ from ..core.physics import skinning
 from ..ros.messages import outfit
 from ..core.transforms import matrix_to_quat
 from .outputs import replacing
-from .session import SessionInput, run_session
+from .session import SessionInput, run_session, took_nothing
 
 # The lining's faces lie this share of the character's height inside the outer faces: the
 # outer material is double-sided, and the lining must win the depth test seen from inside.
@@ -99,8 +99,9 @@ def session_frames(session: SessionInput) -> tuple[Frames, object]:
     session.setup.values = session.setup.values.with_changes({'markers_rate': 0.0})
     pipeline = run_session(session, probe=probe)
     if not stamps:
-        raise ExportError(f'{session.recording.path}: the simulation took none of its '
-                          f'{pipeline.inputs} JointState messages; nothing to animate')
+        raise ExportError((took_nothing(session.recording.path, pipeline)
+                           or f'{session.recording.path}: no input gave the jacket finite '
+                           'bones') + '; nothing to animate')
     seconds, restarts = key_times(np.array(stamps, dtype=np.int64))
     return Frames(seconds, np.array(roots), np.array(links), np.array(bones), restarts), pipeline
 
@@ -172,11 +173,11 @@ def _continuous(q: np.ndarray) -> np.ndarray:
     return q
 
 
-def _within_float32(values: np.ndarray, what: str = 'a value') -> None:
+def _within_float32(values: np.ndarray, what: str) -> None:
     """Refuse values glTF's 32-bit floats cannot hold: cast, they were infinities in the file."""
-    over = np.abs(values[np.isfinite(values)])
-    if over.size and over.max() > np.finfo(np.float32).max:
-        raise ValueError(f'{what} of {over.max():.3g} is beyond glTF\'s 32-bit floats')
+    largest = float(np.abs(values).max(initial=0.0))
+    if largest > np.finfo(np.float32).max:
+        raise ValueError(f'{what} of {largest:.3g} is beyond glTF\'s 32-bit floats')
 
 
 def key_times_32(seconds: np.ndarray) -> np.ndarray:
@@ -217,9 +218,11 @@ class _Blob:
     def accessor(self, data: np.ndarray, kind: str, component: int,
                  target: int | None = None, bounds: bool = False) -> int:
         dtype = {FLOAT: np.float32, UBYTE: np.uint8, USHORT: np.uint16, UINT: np.uint32}
-        if component == FLOAT:
-            _within_float32(np.asarray(data, dtype=float))
-        data = np.ascontiguousarray(data, dtype=dtype[component])
+        with np.errstate(over='ignore'):        # said below, in a line of its own
+            data = np.ascontiguousarray(data, dtype=dtype[component])
+        if component == FLOAT and not np.isfinite(data).all():
+            # The simulation's values are finite: an infinity is a cast that overflowed.
+            raise ValueError('a value beyond glTF\'s 32-bit floats')
         count = len(data)
         flat = data.reshape(count, -1)
         extra = {}

@@ -12,14 +12,10 @@ from typing import TYPE_CHECKING
 
 from ..recording.writer import SessionRecorder
 from .outputs import replacing
-from .session import SessionInput, output_topics, run_session
+from .session import ReplayError, SessionInput, output_topics, run_session, took_nothing
 
 if TYPE_CHECKING:           # for the annotations only
     from ..ros.pipeline import SessionPipeline
-
-
-class ReplayError(ValueError):
-    """A session whose replay would hold no simulation; the message is one line."""
 
 
 def replay(session: SessionInput, out_path: str,
@@ -44,22 +40,14 @@ def replay(session: SessionInput, out_path: str,
             recorder.add_session_config(setup.urdf, setup.rig_yaml, setup.fabrics_yaml,
                                         setup.values.by_name(), node_name=setup.node_name)
             started = time.perf_counter()
-            refused = []            # the first refused input's reasons
-
-            def first_refusal(pipeline, report, stamp, outputs):
-                if not report.accepted and not refused:
-                    refused.extend(text for _, text in report.warnings)
             pipeline = run_session(
                 session, sink=lambda key, data, stamp: recorder.write(topics[key][0], data,
-                                                                      stamp),
-                probe=first_refusal)
+                                                                      stamp))
             recorder.close()                # the writer thread's backlog is part of the time
             took = time.perf_counter() - started
-            if pipeline.inputs and pipeline.dropped == pipeline.inputs:
-                # Its inputs copied and nothing else: no failure may pass for a replay.
-                raise ReplayError(f'{session.recording.path}: the simulation took none of its '
-                                  f'{pipeline.inputs} JointState messages (the first: '
-                                  f'{"; ".join(refused) or "refused"}); nothing written')
+            problem = took_nothing(session.recording.path, pipeline)
+            if problem:
+                raise ReplayError(f'{problem}; nothing written')
         finally:
             recorder.close()
     return pipeline, took

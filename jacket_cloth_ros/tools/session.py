@@ -341,6 +341,27 @@ def _parameter_changes(data):
 _CHARACTER_NAMES = frozenset(VALUE_NAMES)
 
 
+class ReplayError(ValueError):
+    """A session whose replay would hold no simulation; the message is one line."""
+
+
+def took_nothing(path: str, pipeline: SessionPipeline) -> str:
+    """Say that the simulation took none of a session's JointStates, and why; '' if it took one.
+
+    A replay or export of such a session would hold the inputs alone: no failure may pass
+    for one.
+
+    :param path: what the line names (the recording, and in a crowd the character).
+    :param pipeline: the pipeline the session ran through.
+    """
+    seen = pipeline.inputs + pipeline.undecodable
+    if pipeline.inputs > pipeline.dropped or not seen:
+        return ''
+    first = pipeline.first_refusal or 'it does not decode as JointState'
+    return (f'{path}: the simulation took none of its {seen} JointState messages (the first: '
+            f'{first})')
+
+
 def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] | None = None,
                 probe: Callable[[SessionPipeline, StepReport, int, list], None] | None = None,
                 timing: bool = False) -> SessionPipeline:
