@@ -844,3 +844,79 @@ def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_pat
     assert tool.returncode == 143, err
     assert err.strip().splitlines() == ['jacket_cloth replay: stopped by SIGTERM'], err
     assert os.listdir(tmp_path) == ['walk.mcap']
+
+
+def test_sigterm_while_a_file_is_read_is_a_stop_not_a_bad_file(clip, tmp_path, capsys,
+                                                               monkeypatch):
+    # Stopped was an Exception: the reader's and the URDF parser's `except Exception` took a
+    # SIGTERM for a damaged file or a malformed URDF, and exited 1 saying so (a review).
+    import signal
+    from urdf_parser_py import urdf
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.recording import reader
+
+    def terminated(*args, **kwargs):
+        signal.raise_signal(signal.SIGTERM)
+    for module, name, argv in (
+            (reader._Scan, '_take', ['replay', str(clip), '-o', str(tmp_path / 'o.mcap')]),
+            (urdf.URDF, 'from_xml_string', ['rig', '--urdf', shipped('character.urdf'), '-o',
+                                            str(tmp_path / 'rig.yaml')])):
+        with monkeypatch.context() as patched:
+            patched.setattr(module, name, terminated)
+            capsys.readouterr()
+            assert main(argv) == 128 + signal.SIGTERM
+        err = capsys.readouterr().err
+        assert err == f'jacket_cloth {argv[0]}: stopped by SIGTERM\n', err
+    assert os.listdir(tmp_path) == []
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL      # put back as it was
+
+
+def test_a_crowd_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(
+        replayed, tmp_path, capsys):
+    # The one-character replay refused such a session; a crowd's still wrote its inputs alone
+    # and exited 0 (a review).
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.recording.writer import (
+        SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
+    from jacket_cloth_ros.ros.cdr import joint_state
+    _, setup = replayed
+    names = list(load_shipped_character().joint_names)
+    path, out = tmp_path / 'crowd.mcap', tmp_path / 'o.mcap'
+    rec = SessionRecorder(str(path))
+    for who in ('a', 'b'):
+        rec.add_topic(f'/{who}/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        rec.add_metadata(f'{SESSION_CONFIG}/{who}', setup)
+    for k in range(20):
+        stamp = 10 ** 10 + k * 10 ** 9 // 60
+        for who in ('a', 'b'):
+            rec.write(f'/{who}/joint_states',
+                      joint_state(stamp, names, [float('nan')] * len(names)), stamp)
+    rec.close()
+    err = _one_line_error(capsys, ['replay', str(path), '-o', str(out)])
+    assert err.startswith(f'jacket_cloth replay: {path}: a: the simulation took none of its 20 '
+                          'JointState messages (the first: non-finite position for '), err
+    assert err.endswith(", nor of any other character's; nothing written"), err
+    assert not out.exists()
+
+
+def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
+        clip, tmp_path, capsys, monkeypatch):
+    # rig -o x.png --picture x.png put the YAML in place, then the picture over it (a review);
+    # a filmstrip was put in place before its animation, which could then fail.
+    from jacket_cloth_ros.core.config import shipped
+    from jacket_cloth_ros.tools import animation
+    same = str(tmp_path / 'x.png')
+    err = _one_line_error(capsys, ['rig', '--urdf', shipped('character.urdf'), '-o', same,
+                                   '--picture', same])
+    assert err == f"jacket_cloth rig: --picture {same} is the rig's own name: give the " \
+        'picture another'
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, 'No space left on device')
+    monkeypatch.setattr(animation, 'render_animation', full_disk)
+    replay = tmp_path / 'session.mcap'
+    assert main(['replay', str(clip), '-o', str(replay)]) == 0
+    err = _one_line_error(capsys, ['picture', str(replay), '-o', str(tmp_path / 's.png'),
+                                   '--animate'])
+    assert 'No space left on device' in err, err
+    assert sorted(os.listdir(tmp_path)) == ['session.mcap']

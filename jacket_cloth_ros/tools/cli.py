@@ -5,7 +5,6 @@ Every failure ends in one readable line on stderr and a non-zero exit, never a t
 """
 
 import argparse
-import contextlib
 import os
 import signal
 import subprocess
@@ -208,10 +207,10 @@ def cmd_picture(args: argparse.Namespace) -> int:
     :param args: the ``picture`` command's options.
     """
     from ..tools.picture import render_filmstrip
-    from .outputs import OutputError, check_picture, replacing, same_name
+    from .outputs import OutputError, check_picture, replacing_all, same_name
     from .session import recorded_character
-    check_picture(args.output)
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
+    check_picture(args.output)
     gif = os.path.splitext(args.output)[0] + '.gif' if args.animate else None
     if gif and same_name(gif, args.output):
         raise OutputError(f'--animate writes the animation to {gif}, the filmstrip\'s own '
@@ -219,14 +218,18 @@ def cmd_picture(args: argparse.Namespace) -> int:
     if gif:
         _check_output(gif, args.force, [args.input, args.urdf, args.rig, args.output])
     skeleton, rig = recorded_character(args.input, args.urdf, args.rig)
-    with replacing(args.output, force=args.force) as tmp:
+    # The filmstrip and its animation are put in place together: one that fails leaves
+    # neither, not a filmstrip a second run would refuse to overwrite.
+    with replacing_all([args.output] + ([gif] if gif else []), force=args.force) as (
+            tmp, *animation):
         render_filmstrip(args.input, tmp, skeleton, moments=args.moments, rig=rig,
                          style=args.style)
+        if gif:
+            from .animation import render_animation
+            frames = render_animation(args.input, animation[0], skeleton, rig,
+                                      style=args.style)
     print(args.output)
     if gif:
-        from .animation import render_animation
-        with replacing(gif, force=args.force) as tmp:
-            frames = render_animation(args.input, tmp, skeleton, rig, style=args.style)
         print(f'{gif} ({frames} frames)')
     return 0
 
@@ -427,11 +430,14 @@ def cmd_rig(args: argparse.Namespace) -> int:
     from ..core.rig import Rig
     from ..core.skeleton import load_skeleton
     from ..rigging.propose import propose, to_yaml
-    from .outputs import check_picture, replacing
+    from .outputs import OutputError, check_picture, replacing_all, same_name
     _check_output(args.output, args.force, [args.urdf, args.motion])
     if args.picture:
-        check_picture(args.picture)
         _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
+        check_picture(args.picture)
+        if same_name(args.picture, args.output):
+            raise OutputError(f'--picture {args.picture} is the rig\'s own name: give the '
+                              'picture another')
     skeleton = load_skeleton(args.urdf)
     for line in skeleton.warnings:
         print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
@@ -445,15 +451,14 @@ def cmd_rig(args: argparse.Namespace) -> int:
         raise ToolError(f'the proposed rig does not load ({e})') from None
     # Both files are written before either is put in place: a picture that fails (a full
     # disk) leaves no rig beside it that a second run would refuse to overwrite.
-    with (replacing(args.picture, force=args.force) if args.picture
-          else contextlib.nullcontext()) as picture:
-        with replacing(args.output, force=args.force) as tmp:
-            with open(tmp, 'w', encoding='utf-8') as f:
-                f.write(text)
-            if picture:
-                from ..rigging.picture import draw_rig
-                draw_rig(loaded, body.up, body.forward, picture,
-                         title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
+    with replacing_all([args.output] + ([args.picture] if args.picture else []),
+                       force=args.force) as (tmp, *picture):
+        with open(tmp, 'w', encoding='utf-8') as f:
+            f.write(text)
+        if picture:
+            from ..rigging.picture import draw_rig
+            draw_rig(loaded, body.up, body.forward, picture[0],
+                     title=f'{os.path.basename(args.urdf)}: the proposed rig at rest')
     for line in lines:
         print(line)
     print(f'wrote {args.output} ({body.height:.2f} m tall'
@@ -674,6 +679,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _terminated(signum: int, frame: object) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)    # a second one must not cut the clean-up
     raise Stopped(signum)
 
 

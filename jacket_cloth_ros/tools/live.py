@@ -16,8 +16,12 @@ from ..ros.cdr import joint_state
 ACK_WAIT_S = 5.0        # at most, for the readers to acknowledge the last input
 
 
-class Stopped(Exception):
-    """SIGINT or SIGTERM asked a live command to stop."""
+class Stopped(BaseException):
+    """SIGINT or SIGTERM asked a command to stop.
+
+    Not an Exception, as KeyboardInterrupt is not: a reader's or parser's ``except
+    Exception`` must not take it for bad input (a stopped replay said its file was damaged).
+    """
 
     def __init__(self, signum: int) -> None:
         """Name the signal that stopped the command.

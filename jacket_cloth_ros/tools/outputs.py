@@ -11,7 +11,7 @@ import contextlib
 import os
 import shutil
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 
 from ..recording.writer import is_bag_folder
 
@@ -69,12 +69,18 @@ def check_picture(path: str | os.PathLike) -> None:
     formats = FigureCanvasAgg.get_supported_filetypes()
     if ext not in formats:
         said = f'.{ext} is not a picture format' if ext else 'no extension names its format'
-        raise OutputError(f'{path}: {said}; end the name in .png, .jpg, .svg, .pdf, .gif or '
-                          'another format matplotlib writes')
+        # The common ones this matplotlib writes (an older one writes no GIF).
+        named = ', '.join(f'.{f}' for f in ('png', 'jpg', 'svg', 'pdf', 'gif') if f in formats)
+        raise OutputError(f'{path}: {said}; end the name in {named} or another format '
+                          'matplotlib writes')
 
 
 def same_name(a: str | os.PathLike, b: str | os.PathLike) -> bool:
-    """Tell whether two paths name one file, or would on a file system blind to case."""
+    """Tell whether two paths name one file, or would on a file system blind to case.
+
+    :param a: one path.
+    :param b: the other.
+    """
     return (os.path.normcase(os.path.abspath(a)).lower()
             == os.path.normcase(os.path.abspath(b)).lower())
 
@@ -150,32 +156,40 @@ def replacing(path: str | os.PathLike, recording: bool = False,
         with _replacing_folder(os.path.normpath(path), force) as tmp:
             yield tmp
         return
-    folder, name = os.path.split(os.path.abspath(path))
-    # A fresh name (never an existing file, nor an input), ending as the output does so that
-    # writers choosing a format by extension (matplotlib) choose the same.
-    fd, tmp = tempfile.mkstemp(prefix=f'.{name}.', suffix='.partial' + os.path.splitext(name)[1],
-                               dir=folder)
-    os.close(fd)
-    try:
+    with replacing_all([path], force) as (tmp,):
         yield tmp
-        os.chmod(tmp, 0o666 & ~_UMASK)
-        place(tmp, path, force)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
-def place(tmp: str, path: str, force: bool) -> None:
-    """Move the finished file ``tmp`` to ``path``; without ``force``, only to a free name.
+@contextlib.contextmanager
+def replacing_all(paths: Sequence[str | os.PathLike], force: bool = False) -> Iterator[list]:
+    """Yield a temporary path next to each of ``paths``: all become theirs, or (a failure) none.
 
-    The name is taken by an exclusive create first, so a file made there since the check is
-    refused, never replaced; the rename then replaces only that empty file of ours.
+    As :func:`replacing` for a tool that writes several files (a filmstrip and its
+    animation, a rig and its picture): placed together at the block's end by
+    :func:`place_all`, so a file that fails leaves none of the others behind.
 
-    :param tmp: the finished output, in ``path``'s folder.
-    :param path: the output file.
-    :param force: whether a file at ``path`` is replaced.
+    :param paths: the output files.
+    :param force: whether files at ``paths`` are replaced.
     """
-    place_all(os.path.dirname(tmp), [os.path.basename(tmp)], [path], force)
+    paths = [os.fspath(p) for p in paths]
+    tmps = []
+    try:
+        for path in paths:
+            folder, name = os.path.split(os.path.abspath(path))
+            # A fresh name (never an existing file, nor an input), ending as the output does
+            # so that writers choosing a format by extension (matplotlib) choose the same.
+            fd, tmp = tempfile.mkstemp(prefix=f'.{name}.',
+                                       suffix='.partial' + os.path.splitext(name)[1], dir=folder)
+            os.close(fd)
+            tmps.append(tmp)
+        yield tmps
+        for tmp in tmps:
+            os.chmod(tmp, 0o666 & ~_UMASK)
+        place_all('', tmps, paths, force)     # each temporary file's own path: no folder
+    finally:
+        for tmp in tmps:
+            if os.path.exists(tmp):
+                os.remove(tmp)
 
 
 def place_all(folder: str, names: list[str], paths: list[str], force: bool) -> None:
@@ -184,7 +198,8 @@ def place_all(folder: str, names: list[str], paths: list[str], force: bool) -> N
     Every name is taken by an exclusive create before any file moves, so a refusal leaves
     no new file beside an old one.
 
-    :param folder: the folder the finished files are in, on the paths' file system.
+    :param folder: the folder the finished files are in, on the paths' file system ('':
+        ``names`` are the files' paths).
     :param names: their names in ``folder``.
     :param paths: where each goes.
     :param force: whether files at those paths are replaced.
@@ -238,7 +253,7 @@ def _swap_folder(tmp, path, old):
         os.rename(path, old)
     try:
         os.rename(tmp, path)
-    except OSError:
-        if os.path.lexists(old):
+    except BaseException:       # a failure, or a signal between the renames
+        if os.path.lexists(old) and not os.path.lexists(path):
             os.rename(old, path)            # the old bag stays where it was
         raise
