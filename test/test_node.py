@@ -524,6 +524,11 @@ def test_a_live_record_in_a_missing_folder_is_refused_and_the_recording_goes_on(
             'choose another path')
         assert h.node.recording.recorder is recorder and h.node.get_parameter(
             'record').value == str(path)
+    (tmp_path / 'notes').write_text('a file, not a folder')
+    result = h.node.set_parameters([Parameter('record', value=str(tmp_path / 'notes' / 'y'))])[0]
+    assert not result.successful and result.reason == (
+        f"record: {str(tmp_path / 'notes')!r} is not a folder: choose another path")
+    assert h.node.recording.recorder is recorder
 
 
 def test_record_refuses_a_file_made_between_its_check_and_its_open(

@@ -11,6 +11,7 @@ Space: the cloth lives in the character's local frame (the URDF root) and feels 
 skeletal motion but only ``world_share`` of the world motion (M14).
 """
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -803,10 +804,8 @@ class JacketSimulation:
         """Why the world move from sample a to b is too big to simulate through, or ''."""
         move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
         if move > self.teleport_m:
-            if not np.isfinite(move):       # its square overflowed: measured again, scaled
-                d = b.root[:3, 3] - a.root[:3, 3]
-                size = np.abs(d).max()
-                move = size * np.linalg.norm(d / size) if np.isfinite(size) else size
+            if not np.isfinite(move):       # its square overflowed: math.dist scales
+                move = math.dist(a.root[:3, 3], b.root[:3, 3])
             shown = f'{move:.2f}' if move < 1e6 else f'{move:.3g}'
             return f'teleport: moved {shown} m between two inputs'
         if turn > self.params.teleport_angle_deg:

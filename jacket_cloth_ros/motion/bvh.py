@@ -139,8 +139,8 @@ def _hierarchy_counts(path):
                     continue
                 if words[0] == 'MOTION':
                     break
-                opened += line.count('{')
-                closed += line.count('}')
+                opened += words.count('{')          # braces are words, as the reader takes
+                closed += words.count('}')          # them; one in a name is none
                 if words[0] == 'End':
                     links += 1
                 elif words[0] == 'CHANNELS':

@@ -693,9 +693,9 @@ class JacketClothNode(Node):
         try:        # a restart would refuse one that does not load: not the advice to give
             Skeleton(text)
         except ConfigError as e:
-            self.get_logger().warning(
+            self.get_logger().warning(cut_line(
                 f'{c.label}a URDF that does not load came on {topic} ({e}): not taken, the '
-                f'node keeps the character it runs (from {c.source})')
+                f'node keeps the character it runs (from {c.source})'))
             return
         self.get_logger().warning(
             f'{c.label}a different URDF came on {topic}: not taken, the node keeps the '

@@ -57,7 +57,7 @@ def overwrite_problem(path: str) -> str:
 
 
 def folder_problem(path: str) -> str:
-    """Why ``path`` cannot be recorded to: its folder is missing or not one ('' if it is there).
+    """Why ``path`` cannot be recorded to: its folder is missing, not one or not ours to write.
 
     Asked before a live ``record`` is taken: found only at the open, the change was reported
     successful while the node's recording had stopped and no new one started.
@@ -65,9 +65,13 @@ def folder_problem(path: str) -> str:
     :param path: the ``record`` value asked for (a file, or a bag folder to make).
     """
     folder = os.path.dirname(os.path.abspath(path))
-    if os.path.isdir(folder):
-        return ''
-    return (f'record: folder {folder!r} does not exist: make it first or choose another path')
+    if not os.path.lexists(folder):
+        return f'record: folder {folder!r} does not exist: make it first or choose another path'
+    if not os.path.isdir(folder):
+        return f'record: {folder!r} is not a folder: choose another path'
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f'record: folder {folder!r} cannot be written to: choose another path'
+    return ''
 
 
 def _exists(path):
