@@ -118,3 +118,40 @@ def test_a_body_sent_without_its_world_pose_stands_on_the_floor_and_its_cloth_re
     assert not sim.faults.collapse and not sim.faults.restless
     soles = lowest_reach(skeleton, sim.links, rig.world_up) + sim.root[2, 3]
     assert abs(soles) < 1e-9                 # its soles on the floor, as the clips stand it
+
+
+def test_collision_shapes_the_shapes_reader_refuses_never_stop_a_character_standing(skeleton):
+    # Standing on the soles read the collision shapes, whose reader refused what the URDF's
+    # own parser loads: a declaration after a blank line, a collision 1e9 m off its link. The
+    # simulation then failed to start, as a malformed URDF (a review).
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    text = skeleton.urdf_xml
+    assert text.startswith('<?xml')
+    declared = '\n' + text
+    assert '<link name="base_link"/>' in text
+    far = text.replace('<link name="base_link"/>', '<link name="base_link"><collision><origin '
+                       'xyz="1e9 0 0"/><geometry><sphere radius="0.1"/></geometry></collision>'
+                       '</link>')
+    for urdf, lift in ((declared, 0.959), (far, 0.91)):      # the soles, else the ankles
+        character = Skeleton(urdf)
+        sim = JacketSimulation(character, load_rig(character), load_fabric('tweed_jacket'))
+        assert sim.parser.last.root[2, 3] == pytest.approx(lift, abs=1e-3)
+
+
+def test_a_character_sent_without_its_world_pose_stands_on_its_rigs_floor_or_at_the_origin(
+        skeleton):
+    # On the rig's floor where it is, and at the origin without one: standing on the world's
+    # origin put the soles above a lowered floor, and raised a root a floorless rig never
+    # needed raised (a review).
+    from jacket_cloth_ros.core.config import load_yaml, shipped
+    from jacket_cloth_ros.core.rig import Rig
+    data = load_yaml(shipped('jacket_rig.yaml'))
+    floor = next(c for c in data['colliders'] if c['link'] == 'world')
+    for point, lift in (([0.0, 0.0, 0.2], 1.159), (None, 0.0)):
+        if point is None:
+            data['colliders'] = [c for c in data['colliders'] if c is not floor]
+        else:
+            floor['point'] = point
+        sim = JacketSimulation(skeleton, Rig(data, skeleton), load_fabric('tweed_jacket'))
+        assert sim.parser.last.root[2, 3] == pytest.approx(lift, abs=1e-3)

@@ -8,6 +8,7 @@ MoveIt names them: ``<world_joint>/trans_x``, ``trans_y``, ``trans_z``, ``rot_x`
 Carrying it in the JointState keeps body and world motion on one stamp, so replay is exact.
 """
 
+import functools
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -45,25 +46,40 @@ class Sample:
     warnings: list = field(default_factory=list)   # (code, text) of usable-but-odd input
 
 
-def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike') -> np.ndarray:
-    """Return the root's world pose that stands the skeleton on the world's floor, unturned.
+def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike', floor: float = 0.0) -> np.ndarray:
+    """Return the root's world pose that stands the skeleton on a floor, unturned.
 
     The root goes up until the zero pose's soles (body_proxy.lowest_reach: its collision
-    shapes, as the retargeted clips stand it) are at the world's origin along ``up``; a body
-    that reaches nowhere below its root stays there. A source that sends only the joints
+    shapes, as the retargeted clips stand it) are at ``floor`` along ``up``; a body that
+    reaches nowhere below it stays at the origin. A source that sends only the joints
     (joint_state_publisher) had a humanoid's pelvis at the origin, its legs under the rig's
     floor, which held the cloth flailing.
 
     :param skeleton: the character.
     :param up: the world's up, (3,) unit.
+    :param floor: the floor's height along ``up``, m.
     :returns: (4,4) the root's pose in the world.
     """
-    from .body_proxy import lowest_reach
     up = np.asarray(up, dtype=float)
-    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
     root = np.eye(4)
-    root[:3, 3] = -min(0.0, lowest_reach(skeleton, rest, up)) * up
+    root[:3, 3] = max(0.0, floor - _lowest_at_rest(skeleton, tuple(up))) * up
     return root
+
+
+@functools.lru_cache(maxsize=16)
+def _lowest_at_rest(skeleton, up):
+    """Return body_proxy.lowest_reach of the zero pose, once per character (a crowd's share one).
+
+    Collision shapes a URDF's own parser loads but the shapes' reader refuses leave the link
+    origins: they only refine where the soles are, never stop a character from loading.
+    """
+    from .body_proxy import lowest_reach
+    from .config import ConfigError
+    rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    try:
+        return lowest_reach(skeleton, rest, np.array(up))
+    except ConfigError:
+        return float((rest[:, :3, 3] @ np.array(up)).min())
 
 
 class InputParser:
@@ -71,16 +87,17 @@ class InputParser:
 
     :param skeleton: the skeleton whose joints the messages move.
     :param world_joint: the prefix of the root's world pose variables (``world_joint/trans_x``).
-    :param up: the world's up: until a message gives the world pose, the root stands the zero
-        pose on the world's floor (:func:`standing_root`); None: the root at the origin.
+    :param floor: (the world's up, the floor's height along it): until a message gives the
+        world pose, the root stands the zero pose on that floor (:func:`standing_root`);
+        None (no floor): the root at the origin.
     """
 
     def __init__(self, skeleton: 'Skeleton', world_joint: str = 'world_joint',
-                 up: 'npt.ArrayLike | None' = None):
+                 floor: 'tuple[npt.ArrayLike, float] | None' = None):
         self.skeleton = skeleton
         self.set_world_joint(world_joint)
         # The last sample: joints and a world pose that a message leaves out keep these.
-        root = np.eye(4) if up is None else standing_root(skeleton, up)
+        root = np.eye(4) if floor is None else standing_root(skeleton, *floor)
         self.last = JointSample(np.zeros(len(skeleton.joint_names)), root,
                                 np.array([0.0, 0.0, 0.0, 1.0]))
 

@@ -282,6 +282,15 @@ class Rig:
             return rpy_matrix(np.radians(section.vector('rpy_deg', 3, lo=-360.0, hi=360.0)))
         return _clean(self._rest[link][:3, :3].T @ self.world_axes)
 
+    def floor(self) -> tuple[np.ndarray, float] | None:
+        """Return the world's up and the floor's height along it, or None without a floor.
+
+        The floor: the highest plane fixed in the world that faces up (within 60 degrees).
+        """
+        heights = [float(p.point @ self.world_up) for p in self.planes
+                   if p.link == WORLD and p.normal @ self.world_up > 0.5]
+        return (self.world_up, max(heights)) if heights else None
+
     def body_tilt(self, positions: np.ndarray, root_rotation: np.ndarray
                   ) -> tuple[np.ndarray, float] | None:
         """Return the body's up in the world and its angle from the world's up, if far from it.

@@ -186,7 +186,7 @@ class JacketSimulation:
                  params: SimParams = SimParams(), world_joint: str = 'world_joint'):
         self.skeleton = skeleton
         self.rig = rig
-        self.parser = InputParser(skeleton, world_joint, up=rig.world_up)
+        self.parser = InputParser(skeleton, world_joint, floor=rig.floor())
         self.fabric = fabric
         self.params = params
         self.model = model_of(skeleton, rig)

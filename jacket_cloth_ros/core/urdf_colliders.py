@@ -78,7 +78,8 @@ def urdf_shapes(urdf_xml: str) -> dict[str, list[UrdfShape]]:
     :param urdf_xml: the URDF's XML text.
     """
     try:
-        root = ElementTree.fromstring(urdf_xml.rstrip('\0 \r\n\t'))
+        # Stripped at both ends: an XML declaration after a blank line is the parser's error.
+        root = ElementTree.fromstring(urdf_xml.strip('\0 \r\n\t'))
     except ElementTree.ParseError as e:
         raise ConfigError(f'URDF: malformed robot description ({e})') from None
     out: dict[str, list[UrdfShape]] = {}

@@ -53,7 +53,7 @@ NODE_PARAMETERS = {
     'frame_prefix': (T.PARAMETER_STRING, '', None, False, 'prepended to every bone frame id'),
     'publish_world_tf': (T.PARAMETER_BOOL, False, None, False,
                          'also publish world_frame -> the URDF root on /tf, from the '
-                         'world_joint variables (without them, standing on the world\'s floor), '
+                         'world_joint variables (without them, standing on the rig\'s floor), '
                          'so a world fixed frame works in a viewer'),
     'world_frame': (T.PARAMETER_STRING, 'world', None, False,
                     'the parent frame of that transform'),
