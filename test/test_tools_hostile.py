@@ -874,29 +874,42 @@ def test_sigterm_while_a_file_is_read_is_a_stop_not_a_bad_file(clip, tmp_path, c
 def test_a_crowd_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(
         replayed, tmp_path, capsys):
     # The one-character replay refused such a session; a crowd's still wrote its inputs alone
-    # and exited 0 (a review).
+    # and exited 0, and with another character replayed, said nothing of the one without cloth
+    # (two reviews).
     from jacket_cloth_ros.core.skeleton import load_shipped_character
     from jacket_cloth_ros.recording.writer import (
         SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
     from jacket_cloth_ros.ros.cdr import joint_state
-    _, setup = replayed
+    inputs, setup = replayed
     names = list(load_shipped_character().joint_names)
-    path, out = tmp_path / 'crowd.mcap', tmp_path / 'o.mcap'
-    rec = SessionRecorder(str(path))
-    for who in ('a', 'b'):
-        rec.add_topic(f'/{who}/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
-        rec.add_metadata(f'{SESSION_CONFIG}/{who}', setup)
-    for k in range(20):
-        stamp = 10 ** 10 + k * 10 ** 9 // 60
+    nan = [(joint_state(stamp, names, [float('nan')] * len(names)), stamp)
+           for stamp in (10 ** 10 + k * 10 ** 9 // 60 for k in range(20))]
+
+    def crowd(path, b_inputs):
+        rec = SessionRecorder(str(path))
         for who in ('a', 'b'):
-            rec.write(f'/{who}/joint_states',
-                      joint_state(stamp, names, [float('nan')] * len(names)), stamp)
-    rec.close()
-    err = _one_line_error(capsys, ['replay', str(path), '-o', str(out)])
-    assert err.startswith(f'jacket_cloth replay: {path}: a: the simulation took none of its 20 '
-                          'JointState messages (the first: non-finite position for '), err
-    assert err.endswith(", nor of any other character's; nothing written"), err
-    assert not out.exists()
+            rec.add_topic(f'/{who}/joint_states', 'sensor_msgs/msg/JointState',
+                          qos_profile_yaml())
+            rec.add_metadata(f'{SESSION_CONFIG}/{who}', setup)
+        for who, given in (('a', nan), ('b', b_inputs)):
+            for data, stamp in given:
+                rec.write(f'/{who}/joint_states', data, stamp)
+        rec.close()
+    out = tmp_path / 'o.mcap'
+    for b_inputs in (nan, []):              # b refused too, or never sent a thing
+        path = tmp_path / f'crowd{len(b_inputs)}.mcap'
+        crowd(path, b_inputs)
+        err = _one_line_error(capsys, ['replay', str(path), '-o', str(out)])
+        assert err.startswith(f'jacket_cloth replay: {path}: a: the simulation took none of its '
+                              '20 JointState messages (the first: non-finite position for '), err
+        assert err.endswith(", nor of any other character's; nothing written"), err
+        assert not out.exists()
+    path = tmp_path / 'crowd_b.mcap'
+    crowd(path, inputs)
+    assert main(['replay', str(path), '-o', str(out)]) == 0
+    warned = capsys.readouterr().err.strip().splitlines()
+    assert len(warned) == 1 and warned[0].startswith(
+        f'jacket_cloth replay: warning: {path}: a: the simulation took none of its 20 '), warned
 
 
 def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
@@ -920,3 +933,38 @@ def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
                                    '--animate'])
     assert 'No space left on device' in err, err
     assert sorted(os.listdir(tmp_path)) == ['session.mcap']
+
+
+@pytest.mark.parametrize('force, renamed', [(True, True), (False, False), (False, True)])
+def test_a_signal_at_a_bags_rename_keeps_the_old_bag_and_leaves_no_empty_folder(
+        tmp_path, monkeypatch, force, renamed):
+    # With --force, a signal as the old bag moved aside let the scratch folder's removal take
+    # it; without, one between the placeholder folder and the rename left that empty folder,
+    # which every later run refused (a review).
+    import signal
+    from jacket_cloth_ros.tools import outputs
+    from jacket_cloth_ros.tools.live import Stopped
+    bag = tmp_path / 'bag'
+    if force:
+        bag.mkdir()
+        (bag / 'metadata.yaml').write_text('the old bag')
+    rename = os.rename
+
+    def stopped(src, dst):          # as a signal comes: before the call or as it returns
+        monkeypatch.setattr(outputs.os, 'rename', rename)
+        if renamed:
+            rename(src, dst)
+        raise Stopped(signal.SIGTERM)
+    with pytest.raises(Stopped):
+        with outputs.replacing(str(bag), recording=True, force=force) as tmp:
+            os.mkdir(tmp)
+            with open(os.path.join(tmp, 'metadata.yaml'), 'w') as f:
+                f.write('new')
+            monkeypatch.setattr(outputs.os, 'rename', stopped)
+    if force:
+        assert (bag / 'metadata.yaml').read_text() == 'the old bag'
+        assert sorted(os.listdir(tmp_path)) == ['bag']
+    elif renamed:
+        assert (bag / 'metadata.yaml').read_text() == 'new'      # in place before the signal
+    else:
+        assert os.listdir(tmp_path) == []

@@ -139,8 +139,9 @@ def _hierarchy_counts(path):
                     continue
                 if words[0] == 'MOTION':
                     break
-                opened += words.count('{')          # braces are words, as the reader takes
-                closed += words.count('}')          # them; one in a name is none
+                # A line of its own each, as the format lays them out: one in a name is none.
+                opened += words[0] == '{'
+                closed += words[0] == '}'
                 if words[0] == 'End':
                     links += 1
                 elif words[0] == 'CHANNELS':

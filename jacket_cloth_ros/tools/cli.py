@@ -433,11 +433,11 @@ def cmd_rig(args: argparse.Namespace) -> int:
     from .outputs import OutputError, check_picture, replacing_all, same_name
     _check_output(args.output, args.force, [args.urdf, args.motion])
     if args.picture:
-        _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
-        check_picture(args.picture)
         if same_name(args.picture, args.output):
             raise OutputError(f'--picture {args.picture} is the rig\'s own name: give the '
                               'picture another')
+        _check_output(args.picture, args.force, [args.urdf, args.output, args.motion])
+        check_picture(args.picture)
     skeleton = load_skeleton(args.urdf)
     for line in skeleton.warnings:
         print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
@@ -661,7 +661,10 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM stops a command as Ctrl-C does, its outputs' temporary files removed on the way
     # out: by default it ended the process where it stood and left them behind.
     main_thread = threading.current_thread() is threading.main_thread()   # where signals go
-    previous = signal.signal(signal.SIGTERM, _terminated) if main_thread else None
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)} \
+        if main_thread else {}
+    if main_thread:
+        signal.signal(signal.SIGTERM, _terminated)
     try:
         check_numbers(args)
         return args.func(args)
@@ -674,12 +677,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
     finally:
-        if main_thread:
-            signal.signal(signal.SIGTERM, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _terminated(signum: int, frame: object) -> None:
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)    # a second one must not cut the clean-up
+    for other in (signal.SIGINT, signal.SIGTERM):    # a second one must not cut the clean-up
+        signal.signal(other, signal.SIG_IGN)
     raise Stopped(signum)
 
 

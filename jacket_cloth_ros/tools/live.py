@@ -37,6 +37,8 @@ class SourceError(Exception):
 
 
 def _stop(signum, frame):
+    for other in (signal.SIGINT, signal.SIGTERM):    # a second one must not cut the clean-up
+        signal.signal(other, signal.SIG_IGN)
     raise Stopped(signum)
 
 

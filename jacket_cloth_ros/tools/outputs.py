@@ -162,11 +162,12 @@ def replacing(path: str | os.PathLike, recording: bool = False,
 
 @contextlib.contextmanager
 def replacing_all(paths: Sequence[str | os.PathLike], force: bool = False) -> Iterator[list]:
-    """Yield a temporary path next to each of ``paths``: all become theirs, or (a failure) none.
+    """Yield a temporary path next to each of ``paths``; they become theirs together at the end.
 
     As :func:`replacing` for a tool that writes several files (a filmstrip and its
     animation, a rig and its picture): placed together at the block's end by
-    :func:`place_all`, so a file that fails leaves none of the others behind.
+    :func:`place_all`, so a file that fails to be made leaves none of the others behind
+    (only a failure between the final renames can leave the first in place).
 
     :param paths: the output files.
     :param force: whether files at ``paths`` are replaced.
@@ -240,8 +241,9 @@ def _replacing_folder(path, force):
             raise OutputError(f'{path} exists (use --force to overwrite)') from None
         try:
             os.rename(tmp, path)
-        except OSError:
-            os.rmdir(path)
+        except BaseException:       # a failure, or a signal: our empty folder goes
+            if os.path.isdir(tmp):
+                os.rmdir(path)
             raise
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
@@ -249,11 +251,11 @@ def _replacing_folder(path, force):
 
 def _swap_folder(tmp, path, old):
     """Put the folder ``tmp`` at ``path``; a bag there goes to ``old`` (back, if that fails)."""
-    if os.path.lexists(path):
-        os.rename(path, old)
     try:
+        if os.path.lexists(path):
+            os.rename(path, old)
         os.rename(tmp, path)
-    except BaseException:       # a failure, or a signal between the renames
+    except BaseException:       # a failure, or a signal at either rename
         if os.path.lexists(old) and not os.path.lexists(path):
             os.rename(old, path)            # the old bag stays where it was
         raise
