@@ -13,7 +13,7 @@ bones go to the shared /tf, kept apart by frame_prefix.
 import os
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
@@ -40,17 +40,28 @@ def generate_launch_description():
         DeclareLaunchArgument('use_sim_time', default_value='false',
                               description='use /clock (the simulation time comes from the '
                                           'JointState stamps either way)'),
-        Node(
-            package='jacket_cloth_ros',
-            executable='jacket_cloth_node',
-            name='jacket_cloth_node',
-            namespace=LaunchConfiguration('namespace'),
-            output='screen',
-            parameters=[LaunchConfiguration('params_file'),
-                        {'record': LaunchConfiguration('record'),
-                         'fabric_preset': LaunchConfiguration('fabric'),
-                         'frame_prefix': LaunchConfiguration('frame_prefix'),
-                         'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'),
-                                                        value_type=bool)}],
-        ),
+        OpaqueFunction(function=_node),
     ])
+
+
+def _node(context):
+    # A params file that is not there was a warning, and the node ran on its defaults.
+    params_file = LaunchConfiguration('params_file').perform(context)
+    if not os.path.isfile(params_file):
+        raise RuntimeError(f'params_file: no file {params_file!r}')
+
+    def text(name):         # as written: frame_prefix:=123 is the text "123", not a number
+        return ParameterValue(LaunchConfiguration(name), value_type=str)
+    return [Node(
+        package='jacket_cloth_ros',
+        executable='jacket_cloth_node',
+        name='jacket_cloth_node',
+        namespace=LaunchConfiguration('namespace'),
+        output='screen',
+        parameters=[params_file,
+                    {'record': text('record'),
+                     'fabric_preset': text('fabric'),
+                     'frame_prefix': text('frame_prefix'),
+                     'use_sim_time': ParameterValue(LaunchConfiguration('use_sim_time'),
+                                                    value_type=bool)}],
+    )]

@@ -39,13 +39,32 @@ def _characters_file(given: str) -> str:
     raise RuntimeError(f'characters: no file {given!r} (from {os.getcwd()}, or in {shipped})')
 
 
+def _whole(context, name: str, lo: int) -> int:
+    """Return a launch argument as a whole number of at least ``lo``; else a line naming it."""
+    text = LaunchConfiguration(name).perform(context)
+    try:
+        value = int(text)
+    except ValueError:
+        raise RuntimeError(f'{name}: {text!r} is not a whole number') from None
+    if value < lo:
+        raise RuntimeError(f'{name}: {value} is below {lo}')
+    return value
+
+
 def _processes(context):
-    total = int(LaunchConfiguration('processes').perform(context))
-    first = int(LaunchConfiguration('first').perform(context))
-    count = LaunchConfiguration('count').perform(context)
-    count = total - first if count == '' else int(count)
+    # Each refused in a line naming it: a slice outside the K launched nothing, with exit 0.
+    total = _whole(context, 'processes', 1)
+    first = _whole(context, 'first', 0)
+    if first >= total:
+        raise RuntimeError(f'first: {first} is not one of the {total} processes (0 to '
+                           f'{total - 1})')
+    count = total - first if LaunchConfiguration('count').perform(context) == '' \
+        else _whole(context, 'count', 1)
+    if first + count > total:
+        raise RuntimeError(f'count: {count} processes from process {first} run past the '
+                           f'{total} there are')
     characters = _characters_file(LaunchConfiguration('characters').perform(context))
-    threads = int(LaunchConfiguration('threads').perform(context))
+    threads = _whole(context, 'threads', 0)
     return [Node(package='jacket_cloth_ros', executable='jacket_cloth_crowd',
                  name=f'jacket_cloth_crowd_{i}', output='screen',
                  parameters=[{'characters': characters, 'slice_index': i,

@@ -393,6 +393,10 @@ def test_stamps_backwards_or_repeated_are_dropped_a_long_gap_resets(make_sim, re
     assert sim.process(8_000_000_000, n, p).reset.startswith('gap')  # 2.9 s gap
     assert sim.process(1_000_000_000, n, p).reset.startswith('stamps jumped back')
     assert sim.resets == 3
+    # A refused input after a gap resets nothing and says so: its report said "cloth reset to
+    # the skinned pose: gap of 1.01 s" in the log for a NaN input (a hostile probe).
+    refused = sim.process(3_000_000_000, n, [np.nan] * len(p))
+    assert not refused.accepted and refused.reset == '' and sim.resets == 3
 
 
 def test_unknown_and_missing_joints_warn_but_keep_the_sample(make_sim, skeleton):

@@ -300,7 +300,13 @@ def test_a_characters_file_is_validated_with_one_line(tmp_path):
             ('characters: [{name: a, frame_prefix: ' + 'x' * 300 + '}]',
              'frame_prefix is 300 characters long (at most 256)'),
             ('characters: [{name: w, count: 2, frame_prefix: ""}]',
-             "characters[0].frame_prefix: characters 'w_0' and 'w_1' both have ''")):
+             "characters[0].frame_prefix: characters 'w_0' and 'w_1' both have ''"),
+            # Its topics' names run past rcl's limit: the crowd died a second after its start,
+            # every character with it (a hostile probe).
+            ('characters: [{name: ' + 'a' * 201 + '}]',
+             'name: 201 characters, over the 200 its topics\' names leave it'),
+            ('characters: [{name: a, frame_prefix: [1, 2]}]',
+             'frame_prefix: [1, 2] is not text (quote it: "[1, 2]")')):
         path.write_text(text)
         with pytest.raises(ConfigError, match='^' + str(path).replace('.', r'\.')) as e:
             load_characters(str(path))
@@ -738,3 +744,31 @@ def test_an_inputs_markers_asked_for_after_its_character_stepped_on_are_refused(
         crowd.step_and_tf([(0, fourth)])
         with pytest.raises(RuntimeError, match='took another input'):
             later()
+
+
+def test_a_named_urdf_file_that_is_empty_or_not_text_is_refused_at_start(tmp_path):
+    # An empty one was taken for "no URDF" and the shipped character ran in its place, with
+    # no word; one that is not UTF-8 was a traceback (a hostile probe).
+    (tmp_path / 'empty.urdf').write_bytes(b'')
+    (tmp_path / 'latin.urdf').write_bytes(shipped_character_urdf().encode() + b'<!-- \xff -->')
+    for name, error in (('empty.urdf', 'a: URDF: empty robot description'),
+                        ('latin.urdf', 'not a UTF-8 text file')):
+        with pytest.raises(ConfigError, match=error):
+            with _crowd(tmp_path, f'characters: [{{name: a, urdf: {name}}}]'):
+                pass
+
+
+def test_a_set_up_file_gone_while_a_character_waits_stops_that_character_alone(
+        tmp_path, skeleton):
+    # Read again at its load, a fabrics file moved meanwhile raised FileNotFoundError in the
+    # fallback's timer: the whole crowd died (a hostile probe).
+    import shutil
+    shutil.copy(shipped('fabrics.yaml'), tmp_path / 'fab.yaml')
+    text = ('characters: [{name: a, urdf: character.urdf}, {name: b, fabric_file: fab.yaml, '
+            'parameters: {robot_description_timeout: 0.2}}]')
+    with _crowd(tmp_path, text) as crowd:
+        (tmp_path / 'fab.yaml').unlink()
+        crowd.spin_until(lambda: 'cannot read' in crowd.chars['b'].waiting)
+        assert crowd.chars['b'].pipeline is None and len(crowd.node.crowd.pipelines) == 1
+        crowd.send({'a': _inputs(skeleton, 'walk', 3)})
+        crowd.spin_until(lambda: len(_tf_of(crowd.tf, 'a')) == 3)

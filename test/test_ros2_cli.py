@@ -232,8 +232,10 @@ def _heard_diagnostics(domain, launch):
 
 
 def test_ros2_launch_starts_the_node_and_stops_it_on_ctrl_c(running):
+    # frame_prefix:=123 is the text "123": given as launch read it, a number, the node died on
+    # its type (a hostile probe).
     launch = running(DOMAIN_ID + 5, 'launch', *_launch('jacket_cloth.launch.py'),
-                     'fabric:=down_jacket')
+                     'fabric:=down_jacket', 'frame_prefix:=123')
     line = launch.wait_for(LOADED)
     assert line.startswith('[jacket_cloth_node-1]'), line
     _heard_diagnostics(DOMAIN_ID + 5, launch)
@@ -354,6 +356,25 @@ def test_motion_takes_ros_args_a_namespace_and_a_node_name(running):
             ex.spin_once(timeout_sec=0.05)
     motion.interrupt()
     assert 'Traceback' not in motion.output(), motion.output()
+
+
+@pytest.mark.parametrize('launch_file, arguments, line', [
+    ('jacket_cloth_crowd.launch.py', ['processes:=0'], 'processes: 0 is below 1'),
+    ('jacket_cloth_crowd.launch.py', ['processes:=2', 'first:=1', 'count:=2'],
+     'count: 2 processes from process 1 run past the 2 there are'),
+    ('jacket_cloth_crowd.launch.py', ['threads:=x'], "threads: 'x' is not a whole number"),
+    ('jacket_cloth.launch.py', ['params_file:=/no/such/params.yaml'],
+     "params_file: no file '/no/such/params.yaml'")])
+def test_a_launch_argument_that_cannot_be_is_refused_naming_it(running, launch_file,
+                                                               arguments, line):
+    # A slice outside the processes launched nothing with exit 0; a missing params file was a
+    # warning and the node ran on its defaults (a hostile probe).
+    args = ['characters:=crowd.yaml'] if 'crowd' in launch_file else []
+    launch = running(DOMAIN_ID + 12, 'launch', *_launch(launch_file), *args, *arguments)
+    code = launch.proc.wait(timeout=START_TIMEOUT)
+    launch._drain(5.0)
+    assert code != 0 and line in launch.output(), launch.output()
+    assert 'process started' not in launch.output(), launch.output()
 
 
 def test_the_crowd_launch_finds_a_bare_characters_name_in_the_shipped_config(running,

@@ -681,6 +681,7 @@ class JacketSimulation:
             sample = self.parser.parse(stamp_ns, names, positions)
         except InputRejected as e:
             report.accepted = False
+            report.reset = ''           # a stamp gap marked it, but nothing is reset
             report.warnings.append((e.code, str(e)))
             return report, None
         report.warnings += sample.warnings

@@ -22,7 +22,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
-from ..core.config import shipped
+from ..core.config import read_text, shipped
 from .characters import CharacterSpec
 from .pipeline import session_topics
 
@@ -78,13 +78,16 @@ def cut_line(text: str) -> str:
     return text if len(text) <= MAX_LINE else f'{text[:MAX_LINE]}... (cut)'
 
 
-def read_file(path: str) -> str:
+def read_file(path: str, what: str) -> str:
     """Return a text file's content (a character's URDF, rig or fabrics file).
 
+    A file that cannot be read (gone, not UTF-8, a folder) is a ConfigError naming it, as
+    every set-up file's is: the node says it in one line and loses no other character.
+
     :param path: the file.
+    :param what: what kind of file, as the error names it ('URDF', 'rig', 'fabrics').
     """
-    with open(path, encoding='utf-8') as f:
-        return f.read()
+    return read_text(path, what)
 
 
 class Character:
@@ -110,6 +113,7 @@ class Character:
         self.pipeline: 'SessionPipeline | None' = None
         self.viewer = None              # the last ~/viewer in its world frame, for a late load
         self.urdf = None
+        self.setup_texts = ('', '')     # its rig's and fabrics' texts, read at its load
         self.subscription = None        # joint_states, once loaded
         self.markers = None             # its markers publisher, once loaded
         self.description = self.fallback = None     # while it waits for its URDF
@@ -199,6 +203,17 @@ class Character:
             last = taken[0]
         return last
 
+    def read_setup(self) -> None:
+        """Read its rig and fabrics files as they are now, for every recording it joins.
+
+        At its load, before its pipeline joins the node's: the files may change or go while
+        it runs, and a recording must hold what runs; one gone since the start is a
+        ConfigError for this character alone.
+        """
+        spec = self.spec
+        self.setup_texts = (read_file(spec.rig or shipped('jacket_rig.yaml'), 'rig'),
+                            read_file(spec.fabric_file or shipped('fabrics.yaml'), 'fabrics'))
+
     def attach(self, node: 'Node', pipeline: 'SessionPipeline', index: int, urdf: str,
                markers_wanted: Callable[['Node'], bool],
                listen: 'CallbackGroup | None' = None) -> None:
@@ -214,11 +229,6 @@ class Character:
             (``late_description``) at no cost to the executor; None: unsubscribed.
         """
         self.pipeline, self.index, self.urdf = pipeline, index, urdf
-        # The rig and fabrics as loaded, for every recording it joins: the files may change or
-        # go while it runs, and a recording must hold what runs.
-        spec = self.spec
-        self.setup_texts = (read_file(spec.rig or shipped('jacket_rig.yaml')),
-                            read_file(spec.fabric_file or shipped('fabrics.yaml')))
         if self.viewer is not None:     # it came before the character
             pipeline.set_viewer(self.viewer)
         # Done waiting: every entity left in the node is work for each executor wake-up.

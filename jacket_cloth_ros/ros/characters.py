@@ -34,6 +34,9 @@ MAX_CHARACTERS = 4096
 _NOT_PARAMETERS = ('robot_description', 'rig_file', 'fabric_file', 'fabric', 'fabric_preset',
                    'frame_prefix', 'record', 'record_compression')
 _NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*')
+# A name is its topics' namespace: /<name>/jacket_cloth_node/markers must stay within the
+# 247 characters a ROS topic name may have (rcl's 255 less 8), with room for a count's _k.
+MAX_NAME = 200
 _KEYS = ('urdf', 'rig', 'fabric_file', 'fabric', 'frame_prefix', 'parameters')
 
 
@@ -103,6 +106,9 @@ def load_characters(path: str) -> list[CharacterSpec]:
         if not _NAME.fullmatch(name):
             raise ConfigError(f'{entry._where}.name: {shown(name)} is not a ROS name (letters, '
                               'digits, _ and /, starting with a letter)')
+        if len(name) > MAX_NAME:
+            raise ConfigError(f'{entry._where}.name: {len(name)} characters, over the '
+                              f'{MAX_NAME} its topics\' names leave it')
         count = entry.integer('count', 1, 1, MAX_CHARACTERS)
         keys = dict(base)
         for k in _KEYS:
@@ -124,6 +130,9 @@ def load_characters(path: str) -> list[CharacterSpec]:
             raise ConfigError(f'{where}.fabric: {shown(fabric)} is not a preset (presets: '
                               f'{", ".join(fabrics)})')
         prefix = keys.get('frame_prefix')
+        if prefix is not None and not isinstance(prefix, str):
+            raise ConfigError(f'{where}.frame_prefix: {shown(prefix)} is not text (quote it: '
+                              f'"{prefix}")')
         parameters = own.section('parameters', {})
         values = default_values(fabrics[fabric], fabric)
         known = values.by_name()        # the file names them: typed at this boundary
@@ -147,7 +156,7 @@ def load_characters(path: str) -> list[CharacterSpec]:
             names.add(each)
             try:
                 frame_prefix = typed_value('frame_prefix', each + '/' if prefix is None
-                                           else str(prefix), '', f'{where}.frame_prefix')
+                                           else prefix, '', f'{where}.frame_prefix')
             except ValueError as e:
                 raise ConfigError(str(e)) from None
             mine = values.with_changes({'frame_prefix': frame_prefix})

@@ -162,7 +162,7 @@ class JacketClothNode(Node):
                                        program=self.program, alive=self.context.ok)
         self._record_to(self._p('record'))
         for c, (urdf, source) in zip(self.characters, urdfs):
-            if urdf:
+            if urdf is not None:        # a file named, even an empty one: never the topic's
                 try:
                     self._load(c, urdf, source)
                 except ConfigError as e:
@@ -231,7 +231,7 @@ class JacketClothNode(Node):
         names = {'joint_states': 'joint_states', 'robot_description': 'robot_description',
                  'markers': '~/markers'}
         recorded = {k: self.resolve_topic_name(names[k]) for k in ('joint_states', 'markers')}
-        urdf = self._p('robot_description')
+        urdf = self._p('robot_description') or None         # empty: the topic's
         return [Character(spec, names, recorded)], [(urdf, 'the robot_description parameter')]
 
     def _crowd_characters(self):
@@ -255,7 +255,8 @@ class JacketClothNode(Node):
             # Recorded under its own names, whatever the remapping: a crowd's replay finds
             # each character's inputs by its name.
             characters.append(Character(spec, names, names, f'{spec.name}: ', spec.name))
-            urdfs.append((read_file(spec.urdf), spec.urdf) if spec.urdf else (None, None))
+            urdfs.append((read_file(spec.urdf, 'URDF'), spec.urdf) if spec.urdf
+                         else (None, None))
         return characters, urdfs
 
     def _fabrics_of(self, path):
@@ -323,6 +324,7 @@ class JacketClothNode(Node):
                 'install or an edit of a kernel takes about half a minute (`jacket_cloth warm` '
                 'does it ahead)')
         spec = c.spec
+        c.read_setup()
         # Characters of one URDF and rig share them (read-only): loaded once, not per copy.
         key = (urdf, spec.rig)
         if key not in self._models:
