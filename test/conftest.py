@@ -122,6 +122,21 @@ def rest_input(skeleton):
     return names, np.array(pos)
 
 
+def signalled(proc, ready, signum, timeout=120.0):
+    """Send ``signum`` to ``proc`` once ``ready()`` returns; return its stderr once it has ended.
+
+    A process still running when this returns or raises (``ready`` failed) is killed.
+    """
+    try:
+        ready()
+        proc.send_signal(signum)
+        return proc.communicate(timeout=timeout)[1]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
 @pytest.fixture
 def harness():
     """Make node harnesses (test_node.Harness: a node and a peer over real DDS), closed after."""

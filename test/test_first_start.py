@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from conftest import DOMAIN_ID
+from conftest import DOMAIN_ID, signalled
 
 # In a fresh process on the cache `warm` filled: the node's pipeline on the shipped character,
 # every output of a few inputs, then every kernel's compile misses counted.
@@ -74,14 +74,7 @@ def test_a_signal_while_the_node_imports_is_one_line_and_its_exit_code(stop):
     node = subprocess.Popen([_executable('jacket_cloth_node')],
                             env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 2)),
                             stderr=subprocess.PIPE, text=True)
-    try:
-        _wait_for_library(node.pid, '_multiarray_umath')
-        node.send_signal(stop)
-        err = node.communicate(timeout=120)[1]
-    finally:
-        if node.poll() is None:
-            node.kill()
-            node.wait()
+    err = signalled(node, lambda: _wait_for_library(node.pid, '_multiarray_umath'), stop)
     assert node.returncode == 128 + stop and 'Traceback' not in err, err
     assert err.strip().splitlines() == ['jacket_cloth_node: stopped while starting'], err
 
@@ -139,14 +132,7 @@ def test_python_dash_m_jacket_cloth_is_guarded_from_its_start():
     tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'warm', '--help'],
                             cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    try:
-        _wait_for_library(tool.pid, '_multiarray_umath')
-        tool.send_signal(signal.SIGINT)
-        err = tool.communicate(timeout=120)[1]
-    finally:
-        if tool.poll() is None:
-            tool.kill()
-            tool.wait()
+    err = signalled(tool, lambda: _wait_for_library(tool.pid, '_multiarray_umath'), signal.SIGINT)
     assert tool.returncode == 130 and 'Traceback' not in err, err
     assert err.strip().splitlines() == ['jacket_cloth: stopped while starting'], err
 
@@ -173,14 +159,7 @@ def test_the_demos_node_is_guarded_from_its_start(tmp_path, monkeypatch):
     node = subprocess.Popen(started[0][:-3],
                             env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN_ID + 4)),
                             stderr=subprocess.PIPE, text=True)
-    try:
-        _wait_for_library(node.pid, '_multiarray_umath')
-        node.send_signal(signal.SIGINT)
-        err = node.communicate(timeout=120)[1]
-    finally:
-        if node.poll() is None:
-            node.kill()
-            node.wait()
+    err = signalled(node, lambda: _wait_for_library(node.pid, '_multiarray_umath'), signal.SIGINT)
     assert node.returncode == 130 and 'Traceback' not in err, err
     assert err.strip().splitlines() == ['jacket_cloth_node: stopped while starting'], err
 

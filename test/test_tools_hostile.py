@@ -12,6 +12,7 @@ import tracemalloc
 
 import pytest
 import zstandard
+from conftest import signalled
 
 from jacket_cloth_ros.recording.mcap_file import McapWriter
 from jacket_cloth_ros.recording.reader import (
@@ -830,17 +831,13 @@ def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_pat
     tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'replay', str(clip),
                              '-o', str(out)], cwd=root, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
-    try:
+
+    def replaying():
         deadline = time.monotonic() + 120
-        while not any('.partial' in name for name in os.listdir(tmp_path)):   # replaying
+        while not any('.partial' in name for name in os.listdir(tmp_path)):
             assert tool.poll() is None and time.monotonic() < deadline, 'no replay started'
             time.sleep(0.01)
-        tool.send_signal(signal.SIGTERM)
-        err = tool.communicate(timeout=120)[1]
-    finally:
-        if tool.poll() is None:
-            tool.kill()
-            tool.wait()
+    err = signalled(tool, replaying, signal.SIGTERM)
     assert tool.returncode == 143, err
     assert err.strip().splitlines() == ['jacket_cloth replay: stopped by SIGTERM'], err
     assert os.listdir(tmp_path) == ['walk.mcap']

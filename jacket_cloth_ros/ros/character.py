@@ -78,18 +78,6 @@ def cut_line(text: str) -> str:
     return text if len(text) <= MAX_LINE else f'{text[:MAX_LINE]}... (cut)'
 
 
-def read_file(path: str, what: str) -> str:
-    """Return a text file's content (a character's URDF, rig or fabrics file).
-
-    A file that cannot be read (gone, not UTF-8, a folder) is a ConfigError naming it, as
-    every set-up file's is: the node says it in one line and loses no other character.
-
-    :param path: the file.
-    :param what: what kind of file, as the error names it ('URDF', 'rig', 'fabrics').
-    """
-    return read_text(path, what)
-
-
 class Character:
     """One character of a jacket node: its set-up, and its pipeline once its URDF is known.
 
@@ -211,8 +199,8 @@ class Character:
         ConfigError for this character alone.
         """
         spec = self.spec
-        self.setup_texts = (read_file(spec.rig or shipped('jacket_rig.yaml'), 'rig'),
-                            read_file(spec.fabric_file or shipped('fabrics.yaml'), 'fabrics'))
+        self.setup_texts = (read_text(spec.rig or shipped('jacket_rig.yaml'), 'rig'),
+                            read_text(spec.fabric_file or shipped('fabrics.yaml'), 'fabrics'))
 
     def attach(self, node: 'Node', pipeline: 'SessionPipeline', index: int, urdf: str,
                markers_wanted: Callable[['Node'], bool],

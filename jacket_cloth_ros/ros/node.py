@@ -32,14 +32,14 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
 
 from .. import signals
-from ..core.config import ConfigError, shown
+from ..core.config import ConfigError, read_text, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
 from ..core.stepping import NOT_STEADY
 from . import cdr, messages
 from .character import (NO_PUB_EVENTS, NO_SUB_EVENTS, TF_QOS, Character, CrowdInputs,
-                        cut_line, input_problems, read_file, throttled)
+                        cut_line, input_problems, throttled)
 from .characters import CharacterSpec, crowd_slice, load_characters
 from .clock_watch import ClockWatch, guard_clock
 from .parameter_services import guard_parameter_services
@@ -255,7 +255,7 @@ class JacketClothNode(Node):
             # Recorded under its own names, whatever the remapping: a crowd's replay finds
             # each character's inputs by its name.
             characters.append(Character(spec, names, names, f'{spec.name}: ', spec.name))
-            urdfs.append((read_file(spec.urdf, 'URDF'), spec.urdf) if spec.urdf
+            urdfs.append((read_text(spec.urdf, 'URDF'), spec.urdf) if spec.urdf
                          else (None, None))
         return characters, urdfs
 

@@ -26,7 +26,7 @@ from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
 from .session import (JOINT_STATE, ReplayError, recorded_parameters, setup_warnings,
-                      took_nothing)
+                      took_any, took_nothing)
 
 PREFIX = SESSION_CONFIG + '/'
 
@@ -142,15 +142,15 @@ def replay_crowd(path: str, out_path: str,
                     recorder.write(c.topics[key][0], data, report.stamp_ns)
             recorder.close()
             took = time.perf_counter() - started
-            if not any(c.pipeline.inputs > c.pipeline.dropped for c in characters.values()):
-                first = next((p for p in (took_nothing(f'{path}: {c.name}', c.pipeline)
-                                          for c in characters.values()) if p),
-                             f'{path}: the simulation took none of its JointState messages')
-                raise ReplayError(f'{first}, nor of any other character\'s; nothing written')
+            problems = {c.name: took_nothing(c.pipeline) for c in characters.values()}
+            if not any(took_any(c.pipeline) for c in characters.values()):
+                name, first = next(((n, p) for n, p in problems.items() if p), (
+                    '', 'the simulation took none of its JointState messages'))
+                raise ReplayError(f'{path}: {name + ": " if name else ""}{first}, nor of any '
+                                  'other character\'s; nothing written')
             for c in characters.values():       # the others replayed: said, not refused
-                problem = took_nothing('it', c.pipeline)
-                if problem:
-                    c.warnings.append(problem.removeprefix('it: '))
+                if problems[c.name]:
+                    c.warnings.append(problems[c.name])
         finally:
             recorder.close()
     return characters, took

@@ -99,9 +99,9 @@ def session_frames(session: SessionInput) -> tuple[Frames, object]:
     session.setup.values = session.setup.values.with_changes({'markers_rate': 0.0})
     pipeline = run_session(session, probe=probe)
     if not stamps:
-        raise ExportError((took_nothing(session.recording.path, pipeline)
-                           or f'{session.recording.path}: no input gave the jacket finite '
-                           'bones') + '; nothing to animate')
+        raise ExportError(f'{session.recording.path}: '
+                          + (took_nothing(pipeline) or 'no input gave the jacket finite bones')
+                          + '; nothing to animate')
     seconds, restarts = key_times(np.array(stamps, dtype=np.int64))
     return Frames(seconds, np.array(roots), np.array(links), np.array(bones), restarts), pipeline
 

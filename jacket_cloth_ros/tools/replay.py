@@ -45,9 +45,9 @@ def replay(session: SessionInput, out_path: str,
                                                                       stamp))
             recorder.close()                # the writer thread's backlog is part of the time
             took = time.perf_counter() - started
-            problem = took_nothing(session.recording.path, pipeline)
+            problem = took_nothing(pipeline)
             if problem:
-                raise ReplayError(f'{problem}; nothing written')
+                raise ReplayError(f'{session.recording.path}: {problem}; nothing written')
         finally:
             recorder.close()
     return pipeline, took

@@ -345,21 +345,28 @@ class ReplayError(ValueError):
     """A session whose replay would hold no simulation; the message is one line."""
 
 
-def took_nothing(path: str, pipeline: SessionPipeline) -> str:
+def took_any(pipeline: SessionPipeline) -> bool:
+    """Tell whether the simulation took at least one of the JointStates a pipeline was given.
+
+    :param pipeline: the pipeline a session ran through.
+    """
+    return pipeline.inputs > pipeline.dropped
+
+
+def took_nothing(pipeline: SessionPipeline) -> str:
     """Say that the simulation took none of a session's JointStates, and why; '' if it took one.
 
     A replay or export of such a session would hold the inputs alone: no failure may pass
-    for one.
+    for one. '' too for a session of no JointState at all (a crowd's character that never
+    had one).
 
-    :param path: what the line names (the recording, and in a crowd the character).
     :param pipeline: the pipeline the session ran through.
     """
     seen = pipeline.inputs + pipeline.undecodable
-    if pipeline.inputs > pipeline.dropped or not seen:
+    if took_any(pipeline) or not seen:
         return ''
     first = pipeline.first_refusal or 'it does not decode as JointState'
-    return (f'{path}: the simulation took none of its {seen} JointState messages (the first: '
-            f'{first})')
+    return f'the simulation took none of its {seen} JointState messages (the first: {first})'
 
 
 def run_session(session: SessionInput, sink: Callable[[str, bytes, int], None] | None = None,
