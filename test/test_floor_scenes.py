@@ -155,3 +155,35 @@ def test_a_character_sent_without_its_world_pose_stands_on_its_rigs_floor_or_at_
             floor['point'] = point
         sim = JacketSimulation(skeleton, Rig(data, skeleton), load_fabric('tweed_jacket'))
         assert sim.parser.last.root[2, 3] == pytest.approx(lift, abs=1e-3)
+
+
+def test_the_world_pose_arriving_after_a_standing_root_restarts_the_cloth_there(skeleton, rig):
+    # A source that sent the joints only, then world poses (here 0.8 m ahead of where the root
+    # stood): the root jumped in one input, under the teleport distance, and the cloth was
+    # simulated through a move no motion made, its hem at metres a second (a review). It
+    # restarts there now, once; a world pose from the first message on leaves no guess behind.
+    from jacket_cloth_ros.core.simulation import WORLD_BEGAN
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    names = list(skeleton.joint_names)
+    world = [f'world_joint/{v}' for v in ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y',
+                                          'rot_z', 'rot_w')]
+    still = np.zeros(len(names))
+    stamps = (10 ** 9 + k * 10 ** 9 // 60 for k in range(10 ** 6))
+    for _ in range(120):
+        sim.process(next(stamps), names, still)
+    standing = sim.root[2, 3]
+    assert standing > 0.9 and sim.teleport_m > 0.8
+    posed = np.append(still, [0.8, 0.0, standing, 0.0, 0.0, 0.0, 1.0])
+    resets, speeds = [], []
+    for _ in range(30):
+        hem = sim.x[-rig.cols:].copy()
+        resets.append(sim.process(next(stamps), names + world, posed).reset)
+        speeds.append(np.linalg.norm(sim.x[-rig.cols:] - hem, axis=1).max() * 60)
+    assert resets[0] == WORLD_BEGAN and not any(resets[1:]), resets
+    assert sim.root[0, 3] == 0.8
+    assert max(speeds[1:]) < 0.5, f'the hem at {max(speeds[1:]):.2f} m/s after the world pose'
+    # Joints only again: the root holds the last world pose given, no guess and no restart.
+    assert not any(sim.process(next(stamps), names, still).reset for _ in range(10))
+    again = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    firsts = [again.process(next(stamps), names + world, posed).reset for _ in range(3)]
+    assert firsts == ['first sample', '', '']

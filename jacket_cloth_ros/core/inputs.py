@@ -44,6 +44,8 @@ class Sample:
     root: np.ndarray         # 4x4 pose of the root link in the world frame
     root_quat: np.ndarray    # (x, y, z, w) of that pose, for interpolation
     warnings: list = field(default_factory=list)   # (code, text) of usable-but-odd input
+    # The first world pose after messages without one: the root leaves the parser's guess.
+    world_began: bool = False
 
 
 def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike', floor: float = 0.0) -> np.ndarray:
@@ -100,6 +102,8 @@ class InputParser:
         root = np.eye(4) if floor is None else standing_root(skeleton, *floor)
         self.last = JointSample(np.zeros(len(skeleton.joint_names)), root,
                                 np.array([0.0, 0.0, 0.0, 1.0]))
+        # Whether a message gave the world pose, and whether one parsed before it did not.
+        self.world_given = self.guessed = False
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -183,7 +187,10 @@ class InputParser:
             raise InputRejected('world', f'{self.world_joint} rotation is a zero '
                                 'quaternion: message dropped')
         self.last = new
-        return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings))
+        began = self.guessed and plan.whole_world
+        self.world_given = self.world_given or plan.whole_world
+        self.guessed = not self.world_given
+        return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings), began)
 
 
 def _names_cut(names: 'Iterable[str]') -> str:

@@ -49,6 +49,9 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 DESIGN_RATE = 120.0
 # The reset reason of an input whose bones were not finite (JacketSimulation.check_bones).
 NONFINITE_BONES = 'non-finite bones'
+# The root stood on the rig's floor, a guess, until the source sent its world pose: the cloth
+# restarts there rather than fall or fly the way between, which no motion made.
+WORLD_BEGAN = 'the world pose began (the root stood on the floor before)'
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
 # The cloth stretched more than this share at the first input is named (issue 19's target).
@@ -688,7 +691,8 @@ class JacketSimulation:
         if not report.reset and self.last is None:
             report.reset = 'first sample'
         elif not report.reset:
-            report.reset = self._jump(self.last, sample)
+            report.reset = self._jump(self.last, sample) or (WORLD_BEGAN if sample.world_began
+                                                            else '')
         if report.reset:
             first = report.reset == 'first sample'
             if first:
