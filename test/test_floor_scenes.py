@@ -187,3 +187,24 @@ def test_the_world_pose_arriving_after_a_standing_root_restarts_the_cloth_there(
     again = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
     firsts = [again.process(next(stamps), names + world, posed).reset for _ in range(3)]
     assert firsts == ['first sample', '', '']
+
+
+def test_a_body_under_the_floor_is_named_as_what_fights_the_cloth(skeleton, rig):
+    # The pelvis sent at the floor's height puts the legs under it: the cloth flailed and was
+    # bunched, and the lines advised damping and the cloth's shape, which mend nothing (a
+    # review). They name the body under the floor now; a standing body's lines do not.
+    sim = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    names = list(skeleton.joint_names) + [f'world_joint/{v}' for v in (
+        'trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')]
+    sunk = np.append(np.zeros(len(skeleton.joint_names)), [0.0] * 6 + [1.0])
+    lines = {}
+    for k in range(5 * 60):
+        report = sim.process(10 ** 9 + k * 10 ** 9 // 60, names, sunk)
+        lines.update(w for w in report.warnings if w[0] in ('collapse', 'restless'))
+    assert set(lines) == {'collapse', 'restless'}, lines
+    for line in lines.values():
+        assert "reaches 0.96 m under the rig's floor" in line, line
+        assert 'damping' not in line and 'cloth.shape' not in line, line
+    standing = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
+    standing.process(10 ** 9, list(skeleton.joint_names), np.zeros(len(skeleton.joint_names)))
+    assert sim._under_floor() and standing._under_floor() == ''

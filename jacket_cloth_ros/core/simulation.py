@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from .body_proxy import lowest_reach
 from .bone_layer import LayerPose
 from .bundles import (
     ClothState, Colliders, CrowdSlot, JointSample, StepControl, StepOutput, Tuning, copied,
@@ -49,6 +50,9 @@ _NO_LAYER_POSE = LayerPose([], np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
 DESIGN_RATE = 120.0
 # The reset reason of an input whose bones were not finite (JacketSimulation.check_bones).
 NONFINITE_BONES = 'non-finite bones'
+# Deeper than this share of its height under the floor, the body itself is said to be what
+# fights the cloth: the shapes that stand for feet sink about that far in a captured stride.
+UNDER_FLOOR_PER_HEIGHT = 0.05
 # The root stood on the rig's floor, a guess, until the source sent its world pose: the cloth
 # restarts there rather than fall or fly the way between, which no motion made.
 WORLD_BEGAN = 'the world pose began (the root stood on the floor before)'
@@ -525,10 +529,13 @@ class JacketSimulation:
         rig, watch = self.rig, self.watches.collapse
         row, stretched = watch.worst_row(rig.cols)
         tilt = rig.body_tilt(self.links[:, :3, 3], sample.root[:3, :3])
+        sunk = self._under_floor()
         if tilt is not None:
             fix = (f'the body lies {tilt[1]:.0f} deg from the world\'s up '
                    f'{_shown(rig.world_up)}: write world_up in the rig if this world\'s up is '
                    'another axis, else stand the body up (motion --urdf retargets a clip)')
+        elif sunk:
+            fix = sunk
         elif stretched:
             fix = 'widen cloth.shape.radii: the colliders hold it wider than its rest'
         else:
@@ -782,9 +789,32 @@ class JacketSimulation:
         else:
             setting = (f'fabric.damping and fabric.edge_damping ({f.damping:g} and '
                        f'{f.edge_damping:g} now): it')
-        return (f'the cloth keeps moving with the body still: its hem at '
-                f'{100 * watch.speed:.1f} cm/s after {RESTLESS_FOR_S:g} s still; raise '
-                f'{setting} keep swinging where the vertical pass fights the body and the floor')
+        said = (f'the cloth keeps moving with the body still: its hem at '
+                f'{100 * watch.speed:.1f} cm/s after {RESTLESS_FOR_S:g} s still; ')
+        sunk = self._under_floor()
+        if sunk:
+            return said + sunk
+        return (said + f'raise {setting} keep swinging where the vertical pass fights the body '
+                'and the floor')
+
+    def _under_floor(self) -> str:
+        """Say that the body reaches under the rig's floor, and what puts it there; or ''.
+
+        The floor then holds the cloth against the legs, which no fabric or shape setting
+        mends: the cause is the pose (a source's world pose, a capture not stood on its soles).
+        """
+        floor = self.rig.floor()
+        if floor is None:
+            return ''
+        up, height = floor
+        # The links are in the root's frame: the world's up turned into it.
+        low = lowest_reach(self.skeleton, self.links, self.root[:3, :3].T @ up) + float(
+            self.root[:3, 3] @ up)
+        if height - low <= UNDER_FLOOR_PER_HEIGHT * self.rig.height_m:
+            return ''
+        return (f'the body reaches {height - low:.2f} m under the rig\'s floor, which holds the '
+                'cloth against it: raise the root\'s world pose (world_joint/trans_*), stand a '
+                'capture on its soles (motion --urdf) or lower the floor in the rig')
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:
