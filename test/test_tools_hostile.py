@@ -819,6 +819,27 @@ def test_a_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(tmp_pa
     assert sorted(os.listdir(tmp_path)) == ['nan.mcap']
 
 
+def test_a_replay_whose_inputs_never_gave_finite_bones_is_a_failure_and_no_file(
+        clip, tmp_path, capsys, monkeypatch):
+    # Inputs taken but never a finite pose: the replay wrote the inputs alone, no /tf, and
+    # exited 0 (a review); export refused such a session, replay did not.
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    real = JacketSimulation.bones
+
+    def never_finite(sim):
+        bones = real(sim)
+        bones.finite = False
+        return bones
+    monkeypatch.setattr(JacketSimulation, 'bones', never_finite)
+    out = tmp_path / 'out.mcap'
+    for argv in (['replay', str(clip), '-o', str(out)], ['export', str(clip), '-o',
+                                                         str(tmp_path / 'out.glb')]):
+        err = _one_line_error(capsys, argv)
+        assert f'{clip}: none of the 61 JointState messages the simulation took gave the ' \
+            'jacket finite bones; ' in err, err
+    assert os.listdir(tmp_path) == []
+
+
 def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_path):
     # SIGTERM ended the process where it stood: the output's hidden temporary file stayed.
     import signal

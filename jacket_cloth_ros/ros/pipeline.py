@@ -108,6 +108,7 @@ class SessionPipeline:
         self.dropped = 0
         self.undecodable = 0        # JointStates that did not decode (the node counts them)
         self.lost = 0               # JointStates their publisher numbered that never arrived
+        self.published = 0          # inputs that put bones on /tf (finite ones)
         self.last_reset_reason = ''
         # Why the first JointState the simulation refused was refused ('' until one was): a
         # tool says it when the simulation took none (tools.session.took_nothing).
@@ -363,6 +364,7 @@ class SessionPipeline:
         out = [('tf', encoded)]
         if self._world_tf_due:
             out.append(('tf', self._world_transform(stamp_ns)))
+        self.published += 1
         self._window['published'] += 1
         return out
 

@@ -26,7 +26,7 @@ from ..ros.values import NodeValues, default_values
 from ..ros.viewer import VIEWER_TYPE, read_viewer
 from .outputs import replacing
 from .session import (JOINT_STATE, ReplayError, recorded_parameters, setup_warnings,
-                      took_any, took_nothing)
+                      took_nothing)
 
 PREFIX = SESSION_CONFIG + '/'
 
@@ -143,7 +143,7 @@ def replay_crowd(path: str, out_path: str,
             recorder.close()
             took = time.perf_counter() - started
             problems = {c.name: took_nothing(c.pipeline) for c in characters.values()}
-            if not any(took_any(c.pipeline) for c in characters.values()):
+            if not any(c.pipeline.published for c in characters.values()):
                 name, first = next(((n, p) for n, p in problems.items() if p), (
                     '', 'the simulation took none of its JointState messages'))
                 raise ReplayError(f'{path}: {name + ": " if name else ""}{first}, nor of any '

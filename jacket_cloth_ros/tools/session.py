@@ -354,17 +354,20 @@ def took_any(pipeline: SessionPipeline) -> bool:
 
 
 def took_nothing(pipeline: SessionPipeline) -> str:
-    """Say that the simulation took none of a session's JointStates, and why; '' if it took one.
+    """Say that a session's JointStates gave no bones, and why; '' if one gave them.
 
-    A replay or export of such a session would hold the inputs alone: no failure may pass
-    for one. '' too for a session of no JointState at all (a crowd's character that never
-    had one).
+    The simulation took none of them, or none it took gave finite bones: a replay or
+    export of such a session would hold the inputs alone, and no failure may pass for one.
+    '' too for a session of no JointState at all (a crowd's character that never had one).
 
     :param pipeline: the pipeline the session ran through.
     """
     seen = pipeline.inputs + pipeline.undecodable
-    if took_any(pipeline) or not seen:
+    if pipeline.published or not seen:
         return ''
+    if took_any(pipeline):
+        return (f'none of the {pipeline.inputs - pipeline.dropped} JointState messages the '
+                'simulation took gave the jacket finite bones')
     first = pipeline.first_refusal or 'it does not decode as JointState'
     return f'the simulation took none of its {seen} JointState messages (the first: {first})'
 
