@@ -313,7 +313,7 @@ class JacketClothNode(Node):
                 raise                   # the node has nothing else to run: one line, exit 1
             # One character's set-up must not stop the others: it waits for its topic.
             c.waiting = cut_line(f'no URDF on {c.description.topic_name} yet, and the '
-                                 f'shipped character does not fit its rig ({e})')
+                                 f'shipped character could not be set up in its place ({e})')
             self.get_logger().error(f'{c.label}{c.waiting}: waiting for the topic')
 
     def _load(self, c, urdf, source):
