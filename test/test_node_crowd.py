@@ -272,7 +272,8 @@ def test_a_character_the_shipped_one_does_not_fit_waits_and_the_others_run(tmp_p
         assert crowd.chars['b'].pipeline is None
         # Its diagnostics say why it runs nothing (issue 38).
         crowd.spin_until(lambda: any(
-            s.name == '/jacket_cloth_crowd: b: cloth simulation' and 'does not fit' in s.message
+            s.name == '/jacket_cloth_crowd: b: cloth simulation'
+            and 'could not be set up in its place' in s.message
             for d in crowd.diagnostics for s in d.status))
 
 

@@ -698,8 +698,8 @@ class JacketSimulation:
         if not report.reset and self.last is None:
             report.reset = 'first sample'
         elif not report.reset:
-            report.reset = self._jump(self.last, sample) or (WORLD_BEGAN if sample.world_began
-                                                            else '')
+            report.reset = self._jump(self.last, sample) or (
+                WORLD_BEGAN if sample.world_began else '')
         if report.reset:
             first = report.reset == 'first sample'
             if first:
