@@ -86,6 +86,31 @@ class Capture:
         return len(self.positions)
 
 
+# What each column of a capture's root pose is, as a refusal names it.
+_ROOT_PARTS = ('x position', 'y position', 'z position', 'orientation qx', 'orientation qy',
+               'orientation qz', 'orientation qw')
+
+
+def not_finite(capture: Capture) -> str | None:
+    """Return a phrase naming the first frame and value that is not a finite number, or None.
+
+    The check every importer makes after scaling and normalising, before anything is
+    written: a NaN or an infinity in a JointState is no pose the node can take.
+
+    :param capture: an imported capture (its ``positions`` and ``root``).
+    """
+    values = np.hstack([capture.positions, capture.root])
+    bad = ~np.isfinite(values)
+    if not bad.any():
+        return None
+    k, j = (int(v) for v in np.argwhere(bad)[0])
+    joints = len(capture.joint_names)
+    what = f'joint {capture.joint_names[j]}' if j < joints else \
+        f"the root's {_ROOT_PARTS[j - joints]}"
+    return (f'frame {k}: {what} is {values[k, j]} after scaling and normalising, not a finite '
+            'number')
+
+
 def read_bvh(path: str) -> Bvh:
     """Read ``path`` with pybvh; every failure becomes one BvhError line naming the file.
 
@@ -302,19 +327,25 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     except ConfigError as e:
         raise BvhError(f'its skeleton as a URDF is refused ({str(e).removeprefix("URDF: ")})'
                        ) from None
-    angles = continuous_angles(bvh.joint_angles)
-    # joint_angles holds the root first, then each joint in file order, as the URDF does.
-    positions = angles[:, 1:, :].reshape(len(angles), -1)
-    root = bvh.nodes[0]
-    rot = np.tile(np.eye(3), (len(angles), 1, 1))
-    for i, ch in enumerate(root.rot_channels):
-        rot = rot @ axis_rotations(Y_UP_TO_Z_UP[:, _AXIS[ch]], angles[:, 0, i])
-    quat = continuous_quaternions(matrix_to_quat(rot))
-    trans = bvh.root_pos @ Y_UP_TO_Z_UP.T * scale
+    # A value that overflows is refused below by name; numpy's warnings would only add lines.
+    with np.errstate(over='ignore', invalid='ignore'):
+        angles = continuous_angles(bvh.joint_angles)
+        # joint_angles holds the root first, then each joint in file order, as the URDF does.
+        positions = angles[:, 1:, :].reshape(len(angles), -1)
+        root = bvh.nodes[0]
+        rot = np.tile(np.eye(3), (len(angles), 1, 1))
+        for i, ch in enumerate(root.rot_channels):
+            rot = rot @ axis_rotations(Y_UP_TO_Z_UP[:, _AXIS[ch]], angles[:, 0, i])
+        quat = continuous_quaternions(matrix_to_quat(rot))
+        trans = bvh.root_pos @ Y_UP_TO_Z_UP.T * scale
     height = float(np.ptp(rest_offsets(bvh)[:, 1])) * scale
-    return Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
-                   joint_names=joint_names, positions=positions,
-                   root=np.hstack([trans, quat]), link_names=link_names, height_m=height)
+    capture = Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
+                      joint_names=joint_names, positions=positions,
+                      root=np.hstack([trans, quat]), link_names=link_names, height_m=height)
+    problem = not_finite(capture)
+    if problem:
+        raise BvhError(f'{problem} (at {scale:g} m per unit)')
+    return capture
 
 
 def load_capture(path: str, scale: float | None = None) -> Capture:

@@ -41,7 +41,8 @@ import os
 import numpy as np
 
 from ..core.transforms import quat_slerp, quat_to_matrix
-from .bvh import FRAME_TIME_RANGE, Capture, continuous_angles, continuous_quaternions
+from .bvh import (FRAME_TIME_RANGE, Capture, continuous_angles, continuous_quaternions,
+                  not_finite)
 
 # Each joint of pybullet's humanoid.urdf that a frame moves, in the frame's order, and its
 # count of numbers: 4 for a spherical joint's quaternion, 1 for a revolute joint's angle.
@@ -82,6 +83,13 @@ def read_frames(path: str) -> np.ndarray:
             data = json.load(f)
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise ClipError(f'{path}: not a DeepMimic clip (not JSON: {e})') from None
+    except RecursionError:
+        # The parser recurses once a bracket: arrays nested deeper than the interpreter's
+        # stack are no clip, and the error must not surface as a traceback.
+        raise ClipError(f'{path}: not a DeepMimic clip (its JSON nests too deep)') from None
+    except ValueError as e:     # an integer longer than Python converts from text
+        # Its advice, to raise the interpreter's limit, is no help to whoever runs the tool.
+        raise ClipError(f'{path}: not a DeepMimic clip ({str(e).split(";")[0]})') from None
     frames = data.get('Frames') if isinstance(data, dict) else None
     if not isinstance(frames, list) or not frames:
         raise ClipError(f'{path}: not a DeepMimic clip (no "Frames" list)')
@@ -90,10 +98,54 @@ def read_frames(path: str) -> np.ndarray:
                 isinstance(v, (int, float)) and not isinstance(v, bool) for v in frame):
             raise ClipError(f'{path}: frame {k} is not {FRAME_LENGTH} numbers (duration, root '
                             'position and quaternion, 12 joints)')
-    out = np.array(frames, dtype=float)
+    try:
+        out = np.array(frames, dtype=float)
+    except OverflowError:
+        # A JSON integer has no bound, a float has: name the frame holding the first too big.
+        k = next(k for k, frame in enumerate(frames) if not _floats(frame))
+        raise ClipError(f'{path}: frame {k} holds an integer too large for a number') from None
     if not np.isfinite(out).all():
-        raise ClipError(f'{path}: a value is not a finite number')
+        k = int(np.argmax(~np.isfinite(out).all(axis=1)))
+        raise ClipError(f'{path}: frame {k} holds a value that is not a finite number')
     return out
+
+
+def _floats(frame: list) -> bool:
+    """Return whether every value of ``frame`` converts to a float."""
+    try:
+        [float(v) for v in frame]
+    except OverflowError:
+        return False
+    return True
+
+
+def _quaternion_columns() -> list:
+    """Return (first column, what) of each quaternion in a frame: the root's, then joints'."""
+    out, i = [(4, 'the root orientation')], 8
+    for joint, n in LAYOUT:
+        if n == 4:
+            out.append((i, f'joint {joint}'))
+        i += n
+    return out
+
+
+def check_quaternions(frames: np.ndarray) -> None:
+    """Refuse a frame whose quaternion cannot be normalised, naming the frame and the joint.
+
+    :param frames: the clip's frames, (F, 44), finite.
+    """
+    for i, what in _quaternion_columns():
+        q = frames[:, i:i + 4]
+        # Squared, a value this large overflows: its length is no finite number, and the
+        # normalised quaternion would be NaN.
+        with np.errstate(over='ignore'):
+            norm = np.sqrt(np.sum(q * q, axis=1))
+        bad = ~(np.isfinite(norm) & (norm >= 1e-6))
+        if bad.any():
+            k = int(np.argmax(bad))
+            reason = 'zero' if norm[k] < 1e-6 else \
+                'too long to normalise, its length not a finite number'
+            raise ClipError(f'frame {k}: a quaternion is {reason} ({what})')
 
 
 MAX_RESAMPLED = 100_000         # frames of a resampled clip: DeepMimic clips last seconds
@@ -203,27 +255,36 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
     low, high = FRAME_TIME_RANGE
     if not low <= dt <= high:
         raise ClipError(f'its frames last {dt:g} s, outside [{low:g}, {high:g}] s')
-    if len(frames) > 1 and np.abs(frames[:-1, 0] - dt).max() > 1e-9:
-        # Resampled at its usual frame time: as many frames as the clip's length needs, at
-        # most MAX_RESAMPLED (a few long frames among short ones could ask for millions).
-        count = float(np.sum(frames[:-1, 0])) / dt
-        if count > MAX_RESAMPLED:
-            raise ClipError(f'its frames, resampled every {dt:g} s, would be {count:.0f}, '
-                            f'over {MAX_RESAMPLED}')
-        frames = _resample(frames, dt)
-    columns, i = [], 8
-    for _, n in LAYOUT:
-        if n == 4:
-            rot = quat_to_matrix(_xyzw(frames[:, i:i + 4]))
-            columns.append(continuous_zxy(zxy_angles(rot)))
-        else:
-            columns.append(continuous_angles(frames[:, i:i + 1]))
-        i += n
-    root_q = continuous_quaternions(_turned_quaternions(_xyzw(frames[:, 4:8])))
-    root_p = frames[:, 1:4] @ Y_UP_WORLD.T * scale
-    return Capture(name=name, urdf=urdf, frame_time=dt, scale=scale, joint_names=joint_names(),
-                   positions=np.hstack(columns), root=np.hstack([root_p, root_q]),
-                   link_names=[], height_m=float('nan'))
+    check_quaternions(frames)
+    resampled = len(frames) > 1 and np.abs(frames[:-1, 0] - dt).max() > 1e-9
+    # A value that overflows is refused below by name; numpy's warnings would only add lines.
+    with np.errstate(over='ignore', invalid='ignore'):
+        if resampled:
+            # Resampled at its usual frame time: as many frames as the clip's length needs, at
+            # most MAX_RESAMPLED (a few long frames among short ones could ask for millions).
+            count = float(np.sum(frames[:-1, 0])) / dt
+            if count > MAX_RESAMPLED:
+                raise ClipError(f'its frames, resampled every {dt:g} s, would be {count:.0f}, '
+                                f'over {MAX_RESAMPLED}')
+            frames = _resample(frames, dt)
+        columns, i = [], 8
+        for _, n in LAYOUT:
+            if n == 4:
+                rot = quat_to_matrix(_xyzw(frames[:, i:i + 4]))
+                columns.append(continuous_zxy(zxy_angles(rot)))
+            else:
+                columns.append(continuous_angles(frames[:, i:i + 1]))
+            i += n
+        root_q = continuous_quaternions(_turned_quaternions(_xyzw(frames[:, 4:8])))
+        root_p = frames[:, 1:4] @ Y_UP_WORLD.T * scale
+    capture = Capture(name=name, urdf=urdf, frame_time=dt, scale=scale,
+                      joint_names=joint_names(), positions=np.hstack(columns),
+                      root=np.hstack([root_p, root_q]), link_names=[], height_m=float('nan'))
+    problem = not_finite(capture)
+    if problem:
+        raise ClipError(f'{problem} (root positions times {scale:g}'
+                        + (f', frames resampled every {dt:g} s)' if resampled else ')'))
+    return capture
 
 
 def load_clip(path: str, urdf_path: str, scale: float | None = None) -> Capture:

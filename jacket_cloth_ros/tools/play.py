@@ -8,7 +8,10 @@ from now, and the character's URDF goes on ``robot_description``.
 
 from collections.abc import Iterator
 
+import numpy as np
+
 from ..core.config import read_text
+from ..core.skeleton import skeleton_from
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
@@ -24,12 +27,20 @@ def recorded_inputs(path: str, topic: str | None = None,
     :param urdf_path: a URDF file for ``robot_description``; None takes the recorded one.
     :returns: (URDF text or None, ``(offset_ns, names, positions)`` of each message in file
         order, offsets from the first header stamp, a line saying what plays).
-    :raises RecordingError: no JointState, or one that does not decode (named by its stamp).
+    :raises RecordingError: no JointState, or one that does not decode or holds a position
+        that is not a finite number (named by its stamp), before anything is published.
+    :raises ConfigError: ``urdf_path`` is no character's URDF, refused as ``motion --urdf``
+        refuses it.
     """
+    if urdf_path:
+        # Loaded as every other tool loads a character, so a file that is no URDF, or one
+        # whose links form a cycle, is refused before the node is up, not published.
+        urdf = read_text(urdf_path, 'URDF')
+        skeleton_from(urdf, f'URDF {urdf_path}')
     recording = read_recording(path, kinds=(JOINT_STATE,))
     topic = joint_state_topic(recording, topic)
-    urdf = read_text(urdf_path, 'URDF') if urdf_path else \
-        recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None
+    if not urdf_path:
+        urdf = recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None
     messages = [m for m in recording.messages if m.topic == topic]
     if not messages:
         raise RecordingError(f'{path}: no message on {topic}')
@@ -41,6 +52,15 @@ def recorded_inputs(path: str, topic: str | None = None,
         except DECODE_ERRORS as e:
             raise RecordingError(f'{path}: a {topic} message logged at {m.log_time} ns does '
                                  f'not decode as JointState ({e})') from None
+        # Refused whole, before the first is sent: a NaN takes the character nowhere, and a
+        # recording stopped halfway would leave its subscribers on a pose it never meant.
+        bad = ~np.isfinite(contents[-1].position)
+        if bad.any():
+            j = int(np.argmax(bad))
+            joint = contents[-1].name[j] if j < len(contents[-1].name) else f'position {j}'
+            raise RecordingError(f'{path}: a {topic} message logged at {m.log_time} ns gives '
+                                 f'{joint} {contents[-1].position[j]}, not a finite number: '
+                                 'nothing was published')
     first = contents[0].stamp_ns
     span = (max(c.stamp_ns for c in contents) - first) * 1e-9
     what = f'{len(contents)} JointStates of {topic} over {span:.1f} s'
