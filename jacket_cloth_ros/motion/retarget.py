@@ -18,7 +18,7 @@ from ..core.body_proxy import lowest_reach
 from ..core.skeleton import Skeleton, load_shipped_character
 from ..core.transforms import matrix_to_quat, quat_to_matrix
 from ..rigging.propose import find_body
-from .clips import looped_pose
+from .clips import clip_joints, looped_pose
 
 # Damped least squares per chain, each step damped by this (rad^2).
 DAMPING = 1e-4
@@ -31,6 +31,52 @@ ROUNDS = 12
 SETTLED = 1e-6
 # Finite-difference step of a joint (rad or m).
 STEP = 1e-5
+
+
+# A joint the clips move acts as the shipped character's when its axis and its place, seen
+# from the root at the zero pose, point within these of that joint's (deg): a robot that only
+# shares some names (iCub's arms) turns its joints about other axes or faces another way.
+SAME_AXIS_DEG = 10.0
+SAME_PLACE_DEG = 20.0
+
+
+def unlike_the_clips_character(skeleton: Skeleton, clip: str) -> str:
+    """Say how a skeleton differs from the character a clip is made for; '' if it does not.
+
+    A clip gives the shipped character's joint values and world pose: played as it is, it
+    moves another skeleton right only if that has each joint it moves, turning about the
+    same axis at the same place (a derivative of the shipped character, or that one itself).
+
+    :param skeleton: the skeleton the clip is to move.
+    :param clip: a name of ``clips.ALL_CLIPS``.
+    """
+    joints = clip_joints(clip)
+    moves = f'the clip {clip!r} moves'
+    missing = sorted(joints - set(skeleton.joint_names))
+    if len(missing) == len(joints):
+        return f'has none of the {len(joints)} joints {moves}'
+    if missing:
+        return (f'lacks {len(missing)} of the {len(joints)} joints ({", ".join(missing[:5])}) '
+                f'{moves}')
+    shipped = load_shipped_character()
+    for name in sorted(joints):
+        ours, theirs = _joint_at_rest(shipped, name), _joint_at_rest(skeleton, name)
+        for k, (what, most) in enumerate((('turns about another axis', SAME_AXIS_DEG),
+                                          ('sits another way from its root', SAME_PLACE_DEG))):
+            a, b = ours[k], theirs[k]
+            if np.linalg.norm(a) < 1e-9 or np.linalg.norm(b) < 1e-9:
+                continue
+            if np.degrees(np.arccos(np.clip(_unit(a) @ _unit(b), -1.0, 1.0))) > most:
+                return (f'names the joints {moves}, but its {name} {what} than the shipped '
+                        'character\'s')
+    return ''
+
+
+def _joint_at_rest(skeleton, name):
+    """Return a joint's axis and its place, in the root's frame at the zero pose."""
+    links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+    k = int(np.flatnonzero(skeleton.var == skeleton.joint_index[name])[0])
+    return links[k][:3, :3] @ skeleton.axis[k], links[k][:3, 3]
 
 
 class _Roles:

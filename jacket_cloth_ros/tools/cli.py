@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from .. import signals
 from ..core.config import ConfigError, regular_file_or_refuse, shipped
 from ..core.rig import load_rig
-from ..motion.clips import (ALL_CLIPS, clip_joints, clip_length, segment_at,
+from ..motion.clips import (ALL_CLIPS, clip_length, segment_at,
                             showcase_highlights)
 from ..motion.messages import clip_messages
 from .live import SourceError, Stopped, play_live
@@ -94,19 +94,17 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 
 def _retarget_if_needed(clip, skeleton, urdf_path):
-    """Return the clip retargeted onto a skeleton that lacks its joints (said in one line).
+    """Return the clip retargeted onto a skeleton unlike the clips' (said in one line).
 
-    None when the skeleton has every joint the clip moves (the shipped character's names).
+    None for the character the clips are made for: every joint the clip moves, each turning
+    as the shipped character's does (motion.retarget.unlike_the_clips_character).
     """
-    moved = clip_joints(clip)
-    missing = sorted(moved - set(skeleton.joint_names))
-    if not missing:
+    from ..motion.retarget import Retarget, unlike_the_clips_character
+    unlike = unlike_the_clips_character(skeleton, clip)
+    if not unlike:
         return None
-    from ..motion.retarget import Retarget
     retarget = Retarget(skeleton)            # a skeleton without a body refuses in one line
-    lacks = (f'has none of the {len(moved)} joints' if len(missing) == len(moved)
-             else f'lacks {len(missing)} of the {len(moved)} joints ({", ".join(missing)})')
-    print(f'jacket_cloth motion: {urdf_path} {lacks} the clip {clip!r} moves: retargeted '
+    print(f'jacket_cloth motion: {urdf_path} {unlike}: retargeted '
           f'through its body parts ({retarget.roles()}), standing upright in the world',
           file=sys.stderr)
     return retarget
