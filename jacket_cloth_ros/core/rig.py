@@ -291,20 +291,23 @@ class Rig:
                    if p.link == WORLD and p.normal @ self.world_up > 0.5]
         return (self.world_up, max(heights)) if heights else None
 
-    def body_tilt(self, positions: np.ndarray, root_rotation: np.ndarray
+    def body_tilt(self, links: np.ndarray, root_rotation: np.ndarray
                   ) -> tuple[np.ndarray, float] | None:
         """Return the body's up in the world and its angle from the world's up, if far from it.
 
-        The body's up is the root link to the hood's link in the world. Further than
-        UP_TOLERANCE_DEG from ``world_up`` the body lies down (a capture that starts on the
-        floor, a Y-up URDF whose world joint does not stand it up); the world's up stays.
+        The body's up is the root link to the hood's pivot in the world: the pivot, not its
+        link's origin, which a robot may put at its pelvis (Unitree G1's head link). Further
+        than UP_TOLERANCE_DEG from ``world_up`` the body lies down (a capture that starts on
+        the floor, a Y-up URDF whose world joint does not stand it up); the world's up stays.
 
-        :param positions: the link origins (L, 3) in the root's frame, at a pose.
+        :param links: the link transforms (L, 4, 4) in the root's frame, at a pose.
         :param root_rotation: the root's rotation in the world, (3, 3).
         :returns: (the body's up, (3,) unit, the angle from ``world_up`` in degrees), or None
             where the body stands within UP_TOLERANCE_DEG of it.
         """
-        return lying(np.asarray(root_rotation, float) @ (positions[self.hood.link] - positions[0]),
+        link = links[self.hood.link]
+        pivot = link[:3, :3] @ self.hood.pivot + link[:3, 3]
+        return lying(np.asarray(root_rotation, float) @ (pivot - links[0][:3, 3]),
                      self.world_up)
 
     def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:

@@ -465,7 +465,7 @@ class JacketSimulation:
         tilted a get-up clip's floor by 67-82 degrees).
         """
         rig = self.rig
-        tilt = rig.body_tilt(self.skeleton.forward(sample.q)[:, :3, 3], sample.root[:3, :3])
+        tilt = rig.body_tilt(self.skeleton.forward(sample.q), sample.root[:3, :3])
         if tilt is None:
             return []
         body_up, angle = tilt
@@ -528,7 +528,7 @@ class JacketSimulation:
         """
         rig, watch = self.rig, self.watches.collapse
         row, stretched = watch.worst_row(rig.cols)
-        tilt = rig.body_tilt(self.links[:, :3, 3], sample.root[:3, :3])
+        tilt = rig.body_tilt(self.links, sample.root[:3, :3])
         sunk = self._under_floor()
         if tilt is not None:
             fix = (f'the body lies {tilt[1]:.0f} deg from the world\'s up '

@@ -824,7 +824,7 @@ def propose(sk: Skeleton, forward: list | None = None,
                 'hood': hood})
     # The floor is square to the world's up (REP 103's +z), never to the body's: a motion's
     # first pose only says whether the body starts lying down (issue 47 item 1).
-    tilt = _tilt(body, first_pose)
+    tilt = _tilt(body, first_pose, _in_link(body, neck, neck_at))
     if tilt is not None:
         lines.append(f'{"first pose":>15}: the body lies {tilt:.0f} deg from the world\'s up '
                      '[0, 0, 1]; gravity and the floor stay the world\'s')
@@ -834,13 +834,18 @@ def propose(sk: Skeleton, forward: list | None = None,
     return _plain(rig), lines, body
 
 
-def _tilt(body, first_pose):
-    """Return the body's angle (deg) from the world's up at a first pose, if over tolerance."""
+def _tilt(body, first_pose, neck_point):
+    """Return the body's angle (deg) from the world's up at a first pose, if over tolerance.
+
+    The body's up runs from the pelvis to ``neck_point`` (in the neck link's frame), not to
+    that link's origin, which a robot may put at its pelvis (Unitree G1's head link).
+    """
     if first_pose is None:
         return None
     q, rotation = first_pose
     links = body.skeleton.forward(np.asarray(q, float))
-    neck = links[body.neck][:3, 3] - links[body.pelvis][:3, 3]
+    at = links[body.neck]
+    neck = at[:3, :3] @ neck_point + at[:3, 3] - links[body.pelvis][:3, 3]
     tilt = lying(np.asarray(rotation, float) @ neck, np.array(REP103_UP, float))
     return None if tilt is None else tilt[1]
 
