@@ -19,7 +19,8 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     colliders), ``body_inside_m`` (the body proxy, every vertex, as analyze's),
     ``hood_under_plane_m`` (the M8 hood particle's depth under the rig's planes) (and ``x``, the
     cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
-    counts ``published`` (inputs that put bones on /tf) and ``inputs``. Every input must be
+    counts ``published`` (inputs that put bones on /tf) and ``inputs``, and ``rig_faults``:
+    what the simulation said of the rig and the body at the start. Every input must be
     accepted and leave a finite cloth.
     """
     labels = collider_labels(loaded.setup.rig)
@@ -52,4 +53,5 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     if not keep_x:
         del series['x']
     out = {k: np.array(v) for k, v in series.items()}
-    return out | {'resets': resets, 'published': published, 'inputs': pipeline.inputs}
+    return out | {'resets': resets, 'published': published, 'inputs': pipeline.inputs,
+                  'rig_faults': list(pipeline.sim.faults.rig)}
