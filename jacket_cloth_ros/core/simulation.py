@@ -27,7 +27,7 @@ from .bundles import (
     floats, ints, posed_like)
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
-from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessWatch,
+from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessWatch, Worst,
                        collider_labels, depth_inside, edge_strain)
 from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
@@ -475,16 +475,21 @@ class JacketSimulation:
                 'gravity and the floor stay the world\'s: if this world\'s up is another axis, '
                 'write world_up in the rig']
 
-    def _inside_at_rest(self) -> list[str]:
-        """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is.
+    def deepest_at_rest(self) -> Worst:
+        """Return where the rest cloth is deepest inside the rig's colliders at the zero pose.
 
-        The floor aside: the root is not where the motion puts it.
+        The floor aside: the root is not where the motion puts it. ``value`` (m, 0 outside),
+        ``vertex`` and ``collider`` (its label), as measures.depth_inside gives them.
         """
         rig = self.rig
         c = self.collider_frames(self.skeleton.forward(np.zeros(len(self.skeleton.joint_names))),
                                  np.eye(4))
         body = c._replace(plane_points=np.zeros((0, 3)), plane_normals=np.zeros((0, 3)))
-        worst = depth_inside(rig.rest, np.ones(rig.n, dtype=bool), body, collider_labels(rig))
+        return depth_inside(rig.rest, np.ones(rig.n, dtype=bool), body, collider_labels(rig))
+
+    def _inside_at_rest(self) -> list[str]:
+        """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is."""
+        rig, worst = self.rig, self.deepest_at_rest()
         if worst.value <= INSIDE_AT_REST:
             return []
         row, col = divmod(worst.vertex, rig.cols)

@@ -22,6 +22,9 @@ from ..motion.messages import clip_messages
 from .live import SourceError, Stopped, play_live
 
 if TYPE_CHECKING:           # for the annotations only
+    from collections.abc import Callable
+
+    from ..core.rig import Rig
     from ..core.skeleton import Skeleton
 
 
@@ -442,11 +445,14 @@ def cmd_rig(args: argparse.Namespace) -> int:
     forward = _vector(args.forward, '--forward') if args.forward else None
     first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
     rig, lines, body = propose(skeleton, forward, first)
-    text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
-    try:
-        loaded = Rig(yaml.safe_load(text), skeleton, where=args.output)
-    except ConfigError as e:
-        raise ToolError(f'the proposed rig does not load ({e})') from None
+
+    def load(rig):
+        text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
+        try:
+            return text, Rig(yaml.safe_load(text), skeleton, where=args.output)
+        except ConfigError as e:
+            raise ToolError(f'the proposed rig does not load ({e})') from None
+    text, loaded = _clear_of_colliders(rig, lines, load)
     # Both files are written before either is put in place: a picture that fails (a full
     # disk) leaves no rig beside it that a second run would refuse to overwrite.
     with replacing_all([args.output] + ([args.picture] if args.picture else []),
@@ -464,6 +470,36 @@ def cmd_rig(args: argparse.Namespace) -> int:
     if args.picture:
         print(f'wrote {args.picture}')
     return 0
+
+
+def _clear_of_colliders(rig: dict, lines: list,
+                        load: 'Callable[[dict], tuple[str, Rig]]') -> tuple[str, 'Rig']:
+    """Widen a proposed cloth until it starts outside its colliders, as the node checks it.
+
+    The simulation names a rest cloth inside the body at load (TALOS's proposal was 10 mm
+    inside its pelvis): the radii grow by that depth, a line says so, and the check runs again.
+
+    :param rig: the proposed rig (propose's mapping), its radii changed in place.
+    :param lines: the proposal's lines, one added if the radii grow.
+    :param load: ``load(rig) -> (YAML text, Rig)``.
+    """
+    from ..core.fabric import load_fabric
+    from ..core.simulation import INSIDE_AT_REST, JacketSimulation
+    shape, grown = rig['cloth']['shape'], 0.0
+    text, loaded = load(rig)
+    for _ in range(4):
+        worst = JacketSimulation(loaded.skeleton, loaded,
+                                 load_fabric('tweed_jacket')).deepest_at_rest()
+        if worst.value <= INSIDE_AT_REST:
+            break
+        if not grown:
+            lines.append(f'{"cloth radii":>15}: widened: the rest cloth was '
+                         f'{worst.value * 1e3:.0f} mm inside collider {worst.collider!r}')
+        step = worst.value + INSIDE_AT_REST
+        grown += step
+        shape['radii'] = [round(r + step, 3) for r in shape['radii']]
+        text, loaded = load(rig)
+    return text, loaded
 
 
 def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
