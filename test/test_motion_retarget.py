@@ -138,6 +138,24 @@ def test_rig_motion_says_a_standing_robot_stands(tmp_path, capsys):
     assert 'first pose' not in out.out + out.err and 'lies' not in out.out + out.err, out
 
 
+def test_rig_motion_says_what_of_the_motion_it_could_not_use(tmp_path, capsys):
+    # `rig --motion` dropped the parser's warnings: a motion of another skeleton, or a world
+    # pose under another prefix, gave a verdict on the pose with no word (a hostile probe).
+    urdf, walk = fetched('humanoid.urdf'), tmp_path / 'walk.mcap'
+    assert main(['import', fetched('humanoid3d_walk.txt'), '--urdf', urdf, '-o',
+                 str(walk)]) == 0
+    capsys.readouterr()
+    argv = ['rig', '-o', str(tmp_path / 'rig.yaml'), '--force', '--motion', str(walk)]
+    assert main(argv + ['--urdf', fetched('jvrc1.urdf')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err == (f'jacket_cloth rig: --motion {walk}: none of the 35 names of its first '
+                   '/joint_states is a joint of the URDF: it moves another skeleton'), err
+    assert main(argv + ['--urdf', urdf, '--world-joint', 'nope']) == 0
+    err = capsys.readouterr().err
+    assert f'warning: --motion {walk}: its first /joint_states: ignoring joint(s) not in the ' \
+        'URDF: world_joint/rot_w' in err, err
+
+
 def _soles_over_floor(loaded):
     """Return how far the body's soles are over its rig's floor at a session's first input."""
     from jacket_cloth_ros.core.body_proxy import lowest_reach

@@ -519,6 +519,14 @@ def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
                         f'JointState ({e})') from None
     except InputRejected as e:
         raise ToolError(f'--motion {path}: its first {first.topic}: {e}') from None
+    known = set(msg.name) & set(skeleton.joint_names)
+    if skeleton.joint_names and not known:
+        raise ToolError(f'--motion {path}: none of the {len(set(msg.name))} names of its first '
+                        f'{first.topic} is a joint of the URDF: it moves another skeleton')
+    # Names the URDF lacks or a world pose under another prefix change the verdict: said.
+    for _, text in sample.warnings:
+        print(f'jacket_cloth rig: warning: --motion {path}: its first {first.topic}: {text}',
+              file=sys.stderr)
     return sample.q, sample.root[:3, :3]
 
 
