@@ -44,6 +44,18 @@ def test_malformed_urdf_is_one_clear_error(text):
         Skeleton(text)
 
 
+@pytest.mark.parametrize('kind,twice', [
+    ('link', '<link name="neck"/>'),
+    ('joint', '<joint name="head_yaw" type="fixed"><parent link="head"/><child link="x"/>'
+              '</joint><link name="x"/>')])
+def test_a_name_defined_twice_is_refused_as_urdfdom_refuses_it(urdf_text, kind, twice):
+    # The parser kept the last of two links or joints of one name, and every tool took the
+    # URDF that robot_state_publisher and RViz refuse (a hostile probe).
+    name = 'neck' if kind == 'link' else 'head_yaw'
+    with pytest.raises(ConfigError, match=f"{kind} '{name}' is defined twice"):
+        Skeleton(urdf_text.replace('</robot>', twice + '</robot>'))
+
+
 def test_a_urdf_robot_state_publisher_loads_is_loaded_and_a_refusal_says_why(urdf_text):
     # Issue 47 item 3: an empty <texture/> in a material (urdfdom skips it) was refused, and
     # the refusal stopped at the element's path: "ParseError in .../texture:" and no reason.

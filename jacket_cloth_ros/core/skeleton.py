@@ -63,6 +63,13 @@ class Skeleton:
         self.warnings = [] if not ignored else [
             f'URDF: ignored {len(ignored)} element(s) robot_state_publisher ignores too: '
             + '; '.join(ignored[:3]) + ('; ...' if len(ignored) > 3 else '')]
+        # urdfdom (robot_state_publisher, RViz) refuses a name given twice; this parser kept
+        # the last, and a character would move otherwise than they draw it.
+        for kind, items in (('link', robot.links), ('joint', robot.joints)):
+            twice = _first_twice(item.name for item in items)
+            if twice is not None:
+                raise ConfigError(f'URDF: malformed robot description ({kind} {twice!r} is '
+                                  'defined twice, which robot_state_publisher refuses too)')
         self.name = robot.name
         self.root = root
         self.urdf_xml = urdf_xml          # its <collision> shapes can become colliders (rig)
@@ -286,6 +293,16 @@ def _check_numbers(joint, what, values, limit):
     if v.shape != (len(values),) or not np.isfinite(v).all() or (abs(v) > limit).any():
         raise ConfigError(f'URDF: joint {joint!r} {what} {v.tolist()}: each must be finite and '
                           f'within +-{limit}')
+
+
+def _first_twice(names):
+    """Return the first name met a second time, or None."""
+    seen = set()
+    for name in names:
+        if name in seen:
+            return name
+        seen.add(name)
+    return None
 
 
 def shipped_character_urdf() -> str:
