@@ -79,6 +79,7 @@ class Capture:
     root: np.ndarray             # (F, 7) root pose: x, y, z (m), qx, qy, qz, qw
     link_names: list             # the BVH joints' and end sites' links, file order
     height_m: float              # the rest skeleton's height, metres
+    lies_along_z: bool = False   # its rest skeleton spans twice as far along z as along y
 
     @property
     def frames(self) -> int:
@@ -197,6 +198,12 @@ def height_warning(capture: 'Capture') -> str | None:
     :param capture: an imported capture (its ``height_m`` and ``scale``).
     """
     low, high = HUMAN_HEIGHT_M
+    if capture.lies_along_z:
+        # Another unit would not mend it: a z-up export lies along BVH's forward axis (a
+        # T-pose's arms span x, which says nothing of its up).
+        return (f'the rest skeleton spans most along z, not y, which BVH stands on and this '
+                f'import reads as up (it is {capture.height_m:.2f} m tall along y): export the '
+                'capture y-up')
     if low <= capture.height_m <= high:
         return None
     return (f'the capture is {capture.height_m:.2f} m tall at {capture.scale:g} m per unit, not '
@@ -338,10 +345,11 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
             rot = rot @ axis_rotations(Y_UP_TO_Z_UP[:, _AXIS[ch]], angles[:, 0, i])
         quat = continuous_quaternions(matrix_to_quat(rot))
         trans = bvh.root_pos @ Y_UP_TO_Z_UP.T * scale
-    height = float(np.ptp(rest_offsets(bvh)[:, 1])) * scale
+    spans = np.ptp(rest_offsets(bvh), axis=0)
     capture = Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
                       joint_names=joint_names, positions=positions,
-                      root=np.hstack([trans, quat]), link_names=link_names, height_m=height)
+                      root=np.hstack([trans, quat]), link_names=link_names,
+                      height_m=float(spans[1]) * scale, lies_along_z=spans[2] > 2 * spans[1])
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')
