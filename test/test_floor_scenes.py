@@ -208,3 +208,25 @@ def test_a_body_under_the_floor_is_named_as_what_fights_the_cloth(skeleton, rig)
     standing = JacketSimulation(skeleton, rig, load_fabric('tweed_jacket'))
     standing.process(10 ** 9, list(skeleton.joint_names), np.zeros(len(skeleton.joint_names)))
     assert sim._under_floor() and standing._under_floor() == ''
+
+
+def test_a_body_under_the_floor_with_shapes_the_reader_refuses_is_said_not_a_crash(skeleton):
+    # The floor's line measured the soles by the collision shapes, whose reader refuses what
+    # the URDF's parser loads (a 2 km sphere): the line raised and ended the simulation (a
+    # review). The link origins stand in, as they do to stand a character.
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.core.skeleton import Skeleton
+    text = skeleton.urdf_xml.replace('<link name="l_hand"/>', '<link name="l_hand"><collision>'
+                                     '<geometry><sphere radius="2000"/></geometry></collision>'
+                                     '</link>')
+    assert text != skeleton.urdf_xml
+    odd = Skeleton(text)
+    sim = JacketSimulation(odd, load_rig(odd), load_fabric('tweed_jacket'))
+    names = list(odd.joint_names) + [f'world_joint/{v}' for v in (
+        'trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')]
+    sunk = np.append(np.zeros(len(odd.joint_names)), [0.0] * 6 + [1.0])
+    said = []
+    for k in range(2 * 60):
+        said += [w for c, w in sim.process(10 ** 9 + k * 10 ** 9 // 60, names,
+                                           sunk).warnings if c == 'collapse']
+    assert said and "under the rig's floor" in said[0], said

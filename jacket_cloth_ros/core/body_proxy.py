@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from .bundles import Colliders
+from .config import ConfigError
 from .transforms import rpy_matrix
 from .urdf_colliders import collider_name, urdf_shapes
 
@@ -116,16 +117,21 @@ def body_proxy(skeleton: 'Skeleton', leave_out: Sequence[int] = ()) -> BodyProxy
 def lowest_reach(skeleton: 'Skeleton', rest: np.ndarray, up: np.ndarray) -> float:
     """Return how far down ``up`` the body reaches at a pose: the soles, as its shapes say.
 
-    Its collision shapes, else capsules on its bones (:func:`body_proxy`), else its links:
-    what stands a character on the floor, the retargeted clips and a pose sent without its
-    world pose alike.
+    Its collision shapes, else capsules on its bones (:func:`body_proxy`), else (or where the
+    shapes' reader refuses them) its links: what stands a character on the floor, the
+    retargeted clips and a pose sent without its world pose alike.
 
     :param skeleton: the character.
     :param rest: (L,4,4) its links at the pose, in the root's frame.
     :param up: (3,) the world's up, unit.
     """
-    shapes = body_proxy(skeleton).posed(rest)
     low = [float((rest[:, :3, 3] @ up).min())]
+    try:
+        shapes = body_proxy(skeleton).posed(rest)
+    except ConfigError:
+        # Shapes the URDF's own parser loads but their reader refuses only refine where the
+        # soles are: the link origins stand in, and nothing that stands a body fails on them.
+        return low[0]
     if len(shapes.centers):
         reach = np.linalg.norm(np.einsum('kij,i->kj', shapes.axes, up) * shapes.radii, axis=1)
         low.append(float((shapes.centers @ up - reach).min()))

@@ -70,18 +70,10 @@ def standing_root(skeleton: 'Skeleton', up: 'npt.ArrayLike', floor: float = 0.0)
 
 @functools.lru_cache(maxsize=16)
 def _lowest_at_rest(skeleton, up):
-    """Return body_proxy.lowest_reach of the zero pose, once per character (a crowd's share one).
-
-    Collision shapes a URDF's own parser loads but the shapes' reader refuses leave the link
-    origins: they only refine where the soles are, never stop a character from loading.
-    """
+    """Return body_proxy.lowest_reach of the zero pose, once per character (a crowd shares it)."""
     from .body_proxy import lowest_reach
-    from .config import ConfigError
     rest = skeleton.forward(np.zeros(len(skeleton.joint_names)))
-    try:
-        return lowest_reach(skeleton, rest, np.array(up))
-    except ConfigError:
-        return float((rest[:, :3, 3] @ np.array(up)).min())
+    return lowest_reach(skeleton, rest, np.array(up))
 
 
 class InputParser:
