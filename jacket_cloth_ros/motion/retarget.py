@@ -38,6 +38,9 @@ STEP = 1e-5
 # shares some names (iCub's arms) turns its joints about other axes or faces another way.
 SAME_AXIS_DEG = 10.0
 SAME_PLACE_DEG = 20.0
+# ... and lies within this share of that joint's distance from the root: a skeleton of
+# another size would stand the clip's root height in the air or in the floor.
+SAME_DISTANCE_SHARE = 0.1
 
 
 def unlike_the_clips_character(skeleton: Skeleton, clip: str) -> str:
@@ -69,13 +72,19 @@ def unlike_the_clips_character(skeleton: Skeleton, clip: str) -> str:
             if np.degrees(np.arccos(np.clip(_unit(a) @ _unit(b), -1.0, 1.0))) > most:
                 return (f'names the joints {moves}, but its {name} {what} than the shipped '
                         'character\'s')
+        far, ours_far = np.linalg.norm(theirs[1]), np.linalg.norm(ours[1])
+        if abs(far - ours_far) > SAME_DISTANCE_SHARE * ours_far:
+            return (f'names the joints {moves}, but its {name} is {far:.2f} m from its root, '
+                    f'the shipped character\'s {ours_far:.2f} m')
     return ''
 
 
 def _joint_at_rest(skeleton, name):
     """Return a joint's axis and its place, in the root's frame at the zero pose."""
     links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
-    k = int(np.flatnonzero(skeleton.var == skeleton.joint_index[name])[0])
+    # The link the joint itself moves: a mimic joint shares its value, not its axis.
+    k = next(k for k, link in enumerate(skeleton.link_names)
+             if skeleton.joint_of_link.get(link) == name)
     return links[k][:3, :3] @ skeleton.axis[k], links[k][:3, 3]
 
 
