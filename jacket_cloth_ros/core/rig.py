@@ -159,6 +159,9 @@ def _clean(rotation):
 # The body's up (root link to the hood's link) at the first input further than this (deg) from
 # the world's up: the body lies down, which is said once and changes nothing (issue 47 item 1).
 UP_TOLERANCE_DEG = 45.0
+# A hood link's origin nearer the root than this share of the body's height says nothing of
+# the body's up: the hood's pivot on that link does.
+NEAR_ROOT_PER_HEIGHT = 0.1
 REP103_UP = (0.0, 0.0, 1.0)     # the world's up when the rig does not say otherwise
 
 
@@ -295,10 +298,11 @@ class Rig:
                   ) -> tuple[np.ndarray, float] | None:
         """Return the body's up in the world and its angle from the world's up, if far from it.
 
-        The body's up is the root link to the hood's pivot in the world: the pivot, not its
-        link's origin, which a robot may put at its pelvis (Unitree G1's head link). Further
-        than UP_TOLERANCE_DEG from ``world_up`` the body lies down (a capture that starts on
-        the floor, a Y-up URDF whose world joint does not stand it up); the world's up stays.
+        The body's up is the root link to the hood's link in the world, or to the hood's
+        pivot where that link's origin is near the root (Unitree G1 puts its head link's at
+        its pelvis). Further than UP_TOLERANCE_DEG from ``world_up`` the body lies down (a
+        capture that starts on the floor, a Y-up URDF whose world joint does not stand it
+        up); the world's up stays.
 
         :param links: the link transforms (L, 4, 4) in the root's frame, at a pose.
         :param root_rotation: the root's rotation in the world, (3, 3).
@@ -306,9 +310,10 @@ class Rig:
             where the body stands within UP_TOLERANCE_DEG of it.
         """
         link = links[self.hood.link]
-        pivot = link[:3, :3] @ self.hood.pivot + link[:3, 3]
-        return lying(np.asarray(root_rotation, float) @ (pivot - links[0][:3, 3]),
-                     self.world_up)
+        up = link[:3, 3] - links[0][:3, 3]
+        if np.linalg.norm(up) < NEAR_ROOT_PER_HEIGHT * self.height_m:
+            up = link[:3, :3] @ self.hood.pivot + up
+        return lying(np.asarray(root_rotation, float) @ up, self.world_up)
 
     def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
         """Return the world's forward, left and up as columns: the views' axes.

@@ -53,9 +53,10 @@ NONFINITE_BONES = 'non-finite bones'
 # Deeper than this share of its height under the floor, the body itself is said to be what
 # fights the cloth: the shapes that stand for feet sink about that far in a captured stride.
 UNDER_FLOOR_PER_HEIGHT = 0.05
-# The root stood on the rig's floor, a guess, until the source sent its world pose: the cloth
-# restarts there rather than fall or fly the way between, which no motion made.
-WORLD_BEGAN = 'the world pose began (the root stood on the floor before)'
+# The root stood on the rig's floor (or at the origin), a guess, until the source sent its
+# world pose: the cloth restarts there rather than fall or fly the way between, which no
+# motion made.
+WORLD_BEGAN = 'the world pose began (the root was placed without one before)'
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
 # The cloth stretched more than this share at the first input is named (issue 19's target).
@@ -458,7 +459,8 @@ class JacketSimulation:
     def _lying_down(self, sample: Sample) -> list[str]:
         """Say that the body lies down at the first input, if it does; gravity stays the world's.
 
-        The body's up is the root link to the hood's link, as the input poses them. Further
+        The body's up is the root link to the hood's link (rig.body_tilt), as the input poses
+        them. Further
         than rig.UP_TOLERANCE_DEG from the world's up, a capture that starts on the floor (or a
         Y-up URDF whose world joint does not stand it up) lies down: one line says so, and
         gravity and the floor keep the world's up (issue 47 item 1: turning them onto the body

@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 
 from ..core.config import ConfigError
-from ..core.rig import REP103_UP, lying
+from ..core.rig import REP103_UP
 from ..core.urdf_colliders import urdf_shapes
 from ..core.skeleton import Skeleton
 from ..core.transforms import rpy_matrix, snapped_to_axis
@@ -697,18 +697,11 @@ def _torso_extent(body, links):
     return depth, width, sorted(set(found))
 
 
-Pose = tuple[np.ndarray, np.ndarray]      # joint values, the root's world rotation
-
-
-def propose(sk: Skeleton, forward: list | None = None,
-            first_pose: Pose | None = None) -> tuple[dict, list[str], Body]:
+def propose(sk: Skeleton, forward: list | None = None) -> tuple[dict, list[str], Body]:
     """Return the rig (a mapping for YAML), the lines saying what was chosen and why, the body.
 
     :param sk: the skeleton.
     :param forward: the direction the character faces, (3,) in its root frame; None: inferred.
-    :param first_pose: (joint values, the root's world rotation) of a motion's first input:
-        a line says whether the body lies down in it; the world's up (gravity, the floor) stays
-        REP 103's +z (issue 47 item 1). None: no such line.
     """
     body = find_body(sk, None if forward is None else np.asarray(forward, float))
     up, fwd, left = body.up, body.forward, body.left
@@ -822,32 +815,12 @@ def propose(sk: Skeleton, forward: list | None = None,
         rig['forward'] = _r(fwd)
     rig.update({'cloth': cloth, 'jacket_bones': {'sleeves': sleeves, 'upper': upper},
                 'hood': hood})
-    # The floor is square to the world's up (REP 103's +z), never to the body's: a motion's
-    # first pose only says whether the body starts lying down (issue 47 item 1).
-    tilt = _tilt(body, first_pose, _in_link(body, neck, neck_at))
-    if tilt is not None:
-        lines.append(f'{"first pose":>15}: the body lies {tilt:.0f} deg from the world\'s up '
-                     '[0, 0, 1]; gravity and the floor stay the world\'s')
+    # The floor is square to the world's up (REP 103's +z), never to the body's (issue 47
+    # item 1).
     rig['colliders'], why = _colliders(body, shape_link, top_h, rx, ry, s, ahead,
                                        np.array(REP103_UP))
     lines.append(f'{"colliders":>15}: {why}')
     return _plain(rig), lines, body
-
-
-def _tilt(body, first_pose, neck_point):
-    """Return the body's angle (deg) from the world's up at a first pose, if over tolerance.
-
-    The body's up runs from the pelvis to ``neck_point`` (in the neck link's frame), not to
-    that link's origin, which a robot may put at its pelvis (Unitree G1's head link).
-    """
-    if first_pose is None:
-        return None
-    q, rotation = first_pose
-    links = body.skeleton.forward(np.asarray(q, float))
-    at = links[body.neck]
-    neck = at[:3, :3] @ neck_point + at[:3, 3] - links[body.pelvis][:3, 3]
-    tilt = lying(np.asarray(rotation, float) @ neck, np.array(REP103_UP, float))
-    return None if tilt is None else tilt[1]
 
 
 def _colliders(body, shape_link, top_h, rx, ry, s, ahead, world_up):

@@ -444,7 +444,7 @@ def cmd_rig(args: argparse.Namespace) -> int:
         print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
     forward = _vector(args.forward, '--forward') if args.forward else None
     first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
-    rig, lines, body = propose(skeleton, forward, first)
+    rig, lines, body = propose(skeleton, forward)
 
     def load(rig):
         text = to_yaml(rig, lines, os.path.basename(args.urdf), body)
@@ -453,6 +453,14 @@ def cmd_rig(args: argparse.Namespace) -> int:
         except ConfigError as e:
             raise ToolError(f'the proposed rig does not load ({e})') from None
     text, loaded = _clear_of_colliders(rig, lines, load)
+    if first is not None:
+        # As the simulation judges a first input; gravity and the floor stay the world's.
+        tilt = loaded.body_tilt(skeleton.forward(first[0]), first[1])
+        if tilt is not None:
+            up = ', '.join(f'{v:g}' for v in loaded.world_up)
+            lines.append(f'{"first pose":>15}: the body lies {tilt[1]:.0f} deg from the world\'s '
+                         f'up [{up}]; gravity and the floor stay the world\'s')
+            text, loaded = load(rig)
     # Both files are written before either is put in place: a picture that fails (a full
     # disk) leaves no rig beside it that a second run would refuse to overwrite.
     with replacing_all([args.output] + ([args.picture] if args.picture else []),
@@ -476,8 +484,9 @@ def _clear_of_colliders(rig: dict, lines: list,
                         load: 'Callable[[dict], tuple[str, Rig]]') -> tuple[str, 'Rig']:
     """Widen a proposed cloth until it starts outside its colliders, as the node checks it.
 
-    The simulation names a rest cloth inside the body at load (TALOS's proposal was 10 mm
-    inside its pelvis): the radii grow by that depth, a line says so, and the check runs again.
+    The simulation names a rest cloth inside the body at load (TALOS's proposal was inside
+    its pelvis): the radii grow by that depth until the check passes, a few rounds at most,
+    and a line says by how much, and where the cloth is still inside if it is (a warning).
 
     :param rig: the proposed rig (propose's mapping), its radii changed in place.
     :param lines: the proposal's lines, one added if the radii grow.
@@ -485,21 +494,30 @@ def _clear_of_colliders(rig: dict, lines: list,
     """
     from ..core.fabric import load_fabric
     from ..core.simulation import INSIDE_AT_REST, JacketSimulation
-    shape, grown = rig['cloth']['shape'], 0.0
+
+    def deepest(loaded):
+        return JacketSimulation(loaded.skeleton, loaded,
+                                load_fabric('tweed_jacket')).deepest_at_rest()
+    shape = rig['cloth']['shape']
+    proposed = list(shape['radii'])
     text, loaded = load(rig)
+    first = worst = deepest(loaded)
     for _ in range(4):
-        worst = JacketSimulation(loaded.skeleton, loaded,
-                                 load_fabric('tweed_jacket')).deepest_at_rest()
         if worst.value <= INSIDE_AT_REST:
             break
-        if not grown:
-            lines.append(f'{"cloth radii":>15}: widened: the rest cloth was '
-                         f'{worst.value * 1e3:.0f} mm inside collider {worst.collider!r}')
-        step = worst.value + INSIDE_AT_REST
-        grown += step
-        shape['radii'] = [round(r + step, 3) for r in shape['radii']]
+        shape['radii'] = [round(r + worst.value + INSIDE_AT_REST, 3) for r in shape['radii']]
         text, loaded = load(rig)
-    return text, loaded
+        worst = deepest(loaded)
+    if worst is first:
+        return text, loaded
+    line = (f'{"cloth radii":>15}: widened from {proposed} to {shape["radii"]}: the rest '
+            f'cloth was {first.value * 1e3:.0f} mm inside collider {first.collider!r}')
+    if worst.value > INSIDE_AT_REST:
+        line += (f', and is still {worst.value * 1e3:.0f} mm inside {worst.collider!r}: widen '
+                 'cloth.shape.radii or shrink that collider')
+        print(f'jacket_cloth rig: warning: {line.strip()}', file=sys.stderr)
+    lines.append(line)
+    return load(rig)
 
 
 def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
@@ -513,16 +531,18 @@ def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
         raise ToolError(f'--motion {path}: no sensor_msgs/msg/JointState message in it')
     try:
         msg = JointStateReader().read(first.data)
-        sample = InputParser(skeleton, world_joint).parse(msg.stamp_ns, msg.name, msg.position)
+        parser = InputParser(skeleton, world_joint)
+        sample = parser.parse(msg.stamp_ns, msg.name, msg.position)
     except DECODE_ERRORS as e:
         raise ToolError(f'--motion {path}: its first {first.topic} does not decode as '
                         f'JointState ({e})') from None
     except InputRejected as e:
         raise ToolError(f'--motion {path}: its first {first.topic}: {e}') from None
-    known = set(msg.name) & set(skeleton.joint_names)
-    if skeleton.joint_names and not known:
-        raise ToolError(f'--motion {path}: none of the {len(set(msg.name))} names of its first '
-                        f'{first.topic} is a joint of the URDF: it moves another skeleton')
+    # A message of the world pose alone is the node's too; joints none of the URDF's are not.
+    joints = set(msg.name) - set(parser.world_names)
+    if joints and not joints & set(skeleton.joint_names):
+        raise ToolError(f'--motion {path}: none of the {len(joints)} joint names of its first '
+                        f'{first.topic} is the URDF\'s: it moves another skeleton')
     # Names the URDF lacks or a world pose under another prefix change the verdict: said.
     for _, text in sample.warnings:
         print(f'jacket_cloth rig: warning: --motion {path}: its first {first.topic}: {text}',
