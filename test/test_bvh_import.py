@@ -226,7 +226,8 @@ def test_a_cmu_capture_is_guessed_in_its_unit_and_a_wrong_unit_is_said(tmp_path,
 
 def test_a_capture_exported_z_up_is_said_to_be_so_not_given_another_unit(tmp_path, capsys):
     # A z-up export was said to be 0.20 m tall with the advice to give its unit, which mends
-    # nothing (a hostile probe); the real captures, y-up, get no line.
+    # nothing (a hostile probe), and its unit was guessed from its depth (a review); the real
+    # captures, y-up, get no line.
     path = fetched('test_mocapbank.bvh')
     with open(path, encoding='utf-8') as f:
         lines = f.read().splitlines()
@@ -237,8 +238,10 @@ def test_a_capture_exported_z_up_is_said_to_be_so_not_given_another_unit(tmp_pat
     zup = tmp_path / 'zup.bvh'
     zup.write_text('\n'.join(lines) + '\n')
     assert main(['import', str(zup), '-o', str(tmp_path / 'zup.mcap')]) == 0
-    err = capsys.readouterr().err.strip().splitlines()
+    said = capsys.readouterr()
+    err = said.err.strip().splitlines()
     assert len(err) == 1 and 'spans most along z, not y' in err[0], err
+    assert 'scale 0.01 m per unit' in said.out, said.out      # its unit, from its z span
     assert 'export the capture y-up' in err[0] and '--scale' not in err[0], err
     for real in ('test_mocapbank.bvh', 'test_freebvh.bvh'):
         assert main(['import', fetched(real), '-o', str(tmp_path / f'{real}.mcap')]) == 0

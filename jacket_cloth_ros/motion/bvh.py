@@ -199,8 +199,7 @@ def height_warning(capture: 'Capture') -> str | None:
     """
     low, high = HUMAN_HEIGHT_M
     if capture.lies_along_z:
-        # Another unit would not mend it: a z-up export lies along BVH's forward axis (a
-        # T-pose's arms span x, which says nothing of its up).
+        # Another unit would not mend it: a z-up export lies along BVH's forward axis.
         return (f'the rest skeleton spans most along z, not y, which BVH stands on and this '
                 f'import reads as up (it is {capture.height_m:.2f} m tall along y): export the '
                 'capture y-up')
@@ -210,12 +209,22 @@ def height_warning(capture: 'Capture') -> str | None:
             f'a person\'s {low:g}-{high:g} m: give its unit with --scale')
 
 
+def _lies_along_z(spans):
+    """Tell whether a rest skeleton's spans (x, y, z) say it was exported z-up.
+
+    Twice as far along z as along y: a T-pose's arms span x, which says nothing of its up.
+    """
+    return bool(spans[2] > 2.0 * spans[1])
+
+
 def guess_scale(bvh: Bvh) -> tuple[float, str]:
     """Return (metres per unit, unit name) whose rest skeleton is nearest an adult's height.
 
     :param bvh: the capture as ``read_bvh`` read it.
     """
-    height = float(np.ptp(rest_offsets(bvh)[:, 1]))
+    spans = np.ptp(rest_offsets(bvh), axis=0)
+    # A z-up export's height is its z span: its unit is still guessed right (and it is said).
+    height = float(spans[2] if _lies_along_z(spans) else spans[1])
     if height <= 0.0:
         return 1.0, 'm'
     unit = min(UNITS, key=lambda u: abs(math.log(height * UNITS[u] / _TYPICAL_HEIGHT_M)))
@@ -349,7 +358,7 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     capture = Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
                       joint_names=joint_names, positions=positions,
                       root=np.hstack([trans, quat]), link_names=link_names,
-                      height_m=float(spans[1]) * scale, lies_along_z=spans[2] > 2 * spans[1])
+                      height_m=float(spans[1]) * scale, lies_along_z=_lies_along_z(spans))
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')
