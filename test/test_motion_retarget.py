@@ -126,6 +126,29 @@ def test_motion_urdf_moves_a_robot_in_its_proposed_jacket(name, clip, proposed, 
         assert depth.max() <= 0.01 and np.percentile(depth, 99) <= 0.003
 
 
+def test_a_clip_plays_as_it_is_only_on_a_skeleton_of_the_shipped_characters_joints():
+    # Names alone let iCub play arms_up as it is (a probe); directions alone let the shipped
+    # character at half its size play it as it is, its soles 0.5 m over the floor, and a
+    # mimic joint stand in for the joint it follows (a review).
+    import re
+    from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
+    from jacket_cloth_ros.motion.retarget import unlike_the_clips_character
+    text = shipped_character_urdf()
+    half = re.sub(r'xyz="([^"]+)"', lambda m: 'xyz="{}"'.format(
+        ' '.join(str(float(v) / 2) for v in m.group(1).split())), text)
+    tassel = text.replace('</robot>', '<link name="tassel"/><joint name="tassel_joint" '
+                          'type="revolute"><parent link="base_link"/><child link="tassel"/>'
+                          '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" '
+                          'velocity="1"/><mimic joint="l_shoulder_roll"/></joint></robot>')
+    for clip in ALL_CLIPS:
+        assert unlike_the_clips_character(Skeleton(text), clip) == ''
+        assert unlike_the_clips_character(Skeleton(tassel), clip) == ''
+        assert ' m from its root, the shipped character\'s ' in unlike_the_clips_character(
+            Skeleton(half), clip)
+    said = unlike_the_clips_character(load_skeleton(fetched('icub.urdf')), 'arms_up')
+    assert said.startswith("names the joints the clip 'arms_up' moves, but its "), said
+
+
 def test_rig_motion_says_a_standing_robot_stands(tmp_path, capsys):
     # `rig --motion` judged the first pose by the neck link's origin, which Unitree G1 puts
     # at its pelvis: a standing G1 was said to lie 95 deg from the world's up (a probe).
@@ -148,12 +171,25 @@ def test_rig_motion_says_what_of_the_motion_it_could_not_use(tmp_path, capsys):
     argv = ['rig', '-o', str(tmp_path / 'rig.yaml'), '--force', '--motion', str(walk)]
     assert main(argv + ['--urdf', fetched('jvrc1.urdf')]) == 1
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert err == (f'jacket_cloth rig: --motion {walk}: none of the 35 names of its first '
-                   '/joint_states is a joint of the URDF: it moves another skeleton'), err
+    assert err == (f'jacket_cloth rig: --motion {walk}: none of the 28 joint names of its '
+                   'first /joint_states is the URDF\'s: it moves another skeleton'), err
     assert main(argv + ['--urdf', urdf, '--world-joint', 'nope']) == 0
     err = capsys.readouterr().err
     assert f'warning: --motion {walk}: its first /joint_states: ignoring joint(s) not in the ' \
         'URDF: world_joint/rot_w' in err, err
+    # A message of the world pose alone is the node's too: taken, not called another skeleton.
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    world = tmp_path / 'world.mcap'
+    recorder = SessionRecorder(str(world))
+    recorder.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    recorder.write('/joint_states', joint_state(10 ** 9, [f'world_joint/{v}' for v in
+                                                          WORLD_VARIABLES],
+                                                [0.0] * 6 + [1.0]), 10 ** 9)
+    recorder.close()
+    assert main(['rig', '-o', str(tmp_path / 'w.yaml'), '--motion', str(world), '--urdf',
+                 urdf]) == 0
 
 
 def _soles_over_floor(loaded):

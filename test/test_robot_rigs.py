@@ -390,3 +390,21 @@ def test_an_arm_that_ends_at_the_elbow_gets_a_forearm_sleeve_to_the_links_end(tm
     assert s['horizontal_stretch'].max() <= 0.10
     for depth in (s['inside_m'], s['body_inside_m']):
         assert depth.max() <= 0.01 and np.percentile(depth, 99) <= 0.003
+
+
+def test_a_proposal_still_inside_its_colliders_after_widening_is_said_so(tmp_path, capsys,
+                                                                         monkeypatch):
+    # rig widened a few rounds and said "widened" even when the cloth was still inside (a
+    # review): the last round is checked, and what is left said as a warning.
+    from jacket_cloth_ros.core.measures import Worst
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    monkeypatch.setattr(JacketSimulation, 'deepest_at_rest',
+                        lambda sim: Worst(0.02, 3, 'pelvis'))
+    assert main(['rig', '--urdf', shipped('character.urdf'), '-o',
+                 str(tmp_path / 'rig.yaml')]) == 0
+    out = capsys.readouterr()
+    assert 'cloth radii: widened from [' in out.out, out.out
+    [warning] = [line for line in out.err.splitlines() if 'warning' in line]
+    assert warning.endswith("the rest cloth was 20 mm inside collider 'pelvis', and is still 20 "
+                            "mm inside 'pelvis': widen cloth.shape.radii or shrink that "
+                            'collider'), warning

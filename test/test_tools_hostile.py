@@ -928,6 +928,20 @@ def test_a_crowd_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(
     warned = capsys.readouterr().err.strip().splitlines()
     assert len(warned) == 1 and warned[0].startswith(
         f'jacket_cloth replay: warning: {path}: a: the simulation took none of its 20 '), warned
+    # b's inputs taken but no finite bones ever: no character gave cloth, so nothing written.
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+    real = JacketSimulation.bones
+
+    def never_finite(sim):
+        bones = real(sim)
+        bones.finite = False
+        return bones
+    with pytest.MonkeyPatch.context() as patched:
+        patched.setattr(JacketSimulation, 'bones', never_finite)
+        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o2.mcap')])
+    assert 'the simulation took none of its 20 JointState messages' in err, err
+    assert err.endswith(", nor of any other character's; nothing written"), err
+    assert not (tmp_path / 'o2.mcap').exists()
 
 
 def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
