@@ -161,3 +161,19 @@ def test_play_refuses_a_urdf_as_motion_does(tmp_path, capsys, published, text):
     said = _one_line_error(capsys, ['motion', '--urdf', str(urdf), '--wait', '0'])
     assert err.removeprefix('jacket_cloth play: ') == said.removeprefix('jacket_cloth motion: ')
     assert str(urdf) in err
+
+
+def test_play_refuses_a_recorded_urdf_no_tool_would_load(tmp_path, capsys, published):
+    # Only a URDF given with --urdf was checked: a recording's own went out as
+    # robot_description whatever it held (the fix's own report).
+    from jacket_cloth_ros.recording.writer import SESSION_CONFIG
+    path = tmp_path / 'cyclic.mcap'
+    rec = SessionRecorder(str(path))
+    rec.add_topic('/joint_states', 'sensor_msgs/msg/JointState', qos_profile_yaml())
+    rec.add_metadata(SESSION_CONFIG, {'urdf': CYCLIC})
+    rec.write('/joint_states', joint_state(10 ** 9, ['a', 'b'], [0.0, 1.0]), 10 ** 9)
+    rec.close()
+    err = _one_line_error(capsys, ['play', str(path), '--wait', '0'])
+    assert err.startswith(f'jacket_cloth play: {path}: its recorded URDF: malformed robot '
+                          'description'), err
+    assert published == []

@@ -10,8 +10,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ..core.config import read_text
-from ..core.skeleton import skeleton_from
+from ..core.skeleton import load_skeleton, skeleton_from
 from ..recording.reader import RecordingError, read_recording
 from ..recording.writer import SESSION_CONFIG
 from ..ros.cdr import DECODE_ERRORS, JointStateReader
@@ -29,18 +28,18 @@ def recorded_inputs(path: str, topic: str | None = None,
         order, offsets from the first header stamp, a line saying what plays).
     :raises RecordingError: no JointState, or one that does not decode or holds a position
         that is not a finite number (named by its stamp), before anything is published.
-    :raises ConfigError: ``urdf_path`` is no character's URDF, refused as ``motion --urdf``
-        refuses it.
+    :raises ConfigError: ``urdf_path``, or the recording's own URDF, is no character's URDF,
+        refused as ``motion --urdf`` refuses it.
     """
-    if urdf_path:
-        # Loaded as every other tool loads a character, so a file that is no URDF, or one
-        # whose links form a cycle, is refused before the node is up, not published.
-        urdf = read_text(urdf_path, 'URDF')
-        skeleton_from(urdf, f'URDF {urdf_path}')
+    # Loaded as every other tool loads a character, so a file that is no URDF, or one whose
+    # links form a cycle, is refused before the node is up, not published.
+    urdf = load_skeleton(urdf_path).urdf_xml if urdf_path else None
     recording = read_recording(path, kinds=(JOINT_STATE,))
     topic = joint_state_topic(recording, topic)
     if not urdf_path:
         urdf = recording.metadata.get(SESSION_CONFIG, {}).get('urdf') or None
+        if urdf:            # the recording's own, checked as a given one is
+            skeleton_from(urdf, f'{path}: its recorded URDF')
     messages = [m for m in recording.messages if m.topic == topic]
     if not messages:
         raise RecordingError(f'{path}: no message on {topic}')
