@@ -119,14 +119,19 @@ def _floats(frame: list) -> bool:
     return True
 
 
-def _quaternion_columns() -> list:
-    """Return (first column, what) of each quaternion in a frame: the root's, then joints'."""
-    out, i = [(4, 'the root orientation')], 8
+def _joint_columns() -> list:
+    """Return (first column, joint, values) of each joint in a frame, in LAYOUT's order."""
+    out, i = [], 8
     for joint, n in LAYOUT:
-        if n == 4:
-            out.append((i, f'joint {joint}'))
+        out.append((i, joint, n))
         i += n
     return out
+
+
+def _quaternion_columns() -> list:
+    """Return (first column, what) of each quaternion in a frame: the root's, then joints'."""
+    return [(4, 'the root orientation')] + [(i, f'joint {joint}')
+                                            for i, joint, n in _joint_columns() if n == 4]
 
 
 def check_quaternions(frames: np.ndarray) -> None:
@@ -212,8 +217,7 @@ def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
     times = np.concatenate([[0.0], np.cumsum(frames[:-1, 0])])
     count = int(math.floor(times[-1] / dt + 1e-6)) + 1
     out = np.empty((count, frames.shape[1]))
-    quats = [4] + [8 + sum(n for _, n in LAYOUT[:i]) for i, (_, n) in enumerate(LAYOUT)
-                   if n == 4]
+    quats = [i for i, _ in _quaternion_columns()]
     for j in range(count):
         t = j * dt
         k = min(int(np.searchsorted(times, t, side='right')) - 1, len(frames) - 2)
@@ -267,14 +271,13 @@ def convert(frames: np.ndarray, name: str, urdf: str, scale: float = 1.0 / PYBUL
                 raise ClipError(f'its frames, resampled every {dt:g} s, would be {count:.0f}, '
                                 f'over {MAX_RESAMPLED}')
             frames = _resample(frames, dt)
-        columns, i = [], 8
-        for _, n in LAYOUT:
+        columns = []
+        for i, _, n in _joint_columns():
             if n == 4:
                 rot = quat_to_matrix(_xyzw(frames[:, i:i + 4]))
                 columns.append(continuous_zxy(zxy_angles(rot)))
             else:
                 columns.append(continuous_angles(frames[:, i:i + 1]))
-            i += n
         root_q = continuous_quaternions(_turned_quaternions(_xyzw(frames[:, 4:8])))
         root_p = frames[:, 1:4] @ Y_UP_WORLD.T * scale
     capture = Capture(name=name, urdf=urdf, frame_time=dt, scale=scale,
