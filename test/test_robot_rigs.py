@@ -408,3 +408,29 @@ def test_a_proposal_still_inside_its_colliders_after_widening_is_said_so(tmp_pat
     assert warning.endswith("the rest cloth was 20 mm inside collider 'pelvis', and is still 20 "
                             "mm inside 'pelvis': widen cloth.shape.radii or shrink that "
                             'collider'), warning
+
+
+def test_a_picture_of_a_robot_with_visuals_shows_its_jacket_on_a_body(tmp_path):
+    # markers_body auto leaves a URDF with visuals to RViz's robot model, and the pictures,
+    # drawn from the markers, showed iCub's jacket on nothing (a look at one).
+    from jacket_cloth_ros.recording.reader import read_recording
+    from jacket_cloth_ros.ros.cdr import read_markers
+    from jacket_cloth_ros.tools.picture import moments_at, recorded_frames
+    from jacket_cloth_ros.ros import messages
+    urdf, rig_path = fetched('icub.urdf'), tmp_path / 'rig.yaml'
+    clip, out = tmp_path / 'arms_up.mcap', tmp_path / 'r.mcap'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig_path)]) == 0
+    assert main(['motion', '--clip', 'arms_up', '--urdf', urdf, '--duration', '1', '-o',
+                 str(clip)]) == 0
+    assert main(['replay', str(clip), '--urdf', urdf, '--rig', str(rig_path), '-o',
+                 str(out)]) == 0
+    markers = [m for m in read_recording(str(out)).messages if m.topic.endswith('markers')]
+    assert markers and not any(k.ns == 'body' for k in read_markers(markers[-1].data))
+    sk = load_skeleton(urdf)
+    rig = Rig(yaml.safe_load(rig_path.read_text()), sk)
+    frames, _ = recorded_frames(str(out), sk, rig, moments_at(None, 2))
+    jacket = len(messages.outfit(rig).lined(
+        *[np.zeros((messages.outfit(rig).marker_corners(), k)) for k in (3, 4)])[0])
+    body = len(messages.outfit(rig).body.triangles)
+    assert frames and all(len(f.mesh) == jacket + body for f in frames), (
+        [len(f.mesh) for f in frames], jacket, body)

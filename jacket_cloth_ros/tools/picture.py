@@ -342,9 +342,13 @@ def _marker_points(data):
     return out
 
 
-def _body_pieces(pts):
-    """Tell whether recorded markers hold the body as its pieces (spheres, cylinders)."""
-    return ('body', 0) in pts and not len(pts['body', 0])
+def _body_unmeshed(pts):
+    """Tell whether recorded markers leave the body to be drawn: as its pieces, or not at all.
+
+    Not at all: ``markers_body: auto`` leaves out a URDF with visuals, which RViz's robot
+    model draws live; a picture draws no robot model, and the jacket must hang on a body.
+    """
+    return not len(pts.get(('body', 0), ()))
 
 
 def _body_triangles(rig, links):
@@ -381,7 +385,7 @@ def _frame(log_time, pts, js, parser, skeleton, sim):
     sample = parser.parse(js.stamp_ns, js.name, js.position)
     poses = skeleton.forward(sample.q)
     mesh, colors = _recorded_mesh(pts, sim.rig if sim is not None else None)
-    if sim is not None and mesh is not None and _body_pieces(pts):
+    if sim is not None and mesh is not None and _body_unmeshed(pts):
         body, body_colors = _body_triangles(sim.rig, poses)
         mesh, colors = np.concatenate([mesh, body]), np.concatenate([colors, body_colors])
     frame = Frame(log_time, pts.get(('cloth', 0), np.zeros((0, 3))).reshape(-1, 3, 3),
