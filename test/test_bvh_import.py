@@ -246,3 +246,59 @@ def test_a_capture_exported_z_up_is_said_to_be_so_not_given_another_unit(tmp_pat
     for real in ('test_mocapbank.bvh', 'test_freebvh.bvh'):
         assert main(['import', fetched(real), '-o', str(tmp_path / f'{real}.mcap')]) == 0
         assert capsys.readouterr().err == ''
+
+
+UPPER_BODY = '''HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Spine
+  {
+    OFFSET 0 50 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT Head
+    {
+      OFFSET 0 15 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 14 0
+      }
+    }
+    JOINT LeftArm
+    {
+      OFFSET 20 0 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 70 0 0
+      }
+    }
+    JOINT RightArm
+    {
+      OFFSET -20 0 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET -70 0 0
+      }
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 0.033333
+0 90 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0
+0 90 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0
+'''
+
+
+def test_an_upper_body_capture_is_guessed_in_its_unit_by_its_arm_span(tmp_path, capsys):
+    # A capture of the upper body alone, 79 cm tall, was imported in inches as a 2 m person
+    # with no word (a hostile probe): its arms span a person's height, 1.8 m in centimetres.
+    path = tmp_path / 'upper.bvh'
+    path.write_text(UPPER_BODY)
+    assert main(['import', str(path), '-o', str(tmp_path / 'upper.mcap')]) == 0
+    said = capsys.readouterr()
+    assert 'scale 0.01 m per unit, 0.79 m tall' in said.out and said.err == '', said

@@ -80,6 +80,7 @@ class Capture:
     link_names: list             # the BVH joints' and end sites' links, file order
     height_m: float              # the rest skeleton's height, metres
     lies_along_z: bool = False   # its rest skeleton spans twice as far along z as along y
+    widest_m: float = float('nan')   # its rest skeleton's largest span: height or arm span
 
     @property
     def frames(self) -> int:
@@ -203,7 +204,7 @@ def height_warning(capture: 'Capture') -> str | None:
         return (f'the rest skeleton spans most along z, not y, which BVH stands on and this '
                 f'import reads as up (it is {capture.height_m:.2f} m tall along y): export the '
                 'capture y-up')
-    if low <= capture.height_m <= high:
+    if low <= capture.widest_m <= high:
         return None
     return (f'the capture is {capture.height_m:.2f} m tall at {capture.scale:g} m per unit, not '
             f'a person\'s {low:g}-{high:g} m: give its unit with --scale')
@@ -222,9 +223,10 @@ def guess_scale(bvh: Bvh) -> tuple[float, str]:
 
     :param bvh: the capture as ``read_bvh`` read it.
     """
-    spans = np.ptp(rest_offsets(bvh), axis=0)
-    # A z-up export's height is its z span: its unit is still guessed right (and it is said).
-    height = float(spans[2] if _lies_along_z(spans) else spans[1])
+    # The largest span, not the height along y: a capture of the upper body alone spans a
+    # person's height with its arms (a T-pose's span is about the height), and a z-up
+    # export spans it along z (which is said).
+    height = float(np.ptp(rest_offsets(bvh), axis=0).max())
     if height <= 0.0:
         return 1.0, 'm'
     unit = min(UNITS, key=lambda u: abs(math.log(height * UNITS[u] / _TYPICAL_HEIGHT_M)))
@@ -358,7 +360,8 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     capture = Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
                       joint_names=joint_names, positions=positions,
                       root=np.hstack([trans, quat]), link_names=link_names,
-                      height_m=float(spans[1]) * scale, lies_along_z=_lies_along_z(spans))
+                      height_m=float(spans[1]) * scale, lies_along_z=_lies_along_z(spans),
+                      widest_m=float(spans.max()) * scale)
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')

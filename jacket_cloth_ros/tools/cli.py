@@ -653,8 +653,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the humanoid a DeepMimic clip moves (pybullet's humanoid.urdf)")
     i.add_argument('--scale', type=float, default=None,
                    help='BVH: metres per unit (default: m, cm, mm or in, whichever makes the '
-                   'rest skeleton nearest 1.7 m tall); DeepMimic: URDF lengths per clip length '
-                   '(default 4: pybullet loads the humanoid at a quarter)')
+                   'rest skeleton\'s largest span nearest 1.7 m); DeepMimic: URDF lengths per '
+                   'clip length (default 4: pybullet loads the humanoid at a quarter)')
     i.add_argument('--start', type=float, default=1000.0, help='first stamp (s)')
     i.add_argument('--world-joint', default='world_joint')
     i.add_argument('--force', action='store_true', help='overwrite the output files')
