@@ -39,8 +39,8 @@ def main(args: list[str] | None = None) -> int:
         print(f'jacket_cloth_crowd: {problem}', file=sys.stderr)
         return 1
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
-    return run('jacket_cloth_crowd', functools.partial(JacketClothNode, crowd=True), argv,
-               crowd=True)
+    return run('jacket_cloth_crowd', functools.partial(JacketClothNode, crowd=True, exiting=True),
+               argv, crowd=True)
 
 
 if __name__ == '__main__':

@@ -12,6 +12,7 @@ every character with an input in one compiled call over the cores; a lone charac
 """
 
 import argparse
+import functools
 import gc
 import os
 import sys
@@ -95,10 +96,14 @@ class JacketClothNode(Node):
         topics relative to the node's namespace. True: ``jacket_cloth_crowd``, the characters
         of the file in its ``characters`` parameter (CROWD_PARAMETERS), each under its own
         namespace.
+    :param exiting: a refused start leaves its rclpy node to the process's end, which comes at
+        once (the executables): destroying it now and then crashed rclpy (a segfault after
+        the refusal's line). False: destroyed before the refusal is raised, for a process
+        that goes on.
     :param kwargs: rclpy Node's keyword arguments (context, parameter_overrides...).
     """
 
-    def __init__(self, crowd: bool = False, **kwargs: object):
+    def __init__(self, crowd: bool = False, exiting: bool = False, **kwargs: object):
         self.program = 'jacket_cloth_crowd' if crowd else 'jacket_cloth_node'
         super().__init__(self.program, **kwargs)
         try:
@@ -108,7 +113,8 @@ class JacketClothNode(Node):
             # interpreter's exit, after rclpy's shutdown, the half-made node crashed it there.
             if hasattr(self, 'recording'):
                 self.close()
-            self.destroy_node()
+            if not exiting:
+                self.destroy_node()
             raise
 
     def _set_up(self, crowd):
@@ -725,7 +731,8 @@ def main(args: list[str] | None = None) -> int:
         print(f'jacket_cloth_node: {problem}', file=sys.stderr)
         return 1
     parser.parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
-    return run('jacket_cloth_node', JacketClothNode, argv, crowd=False)
+    return run('jacket_cloth_node', functools.partial(JacketClothNode, exiting=True), argv,
+               crowd=False)
 
 
 def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: bool) -> int:
@@ -766,6 +773,11 @@ def run(program: str, make_node: Callable[[], Node], argv: list[str], crowd: boo
         pass
     except ConfigError as e:
         print(f'{program}: {e}', file=sys.stderr)
+        if node is None:
+            # Refused while made: nothing was written, and neither the half-made node nor
+            # rclpy is torn down (see JacketClothNode's ``exiting``).
+            sys.stderr.flush()
+            os._exit(1)
         refused = True
     except Exception:
         if rclpy.ok():
