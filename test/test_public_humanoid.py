@@ -210,3 +210,34 @@ def test_pictures_of_a_y_up_urdf_in_a_z_up_world_show_it_upright(tmp_path):
     across, upward = view_limits(frames)
     assert upward[0] < min(f.links[:, 2].min() for f in frames)
     assert upward[1] > max(f.links[neck, 2] for f in frames)
+
+
+def test_a_y_up_urdf_sent_without_its_world_pose_is_warned_of_while_it_lies(tmp_path):
+    # joint_state_publisher sends the joints only: the Y-up humanoid then lies on its side,
+    # said once at the first input while the diagnostics said ok for seconds (a probe). The
+    # diagnostics warn while it lies; a Z-up robot, stood the same way, stays ok.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.rig import load_rig
+    from jacket_cloth_ros.ros import cdr, messages
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    levels = {}
+    for name in ('humanoid.urdf', 'jvrc1.urdf'):
+        urdf, rig = fetched(name), tmp_path / f'{name}.yaml'
+        assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
+        sk = load_skeleton(urdf)
+        pipe = SessionPipeline(sk, load_rig(sk, str(rig)),
+                               default_values(load_fabrics()['tweed_jacket']))
+        zeros = [0.0] * len(sk.joint_names)
+        for k in range(3 * 60):
+            pipe.on_raw(cdr.joint_state(10 ** 9 + k * 10 ** 9 // 60, sk.joint_names, zeros))
+        status = deserialize_message(pipe.diagnostics_now(4 * 10 ** 9),
+                                     DiagnosticArray).status[0]
+        levels[name] = status.level, status.message
+    level, message = levels['humanoid.urdf']
+    assert level == bytes([messages.WARN]), message
+    assert "the body lies 90 deg from the world's up [0, 0, 1], stood on its zero pose with " \
+        'no world pose: send world_joint/* to stand it up' in message, message
+    assert levels['jvrc1.urdf'][0] == bytes([messages.OK]), levels['jvrc1.urdf']

@@ -477,6 +477,23 @@ class JacketSimulation:
                 'gravity and the floor stay the world\'s: if this world\'s up is another axis, '
                 'write world_up in the rig']
 
+    def lies_unstood(self) -> str:
+        """Say that the body lies down where no world pose stands it, or ''.
+
+        Sent without ``world_joint/*``, the root stands the zero pose on the floor as the URDF
+        draws it: a body that then lies (a Y-up URDF) lies because of the set-up, not the
+        motion, for as long as it lasts (a capture lying on the floor is said once, at the
+        first input).
+        """
+        if not self.parser.guessed or self.last is None:
+            return ''
+        tilt = self.rig.body_tilt(self.links, self.root[:3, :3])
+        if tilt is None:
+            return ''
+        return (f'the body lies {tilt[1]:.0f} deg from the world\'s up '
+                f'{_shown(self.rig.world_up)}, stood on its zero pose with no world pose: send '
+                f'{self.parser.world_joint}/* to stand it up, or turn the URDF\'s root')
+
     def deepest_at_rest(self) -> Worst:
         """Return where the rest cloth is deepest inside the rig's colliders at the zero pose.
 

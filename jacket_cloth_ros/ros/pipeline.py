@@ -480,6 +480,9 @@ class SessionPipeline:
             problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
+        lying = self.sim.lies_unstood()
+        if lying:
+            problems.append(lying)
         # No silent collapse, no cloth that never rests: said while it lasts, and once after.
         watches = self.sim.watches
         for kind, lasts in (('collapse', watches.collapse.collapsed),
