@@ -706,6 +706,36 @@ def test_a_urdf_rejected_on_the_topic_is_waited_for_and_a_corrected_one_taken(ur
         h.close()
 
 
+def test_a_robots_rig_waits_for_its_urdf_on_the_topic_when_the_node_starts_first(tmp_path):
+    # Started before robot_state_publisher with its robot's rig, the node took the shipped
+    # character after robot_description_timeout and exited blaming the rig (a probe): the
+    # rig names links the shipped character lacks, so the robot's URDF is waited for.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from fetched import fetched
+    from test_fuzz import _start_waiting
+    from jacket_cloth_ros.tools.cli import main
+    urdf, rig = fetched('g1_29dof_rev_1_0.urdf'), tmp_path / 'g1.yaml'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
+    h = Harness.__new__(Harness)
+    _start_waiting(h, rig_file=str(rig), robot_description_timeout=0.2, diagnostics_rate=20.0)
+    try:
+        diags = []
+        h.peer.create_subscription(DiagnosticArray, '/diagnostics', diags.append, 100)
+        h.spin_until(lambda: len(diags) >= 20, timeout=30)      # well past the timeout
+        assert h.c.pipeline is None
+        status = diags[-1].status[0]
+        assert _level(status) == 2 and "link 'torso_link' is not in the URDF" in \
+            status.message, status.message
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        description = h.peer.create_publisher(String, '/robot_description', latched)
+        with open(urdf, encoding='utf-8') as f:
+            description.publish(String(data=f.read()))
+        h.spin_until(lambda: h.c.sim is not None, timeout=30)
+        assert h.c.sim.skeleton.name == 'g1_29dof_rev_1_0'
+    finally:
+        h.close()
+
+
 def test_recording_is_a_ros2_mcap_that_decodes(harness, tmp_path):
     from mcap.reader import make_reader
     from rclpy.serialization import deserialize_message

@@ -142,6 +142,10 @@ class ConfigError(ValueError):
     """A configuration file or value is wrong; the message names the file and key."""
 
 
+class MissingLink(ConfigError):
+    """A rig or set-up names a link the URDF lacks: it is another skeleton's."""
+
+
 def config_dir() -> str:
     """Return the shipped config folder: the installed share/ folder, else the source tree's."""
     package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -15,7 +15,7 @@ import numpy as np
 from urdf_parser_py import urdf
 
 from .bundles import SkeletonModel, floats, ints
-from .config import MAX_COORDINATE, ConfigError, read_text, shipped
+from .config import MAX_COORDINATE, ConfigError, MissingLink, read_text, shipped
 from .physics.pose import forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
@@ -145,7 +145,7 @@ class Skeleton:
         :param where: what names it, the error's prefix.
         """
         if name not in self.link_index:
-            raise ConfigError(f'{where}: link {name!r} is not in the URDF '
+            raise MissingLink(f'{where}: link {name!r} is not in the URDF '
                               f'(links: {", ".join(self.link_names)})')
         return self.link_index[name]
 

@@ -33,7 +33,7 @@ from geometry_msgs.msg import PointStamped, Vector3Stamped
 from tf2_msgs.msg import TFMessage
 
 from .. import signals
-from ..core.config import ConfigError, read_text, shown
+from ..core.config import ConfigError, MissingLink, read_text, shown
 from ..core.fabric import load_fabrics
 from ..core.rig import load_rig
 from ..core.skeleton import Skeleton, shipped_character_urdf
@@ -315,7 +315,9 @@ class JacketClothNode(Node):
             self._load(c, shipped_character_urdf(),
                        'the shipped character (config/character.urdf)')
         except ConfigError as e:
-            if len(self.characters) == 1:
+            # A rig naming links the shipped character lacks is another robot's, whose URDF
+            # may come late (the node started before robot_state_publisher): waited for.
+            if len(self.characters) == 1 and not isinstance(e, MissingLink):
                 raise                   # the node has nothing else to run: one line, exit 1
             # One character's set-up must not stop the others: it waits for its topic.
             c.waiting = cut_line(f'no URDF on {c.description.topic_name} yet, and the '
