@@ -35,6 +35,13 @@ def test_prismatic_and_mimic_joints():
     assert sk.joint_names == ['slide']
     links = sk.forward(np.array([0.5]))
     assert links[sk.link_index['c'], :3, 3] == pytest.approx([1.1, 0.0, 0.5])
+    # A JointState naming the mimic joint too (JVRC-1's fingers, TALOS's grippers) was told
+    # it names joints "not in the URDF" (a probe); it follows its source, as in rsp.
+    from jacket_cloth_ros.core.inputs import InputParser
+    sample = InputParser(sk).parse(10 ** 9, ['slide', 'follow'], [0.5, 0.9])
+    assert sample.warnings == [] and sample.q.tolist() == [0.5]
+    assert [c for c, _ in InputParser(sk).parse(10 ** 9, ['slide', 'x'], [0.5, 0.9]).warnings
+            ] == ['unknown']
 
 
 @pytest.mark.parametrize('text', ['', '<robot name="x"><link name="a"/>', 'not xml at all',

@@ -118,6 +118,7 @@ class InputParser:
             return plan
         index = self.skeleton.joint_index
         joint_from, joint_to, world_from, world_to, unknown = [], [], [], [], []
+        mimics = self.skeleton.mimic_names
         for i, n in enumerate(names):
             if n in index:
                 joint_from.append(i)
@@ -125,7 +126,7 @@ class InputParser:
             elif n in self.world_names:
                 world_from.append(i)
                 world_to.append(self.world_names[n])
-            else:
+            elif n not in mimics:
                 unknown.append(n)
         warnings = []
         if len(set(names)) < len(names):

@@ -664,8 +664,12 @@ class JacketSimulation:
             return
         key = self.steady_key(names)
         if not steps.rearm(key):
+            plan = self.parser.plan(names)[0]
+            if len(plan.joint_from) + len(plan.world_from) != len(names):
+                steps.armed = None      # names it skips (mimic joints): the intake takes none
+                return
             p = self.params
-            steps.arm(key, self.parser.plan(names)[0], self.last,
+            steps.arm(key, plan, self.last,
                       (self.dt_ns, p.max_steps_per_input),
                       (p.reset_gap, self.teleport_m, p.teleport_angle_deg))
 

@@ -136,6 +136,9 @@ class Skeleton:
             _check_numbers(j.name, 'mimic multiplier and offset',
                            [self.mult[k], self.offset[k]], 100.0)
         self.joint_index = index
+        # A mimic joint's value is its source's: a JointState naming it is not told it is
+        # unknown (robot_state_publisher ignores it too).
+        self.mimic_names = frozenset(j.name for _, j in mimics)
         self.model = skeleton_model(self)
 
     def link(self, name: str, where: str = 'rig') -> int:
