@@ -230,3 +230,28 @@ def test_a_body_under_the_floor_with_shapes_the_reader_refuses_is_said_not_a_cra
         said += [w for c, w in sim.process(10 ** 9 + k * 10 ** 9 // 60, names,
                                            sunk).warnings if c == 'collapse']
     assert said and "under the rig's floor" in said[0], said
+
+
+def test_a_partial_world_pose_is_a_warning_while_it_comes(skeleton, rig):
+    # The world pose's translation alone was logged every few seconds and the diagnostics said
+    # ok while the robot's travel was dropped (a probe); the whole pose again clears it.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.ros import cdr
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    pipe = SessionPipeline(skeleton, rig, default_values(load_fabrics()['tweed_jacket']))
+    names = list(skeleton.joint_names)
+    zeros = [0.0] * len(names)
+    trans = [f'world_joint/trans_{a}' for a in 'xyz']
+    whole = trans + [f'world_joint/rot_{a}' for a in 'xyzw']
+    messages = []
+    for k, (extra, values) in enumerate([(trans, [0.0, 0.0, 1.0])] * 60
+                                        + [(whole, [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])] * 60):
+        pipe.on_raw(cdr.joint_state(10 ** 9 + k * 10 ** 9 // 60, names + extra, zeros + values))
+        if k in (59, 119):
+            messages.append(deserialize_message(pipe.diagnostics_now(10 ** 9 + k * 10 ** 9 // 60),
+                                                DiagnosticArray).status[0].message)
+    assert 'incomplete world_joint/* pose: the root keeps its last world pose' in messages[0]
+    assert 'incomplete' not in messages[1], messages

@@ -96,6 +96,8 @@ class InputParser:
                                 np.array([0.0, 0.0, 0.0, 1.0]))
         # Whether a message gave the world pose, and whether one parsed before it did not.
         self.world_given = self.guessed = False
+        # Whether the last message gave part of the world pose (its travel then is lost).
+        self.world_incomplete = False
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -181,6 +183,7 @@ class InputParser:
                                 'quaternion: message dropped')
         self.last = new
         began = self.guessed and plan.whole_world
+        self.world_incomplete = len(plan.world_to) > 0 and not plan.whole_world
         self.world_given = self.world_given or plan.whole_world
         self.guessed = not self.world_given
         return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings), began)

@@ -483,6 +483,9 @@ class SessionPipeline:
         lying = self.sim.lies_unstood()
         if lying:
             problems.append(lying)
+        if self.sim.parser.world_incomplete:
+            problems.append(f'incomplete {self.sim.parser.world_joint}/* pose: the root keeps '
+                            'its last world pose')
         # No silent collapse, no cloth that never rests: said while it lasts, and once after.
         watches = self.sim.watches
         for kind, lasts in (('collapse', watches.collapse.collapsed),
