@@ -460,11 +460,10 @@ class JacketSimulation:
         """Say that the body lies down at the first input, if it does; gravity stays the world's.
 
         The body's up is the root link to the hood's link (rig.body_tilt), as the input poses
-        them. Further
-        than rig.UP_TOLERANCE_DEG from the world's up, a capture that starts on the floor (or a
-        Y-up URDF whose world joint does not stand it up) lies down: one line says so, and
-        gravity and the floor keep the world's up (issue 47 item 1: turning them onto the body
-        tilted a get-up clip's floor by 67-82 degrees).
+        them. Further than rig.UP_TOLERANCE_DEG from the world's up, a capture that starts on
+        the floor (or a Y-up URDF whose world joint does not stand it up) lies down: one line
+        says so, and gravity and the floor keep the world's up (issue 47 item 1: turning them
+        onto the body tilted a get-up clip's floor by 67-82 degrees).
         """
         rig = self.rig
         tilt = rig.body_tilt(self.skeleton.forward(sample.q), sample.root[:3, :3])
@@ -477,7 +476,7 @@ class JacketSimulation:
                 'gravity and the floor stay the world\'s: if this world\'s up is another axis, '
                 'write world_up in the rig']
 
-    def lies_unstood(self) -> str:
+    def lying_without_world_pose(self) -> str:
         """Say that the body lies down where no world pose stands it, or ''.
 
         Sent without ``world_joint/*``, the root stands the zero pose on the floor as the URDF

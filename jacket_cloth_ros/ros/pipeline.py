@@ -480,7 +480,7 @@ class SessionPipeline:
             problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
-        lying = self.sim.lies_unstood()
+        lying = self.sim.lying_without_world_pose()
         if lying:
             problems.append(lying)
         if self.sim.parser.world_incomplete:
