@@ -88,6 +88,7 @@ def test_the_body_proxy_sees_what_the_rigs_colliders_do_not(tmp_path, capsys):
     assert body['max'] > 0.02 and body['p99'] > 0.02 and body['link'] in ('l_thigh', 'r_thigh')
     assert body['vertex'][0] >= 8 and 'at_s' in body           # the hem's rows
     line = capsys.readouterr().out
-    for figure in ('vertical stretch ', 'horizontal stretch p99 ', 'inside 0.0 / 0.0 mm',
+    for figure in ('vertical stretch ', 'compression max ', 'horizontal stretch p99 ',
+                   'inside 0.0 / 0.0 mm',
                    'inside the body ', 'non-finite 0', 'resets 1'):
         assert figure in line, figure

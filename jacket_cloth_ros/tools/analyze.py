@@ -341,13 +341,16 @@ def summary_line(report: dict) -> str:
 
 
 def target_figures(r: dict) -> str:
-    """Return a session's figures that have targets (issue 19, issue 35), max / p99.
+    """Return a session's figures that have targets (issue 19, issue 35), max / p99; and more.
 
     :param r: one session's report (report.json's, or one of its ``sessions``).
     """
     def pair(name, scale=1.0, digits=3):
         return f'{r[name]["max"] * scale:.{digits}f} / {r[name]["p99"] * scale:.{digits}f}'
-    return (f'vertical stretch {pair("vertical_stretch")}, horizontal stretch p99 '
+    # No target holds the vertical compression, but an edge folded to nothing (rows on one
+    # point, a pinched front edge) is a failure the line must not hide.
+    return (f'vertical stretch {pair("vertical_stretch")}, compression max '
+            f'{r["vertical_compression"]["max"]:.3f}, horizontal stretch p99 '
             f'{r["horizontal_stretch"]["p99"]:.3f}, inside {pair("inside_m", 1e3, 1)} mm, '
             f'inside the body {pair("body_inside_m", 1e3, 1)} mm, non-finite '
             f'{r["nonfinite_count"]}, resets {r["resets"]}')
