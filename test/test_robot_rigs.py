@@ -434,3 +434,17 @@ def test_a_picture_of_a_robot_with_visuals_shows_its_jacket_on_a_body(tmp_path):
     body = len(messages.outfit(rig).body.triangles)
     assert frames and all(len(f.mesh) == jacket + body for f in frames), (
         [len(f.mesh) for f in frames], jacket, body)
+
+
+def test_a_forward_across_the_body_is_named_when_the_proposal_fails(tmp_path, capsys):
+    # rig --forward 0,1,0 on JVRC-1 named only a rig key of a file never written (a probe):
+    # the option given is the likeliest cause, and the line says so.
+    argv = ['rig', '--urdf', fetched('jvrc1.urdf'), '-o', str(tmp_path / 'r.yaml')]
+    capsys.readouterr()
+    assert main(argv + ['--forward', '0,1,0']) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith('jacket_cloth rig: the proposed rig does not load (') and err.endswith(
+        '; --forward 0,1,0 may not be the way the character faces (without it, that is '
+        'inferred from its toes)'), err
+    assert os.listdir(tmp_path) == []
+    assert main(argv) == 0

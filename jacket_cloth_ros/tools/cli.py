@@ -451,7 +451,10 @@ def cmd_rig(args: argparse.Namespace) -> int:
         try:
             return text, Rig(yaml.safe_load(text), skeleton, where=args.output)
         except ConfigError as e:
-            raise ToolError(f'the proposed rig does not load ({e})') from None
+            # A --forward across the body folds its parts to nothing: the likeliest cause then.
+            hint = (f'; --forward {args.forward} may not be the way the character faces (without '
+                    'it, that is inferred from its toes)' if args.forward else '')
+            raise ToolError(f'the proposed rig does not load ({e}){hint}') from None
     text, loaded = _clear_of_colliders(rig, lines, load)
     if first is not None:
         # As the simulation judges a first input; gravity and the floor stay the world's.
