@@ -122,6 +122,16 @@ def rest_input(skeleton):
     return names, np.array(pos)
 
 
+def one_line_error(capsys, argv):
+    """Run ``jacket_cloth argv``: it must exit 1 with one stderr line, no traceback; return it."""
+    from jacket_cloth_ros.tools.cli import main
+    capsys.readouterr()
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert '\n' not in err and 'Traceback' not in err, err
+    return err
+
+
 def signalled(proc, ready, signum, timeout=120.0):
     """Send ``signum`` to ``proc`` once ``ready()`` returns; return its stderr once it has ended.
 

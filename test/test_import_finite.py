@@ -16,6 +16,7 @@ from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
 from jacket_cloth_ros.ros.cdr import joint_state
 from jacket_cloth_ros.tools import cli
 from jacket_cloth_ros.tools.cli import main
+from conftest import one_line_error
 from fetched import fetched
 
 
@@ -30,14 +31,6 @@ def numpy_warnings_fail():
         yield
 
 
-def _one_line_error(capsys, argv):
-    capsys.readouterr()
-    assert main(argv) == 1
-    err = capsys.readouterr().err.strip()
-    assert '\n' not in err and 'Traceback' not in err, err
-    return err
-
-
 def _walk_frames():
     with open(fetched('humanoid3d_walk.txt'), encoding='utf-8') as f:
         return json.load(f)
@@ -47,8 +40,8 @@ def _import_clip(capsys, tmp_path, text):
     """Import the clip ``text``; return its one error line, the output checked absent."""
     clip, out = tmp_path / 'clip.txt', tmp_path / 'out.mcap'
     clip.write_text(text)
-    err = _one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
-                                   '-o', str(out)])
+    err = one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
+                                  '-o', str(out)])
     assert err.startswith(f'jacket_cloth import: {clip}: '), err
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ['clip.txt']
     return err
@@ -79,7 +72,7 @@ def test_a_bvh_root_position_that_overflows_when_scaled_is_refused_by_frame(tmp_
                    '0.0001 0\n\t\tCHANNELS 3 Zrotation Yrotation Xrotation\n\t\tEnd Site\n\t\t'
                    '{\n\t\t\tOFFSET 0 0.0001 0\n\t\t}\n\t}\n}\nMOTION\nFrames: 2\n'
                    'Frame Time: 0.0333333\n0 0 0 0 0 0 0 0 0\n1e303 0 0 0 0 0 0 0 0\n')
-    err = _one_line_error(capsys, ['import', str(bvh), '--scale', '1e6', '-o', str(out)])
+    err = one_line_error(capsys, ['import', str(bvh), '--scale', '1e6', '-o', str(out)])
     assert err == (f"jacket_cloth import: {bvh}: frame 1: the root's y position is inf after "
                    'scaling and normalising, not a finite number (at 1e+06 m per unit)')
     assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ['big.bvh']
@@ -139,8 +132,8 @@ def test_play_hands_a_finite_recording_over_whole(tmp_path, capsys, published):
 def test_play_refuses_a_position_that_is_not_finite_before_publishing(
         tmp_path, capsys, published, bad):
     path = _recording(tmp_path / 'nan.mcap', [[0.0, 1.0], [0.5, bad], [1.0, 2.0]])
-    err = _one_line_error(capsys, ['play', str(path), '--urdf', fetched('humanoid.urdf'),
-                                   '--wait', '0'])
+    err = one_line_error(capsys, ['play', str(path), '--urdf', fetched('humanoid.urdf'),
+                                  '--wait', '0'])
     assert err == (f'jacket_cloth play: {path}: a /joint_states message logged at 1010000000 '
                    f'ns gives b {bad}, not a finite number: nothing was published')
     assert published == []
@@ -156,9 +149,9 @@ def test_play_refuses_a_urdf_as_motion_does(tmp_path, capsys, published, text):
     path = _recording(tmp_path / 'ok.mcap', [[0.0, 1.0], [0.5, 1.5]])
     urdf = tmp_path / 'bad.urdf'
     urdf.write_text(text)
-    err = _one_line_error(capsys, ['play', str(path), '--urdf', str(urdf), '--wait', '0'])
+    err = one_line_error(capsys, ['play', str(path), '--urdf', str(urdf), '--wait', '0'])
     assert published == []
-    said = _one_line_error(capsys, ['motion', '--urdf', str(urdf), '--wait', '0'])
+    said = one_line_error(capsys, ['motion', '--urdf', str(urdf), '--wait', '0'])
     assert err.removeprefix('jacket_cloth play: ') == said.removeprefix('jacket_cloth motion: ')
     assert str(urdf) in err
 
@@ -173,7 +166,7 @@ def test_play_refuses_a_recorded_urdf_no_tool_would_load(tmp_path, capsys, publi
     rec.add_metadata(SESSION_CONFIG, {'urdf': CYCLIC})
     rec.write('/joint_states', joint_state(10 ** 9, ['a', 'b'], [0.0, 1.0]), 10 ** 9)
     rec.close()
-    err = _one_line_error(capsys, ['play', str(path), '--wait', '0'])
+    err = one_line_error(capsys, ['play', str(path), '--wait', '0'])
     assert err.startswith(f'jacket_cloth play: {path}: its recorded URDF: malformed robot '
                           'description'), err
     assert published == []

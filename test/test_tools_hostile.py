@@ -12,7 +12,7 @@ import tracemalloc
 
 import pytest
 import zstandard
-from conftest import signalled
+from conftest import one_line_error, signalled
 
 from jacket_cloth_ros.recording.mcap_file import McapWriter
 from jacket_cloth_ros.recording.reader import (
@@ -26,14 +26,6 @@ def clip(tmp_path_factory):
     path = tmp_path_factory.mktemp('clip') / 'clip.mcap'
     assert main(['motion', '--clip', 'walk', '--duration', '1.0', '-o', str(path)]) == 0
     return path
-
-
-def _one_line_error(capsys, argv):
-    capsys.readouterr()
-    assert main(argv) == 1
-    err = capsys.readouterr().err.strip()
-    assert '\n' not in err and 'Traceback' not in err, err
-    return err
 
 
 def _one_chunk(compression='zstd'):
@@ -124,7 +116,7 @@ def test_replay_and_analyze_of_magic_and_zeros_are_one_line(tmp_path, capsys):
     for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
                  ['analyze', str(path), '--out', str(tmp_path / 'an')],
                  ['picture', str(path), '-o', str(tmp_path / 'p.png')]):
-        err = _one_line_error(capsys, argv)
+        err = one_line_error(capsys, argv)
         assert f'{path}: damaged file (no header record after its magic)' in err, err
 
 
@@ -137,7 +129,7 @@ def test_a_finished_file_with_a_damaged_summary_is_refused_not_cut_short(
     bad[summary_start + 1:summary_start + 9] = struct.pack('<Q', 1 << 31)   # a record's length
     damaged = tmp_path / 'damaged.mcap'
     damaged.write_bytes(bytes(bad))
-    err = _one_line_error(capsys, ['replay', str(damaged), '-o', str(tmp_path / 'out.mcap')])
+    err = one_line_error(capsys, ['replay', str(damaged), '-o', str(tmp_path / 'out.mcap')])
     assert f'{damaged}: damaged file' in err, err
     # Without its summary and footer (a kill -9 while recording): still replayed, as a cut.
     cut = tmp_path / 'cut.mcap'
@@ -167,7 +159,7 @@ def test_a_bag_listing_one_file_twice_is_refused(clip, tmp_path, capsys):
         (bag / 'metadata.yaml').write_text(
             'rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
             f'  relative_file_paths: {listed}\n')
-        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+        err = one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
         assert f'{bag / "metadata.yaml"}: lists ' in err and 'twice' in err, err
 
 
@@ -179,7 +171,7 @@ def test_a_bag_whose_metadata_lists_no_files_says_so(clip, tmp_path, capsys):
     shutil.copy(clip, bag / 'bag_0.mcap')
     (bag / 'metadata.yaml').write_text('rosbag2_bagfile_information:\n  storage_identifier: '
                                        'mcap\n  relative_file_paths: []\n')
-    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    err = one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
     assert err == (f'jacket_cloth replay: {bag / "metadata.yaml"}: lists no files '
                    '(relative_file_paths is empty)')
 
@@ -235,7 +227,7 @@ def test_a_recorded_set_up_is_validated_as_files_and_parameters_are(
     _with_setup(inputs, change(setup), path)
     for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
                  ['analyze', str(path), '--out', str(tmp_path / 'an')]):
-        err = _one_line_error(capsys, argv)
+        err = one_line_error(capsys, argv)
         assert str(path) in err and expected in err, err
 
 
@@ -253,7 +245,7 @@ def test_replay_never_writes_over_a_file_of_its_input_bag(clip, tmp_path, capsys
                 f'  relative_file_paths: [../{target.name}]\n')
         else:                           # a link in the bag, no metadata.yaml
             (bag / 'a.mcap').symlink_to(target)
-        err = _one_line_error(capsys, ['replay', str(bag), '-o', str(target), '--force'])
+        err = one_line_error(capsys, ['replay', str(bag), '-o', str(target), '--force'])
         assert f'{target} is the input' in err, err
         assert target.read_bytes() == kept
 
@@ -280,7 +272,7 @@ def test_a_bvh_frame_time_or_offset_out_of_range_is_refused(
     if expected is None:
         assert main(argv) == 0
     else:
-        err = _one_line_error(capsys, argv)
+        err = one_line_error(capsys, argv)
         assert f'{src}: {expected}' in err, err
 
 
@@ -293,7 +285,7 @@ def test_a_bvh_frame_time_or_offset_out_of_range_is_refused(
 ])
 def test_a_motion_number_out_of_range_is_refused(tmp_path, capsys, option, value, expected):
     out = tmp_path / 'o.mcap'
-    err = _one_line_error(capsys, ['motion', '--clip', 'walk', '-o', str(out), option, value])
+    err = one_line_error(capsys, ['motion', '--clip', 'walk', '-o', str(out), option, value])
     assert expected in err, err
     assert not out.exists()
 
@@ -308,7 +300,7 @@ def test_import_start_and_picture_analyze_moments_out_of_range_are_refused(
              '--moments 1e+09 is outside [1, 24] frames'),
             (['analyze', str(clip), '--out', str(tmp_path / 'an'), '--moments', '0'],
              '--moments 0 is outside')):
-        assert expected in _one_line_error(capsys, argv)
+        assert expected in one_line_error(capsys, argv)
 
 
 def test_a_fifo_or_a_folder_as_an_input_is_refused_unopened(clip, tmp_path, capsys):
@@ -326,9 +318,9 @@ def test_a_fifo_or_a_folder_as_an_input_is_refused_unopened(clip, tmp_path, caps
                      ['import', str(path), '-o', out],
                      ['picture', str(clip), '-o', str(tmp_path / 'p.png'), '--rig', str(path)],
                      ['motion', '--urdf', str(path), '-o', out]):
-            err = _one_line_error(capsys, argv)
+            err = one_line_error(capsys, argv)
             assert f'{path}: {kind}, not a regular file' in err, (argv, err)
-    err = _one_line_error(capsys, ['replay', str(fifo), '-o', out])
+    err = one_line_error(capsys, ['replay', str(fifo), '-o', out])
     assert f'{fifo}: a FIFO, not a regular file' in err, err
     # The node's file parameters load through the same readers.
     for load in (lambda: load_characters(str(fifo)), lambda: load_rig(None, str(fifo))):
@@ -418,7 +410,7 @@ def test_a_crowd_recordings_set_ups_are_validated_too(replayed, tmp_path, capsys
         for data, stamp in inputs:
             rec.write('/a/joint_states', data, stamp)
         rec.close()
-        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+        err = one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
         assert f'{path}: a' in err and expected in err, err
 
 
@@ -436,8 +428,8 @@ def test_a_deepmimic_clip_of_absurd_frame_times_is_refused(tmp_path, capsys, dur
         frame[0] = duration
     clip = tmp_path / 'clip.txt'
     clip.write_text(json.dumps({'Frames': frames}))
-    err = _one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
-                                   '-o', str(tmp_path / 'o.mcap')])
+    err = one_line_error(capsys, ['import', str(clip), '--urdf', fetched('humanoid.urdf'),
+                                  '-o', str(tmp_path / 'o.mcap')])
     assert words in err, err
 
 
@@ -464,7 +456,7 @@ def test_a_bag_folder_without_metadata_holding_a_file_twice_names_the_folder(
     bag.mkdir()
     shutil.copy(clip, bag / 'a.mcap')
     (bag / 'b.mcap').symlink_to('a.mcap')
-    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    err = one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
     assert 'metadata.yaml' not in err, err
     assert f'{bag}: holds {bag / "a.mcap"} twice ({bag / "b.mcap"} is a link to it)' in err, err
 
@@ -507,7 +499,7 @@ def test_an_analyze_output_made_while_it_runs_is_refused_not_overwritten(
         (out / 'report.json').write_text('made while analyze ran')
         return original(sessions, out_dir, **kwargs)
     monkeypatch.setattr(analyze, 'analyze', and_meanwhile)
-    err = _one_line_error(capsys, ['analyze', str(clip), '--out', str(out), '--moments', '2'])
+    err = one_line_error(capsys, ['analyze', str(clip), '--out', str(out), '--moments', '2'])
     assert err.endswith(f'{out / "report.json"} exists (use --force to overwrite)'), err
     assert (out / 'report.json').read_text() == 'made while analyze ran'
     # All or nothing: no new chart beside someone else's report, and no scratch left.
@@ -586,7 +578,7 @@ def test_a_key_given_twice_in_a_recorded_set_up_or_a_bag_is_refused(
     for k, (changed, expected) in enumerate(cases):
         path = tmp_path / f'setup{k}.mcap'
         _with_setup(inputs, changed, path)
-        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+        err = one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
         assert f'{path}: {expected}' in err and 'given twice' in err, err
     bag = tmp_path / 'bag'
     bag.mkdir()
@@ -594,7 +586,7 @@ def test_a_key_given_twice_in_a_recorded_set_up_or_a_bag_is_refused(
     (bag / 'metadata.yaml').write_text(
         'rosbag2_bagfile_information:\n  storage_identifier: mcap\n'
         '  relative_file_paths: [a.mcap]\n  relative_file_paths: []\n')
-    err = _one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
+    err = one_line_error(capsys, ['replay', str(bag), '-o', str(tmp_path / 'o.mcap')])
     assert "'relative_file_paths' is given twice (first at line 3)" in err, err
 
 
@@ -614,7 +606,7 @@ def test_a_bit_flipped_in_the_recorded_set_up_fails_the_files_crc(replayed, clip
     path = tmp_path / 'flipped.mcap'
     path.write_bytes(_flipped(full, at))
     assert b'"sim_rate": 130' in path.read_bytes()
-    err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
+    err = one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o.mcap')])
     assert err.endswith(f'{path}: damaged file (its data section fails its CRC check: a byte '
                         'of its set-up, channels or messages changed after it was written); '
                         'nothing read'), err
@@ -670,7 +662,7 @@ def test_import_refuses_a_skeleton_no_tool_takes_before_writing(
     src = tmp_path / 'c.bvh'
     src.write_text(text)
     out, urdf = tmp_path / 'o.mcap', tmp_path / 'c.urdf'
-    err = _one_line_error(capsys, ['import', str(src), '-o', str(out), '--urdf-out', str(urdf)])
+    err = one_line_error(capsys, ['import', str(src), '-o', str(out), '--urdf-out', str(urdf)])
     assert err == f'jacket_cloth import: {src}: {expected}', err
     assert not out.exists() and not urdf.exists()
     # Within the limits, what it writes loads.
@@ -699,7 +691,7 @@ def test_a_channel_declared_in_another_encoding_is_refused_not_decoded_as_cdr(
     for argv in (['replay', str(path), '-o', str(tmp_path / 'o.mcap')],
                  ['picture', str(path), '-o', str(tmp_path / 'p.png'), '--urdf',
                   _shipped('character.urdf')]):
-        err = _one_line_error(capsys, argv)
+        err = one_line_error(capsys, argv)
         assert err.endswith(f"{path}: /joint_states (sensor_msgs/msg/JointState) is declared "
                             f"'{encoding}'-encoded; only cdr (ROS 2) messages are read"), err
 
@@ -723,8 +715,8 @@ def test_unknown_keys_of_a_recorded_set_up_are_named_in_one_warning(replayed, tm
 
 
 def test_a_picture_of_inputs_only_says_what_it_found_and_what_it_needs(clip, tmp_path, capsys):
-    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
-                                   '--urdf', _shipped('character.urdf')])
+    err = one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
+                                  '--urdf', _shipped('character.urdf')])
     assert err.endswith(f"{clip}: nothing to draw: it holds 61 JointState and 0 MarkerArray "
                         "messages; a picture needs the simulation's markers: replay it first "
                         '(jacket_cloth replay IN -o OUT), then draw OUT'), err
@@ -761,7 +753,7 @@ def test_an_animation_named_as_its_filmstrip_is_refused_before_either_is_written
     # the filmstrip just written, and both were reported written (a hostile probe).
     for name in ('strip.gif', 'strip.GIF'):          # one file where case is not told apart
         out = tmp_path / name
-        err = _one_line_error(capsys, ['picture', str(clip), '-o', str(out), '--animate'])
+        err = one_line_error(capsys, ['picture', str(clip), '-o', str(out), '--animate'])
         assert err == (f'jacket_cloth picture: --animate writes the animation to '
                        f'{tmp_path / "strip.gif"}, the filmstrip\'s own name: give the '
                        'filmstrip another extension (.png)')
@@ -773,7 +765,7 @@ def test_a_picture_whose_name_names_no_format_is_refused_up_front(
         clip, tmp_path, capsys, name):
     # An extension-less name failed at the save with matplotlib's "Format 'partial' is not
     # supported", the suffix of the tool's own temporary file.
-    err = _one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / name)])
+    err = one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / name)])
     assert 'partial' not in err and 'end the name in .png' in err, err
     assert os.listdir(tmp_path) == []
 
@@ -786,13 +778,13 @@ def test_a_rig_whose_picture_cannot_be_made_is_not_written_either(tmp_path, caps
     from jacket_cloth_ros.rigging import picture
     urdf = shipped('character.urdf')
     argv = ['rig', '--urdf', urdf, '-o', str(tmp_path / 'rig.yaml')]
-    err = _one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.txt')])
+    err = one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.txt')])
     assert 'rig.txt: .txt is not a picture format' in err, err
 
     def full_disk(*args, **kwargs):
         raise OSError(28, 'No space left on device')
     monkeypatch.setattr(picture, 'draw_rig', full_disk)
-    err = _one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.png')])
+    err = one_line_error(capsys, argv + ['--picture', str(tmp_path / 'rig.png')])
     assert 'No space left on device' in err, err
     assert os.listdir(tmp_path) == []
 
@@ -812,7 +804,7 @@ def test_a_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(tmp_pa
         recorder.write('/joint_states', joint_state(stamp, names, [float('nan')] * len(names)),
                        stamp)
     recorder.close()
-    err = _one_line_error(capsys, ['replay', str(session), '-o', str(out)])
+    err = one_line_error(capsys, ['replay', str(session), '-o', str(out)])
     assert err.startswith(f'jacket_cloth replay: {session}: the simulation took none of its 30 '
                           'JointState messages (the first: non-finite position for '), err
     assert err.endswith('message dropped); nothing written'), err
@@ -834,7 +826,7 @@ def test_a_replay_whose_inputs_never_gave_finite_bones_is_a_failure_and_no_file(
     out = tmp_path / 'out.mcap'
     for argv in (['replay', str(clip), '-o', str(out)], ['export', str(clip), '-o',
                                                          str(tmp_path / 'out.glb')]):
-        err = _one_line_error(capsys, argv)
+        err = one_line_error(capsys, argv)
         assert f'{clip}: none of the 61 JointState messages the simulation took gave the ' \
             'jacket finite bones; ' in err, err
     assert os.listdir(tmp_path) == []
@@ -917,7 +909,7 @@ def test_a_crowd_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(
     for b_inputs in (nan, []):              # b refused too, or never sent a thing
         path = tmp_path / f'crowd{len(b_inputs)}.mcap'
         crowd(path, b_inputs)
-        err = _one_line_error(capsys, ['replay', str(path), '-o', str(out)])
+        err = one_line_error(capsys, ['replay', str(path), '-o', str(out)])
         assert err.startswith(f'jacket_cloth replay: {path}: a: the simulation took none of its '
                               '20 JointState messages (the first: non-finite position for '), err
         assert err.endswith(", nor of any other character's; nothing written"), err
@@ -938,7 +930,7 @@ def test_a_crowd_replay_the_simulation_took_nothing_of_is_a_failure_and_no_file(
         return bones
     with pytest.MonkeyPatch.context() as patched:
         patched.setattr(JacketSimulation, 'bones', never_finite)
-        err = _one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o2.mcap')])
+        err = one_line_error(capsys, ['replay', str(path), '-o', str(tmp_path / 'o2.mcap')])
     assert 'the simulation took none of its 20 JointState messages' in err, err
     assert err.endswith(", nor of any other character's; nothing written"), err
     assert not (tmp_path / 'o2.mcap').exists()
@@ -951,8 +943,8 @@ def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
     from jacket_cloth_ros.core.config import shipped
     from jacket_cloth_ros.tools import animation
     same = str(tmp_path / 'x.png')
-    err = _one_line_error(capsys, ['rig', '--urdf', shipped('character.urdf'), '-o', same,
-                                   '--picture', same])
+    err = one_line_error(capsys, ['rig', '--urdf', shipped('character.urdf'), '-o', same,
+                                  '--picture', same])
     assert err == f"jacket_cloth rig: --picture {same} is the rig's own name: give the " \
         'picture another'
 
@@ -961,8 +953,8 @@ def test_a_rig_and_its_picture_of_one_name_and_a_failed_animation_leave_nothing(
     monkeypatch.setattr(animation, 'render_animation', full_disk)
     replay = tmp_path / 'session.mcap'
     assert main(['replay', str(clip), '-o', str(replay)]) == 0
-    err = _one_line_error(capsys, ['picture', str(replay), '-o', str(tmp_path / 's.png'),
-                                   '--animate'])
+    err = one_line_error(capsys, ['picture', str(replay), '-o', str(tmp_path / 's.png'),
+                                  '--animate'])
     assert 'No space left on device' in err, err
     assert sorted(os.listdir(tmp_path)) == ['session.mcap']
 
