@@ -79,8 +79,8 @@ class Capture:
     root: np.ndarray             # (F, 7) root pose: x, y, z (m), qx, qy, qz, qw
     link_names: list             # the BVH joints' and end sites' links, file order
     height_m: float              # the rest skeleton's height, metres
-    lies_along_z: bool = False   # its rest skeleton spans twice as far along z as along y
-    widest_m: float = float('nan')   # its rest skeleton's largest span: height or arm span
+    # Its rest skeleton's extents along the file's x, y and z, metres (y: its height).
+    spans_m: tuple = (float('nan'),) * 3
 
     @property
     def frames(self) -> int:
@@ -194,17 +194,17 @@ def rest_offsets(bvh: Bvh) -> np.ndarray:
 
 
 def height_warning(capture: 'Capture') -> str | None:
-    """Return a line if the capture's rest height is not a person's, else None.
+    """Return a line if the capture's rest skeleton is no person's (its size, its up), else None.
 
-    :param capture: an imported capture (its ``height_m`` and ``scale``).
+    :param capture: an imported capture (its ``spans_m``, ``height_m`` and ``scale``).
     """
     low, high = HUMAN_HEIGHT_M
-    if capture.lies_along_z:
+    if _lies_along_z(capture.spans_m):
         # Another unit would not mend it: a z-up export lies along BVH's forward axis.
         return (f'the rest skeleton spans most along z, not y, which BVH stands on and this '
                 f'import reads as up (it is {capture.height_m:.2f} m tall along y): export the '
                 'capture y-up')
-    if low <= capture.widest_m <= high:
+    if low <= max(capture.spans_m) <= high:
         return None
     return (f'the capture is {capture.height_m:.2f} m tall at {capture.scale:g} m per unit, not '
             f'a person\'s {low:g}-{high:g} m: give its unit with --scale')
@@ -360,8 +360,8 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     capture = Capture(name=name, urdf=urdf, frame_time=float(bvh.frame_time), scale=scale,
                       joint_names=joint_names, positions=positions,
                       root=np.hstack([trans, quat]), link_names=link_names,
-                      height_m=float(spans[1]) * scale, lies_along_z=_lies_along_z(spans),
-                      widest_m=float(spans.max()) * scale)
+                      height_m=float(spans[1]) * scale,
+                      spans_m=tuple(float(v) * scale for v in spans))
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')
