@@ -396,10 +396,9 @@ def test_a_proposal_still_inside_its_colliders_after_widening_is_said_so(tmp_pat
                                                                          monkeypatch):
     # rig widened a few rounds and said "widened" even when the cloth was still inside (a
     # review): the last round is checked, and what is left said as a warning.
+    from jacket_cloth_ros.core import simulation
     from jacket_cloth_ros.core.measures import Worst
-    from jacket_cloth_ros.core.simulation import JacketSimulation
-    monkeypatch.setattr(JacketSimulation, 'deepest_at_rest',
-                        lambda sim: Worst(0.02, 3, 'pelvis'))
+    monkeypatch.setattr(simulation, 'deepest_at_rest', lambda rig: Worst(0.02, 3, 'pelvis'))
     assert main(['rig', '--urdf', shipped('character.urdf'), '-o',
                  str(tmp_path / 'rig.yaml')]) == 0
     out = capsys.readouterr()

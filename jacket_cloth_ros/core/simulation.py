@@ -32,7 +32,7 @@ from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessW
 from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
-from .rig import model_of
+from .rig import collider_model, model_of
 from .stepping import (BONES_FINITE, NOT_STEADY, STEPS_FAILED, StepJob, Stepper,
                        identity_poses)
 
@@ -173,6 +173,24 @@ class StepReport:
 # A profiler's hook (JacketSimulation.time_stages, ros.pipeline.SessionPipeline): called once
 # per stage with the stage's name and callable, it returns the callable run in its place.
 StageTimer = Callable[[str, Callable], Callable]
+
+
+def deepest_at_rest(rig: 'Rig') -> Worst:
+    """Return where a rig's rest cloth is deepest inside its colliders at the zero pose.
+
+    The floor aside: the root is not where a motion puts it. A rig's own measure, with no
+    simulation made: the node checks it at load, ``rig`` while it fits a proposal.
+
+    :param rig: the rig, fitted to its skeleton.
+    :returns: ``value`` (m, 0 outside), ``vertex`` and ``collider`` (its label), as
+        measures.depth_inside gives them.
+    """
+    skeleton, model = rig.skeleton, collider_model(rig)
+    now = posed_like(model, rig.n)
+    colliders.collider_poses(skeleton.forward(np.zeros(len(skeleton.joint_names))), model, now)
+    body = Colliders(now.centers, now.axes, floats(rig.collider_radii), now.cap_a, now.cap_b,
+                     floats(rig.capsule_radii), np.zeros((0, 3)), np.zeros((0, 3)))
+    return depth_inside(rig.rest, np.ones(rig.n, dtype=bool), body, collider_labels(rig))
 
 
 class JacketSimulation:
@@ -493,21 +511,9 @@ class JacketSimulation:
                 f'{_shown(self.rig.world_up)}, stood on its zero pose with no world pose: send '
                 f'{self.parser.world_joint}/* to stand it up, or turn the URDF\'s root')
 
-    def deepest_at_rest(self) -> Worst:
-        """Return where the rest cloth is deepest inside the rig's colliders at the zero pose.
-
-        The floor aside: the root is not where the motion puts it. ``value`` (m, 0 outside),
-        ``vertex`` and ``collider`` (its label), as measures.depth_inside gives them.
-        """
-        rig = self.rig
-        c = self.collider_frames(self.skeleton.forward(np.zeros(len(self.skeleton.joint_names))),
-                                 np.eye(4))
-        body = c._replace(plane_points=np.zeros((0, 3)), plane_normals=np.zeros((0, 3)))
-        return depth_inside(rig.rest, np.ones(rig.n, dtype=bool), body, collider_labels(rig))
-
     def _inside_at_rest(self) -> list[str]:
         """Say where the rest cloth is inside the rig's colliders at the zero pose, if it is."""
-        rig, worst = self.rig, self.deepest_at_rest()
+        rig, worst = self.rig, deepest_at_rest(self.rig)
         if worst.value <= INSIDE_AT_REST:
             return []
         row, col = divmod(worst.vertex, rig.cols)

@@ -495,12 +495,7 @@ def _clear_of_colliders(rig: dict, lines: list,
     :param lines: the proposal's lines, one added if the radii grow.
     :param load: ``load(rig) -> (YAML text, Rig)``.
     """
-    from ..core.fabric import load_fabric
-    from ..core.simulation import INSIDE_AT_REST, JacketSimulation
-
-    def deepest(loaded):
-        return JacketSimulation(loaded.skeleton, loaded,
-                                load_fabric('tweed_jacket')).deepest_at_rest()
+    from ..core.simulation import INSIDE_AT_REST, deepest_at_rest as deepest
     shape = rig['cloth']['shape']
     proposed = list(shape['radii'])
     text, loaded = load(rig)
