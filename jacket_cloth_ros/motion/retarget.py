@@ -62,8 +62,9 @@ def unlike_the_clips_character(skeleton: Skeleton, clip: str) -> str:
         return (f'lacks {len(missing)} of the {len(joints)} joints ({", ".join(missing[:5])}) '
                 f'{moves}')
     shipped = load_shipped_character()
+    rests = [(s, s.forward(np.zeros(len(s.joint_names)))) for s in (shipped, skeleton)]
     for name in sorted(joints):
-        ours, theirs = _joint_at_rest(shipped, name), _joint_at_rest(skeleton, name)
+        ours, theirs = (_joint_at_rest(s, links, name) for s, links in rests)
         for k, (what, most) in enumerate((('turns about another axis', SAME_AXIS_DEG),
                                           ('sits another way from its root', SAME_PLACE_DEG))):
             a, b = ours[k], theirs[k]
@@ -79,9 +80,8 @@ def unlike_the_clips_character(skeleton: Skeleton, clip: str) -> str:
     return ''
 
 
-def _joint_at_rest(skeleton, name):
-    """Return a joint's axis and its place, in the root's frame at the zero pose."""
-    links = skeleton.forward(np.zeros(len(skeleton.joint_names)))
+def _joint_at_rest(skeleton, links, name):
+    """Return a joint's axis and its place, in the root's frame at the zero pose ``links``."""
     # The link the joint itself moves: a mimic joint shares its value, not its axis.
     k = next(k for k, link in enumerate(skeleton.link_names)
              if skeleton.joint_of_link.get(link) == name)
