@@ -558,12 +558,11 @@ class JacketSimulation:
         rig, watch = self.rig, self.watches.collapse
         row, stretched = watch.worst_row(rig.cols)
         tilt = rig.body_tilt(self.links, sample.root[:3, :3])
-        sunk = self._under_floor()
         if tilt is not None:
             fix = (f'the body lies {tilt[1]:.0f} deg from the world\'s up '
                    f'{_shown(rig.world_up)}: write world_up in the rig if this world\'s up is '
                    'another axis, else stand the body up (motion --urdf retargets a clip)')
-        elif sunk:
+        elif sunk := self._under_floor():
             fix = sunk
         elif stretched:
             fix = 'widen cloth.shape.radii: the colliders hold it wider than its rest'
