@@ -192,6 +192,40 @@ def test_rig_motion_says_what_of_the_motion_it_could_not_use(tmp_path, capsys):
                  urdf]) == 0
 
 
+def test_rig_motion_reads_the_topic_of_a_crowds_recording_it_is_told(tmp_path, capsys):
+    # `rig --motion` of a crowd's recording read the first JointState of any topic: another
+    # character's pose gave this one's verdict (a probe). Now it picks the topic as replay
+    # does: the one given, else the only one, else it says to choose.
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES
+    from jacket_cloth_ros.recording.writer import SessionRecorder, qos_profile_yaml
+    from jacket_cloth_ros.ros.cdr import joint_state
+    from jacket_cloth_ros.core.config import shipped
+    urdf, crowd = shipped('character.urdf'), tmp_path / 'crowd.mcap'
+    recorder = SessionRecorder(str(crowd))
+    world = [f'world_joint/{v}' for v in WORLD_VARIABLES]
+    # alice stands; bob lies on his back (a half turn about x: w = cos 45 deg).
+    for topic, pose in (('/alice/joint_states', [0.0] * 6 + [1.0]),
+                        ('/bob/joint_states', [0.0, 0.0, 1.0, 0.7071, 0.0, 0.0, 0.7071])):
+        recorder.add_topic(topic, 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        recorder.write(topic, joint_state(10 ** 9, world, pose), 10 ** 9)
+    recorder.close()
+    argv = ['rig', '--urdf', urdf, '--force', '--motion', str(crowd)]
+    assert main(argv + ['-o', str(tmp_path / 'r.yaml')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err == (f'jacket_cloth rig: {crowd}: several JointState topics (/alice/joint_states, '
+                   '/bob/joint_states); choose one with --topic'), err
+    said = {}
+    for name in ('alice', 'bob'):
+        assert main(argv + ['-o', str(tmp_path / f'{name}.yaml'), '--topic',
+                            f'/{name}/joint_states']) == 0
+        out = capsys.readouterr()
+        said[name] = out.out + out.err
+    assert 'lies' not in said['alice'] and 'lies' in said['bob'], said
+    assert main(['rig', '--urdf', urdf, '-o', str(tmp_path / 't.yaml'), '--topic', '/x']) == 1
+    assert capsys.readouterr().err.strip() == ('jacket_cloth rig: --topic /x names a JointState '
+                                               'topic of --motion: give --motion too')
+
+
 def _soles_over_floor(loaded):
     """Return how far the body's soles are over its rig's floor at a session's first input."""
     from jacket_cloth_ros.core.body_proxy import lowest_reach

@@ -432,6 +432,9 @@ def cmd_rig(args: argparse.Namespace) -> int:
     from ..core.skeleton import load_skeleton
     from ..rigging.propose import propose, to_yaml
     from .outputs import OutputError, check_picture, replacing_all, same_name
+    if args.topic and not args.motion:
+        raise ToolError(f'--topic {args.topic} names a JointState topic of --motion: give '
+                        '--motion too')
     _check_output(args.output, args.force, [args.urdf, args.motion])
     if args.picture:
         if same_name(args.picture, args.output):
@@ -443,7 +446,8 @@ def cmd_rig(args: argparse.Namespace) -> int:
     for line in skeleton.warnings:
         print(f'jacket_cloth rig: warning: {args.urdf}: {line}', file=sys.stderr)
     forward = _vector(args.forward, '--forward') if args.forward else None
-    first = _first_pose(args.motion, skeleton, args.world_joint) if args.motion else None
+    first = _first_pose(args.motion, skeleton, args.world_joint, args.topic) \
+        if args.motion else None
     rig, lines, body = propose(skeleton, forward)
 
     def load(rig):
@@ -518,15 +522,22 @@ def _clear_of_colliders(rig: dict, lines: list,
     return load(rig)
 
 
-def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str) -> tuple:
-    """Return (joint values, root's world rotation) of a recording's first JointState."""
+def _first_pose(path: str, skeleton: 'Skeleton', world_joint: str,
+                topic: str | None = None) -> tuple:
+    """Return (joint values, root's world rotation) of a recording's first JointState.
+
+    Of its JointState topic as replay picks it: ``topic``, else the only one (a crowd's
+    recording has one per character, each another skeleton's).
+    """
     from ..core.inputs import InputParser, InputRejected
     from ..recording.reader import read_recording
     from ..ros.cdr import DECODE_ERRORS, JointStateReader
-    recording = read_recording(path, kinds=('sensor_msgs/msg/JointState',))
+    from .session import NO_MESSAGES, joint_state_topic
+    topic = joint_state_topic(read_recording(path, NO_MESSAGES), topic)
+    recording = read_recording(path, topics=(topic,))
     first = next(iter(recording.messages), None)
     if first is None:
-        raise ToolError(f'--motion {path}: no sensor_msgs/msg/JointState message in it')
+        raise ToolError(f'--motion {path}: no message on {topic}')
     try:
         msg = JointStateReader().read(first.data)
         parser = InputParser(skeleton, world_joint)
@@ -667,6 +678,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--motion', default=None,
                    help='a recording of the character: says whether the body lies down at its '
                    "first JointState (gravity and the floor stay the world's up, +z)")
+    g.add_argument('--topic', default=None,
+                   help='its JointState topic (with --motion; default: the only one, or '
+                   '/joint_states)')
     g.add_argument('--world-joint', default='world_joint',
                    help='the world joint the recording names (with --motion)')
     g.add_argument('--force', action='store_true', help='overwrite the output files')
