@@ -32,7 +32,7 @@ RIG = os.path.join(os.path.dirname(shipped('character.urdf')), 'examples',
 @pytest.fixture(scope='module', params=sorted(CAPTURES))
 def capture(request):
     path = fetched(request.param)
-    bvh = read_bvh(path)
+    bvh, _ = read_bvh(path)
     return request.param, bvh, convert(bvh, request.param.split('.')[0])
 
 
@@ -78,7 +78,7 @@ def test_rest_link_frames_are_z_up_facing_x():
 
 
 def test_a_wrap_at_pi_is_unwrapped_so_interpolation_takes_the_short_way():
-    bvh = read_bvh(fetched('test_mocapbank.bvh'))
+    bvh, _ = read_bvh(fetched('test_mocapbank.bvh'))
     raw = bvh.joint_angles
     # The capture itself wraps: LeftHip's first angle goes from 179.99 to -179.96 degrees.
     hip = [n.name for n in bvh.nodes if not n.is_end_site()].index('LeftHip')
@@ -128,6 +128,27 @@ def test_import_writes_joint_states_at_the_capture_rate_and_the_urdf(tmp_path, c
     # A bag folder too, as motion -o writes one.
     assert main(['import', src, '-o', str(tmp_path / 'bag')]) == 0
     assert (tmp_path / 'bag' / 'metadata.yaml').is_file()
+
+
+def test_joint_names_with_spaces_are_read_whole_their_words_joined(tmp_path, capsys):
+    # The reader cut `JOINT My Spine` at its first space: every joint of such a file was
+    # named 'My' and the import refused two parts of one name, a capture of unique names.
+    src = fetched('test_freebvh.bvh')
+    lines = open(src, encoding='utf-8').read().splitlines()
+    spaced = [' '.join(w[:1] + ['My'] + w[1:]) if w[:1] in (['ROOT'], ['JOINT']) else line
+              for line, w in ((line, line.split()) for line in lines)]
+    path = tmp_path / 'spaced.bvh'
+    path.write_text('\n'.join(spaced) + '\n', encoding='utf-8')
+    out, urdf = tmp_path / 's.mcap', tmp_path / 's.urdf'
+    assert main(['import', str(path), '-o', str(out), '--urdf-out', str(urdf)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: joint names with spaces, their words joined by _: 'My mixamorig:Hips' " \
+        "as 'My_mixamorig:Hips', " in err, err
+    plain, joined = load_capture(src), load_capture(str(path))
+    assert joined.joint_names == ['My_' + n for n in plain.joint_names]
+    assert np.array_equal(joined.positions, plain.positions)
+    assert len(joined.renamed) == CAPTURES['test_freebvh.bvh'][1] - sum(
+        'End Site' in line for line in lines)
 
 
 @pytest.mark.parametrize('content, words', [

@@ -29,11 +29,12 @@ radians, each joint's Euler order as its CHANNELS line gives it). Conventions of
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
+import tempfile
 import warnings
 import xml.etree.ElementTree as ElementTree
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -66,7 +67,7 @@ class BvhError(ValueError):
     """A BVH file that cannot be imported; the message is one line naming the file."""
 
 
-@dataclass
+@dataclasses.dataclass
 class Capture:
     """A BVH capture converted: the URDF, and per frame its joint values and root pose."""
 
@@ -81,6 +82,8 @@ class Capture:
     height_m: float              # the rest skeleton's height, metres
     # Its rest skeleton's extents along the file's x, y and z, metres (y: its height).
     spans_m: tuple = (float('nan'),) * 3
+    # (name in the file, name taken) of each joint whose name had spaces, joined by '_'.
+    renamed: tuple = ()
 
     @property
     def frames(self) -> int:
@@ -113,17 +116,42 @@ def not_finite(capture: Capture) -> str | None:
             'number')
 
 
-def read_bvh(path: str) -> Bvh:
+def read_bvh(path: str) -> tuple[Bvh, tuple]:
     """Read ``path`` with pybvh; every failure becomes one BvhError line naming the file.
 
+    A joint name with spaces (``JOINT Left Hip``), which the reader cuts at the first, is
+    read with its words joined by '_' (``Left_Hip``).
+
     :param path: the BVH file.
+    :returns: (the capture read, (name in the file, name taken) of each name joined).
     """
-    import pybvh
     if not os.path.isfile(path):
         raise BvhError(f'{path}: no such file')
     if os.path.getsize(path) == 0:
         raise BvhError(f'{path}: empty file')
-    links, opened, closed = _hierarchy_counts(path)
+    links, opened, closed, spaced = _hierarchy_counts(path)
+    if not spaced:
+        return _read(path, links, opened, closed), ()
+    with tempfile.TemporaryDirectory() as tmp:
+        joined = os.path.join(tmp, os.path.basename(path))
+        with open(path, encoding='utf-8', errors='replace') as f, \
+                open(joined, 'w', encoding='utf-8') as out:
+            for k, line in enumerate(f):
+                if k in spaced:
+                    words = line.split()
+                    line = line[:len(line) - len(line.lstrip())] + words[0] + ' ' + \
+                        '_'.join(words[1:]) + '\n'
+                out.write(line)
+        try:
+            bvh = _read(joined, links, opened, closed)
+        except BvhError as e:
+            raise BvhError(str(e).replace(joined, path)) from None
+    return bvh, tuple(spaced.values())
+
+
+def _read(path, links, opened, closed):
+    """Read ``path`` with pybvh once its HIERARCHY was counted (_hierarchy_counts)."""
+    import pybvh
     if links > MAX_LINKS:           # before the reader spends seconds on it
         raise BvhError(f'{path}: its skeleton would be {links} links as a URDF, over the '
                        f'{MAX_LINKS} a character may have')
@@ -152,20 +180,23 @@ def read_bvh(path: str) -> Bvh:
 
 
 def _hierarchy_counts(path):
-    """Read the file's HIERARCHY up to MOTION: (links as a URDF, braces opened, closed).
+    """Read the file's HIERARCHY up to MOTION: (links as a URDF, braces opened, closed, names).
 
     The links: the root, one a rotation channel of every other joint, and one an End Site.
-    A file that is no BVH counts few, and the reader says what is wrong with it.
+    A file that is no BVH counts few, and the reader says what is wrong with it. Names:
+    {line index: (name, its words joined by '_')} of each ROOT or JOINT named with spaces.
     """
-    links, channels_seen, opened, closed = 1, 0, 0, 0
+    links, channels_seen, opened, closed, spaced = 1, 0, 0, 0, {}
     try:
         with open(path, encoding='utf-8', errors='replace') as f:
-            for line in f:
+            for k, line in enumerate(f):
                 words = line.split()
                 if not words:
                     continue
                 if words[0] == 'MOTION':
                     break
+                if words[0] in ('ROOT', 'JOINT') and len(words) > 2:
+                    spaced[k] = (' '.join(words[1:]), '_'.join(words[1:]))
                 # A line of its own each, as the format lays them out: one in a name is none.
                 opened += words[0] == '{'
                 closed += words[0] == '}'
@@ -176,8 +207,8 @@ def _hierarchy_counts(path):
                     if channels_seen > 1:       # the root's are the world joint's
                         links += sum(w.endswith('rotation') for w in words[2:])
     except OSError:
-        return 0, 0, 0              # the reader says so
-    return links, opened, closed
+        return 0, 0, 0, {}          # the reader says so
+    return links, opened, closed, spaced
 
 
 def rest_offsets(bvh: Bvh) -> np.ndarray:
@@ -375,9 +406,9 @@ def load_capture(path: str, scale: float | None = None) -> Capture:
     :param scale: metres per BVH unit; None: ``guess_scale``'s.
     """
     name = os.path.splitext(os.path.basename(path))[0] or 'capture'
-    bvh = read_bvh(path)
+    bvh, renamed = read_bvh(path)
     try:
-        return convert(bvh, name, scale)
+        return dataclasses.replace(convert(bvh, name, scale), renamed=renamed)
     except BvhError as e:
         raise BvhError(f'{path}: {e}') from None
 

@@ -164,6 +164,11 @@ def cmd_import(args: argparse.Namespace) -> int:
     warning = None if args.urdf else height_warning(capture)
     if warning:
         print(f'jacket_cloth import: {args.input}: {warning}', file=sys.stderr)
+    if getattr(capture, 'renamed', ()):
+        joined = ', '.join(f'{a!r} as {b!r}' for a, b in capture.renamed[:3]) + (
+            f' and {len(capture.renamed) - 3} more' if len(capture.renamed) > 3 else '')
+        print(f'jacket_cloth import: {args.input}: warning: joint names with spaces, their words '
+              f'joined by _: {joined}', file=sys.stderr)
     stamps = stamps_ns(capture, int(round(args.start * 1e9)))
     with replacing(args.output, recording=True, force=args.force) as tmp:
         rec = SessionRecorder(tmp, final_name=os.path.basename(os.path.normpath(args.output)),
