@@ -158,6 +158,11 @@ def test_joint_names_with_spaces_are_read_whole_their_words_joined(tmp_path, cap
     ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
      'Zrotation Xrotation Wobble\n}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0\n',
      'unrecognized channel'),
+    # A corrupted angle posed its frame at random; the replay then blamed the rig's shape.
+    ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
+     'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'
+     'Frames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n0 0 0 0 -1e20 0\n',
+     'frame 1: Hips turns -1e+20 deg, beyond the 1e+06 any joint may'),
 ])
 def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
     bad = tmp_path / 'bad.bvh'

@@ -58,6 +58,10 @@ _TYPICAL_HEIGHT_M = 1.7
 HUMAN_HEIGHT_M = (1.2, 2.2)
 
 
+# A channel's angle beyond this (degrees) is a corrupted value, not turns a capture unwrapped:
+# its spike would pose the frame at random.
+MAX_ANGLE_DEG = 1e6
+
 # Seconds between frames: 10 kHz to 1 Hz. Shorter made stamps repeat (whole ns); longer put
 # a capture's stamps beyond what a header stamp holds.
 FRAME_TIME_RANGE = (1e-4, 1.0)
@@ -173,6 +177,12 @@ def _read(path, links, opened, closed):
         raise BvhError(f'{path}: Frame Time {bvh.frame_time:g} is outside [{low:g}, {high:g}] s')
     if not (np.isfinite(bvh.root_pos).all() and np.isfinite(bvh.joint_angles).all()):
         raise BvhError(f'{path}: a channel value is not a finite number')
+    size = np.abs(bvh.joint_angles)
+    if size.size and size.max() > math.radians(MAX_ANGLE_DEG):
+        k, j, c = (int(i) for i in np.unravel_index(np.argmax(size), size.shape))
+        raise BvhError(f'{path}: frame {k}: {bvh.joint_names[j]} turns '
+                       f'{math.degrees(bvh.joint_angles[k, j, c]):.3g} deg, beyond the '
+                       f'{MAX_ANGLE_DEG:g} any joint may (a corrupted frame?)')
     for node in bvh.nodes:
         if not np.isfinite(np.asarray(node.offset, dtype=float)).all():
             raise BvhError(f'{path}: the OFFSET of {node.name} is not three finite numbers')
