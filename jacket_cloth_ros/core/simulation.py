@@ -57,6 +57,9 @@ UNDER_FLOOR_PER_HEIGHT = 0.05
 # world pose: the cloth restarts there rather than fall or fly the way between, which no
 # motion made.
 WORLD_BEGAN = 'the world pose began (the root was placed without one before)'
+# Within this share of the height and these degrees of the guess, the world pose is the guess
+# confirmed: no restart.
+GUESS_KEPT_PER_HEIGHT, GUESS_KEPT_DEG = 0.005, 1.0
 # The cloth inside a collider at the zero pose deeper than this (m) is named at load.
 INSIDE_AT_REST = 0.005
 # The cloth stretched more than this share at the first input is named (issue 19's target).
@@ -731,7 +734,8 @@ class JacketSimulation:
             report.reset = 'first sample'
         elif not report.reset:
             report.reset = self._jump(self.last, sample) or (
-                WORLD_BEGAN if sample.world_began else '')
+                WORLD_BEGAN if sample.world_began and self._off_the_guess(self.last, sample)
+                else '')
         if report.reset:
             first = report.reset == 'first sample'
             if first:
@@ -878,6 +882,16 @@ class JacketSimulation:
         if turn > self.params.teleport_angle_deg:
             return f'fast turn: turned {turn:.0f} deg between two inputs'
         return ''
+
+    def _off_the_guess(self, a, b):
+        """Tell whether the first world pose, b, is off the guessed root of a: then a restart.
+
+        A guess that was right (a source standing its robot where the rig's floor stands it)
+        keeps its swinging cloth: a restart would show as a pop.
+        """
+        move, turn = root_jump(a.root, b.root, a.root_quat, b.root_quat)
+        return not (move <= GUESS_KEPT_PER_HEIGHT * self.rig.height_m
+                    and turn <= GUESS_KEPT_DEG)
 
     def step_output(self) -> StepOutput:
         """Return new arrays for what step.advance leaves (the last step's pose, stats)."""
