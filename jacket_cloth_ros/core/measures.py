@@ -146,8 +146,7 @@ class CollapseWatch:
         :param x: the vertices' positions, (N, 3) in m.
         :param stamp_ns: the input's stamp, ns.
         """
-        last = self.looked_ns
-        if len(self.a) == 0 or (last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9):
+        if not self.looks_at(stamp_ns):
             return False
         self.looked_ns = stamp_ns
         size = self._size
@@ -164,6 +163,15 @@ class CollapseWatch:
             return False
         self.collapsed = True
         return True
+
+    def looks_at(self, stamp_ns: int) -> bool:
+        """Tell whether :meth:`note` looks at the cloth at this input's stamp.
+
+        :param stamp_ns: the input's stamp, ns.
+        """
+        last = self.looked_ns
+        return len(self.a) > 0 and not (last is not None
+                                        and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9)
 
     def load(self, x: np.ndarray) -> None:
         """Load the compiled look now, with what is watched unchanged (not on the first input).
@@ -227,6 +235,21 @@ class RestlessWatch:
         scratch = np.zeros((links.shape[0], 3))
         links_in_world(links, root, scratch, scratch)
 
+    def looks_at(self, stamp_ns: int) -> bool:
+        """Tell whether :meth:`note` looks at the body at this input's stamp.
+
+        :param stamp_ns: the input's stamp, ns.
+        """
+        last = self.looked_ns
+        return not (last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9)
+
+    def carry(self, hem_path: float) -> None:
+        """Take an input's hem path where :meth:`looks_at` says no look is due.
+
+        :param hem_path: the hem's mean path over the input's steps, m.
+        """
+        self._path += hem_path
+
     def note(self, hem_path: float, links: np.ndarray, root: np.ndarray, stamp_ns: int) -> bool:
         """Take an input's hem path; return True when the cloth has just been restless long.
 
@@ -236,10 +259,10 @@ class RestlessWatch:
             links hardly moving in it.
         :param stamp_ns: the input's stamp, ns.
         """
-        self._path += hem_path
-        last = self.looked_ns
-        if last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9:
+        self.carry(hem_path)
+        if not self.looks_at(stamp_ns):
             return False
+        last = self.looked_ns
         body = np.zeros((links.shape[0], 3))
         moved = links_in_world(links, root, body if self._body_last is None else self._body_last,
                                body)

@@ -235,6 +235,7 @@ class JacketSimulation:
         # The current state's bones, as an input's check left them (the compiled call makes
         # them with its steps, core/stepping.py); any new input or reset drops them.
         self.ready_bones = None
+        self._own = None        # (last, parser's last, bones) took_steady may move on in place
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
         # The compiled steps and bones (physics.crowd.advance_slot), alone as in a crowd.
@@ -628,9 +629,55 @@ class JacketSimulation:
         :param status: what the compiled call returned (not NOT_STEADY).
         :param started: ``time.perf_counter_ns()`` before that call, for the step cost.
         """
+        report = self._took_again(stamp_ns, status, started)
+        if report is not None:
+            return report
         report, job = self.steady_job(stamp_ns)
         self.finish(report, job, status)
-        return self._checked(report, names, started)
+        report = self._checked(report, names, started)
+        # Made here and held by no caller: the next steady input may move them on in place.
+        self._own = (self.last, self.parser.last, self.ready_bones) \
+            if self.steps.armed is not None else None
+        return report
+
+    def _took_again(self, stamp_ns, status, started):
+        """took_steady of a steady input after one: its bookkeeping in place; else None.
+
+        The last sample (the parser's too) and the bones the last steady input left are this
+        simulation's own: they take this input's values in place, so the intake stays armed
+        for the same objects and nothing is made anew. Anything else goes the whole way: bones
+        or a cloth not finite, a watch's look due, those objects replaced (a reset, a Python
+        input, a caller that dropped the bones).
+        """
+        own, steps = self._own, self.steps
+        windy = self._windy()
+        if (own is None or status != BONES_FINITE or own[0] is not self.last
+                or own[1] is not self.parser.last or own[2] is not self.ready_bones
+                or self.watches.collapse.looks_at(stamp_ns)
+                or (not windy and self.watches.restless.looks_at(stamp_ns))):
+            return None
+        slot = steps.slot
+        deepest, limited, sweeps, substeps, non_finite, hem_path, retried = \
+            slot.out.stats.tolist()
+        if non_finite:
+            return None
+        last = own[0]
+        last.stamp_ns = stamp_ns
+        last.q[:] = slot.q_b
+        last.root[:] = steps.intake.last.root
+        last.root_quat[:] = slot.quat_b
+        own[2].poses[:] = slot.bones
+        steps.steady_inputs += 1
+        _, _, t_sim, _, n = slot.clock.tolist()
+        self.t_sim = t_sim
+        self.steps_total += n
+        self.faults.retried += int(retried)
+        if not windy:
+            self.watches.restless.carry(hem_path)
+        return StepReport(stamp_ns, steps=n, max_penetration=max(0.0, deepest),
+                          limited_vertices=int(limited), sweeps=int(sweeps),
+                          substeps=int(substeps), retried_steps=int(retried),
+                          step_cost_ns=time.perf_counter_ns() - started)
 
     def _checked(self, report, names, started):
         """End an input: its cost, its bones checked, the intake armed or not."""
