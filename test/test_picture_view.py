@@ -17,7 +17,7 @@ from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.simulation import JacketSimulation
 from jacket_cloth_ros.core.skeleton import Skeleton, shipped_character_urdf
 from jacket_cloth_ros.tools.picture import (
-    axis_label, body_link, draw_filmstrip, in_view, sim_frame)
+    axis_label, body_link, draw_filmstrip, in_view, sim_frame, view_axes_of)
 
 # The shipped character on a rail: its own prismatic joint walks it along the world's x.
 RAIL = '''<link name="rail"/>
@@ -83,6 +83,39 @@ def test_a_walk_away_stays_in_frame_upright_in_any_link_axes():
         assert v_t.triangles == pytest.approx(v.triangles, abs=1e-9)
         assert v_t.hood == pytest.approx(v.hood, abs=1e-9)
     assert axis_label(rig_t.world_axes[:, 2], 'up') == 'world +y (m, up)'
+
+
+def _turned_half(names, positions):
+    """Return a JointState's positions with its world pose turned half a turn about z."""
+    out, at = list(positions), {n: k for k, n in enumerate(names)}
+    x, y = (at[f'world_joint/trans_{a}'] for a in 'xy')
+    out[x], out[y] = -out[x], -out[y]
+    q = [at[f'world_joint/rot_{a}'] for a in 'xyzw']
+    qx, qy, qz, qw = (positions[k] for k in q)
+    for k, v in zip(q, (-qy, qx, qw, -qz)):           # (0, 0, 1, 0) times q
+        out[k] = v
+    return out
+
+
+def test_the_front_view_faces_a_character_turned_in_the_world():
+    # A character turned about the world's up (a retargeted iCub, a capture facing -x) was
+    # drawn from behind under "front view", its side view mirrored (a probe): the views took
+    # forward from the URDF, not from where the body faced.
+    urdf = shipped_character_urdf()
+    data = load_yaml(shipped('jacket_rig.yaml'))
+    inputs = [(stamp, names, _turned_half(names, pos)) for stamp, names, pos in
+              clip_inputs(Skeleton(urdf), 'walk', 2.0)]
+    skeleton, rig, frames = _frames(urdf, data, inputs)
+    axes = view_axes_of(frames, rig)
+    assert np.allclose(axes, np.diag([-1.0, -1.0, 1.0]), atol=1e-9), axes
+    assert axis_label(axes[:, 0], 'forward') == 'world -x (m, forward)'
+    centre, left, nose = body_link(skeleton), skeleton.link('l_foot'), skeleton.link('head')
+    for v in (in_view(f, axes, centre) for f in frames):
+        assert v.links[left][1] > 0.05              # its left foot on the picture's left
+        assert v.links[nose][2] > 0.6               # upright
+    # Unturned, the views are the rig's as before.
+    _, _, straight = _frames(urdf, data, clip_inputs(Skeleton(urdf), 'walk', 1.0))
+    assert np.array_equal(view_axes_of(straight, rig), rig.view_axes())
 
 
 def test_a_walk_by_the_urdfs_own_joints_stays_in_frame(tmp_path):

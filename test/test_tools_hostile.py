@@ -839,7 +839,9 @@ def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_pat
     import sys
     import time
     clip, out = tmp_path / 'walk.mcap', tmp_path / 'out.mcap'
-    assert main(['motion', '--clip', 'walk', '--duration', '20', '-o', str(clip)]) == 0
+    # Long enough that the signal, sent once the output is open, lands before the replay
+    # ends on a loaded machine (20 s of the walk replayed in under a second).
+    assert main(['motion', '--clip', 'walk', '--duration', '90', '-o', str(clip)]) == 0
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'replay', str(clip),
                              '-o', str(out)], cwd=root, stdout=subprocess.DEVNULL,

@@ -315,17 +315,35 @@ class Rig:
             up = link[:3, :3] @ self.hood.pivot + up
         return lying(np.asarray(root_rotation, float) @ up, self.world_up)
 
-    def view_axes(self, world_up: npt.ArrayLike | None = None) -> np.ndarray:
+    def view_axes(self, world_up: npt.ArrayLike | None = None,
+                  root_rotation: npt.ArrayLike | None = None) -> np.ndarray:
         """Return the world's forward, left and up as columns: the views' axes.
 
         The body's axes (``up``, ``forward``: the URDF root frame's) turned so that up is the
         world's, where a world joint turns the root (a Y-up URDF driven in a Z-up world).
+        Given the root's rotation in the world, they are turned about up by the quarter turns
+        that bring forward nearest to where the body faces there: a character turned in the
+        world (retargeted, a capture facing the other way) is seen from its front, not its
+        back, and the views stay on the world's axes.
 
         :param world_up: the world's up, (3,) unit; None: the rig's ``world_up``.
+        :param root_rotation: the root's rotation in the world (3, 3) at the moment the views
+            face; None: the body's forward as the URDF has it.
         :returns: (3, 3), forward, left and up as columns.
         """
         up = self.world_up if world_up is None else np.asarray(world_up, float)
-        return rotation_between(self.up, up) @ self.world_axes
+        axes = rotation_between(self.up, up) @ self.world_axes
+        if root_rotation is None:
+            return axes
+        front = np.asarray(root_rotation, float) @ self.world_axes[:, 0]
+        # Facing the floor or the sky (a body lying down): kept.
+        if np.linalg.norm(front - (front @ up) * up) < 0.1:
+            return axes
+        quarter = int(np.argmax([front @ axes[:, 0], front @ axes[:, 1], -front @ axes[:, 0],
+                                 -front @ axes[:, 1]]))
+        for _ in range(quarter):            # a quarter turn about up: forward to left
+            axes = np.column_stack([axes[:, 1], -axes[:, 0], axes[:, 2]])
+        return axes
 
     def _load_regions(self, cloth, where):
         """Per-region multipliers of the fabric's damping, wind, world share and M11 bound.

@@ -22,7 +22,7 @@ from ..core.body_proxy import body_proxy, sleeved_links  # noqa: E402
 from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
 from ..recording.reader import message_digest, message_digests  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
-from .picture import draw_filmstrip, sim_frame  # noqa: E402
+from .picture import draw_filmstrip, sim_frame, view_axes_of  # noqa: E402
 from .session import SessionInput, run_session  # noqa: E402
 
 if TYPE_CHECKING:           # for the annotations only
@@ -249,8 +249,9 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
     for name, session in zip(names, sessions):
         figures = SessionFigures(session, moments)
         pipeline = run_session(session, probe=figures.probe)
-        # The views' up is the world's (the rig's world_up), as the simulation's gravity.
-        axes = session.setup.rig.view_axes()
+        # The views' up is the world's (the rig's world_up), as the simulation's gravity;
+        # forward, where the body faces at the first frame drawn.
+        axes = view_axes_of(figures.frames, session.setup.rig)
         reports.append(figures.report(pipeline))
         series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
         strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'

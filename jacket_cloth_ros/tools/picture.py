@@ -119,14 +119,16 @@ def view_axes_of(frames: Sequence[Frame], rig: 'Rig | None') -> np.ndarray:
     """Return the views' forward, left and up: the world's, as the simulation takes it.
 
     The rig's ``world_up`` (REP 103's +z unless the rig says otherwise): a body that lies down
-    is drawn lying down (issue 47 item 1).
+    is drawn lying down (issue 47 item 1). Forward is where the body faces in the first frame
+    (Rig.view_axes): the front view shows its front.
 
     :param frames: the frames drawn, their points in the root's frame.
     :param rig: the rig; None: x forward, z up.
     """
     if rig is None:
         return WORLD_AXES
-    return rig.view_axes()
+    root = frames[0].root if frames else None
+    return rig.view_axes(root_rotation=None if root is None else root[:3, :3])
 
 
 def view_limits(frames: Sequence[Frame]) -> tuple[tuple[float, float], tuple[float, float]]:
