@@ -267,3 +267,29 @@ def test_a_partial_world_pose_is_a_warning_while_it_comes(skeleton, rig):
                                                 DiagnosticArray).status[0].message)
     assert 'incomplete world_joint/* pose: the root keeps its last world pose' in messages[0]
     assert 'incomplete' not in messages[1], messages
+
+
+def test_steps_skipped_over_the_cap_are_a_warning_saying_how_much_time_the_cloth_lost(skeleton,
+                                                                                      rig):
+    # Inputs further apart than max_steps_per_input steps ran the cloth in slow motion (half
+    # the body's time at a cap of one step from 60 Hz inputs) with the diagnostics ok: a line
+    # every few seconds said it (a probe). It is a WARN now, with the share of time run.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.ros import cdr
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    values = default_values(load_fabrics()['tweed_jacket'])
+    said = {}
+    for cap in (1, 12):
+        pipe = SessionPipeline(skeleton, rig, values.with_changes({'max_steps_per_input': cap}))
+        names = list(skeleton.joint_names)
+        for k in range(61):
+            pipe.on_raw(cdr.joint_state(10 ** 9 + k * 10 ** 9 // 60, names, [0.0] * len(names)))
+        said[cap] = deserialize_message(pipe.diagnostics_now(2 * 10 ** 9),
+                                        DiagnosticArray).status[0]
+    assert said[1].level == bytes([1]), said[1]
+    assert " step(s) skipped over max_steps_per_input (1 an input): the cloth ran 50% of the " \
+        "inputs' time" in said[1].message, said[1].message
+    assert said[12].level == bytes([0]) and said[12].message == 'ok', said[12]

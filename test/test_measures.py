@@ -63,6 +63,25 @@ def test_analyze_reports_each_measure_as_max_and_p99_with_where(tmp_path):
     assert 'vertical compression max / p99' in summary and 'inside a collider' in summary
     assert 'inside the body max / p99' in summary
     assert report['body_inside_m']['max'] == 0.0       # the shipped rig's colliders hold it
+    from jacket_cloth_ros.tools.analyze import summary_line
+    assert report['skipped_steps'] == 0 and 'skipped' not in summary_line(report)
+
+
+def test_analyze_says_the_steps_a_slow_source_skipped(tmp_path, capsys):
+    # Inputs at 2 Hz with a cap of 12 steps ran the cloth a fifth of the time, and analyze's
+    # line, summary and report said nothing (a probe).
+    from jacket_cloth_ros.tools.cli import main
+    clip = tmp_path / 'slow.mcap'
+    assert main(['motion', '--clip', 'walk', '--rate', '2', '--duration', '4', '-o',
+                 str(clip)]) == 0
+    capsys.readouterr()
+    assert main(['analyze', str(clip), '--out', str(tmp_path / 'out')]) == 0
+    report = json.loads((tmp_path / 'out' / 'report.json').read_text())
+    assert report['skipped_steps'] == 8 * (60 - 12), report['skipped_steps']
+    assert ', 384 steps skipped over max_steps_per_input (the cloth ran 20% of the time)' in \
+        capsys.readouterr().out
+    assert '| steps skipped (max_steps_per_input) | 384 |' in \
+        (tmp_path / 'out' / 'summary.md').read_text()
 
 
 def test_the_body_proxy_sees_what_the_rigs_colliders_do_not(tmp_path, capsys):

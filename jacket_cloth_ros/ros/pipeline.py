@@ -346,6 +346,9 @@ class SessionPipeline:
                 self.first_refusal = '; '.join(text for _, text in report.warnings) or 'refused'
             return []
         self._window['accepted'] += 1
+        if report.skipped_steps:
+            self._window['skipped'] += report.skipped_steps
+        self._window['steps'] += report.steps
         bones = self.sim.bones()        # checked where the steps ended (check_bones)
         if report.reset:
             self.last_reset_reason = report.reset
@@ -480,6 +483,12 @@ class SessionPipeline:
             problems.append(f'{w["resets"]} reset(s), the last: {self.last_reset_reason}')
         if w['dropped'] or w['lost']:
             problems.append(f'{w["dropped"]} input(s) dropped, {w["lost"]} lost')
+        if w['skipped']:
+            # The cloth then lives less time than the body: gravity and swing slow down.
+            ran = w['steps'] / (w['steps'] + w['skipped'])
+            problems.append(f'{w["skipped"]} step(s) skipped over max_steps_per_input '
+                            f'({self.sim.params.max_steps_per_input} an input): the cloth ran '
+                            f'{ran:.0%} of the inputs\' time')
         lying = self.sim.lying_without_world_pose()
         if lying:
             problems.append(lying)
@@ -545,7 +554,7 @@ def _no_recording_problem() -> str:
 # Clocks a pipeline's periodic outputs keep a grid for (sources on different clocks).
 _CLOCKS = 4
 # What the inputs since the last diagnostics did, for its level.
-_WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost')
+_WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost', 'steps', 'skipped')
 
 
 def quantile(ordered: list, share: float) -> float:

@@ -68,6 +68,7 @@ class SessionFigures:
         self.tf_compared = 0
         self.tf_equal = 0
         self.nonfinite = 0
+        self.skipped = 0            # steps over max_steps_per_input: time the cloth lost
         self.published = 0              # inputs whose bones went out
         self.tf_sent = 0                # /tf messages, as the node records them
 
@@ -88,6 +89,7 @@ class SessionFigures:
         tf = [data for key, data in outputs if key == 'tf']
         # A non-finite cloth or bones reset the cloth (then /tf goes out); no /tf at all: both.
         self.nonfinite += report.reset.startswith('non-finite') or not tf
+        self.skipped += report.skipped_steps
         self.published += bool(tf)
         for data in tf:             # with publish_world_tf, two per input: compare each
             if self.tf_sent < len(self.recorded_tf):
@@ -137,6 +139,7 @@ class SessionFigures:
             'inputs': pipeline.inputs,
             'dropped_inputs': pipeline.dropped,
             'sim_steps': pipeline.sim.steps_total,
+            'skipped_steps': self.skipped,
             'retried_steps': pipeline.sim.faults.retried,
             'duration_s': float(a[-1, 0]) if len(a) else 0.0,
             'max_vertical_strain': float(a[:, 4].max()) if len(a) else 0.0,
@@ -288,6 +291,7 @@ def _summary(names, reports):
     rows = [
         ('frames (/tf published)', lambda r: r['frames']),
         ('simulation steps', lambda r: r['sim_steps']),
+        ('steps skipped (max_steps_per_input)', lambda r: r['skipped_steps']),
         ('duration (s)', lambda r: f"{r['duration_s']:.1f}"),
         ('max vertical strain', lambda r: f"{r['max_vertical_strain']:.4f}"),
         ('max horizontal strain', lambda r: f"{r['max_horizontal_strain']:.4f}"),
@@ -354,7 +358,10 @@ def target_figures(r: dict) -> str:
             f'{r["vertical_compression"]["max"]:.3f}, horizontal stretch p99 '
             f'{r["horizontal_stretch"]["p99"]:.3f}, inside {pair("inside_m", 1e3, 1)} mm, '
             f'inside the body {pair("body_inside_m", 1e3, 1)} mm, non-finite '
-            f'{r["nonfinite_count"]}, resets {r["resets"]}')
+            f'{r["nonfinite_count"]}, resets {r["resets"]}'
+            + (f', {r["skipped_steps"]} steps skipped over max_steps_per_input (the cloth ran '
+               f'{r["sim_steps"] / (r["sim_steps"] + r["skipped_steps"]):.0%} of the time)'
+               if r.get('skipped_steps') else ''))
 
 
 def _pair(t):
