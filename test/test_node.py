@@ -461,6 +461,33 @@ def test_record_set_to_its_own_value_keeps_the_recording(harness, tmp_path):
     assert h.node.recording.recorder is not recorder and h.node.recording.recorder.path == other
 
 
+def test_a_file_opened_live_holds_the_new_values_and_says_it_began_mid_session(
+        harness, tmp_path):
+    # A file a live `record` change opened held the record value before it in its set-up,
+    # and replayed with /tf far from the recorded ones and no word (a probe): the cloth as
+    # it was when the file opened is not in it. Its set-up now holds the new values and how
+    # many inputs came before; the replay says what that means.
+    import json
+    from jacket_cloth_ros.recording.reader import read_recording
+    from jacket_cloth_ros.recording.writer import SESSION_CONFIG
+    from jacket_cloth_ros.tools.session import load_session
+    h = harness()
+    n = h.send_clip('walk', 60, 0.5)
+    path = str(tmp_path / 'live.mcap')
+    assert h.node.set_parameters_atomically([Parameter('record', value=path),
+                                             Parameter('fabric.damping', value=0.07)]).successful
+    h.send_clip('walk', 60, 0.5, start_s=101.0)
+    assert h.node.set_parameters([Parameter('record', value='')])[0].successful
+    setup = read_recording(path).metadata[SESSION_CONFIG]
+    values = json.loads(setup['parameters_json'])
+    assert (values['record'], values['fabric.damping']) == (path, 0.07), values
+    assert setup['inputs_before'] == str(n)
+    said = load_session(path).warnings
+    assert any(line.startswith(f'it began {n} inputs into the live session (record set '
+                               'live): the cloth as it was then is not in the file')
+               for line in said), said
+
+
 def _service(node, name):
     """The callback of ``node``'s parameter service ``name`` (the one the executor calls)."""
     return next(s for s in node.services if s.service_name.endswith('/' + name))

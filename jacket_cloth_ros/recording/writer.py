@@ -217,7 +217,8 @@ class SessionRecorder:
 
     def add_session_config(self, urdf: str, rig_yaml: str, fabrics_yaml: str,
                            parameters: dict, character: str = '',
-                           output_phase: float = 0.0, node_name: str = '') -> None:
+                           output_phase: float = 0.0, node_name: str = '',
+                           inputs_before: int = 0) -> None:
         """Add what a replay needs besides the inputs: character, rig, fabrics, parameters.
 
         In a crowd's recording, one per character: ``SESSION_CONFIG/<name>``.
@@ -230,6 +231,8 @@ class SessionRecorder:
         :param output_phase: a crowd character's output phase (SessionPipeline).
         :param node_name: if given, what its diagnostics status name starts with
             (SessionPipeline's), for the replay's.
+        :param inputs_before: the inputs the character took before the file opened (a live
+            ``record`` change): its cloth then is not in the file, which a replay says.
         """
         name = f'{SESSION_CONFIG}/{character}' if character else SESSION_CONFIG
         setup = {'urdf': urdf, 'rig_yaml': rig_yaml, 'fabrics_yaml': fabrics_yaml,
@@ -238,6 +241,8 @@ class SessionRecorder:
             setup['node_name'] = node_name
         if character:
             setup['output_phase'] = repr(output_phase)
+        if inputs_before:
+            setup['inputs_before'] = str(int(inputs_before))
         self._writer.add_metadata(name, setup)
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:

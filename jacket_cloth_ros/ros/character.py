@@ -244,7 +244,7 @@ class Character:
             recorder.add_topic(*self.topics[key])
         recorder.add_session_config(
             self.urdf, *self.setup_texts, self.values.by_name(), self.config_name,
-            self.pipeline.output_phase, self.pipeline.node_name)
+            self.pipeline.output_phase, self.pipeline.node_name, self.pipeline.inputs)
 
 
 def input_problems(report: 'StepReport', published: bool) -> list[tuple[str, str]]:

@@ -404,12 +404,13 @@ class JacketClothNode(Node):
     def _apply_parameters(self, params):
         """Apply valid changes from the next step; they never reset the cloth."""
         names = {p.name for p in params}
-        if 'record' in names and self.recording.needs_open(self._p('record')):
-            self._record_to(self._p('record'))
         c = self.characters[0]
         # The character's bundle made anew from rclpy's values (checked by
-        # _validate_parameters), handed whole to its pipeline once it has one.
+        # _validate_parameters), handed whole to its pipeline once it has one; before a new
+        # file opens, whose set-up holds them.
         c.set_values(c.values.with_changes(self._values(params)))
+        if 'record' in names and self.recording.needs_open(self._p('record')):
+            self._record_to(self._p('record'))
         if 'diagnostics_rate' in names:
             self._diag_timer.timer_period_ns = int(1e9 / self._diagnostics_rate())
         if c.pipeline is None:

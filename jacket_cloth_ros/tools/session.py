@@ -196,7 +196,7 @@ def recorded_character(path: str, urdf: str | None = None,
 
 # The keys of a set-up record that the node and the replay write (writer.add_session_config).
 SETUP_KEYS = frozenset({'urdf', 'rig_yaml', 'fabrics_yaml', 'parameters_json', 'node_name',
-                        'output_phase'})
+                        'output_phase', 'inputs_before'})
 
 
 class _Twice(ValueError):
@@ -256,10 +256,16 @@ def setup_warnings(setup: dict, ignored: list[str]) -> list[str]:
     unknown = sorted(set(setup) - SETUP_KEYS)
     parts = ([f'key(s) {shown(", ".join(unknown))}'] if unknown else []) + \
         ([f'parameter(s) {shown(", ".join(ignored))}'] if ignored else [])
-    if not parts:
-        return []
-    return ['its recorded set-up holds what this version does not know (ignored): '
-            + '; '.join(parts)]
+    out = [] if not parts else [
+        'its recorded set-up holds what this version does not know (ignored): '
+        + '; '.join(parts)]
+    before = setup.get('inputs_before', '0')
+    if before.isdigit() and int(before):
+        out.append(f'it began {int(before)} inputs into the live session (record set live): '
+                   'the cloth as it was then is not in the file, so its first inputs replay '
+                   'from the skinned pose and their /tf differ from the recorded ones until '
+                   'the cloth forgets its start')
+    return out
 
 
 def _check_joints(session):
