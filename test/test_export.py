@@ -225,8 +225,13 @@ def test_bad_input_is_one_line_and_a_failure(walk, tmp_path, capsys):
     assert not os.path.exists(out)
     assert main(['export', str(walk), '-o', out]) == 0
     assert 'exists' in _one_line_error(capsys, ['export', str(walk), '-o', out])
-    assert 'is the input' in _one_line_error(capsys, ['export', str(walk), '-o', str(walk),
-                                                      '--force'])
+    # Binary glTF under any name (an .mcap out of a replay's habit, a .gltf, which is JSON)
+    # was written as asked (a probe).
+    for name in (walk.name, 'x.gltf', 'session', 'x.png'):
+        target = tmp_path / name
+        assert _one_line_error(capsys, ['export', str(walk), '-o', str(target), '--force']) \
+            .endswith(f'{target}: export writes binary glTF; end the name in .glb')
+    assert sorted(os.listdir(tmp_path)) == ['mannequin.mcap', 'notes.mcap', 'x.glb']
 
 
 def test_keys_rise_where_the_stamps_go_back():

@@ -718,8 +718,16 @@ def test_a_picture_of_inputs_only_says_what_it_found_and_what_it_needs(clip, tmp
     err = one_line_error(capsys, ['picture', str(clip), '-o', str(tmp_path / 'p.png'),
                                   '--urdf', _shipped('character.urdf')])
     assert err.endswith(f"{clip}: nothing to draw: it holds 61 JointState and 0 MarkerArray "
-                        "messages; a picture needs the simulation's markers: replay it first "
-                        '(jacket_cloth replay IN -o OUT), then draw OUT'), err
+                        "messages; a picture needs the simulation's markers: replay it with "
+                        'them first (jacket_cloth replay IN -o OUT -p markers_rate:=30.0), then '
+                        'draw OUT'), err
+    # The advice taken on a session recorded without markers gives a file to draw (it gave
+    # another without them: the replay keeps the recorded markers_rate; a probe).
+    bare, out = tmp_path / 'bare.mcap', tmp_path / 'out.mcap'
+    assert main(['replay', str(clip), '-o', str(bare), '-p', 'markers_rate:=0.0']) == 0
+    one_line_error(capsys, ['picture', str(bare), '-o', str(tmp_path / 'b.png')])
+    assert main(['replay', str(bare), '-o', str(out), '-p', 'markers_rate:=30.0']) == 0
+    assert main(['picture', str(out), '-o', str(tmp_path / 'o.png')]) == 0
 
 
 def test_a_mimic_cycle_is_named_as_one_and_a_mimic_of_a_mimic_follows_its_source():

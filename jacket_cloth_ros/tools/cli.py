@@ -298,6 +298,10 @@ def cmd_export(args: argparse.Namespace) -> int:
         from .export import export
     except ImportError as e:        # pygltflib has no rosdep key: a ROS install may lack it
         raise ToolError(f'{e}: export needs pygltflib (pip install pygltflib)') from None
+    if not args.output.lower().endswith('.glb'):
+        # What it writes is binary glTF: under another name (session.mcap out of a replay's
+        # habit, .gltf, which is JSON) a viewer or a tool would misread it.
+        raise ToolError(f'{args.output}: export writes binary glTF; end the name in .glb')
     _check_output(args.output, args.force, [args.input, args.urdf, args.rig])
     listed = read_recording(args.input, NO_MESSAGES)
     if is_crowd(listed):

@@ -220,8 +220,9 @@ def _nothing_to_draw(path, times):
     """Say what a recording holds and what a picture needs: its markers and its inputs."""
     found = f'{len(times.inputs)} JointState and {len(times.markers)} MarkerArray'
     if times.inputs:        # an input-only recording: motion, import, a foreign bag
-        need = ('the simulation\'s markers: replay it first (jacket_cloth replay IN -o OUT), '
-                'then draw OUT')
+        # The rate named: a session recorded with markers_rate 0 replays with it.
+        need = ('the simulation\'s markers: replay it with them first (jacket_cloth replay IN '
+                '-o OUT -p markers_rate:=30.0), then draw OUT')
     elif times.markers:
         need = 'the JointState inputs the markers were made from'
     else:
