@@ -226,3 +226,18 @@ def test_compiled_quaternions_match_transforms(skeleton):
         quat_from_matrix(rotation, quaternion)
     assert out == pytest.approx(matrix_to_quat(rotations), abs=1e-12)
     assert np.linalg.norm(out, axis=1) == pytest.approx(1.0)
+
+
+def test_a_bone_named_as_a_link_of_the_urdf_is_refused(skeleton):
+    # A URDF link named as a published bone ('hood', a BVH joint of that name) put one frame
+    # on /tf with two parents, the link's and the jacket's, and every tool went on (a probe).
+    from jacket_cloth_ros.core.skeleton import shipped_character_urdf
+    data = yaml.safe_load(open(shipped('jacket_rig.yaml'), encoding='utf-8'))
+    Rig(data, skeleton)
+    urdf = shipped_character_urdf().replace(
+        '</robot>', '<link name="hood"/><joint name="hood_fixed" type="fixed"><parent '
+        'link="head"/><child link="hood"/></joint></robot>')
+    with pytest.raises(ConfigError, match="^rig: the jacket's bone\\(s\\) 'hood' would go on "
+                       "/tf under the name of a link of the URDF 'jacket_character': one frame,"
+                       " two parents"):
+        Rig(data, Skeleton(urdf))

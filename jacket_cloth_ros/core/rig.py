@@ -273,6 +273,14 @@ class Rig:
         self._skin_top_row(rest)
         top.reject_unknown()
         self._build_topology()
+        # On /tf beside the URDF's links (robot_state_publisher's): a bone named as a link
+        # would give that frame two parents, and tf2 would take either.
+        clash = [n for n in self.bone_names() if n in skeleton.link_index]
+        if clash:
+            raise ConfigError(f'{where}: the jacket\'s bone(s) {", ".join(map(repr, clash))} '
+                              'would go on /tf under the name of a link of the URDF '
+                              f'{skeleton.name!r}: one frame, two parents; rename the link (or '
+                              'the jacket_bones bone)')
 
     def axes_at(self, link: int, section: Section | None = None) -> np.ndarray:
         """Return a part's front, left and up axes (columns) in its link's frame.
@@ -492,6 +500,11 @@ class Rig:
         """M9: vertices that carry bones (every row but the last, every n-th column)."""
         cols = list(range(0, self.cols, self.bone_column_step))
         return [(r, c) for r in range(self.rows - 1) for c in cols]
+
+    def bone_names(self) -> list[str]:
+        """Every bone's frame as published: M9 cloth bones, the M8 hood, M1/M2 layer bones."""
+        return ([f'jacket_r{r:02d}_c{c:02d}' for r, c in self.bone_vertices()] + ['hood']
+                + (self.layer.names if self.layer else []))
 
 
 def _collider_entries(top, skeleton, where):

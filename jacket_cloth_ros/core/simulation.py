@@ -1114,9 +1114,7 @@ def bone_set(skeleton: 'Skeleton', rig: 'Rig') -> BoneSet:
     :param rig: its rig.
     """
     grid = np.array(rig.bone_vertices(), dtype=np.int64).reshape(-1, 2)
-    layer_names = rig.layer.names if rig.layer else []
     layer_parents = [skeleton.link_names[k] for k in rig.layer.parents] if rig.layer else []
     root = skeleton.link_names[0]
-    return BoneSet([f'jacket_r{r:02d}_c{c:02d}' for r, c in grid] + ['hood'] + layer_names,
-                   [root] * len(grid) + [skeleton.link_names[rig.hood.link]] + layer_parents,
-                   grid)
+    return BoneSet(rig.bone_names(), [root] * len(grid) + [skeleton.link_names[rig.hood.link]]
+                   + layer_parents, grid)
