@@ -293,3 +293,22 @@ def test_steps_skipped_over_the_cap_are_a_warning_saying_how_much_time_the_cloth
     assert " step(s) skipped over max_steps_per_input (1 an input): the cloth ran 50% of the " \
         "inputs' time" in said[1].message, said[1].message
     assert said[12].level == bytes([0]) and said[12].message == 'ok', said[12]
+
+
+def test_a_reset_is_no_step_in_the_step_cost_nor_a_warning_that_steps_are_slow(skeleton, rig):
+    # Every start said "step cost above one step of real time" at its first diagnostics: the
+    # first input places the cloth (tens of milliseconds), which is no step (a probe).
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.ros import cdr
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    pipe = SessionPipeline(skeleton, rig, default_values(load_fabrics()['tweed_jacket']))
+    names = list(skeleton.joint_names)
+    report, out = pipe.on_raw(cdr.joint_state(10 ** 9, names, [0.0] * len(names)))
+    assert report.reset and report.step_cost_ns > 0
+    status = deserialize_message(dict(out)['diagnostics'], DiagnosticArray).status[0]
+    values = {v.key: v.value for v in status.values}
+    assert values['step_cost_us_max'] == '0.0', values
+    assert status.message == 'ok', status.message

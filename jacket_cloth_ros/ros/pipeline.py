@@ -358,7 +358,8 @@ class SessionPipeline:
             self._reset_streak += 1
         else:
             self._reset_streak = 0
-        self._costs.append(report.step_cost_ns)
+        if not report.reset:        # a reset places the cloth: no step, and no cost of one
+            self._costs.append(report.step_cost_ns)
         self._finite = bones.finite
         if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
             return []
