@@ -382,3 +382,32 @@ def test_a_full_disk_ends_a_recording_finished_with_or_without_its_writer_thread
         got = [m.data for _, _, m in SeekingReader(f, validate_crcs=True).iter_messages()]
     assert got == sent[:len(got)] and len(got) + rec.unwritten == len(sent)
     assert 200 < len(got) < len(sent)           # what fit, in pieces of the chunk it filled
+
+
+@pytest.mark.parametrize('at', range(3))
+def test_a_stop_inside_add_topic_leaves_a_recording_that_closes_whole(tmp_path, monkeypatch, at):
+    # A SIGTERM that landed while a replay added its topics (between a channel and its QoS)
+    # made the close raise KeyError with a traceback, exit 1, its output left behind (seen in
+    # `make test`). A stop anywhere in add_topic now leaves the topic whole or absent.
+    from jacket_cloth_ros.recording import writer
+    from jacket_cloth_ros.recording.reader import read_recording
+    recorder = writer.SessionRecorder(str(tmp_path / 's.mcap'))
+    recorder.add_topic('/joint_states', 'sensor_msgs/msg/JointState')
+    steps = iter(range(10))
+
+    def stopping(real):
+        def call(*args, **kwargs):
+            if next(steps) == at:
+                raise KeyboardInterrupt
+            return real(*args, **kwargs)
+        return call
+    monkeypatch.setattr(writer.yaml, 'safe_load', stopping(writer.yaml.safe_load))
+    monkeypatch.setattr(recorder._writer, 'register_channel',
+                        stopping(recorder._writer.register_channel))
+    with pytest.raises(KeyboardInterrupt):
+        recorder.add_topic('/jacket_cloth_node/wind', 'geometry_msgs/msg/Vector3Stamped')
+        recorder.add_topic('/tf', 'tf2_msgs/msg/TFMessage')
+    monkeypatch.undo()
+    recorder.close()
+    topics = read_recording(str(tmp_path / 's.mcap')).topics
+    assert '/joint_states' in topics and len(topics) <= 2, topics

@@ -189,12 +189,16 @@ class SessionRecorder:
             self._schemas[type_name] = self._writer.register_schema(
                 name=type_name, encoding='ros2msg',
                 data=ros2msg_schema(type_name).encode())
-        self._channels[topic] = self._writer.register_channel(
+        qos_yaml = qos_yaml or qos_profile_yaml()
+        qos = yaml.safe_load(qos_yaml)
+        channel = self._writer.register_channel(
             topic=topic, message_encoding='cdr', schema_id=self._schemas[type_name],
-            metadata={'offered_qos_profiles': qos_yaml or qos_profile_yaml(),
-                      'topic_type_hash': ''})
+            metadata={'offered_qos_profiles': qos_yaml, 'topic_type_hash': ''})
+        # The channel last: a stop (Ctrl-C, SIGTERM) landing in between leaves a topic the
+        # close's metadata lists whole, or not at all.
         self._types[topic] = type_name
-        self._qos[topic] = yaml.safe_load(qos_yaml or qos_profile_yaml())
+        self._qos[topic] = qos
+        self._channels[topic] = channel
 
     def write(self, topic: str, data: bytes, stamp_ns: int) -> None:
         """Copy ``data`` into the open chunk (the caller may reuse its buffer).
