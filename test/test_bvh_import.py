@@ -22,6 +22,7 @@ from jacket_cloth_ros.core.transforms import make_transform, quat_to_matrix
 from jacket_cloth_ros.motion.bvh import (Y_UP_TO_Z_UP, continuous_angles, convert, load_capture,
                                          read_bvh)
 from jacket_cloth_ros.tools.cli import main
+from conftest import one_line_error
 from fetched import fetched
 
 CAPTURES = {'test_mocapbank.bvh': (455, 24), 'test_freebvh.bvh': (69, 70)}   # frames, nodes
@@ -149,6 +150,13 @@ def test_joint_names_with_spaces_are_read_whole_their_words_joined(tmp_path, cap
     assert np.array_equal(joined.positions, plain.positions)
     assert len(joined.renamed) == CAPTURES['test_freebvh.bvh'][1] - sum(
         'End Site' in line for line in lines)
+    # Joined, a name may meet another: the refusal says which names were joined.
+    clash = [line.replace('JOINT mixamorig:Spine1', 'JOINT mixamorig:Spine_1').replace(
+        'JOINT mixamorig:Spine2', 'JOINT mixamorig:Spine 1') for line in lines]
+    path.write_text('\r\n'.join(clash) + '\r\n', encoding='utf-8')
+    err = one_line_error(capsys, ['import', str(path), '-o', str(tmp_path / 'c.mcap')])
+    assert "two parts of the skeleton are both named 'mixamorig:Spine_1" in err and \
+        "(joint names with spaces, their words joined by _: 'mixamorig:Spine_1')" in err, err
 
 
 @pytest.mark.parametrize('content, words', [

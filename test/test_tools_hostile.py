@@ -414,6 +414,32 @@ def test_a_crowd_recordings_set_ups_are_validated_too(replayed, tmp_path, capsys
         assert f'{path}: a' in err and expected in err, err
 
 
+def test_a_file_begun_mid_session_is_said_by_its_replay_and_not_by_the_replays(
+        replayed, tmp_path, capsys):
+    # A file a live record change opened counts the inputs before it; its replay says so, and
+    # the replay's own file, which starts from its first input, no more (a review: the crowd's
+    # replay copied the count on).
+    from jacket_cloth_ros.recording.writer import (
+        SESSION_CONFIG, SessionRecorder, qos_profile_yaml)
+    inputs, setup = replayed
+    said = 'it began 42 inputs into the live session'
+    for crowd in (False, True):
+        path, out = tmp_path / f'late_{crowd}.mcap', tmp_path / f'o_{crowd}.mcap'
+        topic, name = ('/a/joint_states', f'{SESSION_CONFIG}/a') if crowd else \
+            ('/joint_states', SESSION_CONFIG)
+        rec = SessionRecorder(str(path))
+        rec.add_topic(topic, 'sensor_msgs/msg/JointState', qos_profile_yaml())
+        rec.add_metadata(name, {**setup, 'inputs_before': '42'})
+        for data, stamp in inputs:
+            rec.write(topic, data, stamp)
+        rec.close()
+        assert main(['replay', str(path), '-o', str(out)]) == 0
+        assert said in capsys.readouterr().err, crowd
+        assert 'inputs_before' not in read_recording(str(out)).metadata[name], crowd
+        assert main(['replay', str(out), '-o', str(tmp_path / f'again_{crowd}.mcap')]) == 0
+        assert said not in capsys.readouterr().err, crowd
+
+
 @pytest.mark.parametrize('durations, words', [
     ([1e8, 1e8], 'its frames last 1e+08 s, outside [0.0001, 1] s'),
     ([1e-4, 1e-4, 1e8, 0], 'resampled every 0.0001 s, would be 1000000000002, over 100000'),

@@ -277,10 +277,12 @@ class Rig:
         # would give that frame two parents, and tf2 would take either.
         clash = [n for n in self.bone_names() if n in skeleton.link_index]
         if clash:
+            layer = set(self.layer.names if self.layer else ())
             raise ConfigError(f'{where}: the jacket\'s bone(s) {", ".join(map(repr, clash))} '
                               'would go on /tf under the name of a link of the URDF '
-                              f'{skeleton.name!r}: one frame, two parents; rename the link (or '
-                              'the jacket_bones bone)')
+                              f'{skeleton.name!r}: one frame, two parents; rename the link'
+                              + (' (or the bone in jacket_bones)' if layer >= set(clash)
+                                 else ''))
 
     def axes_at(self, link: int, section: Section | None = None) -> np.ndarray:
         """Return a part's front, left and up axes (columns) in its link's frame.

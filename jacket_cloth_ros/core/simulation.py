@@ -652,7 +652,8 @@ class JacketSimulation:
         own, steps = self._own, self.steps
         windy = self._windy()
         if (own is None or status != BONES_FINITE or own[0] is not self.last
-                or own[1] is not self.parser.last or own[2] is not self.ready_bones
+                or own[1] is not self.parser.last or own[1].q is not own[0].q
+                or own[2] is not self.ready_bones
                 or self.watches.collapse.looks_at(stamp_ns)
                 or (not windy and self.watches.restless.looks_at(stamp_ns))):
             return None

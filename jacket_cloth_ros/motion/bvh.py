@@ -138,13 +138,14 @@ def read_bvh(path: str) -> tuple[Bvh, tuple]:
         return _read(path, links, opened, closed), ()
     with tempfile.TemporaryDirectory() as tmp:
         joined = os.path.join(tmp, os.path.basename(path))
-        with open(path, encoding='utf-8', errors='replace') as f, \
-                open(joined, 'w', encoding='utf-8') as out:
+        # Byte for byte but the names joined: latin-1 reads and writes every byte as it is.
+        with open(path, encoding='latin-1', newline='') as f, \
+                open(joined, 'w', encoding='latin-1', newline='') as out:
             for k, line in enumerate(f):
                 if k in spaced:
                     words = line.split()
                     line = line[:len(line) - len(line.lstrip())] + words[0] + ' ' + \
-                        '_'.join(words[1:]) + '\n'
+                        '_'.join(words[1:]) + line[len(line.rstrip('\r\n')):]
                 out.write(line)
         try:
             bvh = _read(joined, links, opened, closed)
@@ -420,7 +421,9 @@ def load_capture(path: str, scale: float | None = None) -> Capture:
     try:
         return dataclasses.replace(convert(bvh, name, scale), renamed=renamed)
     except BvhError as e:
-        raise BvhError(f'{path}: {e}') from None
+        joined = f' (joint names with spaces, their words joined by _: ' \
+            f'{", ".join(repr(b) for _, b in renamed)})' if renamed else ''
+        raise BvhError(f'{path}: {e}{joined}') from None
 
 
 def joint_state_content(capture: Capture, frame: int,

@@ -358,7 +358,8 @@ class SessionPipeline:
             self._reset_streak += 1
         else:
             self._reset_streak = 0
-        if not report.reset:        # a reset places the cloth: no step, and no cost of one
+        # The first input places the cloth, loading what it first needs: no step's cost.
+        if report.reset != 'first sample':
             self._costs.append(report.step_cost_ns)
         self._finite = bones.finite
         if not bones.finite:     # never a NaN on /tf (left so by check_bones' reset)
@@ -601,8 +602,9 @@ class Periodic:
     def __init__(self, pipeline: SessionPipeline, report: StepReport, stamp_ns: int,
                  now: bool = False):
         self._pipeline, self._report, self._stamp_ns = pipeline, report, stamp_ns
-        # Its character's inputs accounted and its last sample: either moves with the next
-        # input (the sample as soon as that input's steps are taken back).
+        # Its character's inputs accounted, which the next input moves on, and its last
+        # sample, which a next input the Python way replaces (a steady one moves it on in
+        # place: the count tells).
         self._inputs, self._last = pipeline.inputs, pipeline.sim.last
         self._made = pipeline.periodic_outputs(report, stamp_ns) if now else None
 

@@ -254,7 +254,8 @@ def analyze(sessions: list[SessionInput], out_dir: str, names: list[str] | None 
         pipeline = run_session(session, probe=figures.probe)
         # The views' up is the world's (the rig's world_up), as the simulation's gravity;
         # forward, where the body faces at the first frame drawn.
-        axes = view_axes_of(figures.frames, session.setup.rig)
+        axes = view_axes_of(figures.frames or [f for _, f in figures.worst_frames.values()],
+                            session.setup.rig)
         reports.append(figures.report(pipeline))
         series.append((name, np.array(figures.rows, dtype=float).reshape(-1, 9)))
         strip = 'filmstrip.png' if len(sessions) == 1 else f'filmstrip_{len(reports)}.png'

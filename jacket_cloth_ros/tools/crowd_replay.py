@@ -93,8 +93,11 @@ def load_crowd(path: str) -> tuple[Recording, dict[str, CrowdCharacter]]:
         except ValueError:
             raise ConfigError(f'{where}: output_phase {meta.get("output_phase")!r} is not a '
                               'number from 0 to 0.9') from None
+        # The replay starts from the first input: a file that began mid-session says so of
+        # itself, its replay not.
+        setup = {k: v for k, v in meta.items() if k != 'inputs_before'}
         characters[topics['joint_states'][0]] = CrowdCharacter(
-            name, pipeline, topics, dict(meta), setup_warnings(meta, ignored))
+            name, pipeline, topics, setup, setup_warnings(meta, ignored))
     if not characters:
         raise RecordingError(f'{path}: not a crowd recording (no {PREFIX}<name> metadata)')
     return recording, characters
