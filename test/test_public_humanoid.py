@@ -241,3 +241,22 @@ def test_a_y_up_urdf_sent_without_its_world_pose_is_warned_of_while_it_lies(tmp_
     assert "the body lies 90 deg from the world's up [0, 0, 1], stood on its zero pose with " \
         'no world pose: send world_joint/* to stand it up' in message, message
     assert levels['jvrc1.urdf'][0] == bytes([messages.OK]), levels['jvrc1.urdf']
+
+
+def test_analyze_says_when_the_drawn_jacket_reaches_under_the_floor(tmp_path, capsys):
+    # The humanoid getting up from the floor: the simulated cloth stays on the floor (inside
+    # 0 mm), but the jacket the markers, pictures and exports draw, skinned between those
+    # points, went 0.17 m under it, and analyze said nothing (a probe).
+    urdf, session = fetched('humanoid.urdf'), tmp_path / 'getup.mcap'
+    assert main(['import', fetched('humanoid3d_getup_facedown.txt'), '--urdf', urdf, '-o',
+                 str(session)]) == 0
+    rig = tmp_path / 'rig.yaml'
+    assert main(['rig', '--urdf', urdf, '-o', str(rig)]) == 0
+    capsys.readouterr()
+    assert main(['analyze', str(session), '--urdf', urdf, '--rig', str(rig), '--out',
+                 str(tmp_path / 'out')]) == 0
+    report = json.loads((tmp_path / 'out' / 'report.json').read_text())
+    under, inside = report['mesh_under_floor_m'], report['inside_m']
+    assert under['max'] > 0.1 > inside['max'], (under, inside)
+    assert f', the drawn jacket {under["max"] * 1e3:.0f} mm under the floor at ' in \
+        capsys.readouterr().out

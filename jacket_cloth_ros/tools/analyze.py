@@ -21,6 +21,7 @@ import numpy as np  # noqa: E402
 from ..core.body_proxy import body_proxy, sleeved_links  # noqa: E402
 from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
 from ..recording.reader import message_digest, message_digests  # noqa: E402
+from ..ros.messages import outfit  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
 from .picture import draw_filmstrip, sim_frame, view_axes_of  # noqa: E402
 from .session import SessionInput, run_session  # noqa: E402
@@ -34,7 +35,7 @@ if TYPE_CHECKING:           # for the annotations only
 # depth found during the steps: each reported as max and p99 over inputs, with where.
 # ``body_inside_m``: inside the body proxy (core.body_proxy), not the rig's colliders.
 MEASURES = ('vertical_stretch', 'vertical_compression', 'horizontal_stretch', 'inside_m',
-            'push_out_m', 'body_inside_m')
+            'push_out_m', 'body_inside_m', 'mesh_under_floor_m')
 
 REPORTED_PARAMETERS = ('fabric_preset', 'sim_rate', 'stretch_limit', 'fabric.iterations',
                        'fabric.damping', 'fabric.world_share', 'wind', 'wind_gust')
@@ -62,6 +63,11 @@ class SessionFigures:
         setup = session.setup
         self.body = body_proxy(setup.skeleton, sleeved_links(setup.rig))
         self.everywhere = np.ones(setup.rig.n, dtype=bool)
+        # The jacket as the markers draw it, skinned on the bones: its vertices lie between
+        # the simulated points, so the cloth may stand on the floor while the mesh dips under.
+        self.outfit = outfit(setup.rig)
+        corners = self.outfit.marker_corners()
+        self.mesh = np.empty((corners, 3)), np.empty((corners, 4), dtype=np.float32)
         self.frames = []
         self.worst_frames = {}          # measure -> (value, frame) at its worst input so far
         self.reset_reasons = []
@@ -103,7 +109,8 @@ class SessionFigures:
         inside = depth_inside(sim.x, rig.free, sim.collider_frames(sim.links), self.labels)
         body = depth_inside(sim.x, self.everywhere, self.body.posed(sim.links), self.body.labels)
         for name, worst in zip(MEASURES, (vs, vc, hs, inside,
-                                          Worst(report.max_penetration, -1), body)):
+                                          Worst(report.max_penetration, -1), body,
+                                          self._mesh_under_floor(sim))):
             self.worst[name].append((t, worst))
         for name, worst in (('vertical_stretch', vs), ('inside_m', inside)):
             if name not in self.worst_frames or worst.value > self.worst_frames[name][0]:
@@ -172,6 +179,18 @@ class SessionFigures:
         m = self._measure(name, self.session.setup.rig.cols)
         parts = ['r{} c{}'.format(*m['vertex'])] if 'vertex' in m else []
         return ' '.join(parts + [m[k] for k in ('collider', 'link') if k in m])
+
+    def _mesh_under_floor(self, sim):
+        """Return how deep the drawn jacket reaches under the rig's floor (0 without one)."""
+        floor = sim.rig.floor()
+        if floor is None:
+            return Worst(0.0, -1)
+        up, height = floor
+        points, colors = self.mesh
+        self.outfit.draw_jacket(sim.links, sim.bones().poses, points, colors)
+        root = sim.root
+        lowest = float((points @ (root[:3, :3].T @ up)).min() + root[:3, 3] @ up)
+        return Worst(max(height - lowest, 0.0), -1)
 
     def _measure(self, name, cols):
         """{max, p99} over inputs, and when (s), which vertex (row, column) and collider."""
@@ -302,6 +321,8 @@ def _summary(names, reports):
         ('horizontal stretch max / p99', lambda r: _max_p99(r['horizontal_stretch'], 1, '')),
         ('inside a collider max / p99 (mm)', lambda r: _max_p99(r['inside_m'], 1e3, '')),
         ('inside the body max / p99 (mm)', lambda r: _max_p99(r['body_inside_m'], 1e3, '')),
+        ('drawn jacket under the floor max / p99 (mm)',
+         lambda r: _max_p99(r['mesh_under_floor_m'], 1e3, '')),
         ('push-out during a step max / p99 (mm)', lambda r: _max_p99(r['push_out_m'], 1e3,
                                                                      '')),
         ('M11 vertex-steps moved', lambda r: r['max_distance_exceeded']),
@@ -360,6 +381,10 @@ def target_figures(r: dict) -> str:
             f'{r["horizontal_stretch"]["p99"]:.3f}, inside {pair("inside_m", 1e3, 1)} mm, '
             f'inside the body {pair("body_inside_m", 1e3, 1)} mm, non-finite '
             f'{r["nonfinite_count"]}, resets {r["resets"]}'
+            # The cloth on the floor, its drawn mesh under it: said where it is more than 1 mm.
+            + (f', the drawn jacket {r["mesh_under_floor_m"]["max"] * 1e3:.0f} mm under the '
+               f'floor at {r["mesh_under_floor_m"]["at_s"]:.1f} s'
+               if r.get('mesh_under_floor_m', {}).get('max', 0.0) > 1e-3 else '')
             + (f', {r["skipped_steps"]} steps skipped over max_steps_per_input (the cloth ran '
                f'{r["sim_steps"] / (r["sim_steps"] + r["skipped_steps"]):.0%} of the time)'
                if r.get('skipped_steps') else ''))
