@@ -447,3 +447,34 @@ def test_a_forward_across_the_body_is_named_when_the_proposal_fails(tmp_path, ca
         'inferred from its toes)'), err
     assert os.listdir(tmp_path) == []
     assert main(argv) == 0
+
+
+@pytest.mark.parametrize('name, wrist, hand', [
+    ('talos_full_v2.urdf', 'arm_left_7_link', 'gripper_left_base_link'),
+    ('g1_29dof_with_hand_rev_1_0.urdf', 'left_wrist_pitch_link', 'left_hand_palm_link')])
+def test_the_body_is_drawn_from_the_wrist_to_the_hand_through_short_frames(name, wrist, hand):
+    # A wrist's force-torque and tool frames, each too short to draw alone, were left bare:
+    # the hand floated 9 cm (TALOS) and 14 cm (G1) off its forearm in every picture and in
+    # the markers' body (a probe). A chain of short segments is drawn as one piece now.
+    from jacket_cloth_ros.core.body_mesh import body_shapes
+    sk = load_skeleton(fetched(name))
+    rig, lines, body = propose(sk)
+    shapes = body_shapes(sk, Rig(yaml.safe_load(to_yaml(rig, lines, name, body)), sk))
+    rest = sk.forward(np.zeros(len(sk.joint_names)))
+    ends = [(rest[k][:3, :3] @ e.T).T + rest[k][:3, 3]
+            for k, e in zip(shapes.capsule_links, shapes.capsule_ends)]
+
+    def covered(p):
+        for (a, b), r in zip(ends, shapes.capsule_radii):
+            t = np.clip((p - a) @ (b - a) / max((b - a) @ (b - a), 1e-12), 0.0, 1.0)
+            if np.linalg.norm(a + t * (b - a) - p) <= r:
+                return True
+        return False
+    chain, k = [], sk.link(hand)
+    while k != sk.link(wrist):
+        chain.append(k)
+        k = int(sk.parent[k])
+    points = [rest[k][:3, 3] for k in [sk.link(wrist)] + chain[::-1]]
+    samples = [a + s * (b - a) for a, b in zip(points, points[1:]) for s in np.linspace(0, 1, 5)]
+    assert all(covered(p) for p in samples), [round(float(np.linalg.norm(p - points[0])), 3)
+                                              for p in samples if not covered(p)]

@@ -39,10 +39,17 @@ def body_shapes(skeleton: 'Skeleton', rig: 'Rig') -> ColliderModel:
     limb = float(np.clip(0.024 * size, 0.01, 0.06))
     cap_links, cap_ends = list(rig.capsule_links), list(rig.capsule_ends)
     cap_radii = list(rig.capsule_radii)
+    # Where each link's segment starts: its parent's origin, or further up a chain of segments
+    # too short to draw alone (a wrist's sensor and tool frames), so the chain is drawn as
+    # one piece and a hand does not float off its forearm.
+    start = list(range(len(skeleton.link_names)))
     for child in range(1, len(skeleton.link_names)):
         parent = int(skeleton.parent[child])
-        a, c = rest[parent][:3, 3], rest[child][:3, 3]
-        if parent in covered or np.linalg.norm(c - a) < 0.04 * size:
+        if parent in covered:
+            continue
+        a, c = rest[start[parent]][:3, 3], rest[child][:3, 3]
+        if np.linalg.norm(c - a) < 0.04 * size:
+            start[child] = start[parent]
             continue
         cap_links.append(parent)
         cap_ends.append(_local(rest[parent], np.array([a, c])))
