@@ -164,7 +164,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     warning = None if args.urdf else height_warning(capture)
     if warning:
         print(f'jacket_cloth import: {args.input}: {warning}', file=sys.stderr)
-    if getattr(capture, 'renamed', ()):
+    if not args.urdf and capture.renamed:       # a BVH capture's (a DeepMimic clip has none)
         joined = ', '.join(f'{a!r} as {b!r}' for a, b in capture.renamed[:3]) + (
             f' and {len(capture.renamed) - 3} more' if len(capture.renamed) > 3 else '')
         print(f'jacket_cloth import: {args.input}: warning: joint names with spaces, their words '
