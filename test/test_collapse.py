@@ -250,3 +250,33 @@ def test_a_restless_cloth_is_a_warn_in_the_diagnostics_while_it_lasts():
     first = next(k for k, (_, text) in enumerate(levels) if said[0] in text)
     assert all(level == bytes([messages.WARN]) and said[0] in text
                for level, text in levels[first:])
+
+
+def test_the_watches_look_at_a_steady_input_in_place_and_say_what_the_whole_way_says():
+    # One simulation takes the names as a tuple (its compiled intake armed, a steady input's
+    # bookkeeping done in place), its twin as a list (never armed: every input through
+    # prepare and complete). Both must say the restless cloth at the same input, with the
+    # same cloth; the looks the first made must be on inputs it moved on in place.
+    from jacket_cloth_lab.stress import floor_scenes
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    skeleton = load_shipped_character()
+    sims = [JacketSimulation(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'),
+                             SimParams()) for _ in range(2)]
+    steady, twin = sims
+    crawling = next(s for s in floor_scenes(skeleton) if s.name == 'floor: crawling')
+    looked_in_place = 0
+    for stamp, names, pos in _held_still(crawling, 5.0):
+        last = steady.last
+        mine = steady.process(stamp, tuple(names), pos)
+        theirs = twin.process(stamp, list(names), pos)
+        assert (mine.warnings, mine.sweeps, mine.steps) == (
+            theirs.warnings, theirs.sweeps, theirs.steps), stamp
+        assert np.array_equal(steady.x, twin.x), stamp
+        looked_in_place += (steady.last is last
+                            and steady.watches.collapse.looked_ns == stamp
+                            and steady.watches.restless.looked_ns == stamp)
+    assert steady.faults.restless == twin.faults.restless and len(twin.faults.restless) == 1
+    assert twin.steps.steady_inputs == 0
+    assert looked_in_place > 50, looked_in_place

@@ -126,7 +126,7 @@ def test_a_steady_input_from_its_bytes_gives_the_outputs_of_the_reader_and_proce
         # by none: its bookkeeping (core/simulation.py's _took_again).
         again += lane.read == read and a.last is last
     assert refused == 2                         # the cut bytes and the big-endian ones
-    assert again >= 5, again         # 8: the watches look every 0.1 s the whole way
+    assert again >= 5, again         # 9 of the 18 the lane took
     # The lane took 18 of the 45: not the first two, nor a case it must leave and the one or
     # two after it that rearm, nor the inputs from the negative stamp on. rclpy's bytes (the
     # frame and velocity cases), padding left as its buffer held it, it takes as the package's.

@@ -631,6 +631,8 @@ class JacketSimulation:
         """
         report = self._took_again(stamp_ns, status, started)
         if report is not None:
+            if report.warnings:         # a watch spoke: the intake disarms, as settle would
+                self.steps.armed = self._own = None
             return report
         report, job = self.steady_job(stamp_ns)
         self.finish(report, job, status)
@@ -645,17 +647,14 @@ class JacketSimulation:
 
         The last sample (the parser's too) and the bones the last steady input left are this
         simulation's own: they take this input's values in place, so the intake stays armed
-        for the same objects and nothing is made anew. Anything else goes the whole way: bones
-        or a cloth not finite, a watch's look due, those objects replaced (a reset, a Python
-        input, a caller that dropped the bones).
+        for the same objects and nothing is made anew; the watches look as :meth:`complete`
+        has them look. Anything else goes the whole way: bones or a cloth not finite, those
+        objects replaced (a reset, a Python input, a caller that dropped the bones).
         """
         own, steps = self._own, self.steps
-        windy = self._windy()
         if (own is None or status != BONES_FINITE or own[0] is not self.last
                 or own[1] is not self.parser.last or own[1].q is not own[0].q
-                or own[2] is not self.ready_bones
-                or self.watches.collapse.looks_at(stamp_ns)
-                or (not windy and self.watches.restless.looks_at(stamp_ns))):
+                or own[2] is not self.ready_bones):
             return None
         slot = steps.slot
         deepest, limited, sweeps, substeps, non_finite, hem_path, retried = \
@@ -673,12 +672,12 @@ class JacketSimulation:
         self.t_sim = t_sim
         self.steps_total += n
         self.faults.retried += int(retried)
-        if not windy:
-            self.watches.restless.carry(hem_path)
-        return StepReport(stamp_ns, steps=n, max_penetration=max(0.0, deepest),
-                          limited_vertices=int(limited), sweeps=int(sweeps),
-                          substeps=int(substeps), retried_steps=int(retried),
-                          step_cost_ns=time.perf_counter_ns() - started)
+        report = StepReport(stamp_ns, steps=n, max_penetration=max(0.0, deepest),
+                            limited_vertices=int(limited), sweeps=int(sweeps),
+                            substeps=int(substeps), retried_steps=int(retried))
+        self._watch(report, last, hem_path)
+        report.step_cost_ns = time.perf_counter_ns() - started
+        return report
 
     def _checked(self, report, names, started):
         """End an input: its cost, its bones checked, the intake armed or not."""
@@ -847,16 +846,23 @@ class JacketSimulation:
             report.reset = 'non-finite cloth state'
             self._reset(job.sample)
         else:
-            if self.watches.collapse.note(self.x, job.sample.stamp_ns):
-                line = self._collapsed(job.sample)
-                self.faults.collapse.append(line)
-                report.warnings.append(('collapse', line))
-            if not self._windy() and self.watches.restless.note(
-                    float(out.stats[step.HEM_PATH]), self.links, self.root,
-                    job.sample.stamp_ns):
-                line = self._restless()
-                self.faults.restless.append(line)
-                report.warnings.append(('restless', line))
+            self._watch(report, job.sample, float(out.stats[step.HEM_PATH]))
+
+    def _watch(self, report, sample, hem_path):
+        """Let the watches see the cloth after an input's steps; a finding goes in the report.
+
+        :param hem_path: the hem's mean path over the input's steps (step.HEM_PATH), m.
+        """
+        watches, stamp_ns = self.watches, sample.stamp_ns
+        if watches.collapse.note(self.x, stamp_ns):
+            line = self._collapsed(sample)
+            self.faults.collapse.append(line)
+            report.warnings.append(('collapse', line))
+        if not self._windy() and watches.restless.note(hem_path, self.links, self.root,
+                                                       stamp_ns):
+            line = self._restless()
+            self.faults.restless.append(line)
+            report.warnings.append(('restless', line))
 
     def _windy(self):
         """Tell whether wind moves the cloth: then a cloth moving on a still body is right."""
