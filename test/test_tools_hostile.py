@@ -866,30 +866,53 @@ def test_a_replay_whose_inputs_never_gave_finite_bones_is_a_failure_and_no_file(
     assert os.listdir(tmp_path) == []
 
 
+# The replay a SIGTERM must stop, held at its 100th input until the signal comes: the signal
+# then lands inside the replay's loop, with its output open, however loaded the machine.
+_HELD_REPLAY = """
+import sys, time
+from jacket_cloth_ros.ros.pipeline import SessionPipeline
+from jacket_cloth_ros.signals import tools
+real, taken, here = SessionPipeline.on_raw, [], sys.argv[1]
+
+def held(pipeline, raw):
+    taken.append(raw)
+    if len(taken) == 100:
+        open(here, 'w').close()
+        while True:
+            time.sleep(0.01)
+    return real(pipeline, raw)
+SessionPipeline.on_raw = held
+sys.argv = ['jacket_cloth'] + sys.argv[2:]
+sys.exit(tools())
+"""
+
+
 def test_sigterm_stops_a_replay_as_ctrl_c_does_leaving_no_temporary_file(tmp_path):
     # SIGTERM ended the process where it stood: the output's hidden temporary file stayed.
     import signal
     import subprocess
     import sys
     import time
-    clip, out = tmp_path / 'walk.mcap', tmp_path / 'out.mcap'
-    # Long enough that the signal, sent once the output is open, lands before the replay
-    # ends on a loaded machine (20 s of the walk replayed in under a second).
-    assert main(['motion', '--clip', 'walk', '--duration', '90', '-o', str(clip)]) == 0
+    work, side = tmp_path / 'work', tmp_path / 'side'
+    work.mkdir()
+    side.mkdir()
+    clip, out, held = work / 'walk.mcap', work / 'out.mcap', side / 'held'
+    assert main(['motion', '--clip', 'walk', '--duration', '5', '-o', str(clip)]) == 0
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    tool = subprocess.Popen([sys.executable, '-m', 'jacket_cloth_ros', 'replay', str(clip),
-                             '-o', str(out)], cwd=root, stdout=subprocess.DEVNULL,
+    tool = subprocess.Popen([sys.executable, '-c', _HELD_REPLAY, str(held), 'replay',
+                             str(clip), '-o', str(out)], cwd=root, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
 
     def replaying():
         deadline = time.monotonic() + 120
-        while not any('.partial' in name for name in os.listdir(tmp_path)):
+        while not held.exists():
             assert tool.poll() is None and time.monotonic() < deadline, 'no replay started'
             time.sleep(0.01)
+        assert any('.partial' in name for name in os.listdir(work)), os.listdir(work)
     err = signalled(tool, replaying, signal.SIGTERM)
     assert tool.returncode == 143, err
     assert err.strip().splitlines() == ['jacket_cloth replay: stopped by SIGTERM'], err
-    assert os.listdir(tmp_path) == ['walk.mcap']
+    assert os.listdir(work) == ['walk.mcap']
 
 
 def test_sigterm_while_a_file_is_read_is_a_stop_not_a_bad_file(clip, tmp_path, capsys,
