@@ -14,7 +14,8 @@ import yaml
 from jacket_cloth_ros.core.config import ConfigError, shipped
 from jacket_cloth_ros.core.rig import Rig
 from jacket_cloth_ros.core.skeleton import Skeleton, load_skeleton
-from jacket_cloth_ros.rigging.propose import name_rank, propose, side_of, to_yaml, tokens
+from jacket_cloth_ros.rigging.propose import (
+    Refusal, name_rank, propose, side_of, to_yaml, tokens)
 from jacket_cloth_ros.tools.cli import main
 from fetched import fetched
 
@@ -306,10 +307,26 @@ def test_links_whose_axes_are_not_the_bodys_get_rpy_deg_on_shape_upper_and_ellip
     assert 'rpy_deg' not in rig['cloth']['shape']     # its links turned with it: nothing to turn
     assert rig['cloth']['shape']['radii'] == _rig_of(_text(shipped('character.urdf')))[1][
         'cloth']['shape']['radii']
-    # Told that it faces +x, the links' x is its left: every frame-bound key is turned back.
-    sk, rig, lines, body = _rig_of(turned, forward=[1, 0, 0])
-    for turned_key in (rig['cloth']['shape'], rig['jacket_bones']['upper'], rig['colliders'][0]):
-        assert turned_key['rpy_deg'] == [0.0, 0.0, -90.0]
+    # Facing +x with every link's frame turned a quarter turn (its x is the body's left):
+    # every frame-bound key is turned back, whether forward is given or inferred.
+    for forward in ([1, 0, 0], None):
+        sk, rig, lines, body = _rig_of(_frames_turned(turned), forward=forward)
+        assert [round(v, 6) + 0.0 for v in body.forward] == [1.0, 0.0, 0.0]
+        for turned_key in (rig['cloth']['shape'], rig['jacket_bones']['upper'],
+                           rig['colliders'][0]):
+            assert turned_key['rpy_deg'] == [0.0, 0.0, -90.0]
+
+
+def _frames_turned(turned):
+    """:func:`_turned` by a quarter turn about z, each joint's offset and axis turned back.
+
+    The body faces +x again, while every link's frame stays turned.
+    """
+    def back(match):
+        x, y, z = (float(v) for v in match.group(2).split())
+        return f'{match.group(1)}"{y:g} {-x:g} {z:g}"'
+    # The turn's own offset is zero.
+    return re.sub(r'(<(?:origin|axis) xyz=)"([^"]*)"', back, turned)
 
 
 def _under_new_root(text, root, rpy):
@@ -336,9 +353,12 @@ def test_forward_is_inferred_from_the_named_sides_when_the_legs_end_at_the_ankle
     assert _forward_of(_under_new_root(text, root, '0 0 1.5707963'))[0] == [0.0, 1.0, 0.0]
     assert _forward_of(_under_new_root(text, root, '0 0 3.1415926'))[0] == [-1.0, 0.0, 0.0]
     assert _forward_of(_under_new_root(text, root, '-1.5707963 0 0'))[0] == [1.0, 0.0, 0.0]
-    # --forward still overrides, and says so.
-    fwd, why = _forward_of(_under_new_root(text, root, '0 0 1.5707963'), [1, 0, 0])
-    assert fwd == [1.0, 0.0, 0.0] and 'given by --forward' in why
+    # --forward still overrides (facing back, here), and says so; across the body it is
+    # refused (test_robot_rigs: on every fetched robot).
+    fwd, why = _forward_of(_under_new_root(text, root, '0 0 1.5707963'), [0, -1, 0])
+    assert fwd == [0.0, -1.0, 0.0] and 'given by --forward' in why
+    with pytest.raises(Refusal, match='runs across the body'):
+        _forward_of(_under_new_root(text, root, '0 0 1.5707963'), [1, 0, 0])
 
 
 def test_forward_is_inferred_from_the_toes_whatever_the_names(tmp_path):

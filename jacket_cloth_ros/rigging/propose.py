@@ -440,6 +440,18 @@ def find_body(sk: Skeleton, forward: np.ndarray | None = None) -> Body:
         raise Refusal('forward is along up: give another forward direction')
     fwd = snapped_to_axis(fwd)
     left = np.cross(up, fwd)
+    # Each arm's mean point (its chain's links): both arms' roots may share one point.
+    arm_at = [pts[_main_path(c, kids, reach)].mean(axis=0) for c in arms_roots]
+    apart = arm_at[0] - arm_at[1]
+    if forward is not None and abs(apart @ left) < 0.25 * abs(apart @ fwd):
+        # Across the body, the jacket's left and right fold onto each other (its shoulder
+        # pads have no length); an arm ahead of the other at rest leaves them mostly apart
+        # along left.
+        given = ','.join(f'{v:g}' for v in np.asarray(forward, float))
+        raise Refusal(f'--forward {given} runs across the body: its arms '
+                      f'({sk.link_names[arms_roots[0]]}, {sk.link_names[arms_roots[1]]}) lie '
+                      'side by side along it; give the way the character faces, or leave '
+                      '--forward out (then the toes say it)')
     body = Body(sk, rest, pelvis, chest, spine, neck_root, {}, {}, {}, up, fwd, left,
                 float(np.ptp(pts @ up)), tips=tips, virtual=virtual, frames=frames)
     nk, why = _pick(neck_path[0] if len(neck_path[0]) > 1 else [neck_root], 'neck', sk)

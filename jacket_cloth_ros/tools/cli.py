@@ -464,10 +464,11 @@ def cmd_rig(args: argparse.Namespace) -> int:
         try:
             return text, Rig(yaml.safe_load(text), skeleton, where=args.output)
         except ConfigError as e:
-            # A --forward across the body folds its parts to nothing: the likeliest cause then.
+            # Named by its keys alone: the file the error would name is not written.
+            detail = str(e).removeprefix(f'{args.output}.')
             hint = (f'; --forward {args.forward} may not be the way the character faces (without '
                     'it, that is inferred from its toes)' if args.forward else '')
-            raise ToolError(f'the proposed rig does not load ({e}){hint}') from None
+            raise ToolError(f'the proposed rig does not load ({detail}){hint}') from None
     text, loaded = _clear_of_colliders(rig, lines, load)
     if first is not None:
         # As the simulation judges a first input; gravity and the floor stay the world's.
@@ -683,7 +684,8 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument('--picture', default=None, help='also draw the rig at rest into this PNG')
     g.add_argument('--forward', default=None,
                    help="the character's forward in the URDF root frame (default: where the "
-                   'toes point, else from the left and right names, else 1,0,0)')
+                   'toes point, else from the left and right names, else 1,0,0); a negative '
+                   'one as --forward=-1,0,0')
     g.add_argument('--motion', default=None,
                    help='a recording of the character: says whether the body lies down at its '
                    "first JointState (gravity and the floor stay the world's up, +z)")
