@@ -109,9 +109,10 @@ def walk(tmp_path_factory):
     return path
 
 
-def _still_session(path, urdf, inputs=5, lift=LIFT):
+def _still_session(path, urdf, inputs=5, lift=LIFT, x=0.0, creep=0.0):
     """A JointState recording of a character at its zero pose, its root ``lift`` m up (clear of
-    the floor, which would push the cloth), without a set-up."""
+    the floor, which would push the cloth), without a set-up; at ``x`` m along the world's x,
+    moving on by ``creep`` m an input."""
     with open(urdf, encoding='utf-8') as f:
         names = list(Skeleton(f.read()).joint_names)
     world = [f'world_joint/{v}' for v in WORLD_VARIABLES]
@@ -120,7 +121,7 @@ def _still_session(path, urdf, inputs=5, lift=LIFT):
     for k in range(inputs):
         stamp = 7_000_000_000 + k * 20_000_000
         rec.write('/joint_states', joint_state(stamp, names + world, [0.0] * len(names) + [
-            0.0, 0.0, lift, 0.0, 0.0, 0.0, 1.0]), stamp)
+            x + k * creep, 0.0, lift, 0.0, 0.0, 0.0, 1.0]), stamp)
     rec.close()
 
 
@@ -200,6 +201,25 @@ def test_a_still_session_skins_to_the_rest_mesh_at_its_first_key(tmp_path):
     assert np.abs(glb.skinned(body, 0) - (glb.data(body.attributes.POSITION) + lifted)
                   ).max() < 1e-4
     assert len(glb.data(glb.gltf.animations[0].samplers[0].input)) == 5
+
+
+def test_the_root_is_keyed_to_the_millimetre_far_from_the_origin(tmp_path):
+    # 500 km away, a root creeping 1 mm an input was keyed as 32-bit floats, in steps of
+    # 3 cm (still for 30 inputs, then a jump). Its first position rides on the world node now, as
+    # JSON's 64-bit numbers, and the keys hold its moves from there.
+    urdf = shipped('character.urdf')
+    far, out = tmp_path / 'far.mcap', tmp_path / 'far.glb'
+    _still_session(far, urdf, inputs=40, x=5e5, creep=0.001)
+    assert main(['export', str(far), '-o', str(out)]) == 0
+    glb = Glb(out)
+    axes = glb.node_globals(0)[0][:3, :3]
+    roots = []
+    run_session(load_session(str(far)), probe=lambda p, r, stamp, o: roots.append(
+        p.sim.root[:3, 3].copy()))
+    assert len(roots) == 40
+    for key, root in enumerate(roots):
+        placed = glb.node_globals(key)[1][:3, 3]        # the character's root node
+        assert np.abs(placed - axes @ root).max() < 1e-6, key
 
 
 def _one_line_error(capsys, argv):

@@ -317,7 +317,11 @@ def build_gltf(session: SessionInput, frames: Frames, bone_names: list, bone_par
     local_rest = rest.copy()
     local_rest[1:] = np.linalg.inv(rest[parent_of[1:]]) @ rest[1:]
     t_rest, q_rest = _trs(local_rest)
-    world = gl.Node(name='world', rotation=matrix_to_quat(axes).tolist(), children=[1])
+    # The root's first position rides on the world node, as JSON's 64-bit numbers; the
+    # root's keys (32-bit floats) are its moves from there, which keeps them exact far from
+    # the world's origin.
+    world = gl.Node(name='world', rotation=matrix_to_quat(axes).tolist(),
+                    translation=(axes @ frames.root[0, :3, 3]).tolist(), children=[1])
     root = gl.Node(name=skeleton.name or 'character', children=[link0])
     nodes = [world, root]
     children = [[] for _ in range(n_links)]
@@ -369,6 +373,7 @@ def _animation(gltf, blob, frames, parent_of, n_links, t_rest, q_rest):
     local[:, 1:] = np.linalg.inv(frames.links[:, parent_of[1:n_links]]) @ frames.links[:, 1:]
     t_links, q_links = _trs(local)
     t_root, q_root = _trs(frames.root)
+    t_root = t_root - t_root[0]             # from where the world node puts it (build_gltf)
     t_all = np.concatenate([t_links, frames.bones[:, :, :3]], axis=1)
     q_all = np.concatenate([q_links, frames.bones[:, :, 3:]], axis=1)
     q_all = q_all / np.linalg.norm(q_all, axis=2, keepdims=True)
