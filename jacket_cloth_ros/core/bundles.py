@@ -240,6 +240,7 @@ class NamePlan(NamedTuple):
     world_from: np.ndarray          # int64: message index -> world_joint variable
     world_to: np.ndarray
     whole_world: bool               # every world variable is there
+    wraps: np.ndarray               # bool per joint value taken: a continuous joint's angle
 
 
 class JointSample(NamedTuple):
@@ -310,7 +311,7 @@ class SteadyIntake(NamedTuple):
 
 
 def name_plan(joint_from: tuple = (), joint_to: tuple = (), world_from: tuple = (),
-              world_to: tuple = (), whole_world: bool = False) -> NamePlan:
+              world_to: tuple = (), whole_world: bool = False, wraps: tuple = ()) -> NamePlan:
     """Return a NamePlan with its index arrays as int64.
 
     :param joint_from: message index of each joint value the plan takes.
@@ -318,9 +319,12 @@ def name_plan(joint_from: tuple = (), joint_to: tuple = (), world_from: tuple = 
     :param world_from: message index of each world_joint variable the plan takes.
     :param world_to: the world_joint variable each goes to.
     :param whole_world: whether every world_joint variable is in the message.
+    :param wraps: whether each joint value taken is a continuous joint's (an angle that
+        wraps); empty: none is.
     """
     return NamePlan(ints(joint_from), ints(joint_to), ints(world_from), ints(world_to),
-                    bool(whole_world))
+                    bool(whole_world),
+                    np.asarray(wraps if len(wraps) else [False] * len(joint_from), dtype=bool))
 
 
 def joint_sample(q: npt.ArrayLike, root: npt.ArrayLike, quat: npt.ArrayLike) -> JointSample:

@@ -150,8 +150,10 @@ class InputParser:
         if 0 < world < len(WORLD_VARIABLES):
             warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
                              'keeping the last world pose'))
+        continuous = self.skeleton.continuous
         plan = (name_plan(joint_from, joint_to, world_from, world_to,
-                          world == len(WORLD_VARIABLES)), warnings)
+                          world == len(WORLD_VARIABLES), [continuous[k] for k in joint_to]),
+                warnings)
         if len(self._plans) > 16:           # a publisher that changes its list every time
             self._plans.clear()
         self._plans[names] = plan
@@ -175,7 +177,9 @@ class InputParser:
         new = JointSample(np.empty_like(self.last.q), np.empty((4, 4)), np.empty(4))
         found = fill_sample(positions, plan, self.last, new)
         if found == NON_FINITE_POSITION:
-            bad = [n for n, p in zip(names, positions) if not np.isfinite(p)]
+            taken = set(plan.joint_from) | (set(plan.world_from) if plan.whole_world else set())
+            bad = [n for k, (n, p) in enumerate(zip(names, positions))
+                   if k in taken and not np.isfinite(p)]
             raise InputRejected('nonfinite', f'non-finite position for {", ".join(bad[:5])}: '
                                 'message dropped')
         if found == ZERO_QUATERNION:

@@ -105,6 +105,7 @@ class Skeleton:
         self.joint_names = []
         self.joint_of_link = {}
         mimics = []
+        continuous = []
         for k, j in enumerate(joints):
             if j is None:
                 continue
@@ -126,6 +127,9 @@ class Skeleton:
                 else:
                     self.var[k] = len(self.joint_names)
                     self.joint_names.append(j.name)
+                    continuous.append(j.type == 'continuous')
+        # Per joint value: a continuous joint's angle wraps (a driver may give it in +-pi).
+        self.continuous = np.array(continuous, dtype=bool)
         index = {name: v for v, name in enumerate(self.joint_names)}
         mimicking = {j.name: j for _, j in mimics}
         for k, j in mimics:

@@ -18,18 +18,31 @@ FILLED, NON_FINITE_POSITION, ZERO_QUATERNION = range(3)    # what fill_sample fo
 def fill_sample(positions, plan, last, new):
     """Fill the bundles.JointSample ``new`` from one message's positions by its NamePlan.
 
-    Joints and a world pose the message leaves out keep their values in ``last``. Compiled: in
-    numpy it was a visible share of every input.
+    Joints and a world pose the message leaves out keep their values in ``last``; a value the
+    plan does not take (a name not in the URDF) is not looked at. A continuous joint's angle
+    is taken within half a turn of its last value: the steps interpolate between the two, and
+    a driver's angle wrapped at +-pi turned the body the long way round. Compiled: in numpy
+    it was a visible share of every input.
     """
     q, root, quat = new.q, new.root, new.quat
     joint_from, joint_to, world_from, world_to = (plan.joint_from, plan.joint_to,
                                                   plan.world_from, plan.world_to)
-    for k in range(positions.shape[0]):
-        if not np.isfinite(positions[k]):
-            return NON_FINITE_POSITION
-    q[:] = last.q
     for k in range(joint_from.shape[0]):
-        q[joint_to[k]] = positions[joint_from[k]]        # a repeated name: the last one counts
+        if not np.isfinite(positions[joint_from[k]]):
+            return NON_FINITE_POSITION
+    if plan.whole_world:
+        for k in range(world_from.shape[0]):
+            if not np.isfinite(positions[world_from[k]]):
+                return NON_FINITE_POSITION
+    q[:] = last.q
+    wraps = plan.wraps
+    for k in range(joint_from.shape[0]):
+        value = positions[joint_from[k]]
+        if wraps[k]:
+            before = last.q[joint_to[k]]
+            turns = np.floor((value - before) / (2.0 * np.pi) + 0.5)
+            value -= 2.0 * np.pi * turns
+        q[joint_to[k]] = value          # a repeated name: the last one counts
     if not plan.whole_world:
         root[:] = last.root
         quat[:] = last.quat

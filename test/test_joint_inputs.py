@@ -1,0 +1,69 @@
+# Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
+"""A robot's own JointState stream: continuous joints that wrap, values the URDF does not take."""
+
+import math
+
+import numpy as np
+
+from jacket_cloth_ros.core.config import shipped
+from jacket_cloth_ros.core.fabric import load_fabric
+from jacket_cloth_ros.core.rig import load_rig
+from jacket_cloth_ros.core.simulation import JacketSimulation, SimParams
+from jacket_cloth_ros.core.skeleton import Skeleton
+
+STEP_NS = round(1e9 / 60)
+
+
+def _on_a_turret():
+    """The shipped character turned by a continuous joint under its base (a robot's turret)."""
+    with open(shipped('character.urdf'), encoding='utf-8') as f:
+        text = f.read()
+    return Skeleton(text.replace(
+        '<link name="base_link"/>', '<link name="turret"/><link name="base_link"/>'
+        '<joint name="turret_yaw" type="continuous"><parent link="turret"/>'
+        '<child link="base_link"/><origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        '</joint>', 1))
+
+
+def test_a_continuous_joint_wrapped_at_pi_moves_the_cloth_as_its_unwrapped_angle():
+    # A driver reports a continuous joint within +-pi. Interpolated from 3.13 to -3.13 rad,
+    # the body turned the long way round within one input and flung the hem 0.30 m (a probe);
+    # the angle is now taken within half a turn of the last, as the unwrapped one would be.
+    skeleton = _on_a_turret()
+    assert list(skeleton.continuous) == [name == 'turret_yaw' for name in skeleton.joint_names]
+    sims = [JacketSimulation(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'),
+                             SimParams()) for _ in range(2)]
+    names = tuple(skeleton.joint_names)
+    yaw = names.index('turret_yaw')
+    worst = 0.0
+    for k in range(90):                  # 1.5 s at 1 rad/s from 2.8 rad: past pi at 0.34 s
+        angle = 2.8 + k / 60
+        for sim, given in zip(sims, (angle, math.atan2(math.sin(angle), math.cos(angle)))):
+            positions = np.zeros(len(names))
+            positions[yaw] = given
+            report = sim.process(10 ** 10 + k * STEP_NS, names, positions)
+            assert report.accepted and report.reset in ('', 'first sample'), report
+        worst = max(worst, np.abs(sims[0].x - sims[1].x).max())
+    assert worst < 1e-6, worst
+
+
+def test_a_value_the_urdf_does_not_take_is_not_looked_at():
+    # An unpowered gripper's NaN on a joint the URDF does not have dropped every message
+    # (a probe): the joint is ignored as the docs say, its value too. A NaN on a joint of the
+    # URDF still drops the message, naming it.
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    skeleton = load_shipped_character()
+    sim = JacketSimulation(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'),
+                           SimParams())
+    names = tuple(skeleton.joint_names) + ('gripper_finger_joint',)
+    for k in range(3):
+        report = sim.process(10 ** 10 + k * STEP_NS, names, [0.0] * (len(names) - 1) + [np.nan])
+        assert report.accepted, report
+        assert ('unknown', 'ignoring joint(s) not in the URDF: gripper_finger_joint') in \
+            report.warnings, report.warnings
+    positions = [0.0] * len(names)
+    positions[0] = np.nan
+    report = sim.process(10 ** 10 + 3 * STEP_NS, names, positions)
+    assert not report.accepted
+    assert report.warnings == [('nonfinite', f'non-finite position for {names[0]}: message '
+                                'dropped')], report.warnings
