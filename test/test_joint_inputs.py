@@ -67,3 +67,30 @@ def test_a_value_the_urdf_does_not_take_is_not_looked_at():
     assert not report.accepted
     assert report.warnings == [('nonfinite', f'non-finite position for {names[0]}: message '
                                 'dropped')], report.warnings
+
+
+def test_a_stream_with_no_joint_of_the_urdf_is_a_warning_while_it_comes():
+    # A robot publishing its joints under a prefix (robot1/l_knee): the body stayed at its
+    # zero pose, /tf went out and every diagnostics said ok (a probe). They now say it.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    skeleton = load_shipped_character()
+    pipeline = SessionPipeline(skeleton, load_rig(skeleton),
+                               default_values(load_fabrics()['tweed_jacket']), timing=False)
+    names = tuple(skeleton.joint_names)
+    statuses = []
+    for k, given in enumerate([tuple('robot1/' + n for n in names)] * 3 + [names] * 3):
+        stamp = 10 ** 10 + k * STEP_NS
+        report, outputs = pipeline.on_joint_state(
+            JointStateContent(stamp, given, np.zeros(len(names))), stamp)
+        assert report.accepted
+        status = deserialize_message(pipeline.diagnostics_now(stamp), DiagnosticArray).status[0]
+        statuses.append((status.level, status.message))
+    said = 'no name of the JointState is a joint of the URDF (robot1/'
+    assert all(level == b'\x01' and said in text for level, text in statuses[:3]), statuses
+    assert all(level == b'\x00' for level, _ in statuses[3:]), statuses

@@ -98,6 +98,9 @@ class InputParser:
         self.world_given = self.guessed = False
         # Whether the last message gave part of the world pose (its travel then is lost).
         self.world_incomplete = False
+        # The last message's names when none is a joint of the URDF (another robot's, or
+        # prefixed): the body then stays as it is, which looks like a working node.
+        self.unmatched = ''
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -188,6 +191,9 @@ class InputParser:
         self.last = new
         began = self.guessed and plan.whole_world
         self.world_incomplete = len(plan.world_to) > 0 and not plan.whole_world
+        self.unmatched = _names_cut(set(names) - self.world_names.keys()) \
+            if len(plan.joint_to) == 0 and len(self.skeleton.joint_names) and \
+            any(code == 'unknown' for code, _ in warnings) else ''
         self.world_given = self.world_given or plan.whole_world
         self.guessed = not self.world_given
         return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings), began)

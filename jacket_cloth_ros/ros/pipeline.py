@@ -494,6 +494,10 @@ class SessionPipeline:
         lying = self.sim.lying_without_world_pose()
         if lying:
             problems.append(lying)
+        unmatched = self.sim.parser.unmatched
+        if unmatched:
+            problems.append(f'no name of the JointState is a joint of the URDF ({unmatched}): '
+                            'the body stays as it is')
         if self.sim.parser.world_incomplete:
             problems.append(f'incomplete {self.sim.parser.world_joint}/* pose: the root keeps '
                             'its last world pose')
