@@ -9,6 +9,7 @@ hangs between them and the torso. Depths are measured with measures.depth_inside
 bundles.Colliders this proxy is posed into, so they do not depend on the rig's own colliders.
 """
 
+import functools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
@@ -126,12 +127,12 @@ def lowest_reach(skeleton: 'Skeleton', rest: np.ndarray, up: np.ndarray) -> floa
     :param up: (3,) the world's up, unit.
     """
     low = [float((rest[:, :3, 3] @ up).min())]
-    try:
-        shapes = body_proxy(skeleton).posed(rest)
-    except ConfigError:
+    proxy = _proxy_of(skeleton)
+    if proxy is None:
         # Shapes the URDF's own parser loads but their reader refuses only refine where the
         # soles are: the link origins stand in, and nothing that stands a body fails on them.
         return low[0]
+    shapes = proxy.posed(rest)
     if len(shapes.centers):
         reach = np.linalg.norm(np.einsum('kij,i->kj', shapes.axes, up) * shapes.radii, axis=1)
         low.append(float((shapes.centers @ up - reach).min()))
@@ -139,3 +140,15 @@ def lowest_reach(skeleton: 'Skeleton', rest: np.ndarray, up: np.ndarray) -> floa
         ends = np.minimum(shapes.capsule_a @ up, shapes.capsule_b @ up)
         low.append(float((ends - shapes.capsule_radii).min()))
     return min(low)
+
+
+@functools.lru_cache(maxsize=16)
+def _proxy_of(skeleton: 'Skeleton') -> 'BodyProxy | None':
+    """body_proxy of the whole body once per character (it reads the URDF's shapes anew).
+
+    None where the shapes' reader refuses them.
+    """
+    try:
+        return body_proxy(skeleton)
+    except ConfigError:
+        return None

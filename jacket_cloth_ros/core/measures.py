@@ -6,7 +6,7 @@ name the instant, the vertex and the collider. Stretch and compression are kept 
 folding where a thigh lifts it is not a rubber-band hem.
 """
 
-from typing import TYPE_CHECKING, NamedTuple, Sequence
+from typing import TYPE_CHECKING, Callable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -286,6 +286,46 @@ class RestlessWatch:
             return False
         self.restless, self.speed = True, speed
         return True
+
+
+# The body under the floor is looked for this often (s of the stamps), and said when it is
+# there at FLOOR_LOOKS looks in a row: a body that stays there is what it is to catch (a
+# capture sunk through the floor, a source's world pose too low), not a landing's dip.
+FLOOR_LOOK_EVERY_S = 0.5
+FLOOR_LOOKS = 2
+
+
+class FloorWatch:
+    """Tell when the body stays under the rig's floor: said once, until it comes back up.
+
+    The floor then holds the cloth against the body, while every per-input figure reads
+    clean (the cloth on the floor is outside it).
+    """
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget what was seen (the cloth was put back on the body: a reset)."""
+        self.looked_ns = None
+        self.under = 0              # looks in a row that found the body under the floor
+        self.sunk = False           # said, and said while it lasts
+
+    def note(self, under: Callable[[], str], stamp_ns: int) -> str:
+        """Look, if a look is due; return the line to say when the body has just gone under.
+
+        :param under: says how far the body reaches under the floor and why, or ''.
+        :param stamp_ns: the input's stamp, ns.
+        """
+        last = self.looked_ns
+        if last is not None and 0 <= stamp_ns - last < FLOOR_LOOK_EVERY_S * 1e9:
+            return ''
+        self.looked_ns = stamp_ns
+        line = under()
+        self.under = self.under + 1 if line else 0
+        said = line if self.under >= FLOOR_LOOKS and not self.sunk else ''
+        self.sunk = self.under >= FLOOR_LOOKS
+        return said
 
 
 # The watches look every LOOK_EVERY_S: as a dozen numpy calls each, a look cost several inputs'

@@ -27,8 +27,8 @@ from .bundles import (
     floats, ints, posed_like)
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
-from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, RestlessWatch, Worst,
-                       collider_labels, depth_inside, edge_strain)
+from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, FloorWatch,
+                       RestlessWatch, Worst, collider_labels, depth_inside, edge_strain)
 from .params import AUTO_TELEPORT_PER_HEIGHT, SimParams
 from .physics import cloth, colliders, hood, pose, step
 from .physics.sampling import root_jump
@@ -139,6 +139,7 @@ class Faults:
     rig: list = field(default_factory=list)     # the rig's, at load and at the first input
     collapse: list = field(default_factory=list)    # each time the cloth stayed collapsed
     restless: list = field(default_factory=list)    # each time it kept moving, body still
+    under_floor: list = field(default_factory=list)     # each time the body went under
 
 
 @dataclass(slots=True)
@@ -147,11 +148,13 @@ class Watches:
 
     collapse: CollapseWatch         # bunched or stretched across for a second
     restless: RestlessWatch         # moving on while the body stays still
+    floor: FloorWatch               # the body under the rig's floor
 
     def clear(self) -> None:
         """Forget what was seen (the cloth was put back on the body: a reset)."""
         self.collapse.clear()
         self.restless.clear()
+        self.floor.clear()
 
 
 @dataclass(slots=True)
@@ -248,7 +251,7 @@ class JacketSimulation:
             ints(layer.parent_index if layer else []), identity_poses(len(self.bone_names))))
         c = self.model.cloth        # issue 47 item 5a: no silent collapse
         self.watches = Watches(CollapseWatch(c.horiz_a, c.horiz_b, c.horiz_rest),
-                               RestlessWatch())
+                               RestlessWatch(), FloorWatch())
         self._warm_up()
         # What is wrong with the rig before any input (the node logs it at load), then at the
         # first input (with its warnings); the tools print them all (issue 35 item 5).
@@ -863,6 +866,10 @@ class JacketSimulation:
             line = self._restless()
             self.faults.restless.append(line)
             report.warnings.append(('restless', line))
+        line = watches.floor.note(self._under_floor, stamp_ns)
+        if line:
+            self.faults.under_floor.append(line)
+            report.warnings.append(('under_floor', line))
 
     def _windy(self):
         """Tell whether wind moves the cloth: then a cloth moving on a still body is right."""

@@ -119,7 +119,7 @@ class SessionPipeline:
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         # The simulation's collapse and restless lines (Faults) the diagnostics have said.
-        self._said = {'collapse': 0, 'restless': 0}
+        self._said = {'collapse': 0, 'restless': 0, 'under_floor': 0}
         self._costs = []
         self._latencies = []
         # The grid each periodic output is due on, per clock the stamps come on (most recent
@@ -504,7 +504,8 @@ class SessionPipeline:
         # No silent collapse, no cloth that never rests: said while it lasts, and once after.
         watches = self.sim.watches
         for kind, lasts in (('collapse', watches.collapse.collapsed),
-                            ('restless', watches.restless.restless)):
+                            ('restless', watches.restless.restless),
+                            ('under_floor', watches.floor.sunk)):
             said = getattr(self.sim.faults, kind)
             if lasts or len(said) > self._said[kind]:
                 problems.append(said[-1])

@@ -157,6 +157,7 @@ class SessionFigures:
             'rig_warnings': list(pipeline.sim.faults.rig),
             'collapsed': list(pipeline.sim.faults.collapse),
             'restless': list(pipeline.sim.faults.restless),
+            'under_floor': list(pipeline.sim.faults.under_floor),
             'resets': len(self.reset_reasons),
             'reset_reasons': self.reset_reasons,
             'step_time_us': {

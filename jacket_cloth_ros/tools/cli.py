@@ -277,7 +277,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     session = _session(args, listed)
     pipeline, took = replay(session, args.output, args.force)
     sim = pipeline.sim
-    _warn_rig(args, sim.faults.rig + sim.faults.collapse + sim.faults.restless)
+    _warn_rig(args, sim.faults.rig + sim.faults.collapse + sim.faults.restless
+              + sim.faults.under_floor)
     first, last = session.stamp_range()
     span = (last - first) * 1e-9
     print(f'{args.output}: {pipeline.inputs} JointState ({pipeline.dropped} dropped), '
@@ -357,7 +358,8 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     report = _analyze_into(args.out, args.force, sessions, args.moments)
     for r in report.get('sessions', [report]):
         _warn_rig(argparse.Namespace(**{**vars(args), 'input': r['file']}),
-                  r['rig_warnings'] + r['collapsed'] + r.get('restless', []))
+                  r['rig_warnings'] + r['collapsed'] + r.get('restless', [])
+                  + r.get('under_floor', []))
     print(f'{os.path.join(args.out, "report.json")}: {summary_line(report)}')
     return 0
 
