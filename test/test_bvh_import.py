@@ -171,6 +171,16 @@ def test_joint_names_with_spaces_are_read_whole_their_words_joined(tmp_path, cap
      'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'
      'Frames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n0 0 0 0 -1e20 0\n',
      'frame 1: Hips turns -1e+20 deg, beyond the 1e+06 any joint may'),
+    # A corrupted root position was imported, and analyze printed figures of 280 digits.
+    ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
+     'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'
+     'Frames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n1e300 0 0 0 0 0\n',
+     "m per unit, beyond the 1e+06 m a capture's root may reach (a corrupted frame?)"),
+    # The reader turned a NaN frame time into an integer and said only that.
+    ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
+     'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'
+     'Frames: 1\nFrame Time: nan\n0 0 0 0 0 0\n',
+     'Frame Time nan is outside [0.0001, 1] s'),
 ])
 def test_a_bad_file_is_one_line_and_exit_1(tmp_path, capsys, content, words):
     bad = tmp_path / 'bad.bvh'

@@ -111,3 +111,23 @@ def test_the_body_proxy_sees_what_the_rigs_colliders_do_not(tmp_path, capsys):
                    'inside 0.0 / 0.0 mm',
                    'inside the body ', 'non-finite 0', 'resets 1'):
         assert figure in line, figure
+
+
+def test_worst_instants_at_one_moment_draw_one_frame_with_both_labels(monkeypatch):
+    # The worst vertical stretch and the deepest vertex at one input: the picture labelled
+    # both panels with the second, and the stretch was nowhere in it (a probe).
+    from types import SimpleNamespace
+    from jacket_cloth_ros.tools import analyze
+    drawn = {}
+
+    def draw(frames, skeleton, path, t0, labels, **kwargs):
+        drawn.update(frames=frames, label=labels(frames[0].stamp_ns - t0))
+    monkeypatch.setattr(analyze, 'draw_filmstrip', draw)
+    frame = SimpleNamespace(stamp_ns=2_500_000_000)
+    figures = SimpleNamespace(
+        t0=0, worst_frames={'vertical_stretch': (0.397, frame), 'inside_m': (0.0146, frame)},
+        report_where=lambda measure: {'vertical_stretch': 'r2 c5', 'inside_m': 'r1 c4 torso'}[
+            measure])
+    analyze._draw_worst(figures, None, 'worst.png', 'lying', None)
+    assert drawn['frames'] == [frame]
+    assert drawn['label'] == '\nworst vertical stretch 0.4\nr2 c5\nworst inside 0.015\nr1 c4 torso'

@@ -61,6 +61,9 @@ HUMAN_HEIGHT_M = (1.2, 2.2)
 # A channel's angle beyond this (degrees) is a corrupted value, not turns a capture unwrapped:
 # its spike would pose the frame at random.
 MAX_ANGLE_DEG = 1e6
+# The farthest a capture's root may be from its origin, m: a capture volume is tens of
+# metres; beyond this a frame is corrupted, and 1e300 m gave figures of 280 digits.
+MAX_ROOT_M = 1e6
 
 # Seconds between frames: 10 kHz to 1 Hz. Shorter made stamps repeat (whole ns); longer put
 # a capture's stamps beyond what a header stamp holds.
@@ -162,6 +165,10 @@ def _read(path, links, opened, closed):
                        f'{MAX_LINKS} a character may have')
     if opened != closed:            # the reader guesses where a brace was missing
         raise BvhError(f'{path}: its HIERARCHY opens {opened} braces and closes {closed}')
+    low, high = FRAME_TIME_RANGE
+    given = _frame_time_given(path)
+    if given is not None and not low <= given <= high:       # NaN too: the reader fails on it
+        raise BvhError(f'{path}: Frame Time {given:g} is outside [{low:g}, {high:g}] s')
     try:
         with warnings.catch_warnings():
             # The capture is Y-up by the format's convention: no guessing, so no warning.
@@ -173,7 +180,6 @@ def _read(path, links, opened, closed):
         raise BvhError(f'{path}: not a readable BVH file ({text})') from None
     if bvh.frame_count < 1:
         raise BvhError(f'{path}: no frames')
-    low, high = FRAME_TIME_RANGE
     if not low <= bvh.frame_time <= high:       # NaN too
         raise BvhError(f'{path}: Frame Time {bvh.frame_time:g} is outside [{low:g}, {high:g}] s')
     if not (np.isfinite(bvh.root_pos).all() and np.isfinite(bvh.joint_angles).all()):
@@ -188,6 +194,18 @@ def _read(path, links, opened, closed):
         if not np.isfinite(np.asarray(node.offset, dtype=float)).all():
             raise BvhError(f'{path}: the OFFSET of {node.name} is not three finite numbers')
     return bvh
+
+
+def _frame_time_given(path):
+    """Return the number on the file's ``Frame Time:`` line, or None if none reads as one."""
+    with open(path, encoding='latin-1') as f:
+        for line in f:
+            if line.strip().lower().startswith('frame time:'):
+                try:
+                    return float(line.split(':', 1)[1])
+                except ValueError:
+                    return None
+    return None
 
 
 def _hierarchy_counts(path):
@@ -407,6 +425,12 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')
+    far = np.abs(trans).max(axis=1) if len(trans) else np.zeros(0)
+    if len(far) and far.max() > MAX_ROOT_M:
+        k = int(np.argmax(far))
+        raise BvhError(f'frame {k}: the root is {far[k]:.3g} m from the origin at {scale:g} m '
+                       f'per unit, beyond the {MAX_ROOT_M:g} m a capture\'s root may reach (a '
+                       'corrupted frame?)')
     return capture
 
 

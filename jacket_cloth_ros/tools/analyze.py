@@ -419,8 +419,11 @@ def _draw_worst(figures: SessionFigures, skeleton: 'Skeleton', path: str, name: 
     for measure, title in (('vertical_stretch', 'vertical stretch'), ('inside_m', 'inside')):
         value, frame = figures.worst_frames[measure]
         where = figures.report_where(measure)
-        frames.append(frame)
-        labels[frame.stamp_ns - figures.t0] = f'\nworst {title} {value:.2g}\n{where}'
+        dt = frame.stamp_ns - figures.t0
+        if dt not in labels:
+            frames.append(frame)
+        # Both worst at one instant: one frame with both labels, neither lost.
+        labels[dt] = labels.get(dt, '') + f'\nworst {title} {value:.2g}\n{where}'
     draw_filmstrip(frames, skeleton, path, figures.t0, labels=lambda dt: labels.get(dt, ''),
                    title=f'{name}: the worst instants; dashed blue: skinned hem and hood',
                    world_axes=axes)

@@ -176,7 +176,7 @@ def _continuous(q: np.ndarray) -> np.ndarray:
 def _within_float32(values: np.ndarray, what: str) -> None:
     """Refuse values glTF's 32-bit floats cannot hold: cast, they were infinities in the file."""
     largest = float(np.abs(values).max(initial=0.0))
-    if largest > np.finfo(np.float32).max:
+    if largest > float(np.finfo(np.float32).max):       # a Python float: no cast to warn
         raise ValueError(f'{what} of {largest:.3g} is beyond glTF\'s 32-bit floats')
 
 
