@@ -129,3 +129,38 @@ def test_a_body_under_the_floor_is_said_once_and_warned_while_it_stays():
     assert said[0].startswith('the body reaches 0.3') and 'under the rig\'s floor' in said[0]
     assert [level for level, _ in statuses] == [b'\x00'] + [b'\x01'] * 2 + [b'\x00'] * 3, \
         statuses
+
+
+def test_two_sources_on_one_topic_are_merged_by_name_as_robot_state_publisher_does():
+    # Legs and arms from two broadcasters stamped by one control tick, or the arms 5 ms
+    # behind: every arms message was dropped (a repeated stamp, a stamp gone back) and the
+    # arms stayed at zero for good (a probe). Each is now taken into the pose the next
+    # steps start from, publishing nothing of its own: the pose of one message with both.
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    skeleton = load_shipped_character()
+    values = default_values(load_fabrics()['tweed_jacket'])
+    for behind in (0, 5_000_000):
+        split, whole = (SessionPipeline(skeleton, load_rig(skeleton), values, timing=False)
+                        for _ in range(2))
+        published = []
+        for k in range(60):
+            stamp = 10 ** 10 + k * STEP_NS
+            names, positions = joint_state_content(skeleton.joint_names, 'arms_up', k / 60)
+            arms = [i for i, n in enumerate(names) if 'shoulder' in n or 'elbow' in n]
+            legs = [i for i in range(len(names)) if i not in arms]
+            for part, at in ((legs, stamp), (arms, stamp - behind)):
+                report, out = split.on_joint_state(JointStateContent(
+                    at, tuple(names[i] for i in part), np.asarray(positions)[part]), at)
+                assert report.accepted and not report.warnings[1:], report
+                published += [key for key, _ in out if key == 'tf']
+            whole.on_joint_state(JointStateContent(stamp, tuple(names), positions), stamp)
+        assert len(published) == 60 and split.dropped == 0      # one /tf a tick
+        shoulder = skeleton.joint_index['l_shoulder_roll']
+        assert split.sim.last.q[shoulder] > 2.0                 # the arms up
+        # Merged a step later than one message brings them: the arms lag by a step.
+        assert np.abs(split.sim.x - whole.sim.x).max() < 0.01, behind       # 8 mm

@@ -173,6 +173,7 @@ class StepReport:
     sweeps: int = 0                    # relaxation sweeps run (over all steps and substeps)
     substeps: int = 0                  # substeps run (over all steps), retries' included
     retried_steps: int = 0             # steps run again in finer substeps (step.RETRIED)
+    merged: bool = False               # another source's joints, taken into the last pose
     lod_level: int = 0                 # level of detail of these steps (core/lod.py)
 
 
@@ -239,6 +240,7 @@ class JacketSimulation:
         # them with its steps, core/stepping.py); any new input or reset drops them.
         self.ready_bones = None
         self._own = None        # (last, parser's last, bones) took_steady may move on in place
+        self._names = None      # the name list of the last input that moved the simulation on
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
         # The compiled steps and bones (physics.crowd.advance_slot), alone as in a crowd.
@@ -772,6 +774,9 @@ class JacketSimulation:
         report = StepReport(stamp_ns)
         self.ready_bones = None
         try:
+            if self._another_source(stamp_ns, names):
+                self._merge(self.parser.parse(stamp_ns, names, positions), report)
+                return report, None
             self._check_stamp(stamp_ns, report)
             sample = self.parser.parse(stamp_ns, names, positions)
         except InputRejected as e:
@@ -779,6 +784,7 @@ class JacketSimulation:
             report.reset = ''           # a stamp gap marked it, but nothing is reset
             report.warnings.append((e.code, str(e)))
             return report, None
+        self._names = tuple(names)
         report.warnings += sample.warnings
         if not report.reset and self.last is None:
             report.reset = 'first sample'
@@ -912,6 +918,29 @@ class JacketSimulation:
         return (f'the body reaches {height - low:.2f} m under the rig\'s floor, which holds the '
                 'cloth against it: raise the root\'s world pose (world_joint/trans_*), stand a '
                 'capture on its soles (motion --urdf) or lower the floor in the rig')
+
+    def _another_source(self, stamp_ns, names):
+        """Tell whether an input is a second source's: another name list, not ahead in time.
+
+        Two publishers on one topic (a robot's legs and arms, a gripper beside its arm), each
+        stamped by the same control tick or a little behind: robot_state_publisher merges
+        them by name, and so does this simulation, rather than drop every other input.
+        """
+        last = self.last
+        if last is None or self._names is None or tuple(names) == self._names:
+            return False
+        gap = (stamp_ns - last.stamp_ns) * 1e-9
+        return -self.params.reset_gap < gap <= 0
+
+    def _merge(self, sample, report):
+        """Take a second source's values into the last pose, which the next steps start from.
+
+        No step and nothing to publish: its stamp is the last one's, or behind it.
+        """
+        last = self.last
+        self.last = Sample(last.stamp_ns, sample.q, sample.root, sample.root_quat)
+        report.merged = True
+        report.warnings += sample.warnings
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:

@@ -346,6 +346,9 @@ class SessionPipeline:
                 self.first_refusal = '; '.join(text for _, text in report.warnings) or 'refused'
             return []
         self._window['accepted'] += 1
+        if report.merged:           # another source's joints, in the last pose: nothing new
+            self._window['merged'] += 1
+            return []
         if report.skipped_steps:
             self._window['skipped'] += report.skipped_steps
         self._window['steps'] += report.steps
@@ -382,7 +385,7 @@ class SessionPipeline:
         :param report: the input's step report.
         :param stamp_ns: the input's stamp, ns, which its outputs carry.
         """
-        if not report.accepted:
+        if not report.accepted or report.merged:
             return []
         out = []
         rate = self.values.markers_rate
@@ -469,7 +472,7 @@ class SessionPipeline:
     def _status(self, slow, recording):
         """Level and message of the inputs since the last diagnostics."""
         w = self._window
-        if w['accepted'] and not w['published']:
+        if w['accepted'] > w['merged'] and not w['published']:
             return messages.ERROR, 'nothing published: the bone pose is not finite'
         if self._reset_streak >= 3:
             return messages.ERROR, (f'the cloth resets on every input ({self._reset_streak} '
@@ -561,7 +564,8 @@ def _no_recording_problem() -> str:
 # Clocks a pipeline's periodic outputs keep a grid for (sources on different clocks).
 _CLOCKS = 4
 # What the inputs since the last diagnostics did, for its level.
-_WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost', 'steps', 'skipped')
+_WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost', 'steps', 'skipped',
+           'merged')
 
 
 def quantile(ordered: list, share: float) -> float:
