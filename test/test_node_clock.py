@@ -146,9 +146,12 @@ def test_a_different_urdf_after_the_fallback_is_one_line(harness, urdf_text, cap
         said.append(capfd.readouterr().err)
     lines = [x for x in ''.join(said).splitlines() if 'different URDF' in x]
     assert len(lines) == 1 and 'shipped character' in lines[0] and 'restart' in lines[0], lines
+    # The diagnostics say it while it holds: one log line was all a user had (a probe).
+    assert _status(h) == (b'\x01', lines[0].split(']: ', 1)[-1]), (_status(h), lines[0])
     pub.publish(String(data=urdf_text))             # the one it runs: nothing to say
     h.spin_until(lambda: h.node.received['robot_description'] == 4)
     assert 'different URDF' not in capfd.readouterr().err
+    assert _status(h)[0] == b'\x00', _status(h)
     assert h.c.sim.skeleton.name == 'jacket_character'
     # One that does not load is said so, not given the restart a restart would refuse.
     pub.publish(String(data=urdf_text.replace('</robot>', '')))
@@ -156,6 +159,14 @@ def test_a_different_urdf_after_the_fallback_is_one_line(harness, urdf_text, cap
     lines = [x for x in capfd.readouterr().err.splitlines() if 'URDF' in x]
     assert len(lines) == 1 and 'a URDF that does not load came on /robot_description (URDF: ' \
         'malformed robot description' in lines[0] and 'restart' not in lines[0], lines
+
+
+def _status(h):
+    """The level and message of the character's diagnostics now."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    status = deserialize_message(h.c.pipeline.diagnostics_now(0), DiagnosticArray).status[0]
+    return status.level, status.message
 
 
 def test_a_recording_replaced_by_another_writer_is_said_and_saved(harness, tmp_path, capfd):

@@ -106,7 +106,8 @@ class Character:
         self.markers = None             # its markers publisher, once loaded
         self.description = self.fallback = None     # while it waits for its URDF
         self.source = ''                # where its URDF came from, for the log
-        self.told_description = None    # the hash of the last late URDF said to be ignored
+        # The hash of the last late URDF said to be ignored, and what was said.
+        self.told_description: tuple = (None, '')
         self.waiting = ''               # why it still waits: the URDF its topic gave, refused
         self.inputs = 0
         self.log_times = {}             # its throttled warnings: code -> when last logged

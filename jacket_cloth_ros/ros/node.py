@@ -697,20 +697,29 @@ class JacketClothNode(Node):
                    f'({e}): message dropped')
             return
         told = hash(text)
-        if text == c.urdf or told == c.told_description:
+        if text == c.urdf:          # the one it runs after all: nothing wrong any more
+            self._character_problem(c, '')
             return
-        c.told_description = told
+        if told == c.told_description[0]:      # said once: the diagnostics say it again
+            self._character_problem(c, c.told_description[1])
+            return
         self.refused['robot_description'] += 1
         try:        # a restart would refuse one that does not load: not the advice to give
             Skeleton(text)
+            line = (f'a different URDF came on {topic}: not taken, the node keeps the '
+                    f'character it runs (from {c.source}); restart the node to take it')
         except ConfigError as e:
-            self.get_logger().warning(cut_line(
-                f'{c.label}a URDF that does not load came on {topic} ({e}): not taken, the '
-                f'node keeps the character it runs (from {c.source})'))
-            return
-        self.get_logger().warning(
-            f'{c.label}a different URDF came on {topic}: not taken, the node keeps the '
-            f'character it runs (from {c.source}); restart the node to take it')
+            line = cut_line(f'a URDF that does not load came on {topic} ({e}): not taken, the '
+                            f'node keeps the character it runs (from {c.source})')
+        c.told_description = (told, line)
+        self.get_logger().warning(c.label + line)
+        self._character_problem(c, line)
+
+    @staticmethod
+    def _character_problem(c, line):
+        """Let the character's diagnostics say ``line`` while it holds ('' : nothing)."""
+        if c.pipeline is not None:
+            c.pipeline.character_problem = line
 
 
 _CHARACTER_NAMES = frozenset(VALUE_NAMES)

@@ -116,6 +116,9 @@ class SessionPipeline:
         # Why the recording the values name is not being written ('' when it is, or none):
         # asked of the live node's recording (ros/recording.py), which holds it once.
         self.recording_problem: 'Callable[[], str]' = _no_recording_problem
+        # What the node knows is wrong with the character it runs (another URDF came on its
+        # description topic and was not taken): said in the diagnostics while it holds.
+        self.character_problem = ''
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         # The simulation's collapse and restless lines (Faults) the diagnostics have said.
@@ -497,6 +500,8 @@ class SessionPipeline:
         lying = self.sim.lying_without_world_pose()
         if lying:
             problems.append(lying)
+        if self.character_problem:
+            problems.append(self.character_problem)
         unmatched = self.sim.parser.unmatched
         if unmatched:
             problems.append(f'no name of the JointState is a joint of the URDF ({unmatched}): '
