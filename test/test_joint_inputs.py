@@ -164,3 +164,18 @@ def test_two_sources_on_one_topic_are_merged_by_name_as_robot_state_publisher_do
         assert split.sim.last.q[shoulder] > 2.0                 # the arms up
         # Merged a step later than one message brings them: the arms lag by a step.
         assert np.abs(split.sim.x - whole.sim.x).max() < 0.01, behind       # 8 mm
+
+
+def test_a_stream_stamped_zero_says_the_stamp_is_not_set():
+    # A driver leaving header.stamp at 0: one input taken, every other dropped as a
+    # "repeated stamp", with no word that the stamp is 0 or what to set (a probe).
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    skeleton = load_shipped_character()
+    sim = JacketSimulation(skeleton, load_rig(skeleton), load_fabric('tweed_jacket'),
+                           SimParams())
+    names = tuple(skeleton.joint_names)
+    assert sim.process(0, names, np.zeros(len(names))).accepted
+    report = sim.process(0, names, np.zeros(len(names)))
+    assert not report.accepted and report.warnings == [(
+        'stamp', 'repeated stamp 0 (header.stamp not set by the publisher; the steps run on '
+        'the stamps): message dropped')], report.warnings

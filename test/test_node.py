@@ -231,8 +231,10 @@ def test_bad_input_never_reaches_tf_and_the_node_keeps_running(harness):
     for k, (label, n, p) in enumerate(BAD_INPUTS):
         assert send(n, p, stamp + (k + 1) * 10 ** 7) == (label != 'unknown names'), label
     last = stamp + 3 * 10 ** 7                     # the accepted 'unknown names' message
-    assert send(names, pos, last)                  # repeated stamp
-    assert send(names, pos, last - 5 * 10 ** 6)    # backwards
+    # Its name list again: a repeated stamp, then one backwards. (Another name list at
+    # that stamp is a second source's, merged: test_joint_inputs.)
+    assert send(['tail', 'wing'], [0.1, 0.2], last)
+    assert send(['tail', 'wing'], [0.1, 0.2], last - 5 * 10 ** 6)
     h.pub.publish(b'\x00\x01\x00\x00' + b'\xff' * 40)  # bytes that are no JointState
     h.spin_until(lambda: 'decode' in h.c.log_times)  # warned about, dropped
     assert not send(names, pos, last + 10 ** 8)

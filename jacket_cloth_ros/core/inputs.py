@@ -101,6 +101,7 @@ class InputParser:
         # The last message's names when none is a joint of the URDF (another robot's, or
         # prefixed): the body then stays as it is, which looks like a working node.
         self.unmatched = ''
+        self.names = None           # the name list of the last message parsed
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -189,6 +190,7 @@ class InputParser:
             raise InputRejected('world', f'{self.world_joint} rotation is a zero '
                                 'quaternion: message dropped')
         self.last = new
+        self.names = names
         began = self.guessed and plan.whole_world
         self.world_incomplete = len(plan.world_to) > 0 and not plan.whole_world
         self.unmatched = _names_cut(set(names) - self.world_names.keys()) \

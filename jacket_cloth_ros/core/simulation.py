@@ -240,7 +240,6 @@ class JacketSimulation:
         # them with its steps, core/stepping.py); any new input or reset drops them.
         self.ready_bones = None
         self._own = None        # (last, parser's last, bones) took_steady may move on in place
-        self._names = None      # the name list of the last input that moved the simulation on
         self.lod = LevelOfDetail()
         self.bone_set = bone_set(skeleton, rig)
         # The compiled steps and bones (physics.crowd.advance_slot), alone as in a crowd.
@@ -784,7 +783,6 @@ class JacketSimulation:
             report.reset = ''           # a stamp gap marked it, but nothing is reset
             report.warnings.append((e.code, str(e)))
             return report, None
-        self._names = tuple(names)
         report.warnings += sample.warnings
         if not report.reset and self.last is None:
             report.reset = 'first sample'
@@ -927,7 +925,7 @@ class JacketSimulation:
         them by name, and so does this simulation, rather than drop every other input.
         """
         last = self.last
-        if last is None or self._names is None or tuple(names) == self._names:
+        if last is None or self.parser.names is None or tuple(names) == self.parser.names:
             return False
         gap = (stamp_ns - last.stamp_ns) * 1e-9
         return -self.params.reset_gap < gap <= 0
@@ -947,6 +945,9 @@ class JacketSimulation:
             return
         gap = (stamp_ns - self.last.stamp_ns) * 1e-9
         if gap == 0:
+            if stamp_ns == 0:       # a driver that leaves header.stamp unset
+                raise InputRejected('stamp', 'repeated stamp 0 (header.stamp not set by the '
+                                    'publisher; the steps run on the stamps): message dropped')
             raise InputRejected('stamp', 'repeated stamp: message dropped')
         if gap < 0:
             if -gap > self.params.reset_gap:
