@@ -175,7 +175,8 @@ def test_joint_names_with_spaces_are_read_whole_their_words_joined(tmp_path, cap
     ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
      'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'
      'Frames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n1e300 0 0 0 0 0\n',
-     "m per unit, beyond the 1e+06 m a capture's root may reach (a corrupted frame?)"),
+     "the root is 5.64e+298 m from the origin, beyond the 1e+06 m a capture's root may "
+     'reach (a corrupted frame?)'),
     # The reader turned a NaN frame time into an integer and said only that.
     ('HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition '
      'Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\nMOTION\n'

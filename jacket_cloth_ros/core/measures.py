@@ -303,13 +303,13 @@ class FloorWatch:
     """
 
     def __init__(self):
-        self.clear()
-
-    def clear(self) -> None:
-        """Forget what was seen (the cloth was put back on the body: a reset)."""
         self.looked_ns = None
         self.under = 0              # looks in a row that found the body under the floor
         self.sunk = False           # said, and said while it lasts
+
+    def clear(self) -> None:
+        """Look at the next input (a reset): the body under the floor stays said till it is up."""
+        self.looked_ns = None
 
     def note(self, under: Callable[[], str], stamp_ns: int) -> str:
         """Look, if a look is due; return the line to say when the body has just gone under.

@@ -936,9 +936,16 @@ class JacketSimulation:
         No step and nothing to publish: its stamp is the last one's, or behind it.
         """
         last = self.last
-        self.last = Sample(last.stamp_ns, sample.q, sample.root, sample.root_quat)
+        merged = Sample(last.stamp_ns, sample.q, sample.root, sample.root_quat)
         report.merged = True
         report.warnings += sample.warnings
+        # As prepare judges any input: its world pose may teleport or begin off the guess.
+        report.reset = self._jump(last, merged) or (
+            WORLD_BEGAN if sample.world_began and self._off_the_guess(last, merged) else '')
+        if report.reset:
+            self._reset(merged)
+        else:
+            self.last = merged
 
     def _check_stamp(self, stamp_ns, report):
         if self.last is None:

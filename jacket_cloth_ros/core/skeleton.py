@@ -139,6 +139,10 @@ class Skeleton:
             self.var[k] = index[source]
             _check_numbers(j.name, 'mimic multiplier and offset',
                            [self.mult[k], self.offset[k]], 100.0)
+            # A whole turn of the source is none of a follower at another ratio, or sliding:
+            # its angle is taken as given.
+            if self.kind[k] != 0 or self.mult[k] != round(self.mult[k]):
+                self.continuous[index[source]] = False
         self.joint_index = index
         # A mimic joint's value is its source's: a JointState naming it is not told it is
         # unknown (robot_state_publisher ignores it too).

@@ -104,23 +104,29 @@ _ROOT_PARTS = ('x position', 'y position', 'z position', 'orientation qx', 'orie
 
 
 def not_finite(capture: Capture) -> str | None:
-    """Return a phrase naming the first frame and value that is not a finite number, or None.
+    """Return a phrase naming the first frame and value that is no usable number, or None.
 
     The check every importer makes after scaling and normalising, before anything is
-    written: a NaN or an infinity in a JointState is no pose the node can take.
+    written: a NaN or an infinity in a JointState is no pose the node can take, nor a root
+    beyond MAX_ROOT_M from the origin.
 
     :param capture: an imported capture (its ``positions`` and ``root``).
     """
     values = np.hstack([capture.positions, capture.root])
     bad = ~np.isfinite(values)
-    if not bad.any():
+    if bad.any():
+        k, j = (int(v) for v in np.argwhere(bad)[0])
+        joints = len(capture.joint_names)
+        what = f'joint {capture.joint_names[j]}' if j < joints else \
+            f"the root's {_ROOT_PARTS[j - joints]}"
+        return (f'frame {k}: {what} is {values[k, j]} after scaling and normalising, not a '
+                'finite number')
+    far = np.abs(capture.root[:, :3]).max(axis=1) if len(capture.root) else np.zeros(1)
+    if far.max() <= MAX_ROOT_M:
         return None
-    k, j = (int(v) for v in np.argwhere(bad)[0])
-    joints = len(capture.joint_names)
-    what = f'joint {capture.joint_names[j]}' if j < joints else \
-        f"the root's {_ROOT_PARTS[j - joints]}"
-    return (f'frame {k}: {what} is {values[k, j]} after scaling and normalising, not a finite '
-            'number')
+    k = int(np.argmax(far))
+    return (f'frame {k}: the root is {far[k]:.3g} m from the origin, beyond the '
+            f'{MAX_ROOT_M:g} m a capture\'s root may reach (a corrupted frame?)')
 
 
 def read_bvh(path: str) -> tuple[Bvh, tuple]:
@@ -425,12 +431,6 @@ def convert(bvh: Bvh, name: str, scale: float | None = None) -> Capture:
     problem = not_finite(capture)
     if problem:
         raise BvhError(f'{problem} (at {scale:g} m per unit)')
-    far = np.abs(trans).max(axis=1) if len(trans) else np.zeros(0)
-    if len(far) and far.max() > MAX_ROOT_M:
-        k = int(np.argmax(far))
-        raise BvhError(f'frame {k}: the root is {far[k]:.3g} m from the origin at {scale:g} m '
-                       f'per unit, beyond the {MAX_ROOT_M:g} m a capture\'s root may reach (a '
-                       'corrupted frame?)')
     return capture
 
 

@@ -119,6 +119,8 @@ class SessionPipeline:
         # What the node knows is wrong with the character it runs (another URDF came on its
         # description topic and was not taken): said in the diagnostics while it holds.
         self.character_problem = ''
+        self._unmatched = ''        # the last names of which none was a joint of the URDF
+        self._matched_ns = self._latest_ns = None   # stamps: the last input moving a joint, any
         self._reset_streak = 0
         self._window = dict.fromkeys(_WINDOW, 0)
         # The simulation's collapse and restless lines (Faults) the diagnostics have said.
@@ -349,8 +351,18 @@ class SessionPipeline:
                 self.first_refusal = '; '.join(text for _, text in report.warnings) or 'refused'
             return []
         self._window['accepted'] += 1
+        unmatched = self.sim.parser.unmatched
+        if unmatched:       # said while no input has moved a joint for a second of stamps
+            self._unmatched = unmatched
+        else:
+            self._matched_ns = stamp_ns
+        self._latest_ns = stamp_ns
         if report.merged:           # another source's joints, in the last pose: nothing new
             self._window['merged'] += 1
+            if report.reset:        # its world pose jumped: the cloth is reset, said as any
+                self.last_reset_reason = report.reset
+                self._marker_reset = True
+                self._window['resets'] += 1
             return []
         if report.skipped_steps:
             self._window['skipped'] += report.skipped_steps
@@ -502,10 +514,10 @@ class SessionPipeline:
             problems.append(lying)
         if self.character_problem:
             problems.append(self.character_problem)
-        unmatched = self.sim.parser.unmatched
-        if unmatched:
-            problems.append(f'no name of the JointState is a joint of the URDF ({unmatched}): '
-                            'the body stays as it is')
+        if w['accepted'] and (self._matched_ns is None
+                              or self._latest_ns - self._matched_ns > _UNMATCHED_NS):
+            problems.append(f'no name of the JointState is a joint of the URDF '
+                            f'({self._unmatched}): the body stays as it is')
         if self.sim.parser.world_incomplete:
             problems.append(f'incomplete {self.sim.parser.world_joint}/* pose: the root keeps '
                             'its last world pose')
@@ -571,6 +583,9 @@ _CLOCKS = 4
 # What the inputs since the last diagnostics did, for its level.
 _WINDOW = ('inputs', 'accepted', 'published', 'resets', 'dropped', 'lost', 'steps', 'skipped',
            'merged')
+# How long in stamps no input may move a joint of the URDF before diagnostics say so: a
+# second source of names the URDF lacks (a gripper's) comes between the body's inputs.
+_UNMATCHED_NS = 1_000_000_000
 
 
 def quantile(ordered: list, share: float) -> float:

@@ -92,6 +92,8 @@ class SessionFigures:
             return
         if report.reset:
             self.reset_reasons.append(report.reset)
+        if report.merged:           # a second source's values: no step, no frame of its own
+            return
         tf = [data for key, data in outputs if key == 'tf']
         # A non-finite cloth or bones reset the cloth (then /tf goes out); no /tf at all: both.
         self.nonfinite += report.reset.startswith('non-finite') or not tf

@@ -80,8 +80,8 @@ def session_frames(session: SessionInput) -> tuple[Frames, object]:
     held = [None]
 
     def probe(pipeline, report, stamp, outputs):
-        if not report.accepted:
-            return              # a refused input moved nothing: it is no frame of the motion
+        if not report.accepted or report.merged:
+            return              # a refused input moved nothing, a merged one no step: no frame
         sim = pipeline.sim
         b = sim.bones()
         if not b.finite or not np.isfinite(b.poses).all():
