@@ -100,6 +100,17 @@ def collider_labels(rig: 'Rig') -> list:
     return [c.name for c in (*rig.colliders, *rig.capsules, *rig.planes)]
 
 
+def look_due(looked_ns: 'int | None', stamp_ns: int, every_s: float) -> bool:
+    """Tell whether a watch that looks every ``every_s`` of stamps looks at this one.
+
+    :param looked_ns: the last look's stamp, ns; None: none yet.
+    :param stamp_ns: the input's stamp, ns; one behind the last look (a restarted source)
+        is looked at.
+    :param every_s: the watch's period, s of the stamps.
+    """
+    return looked_ns is None or not 0 <= stamp_ns - looked_ns < every_s * 1e9
+
+
 # A cloth bunched or collapsed (issue 47 item 5a): the horizontal edges' p99 strain over this,
 COLLAPSED_STRAIN = 0.10
 # held at every look for this long (s),
@@ -169,9 +180,7 @@ class CollapseWatch:
 
         :param stamp_ns: the input's stamp, ns.
         """
-        last = self.looked_ns
-        return len(self.a) > 0 and not (last is not None
-                                        and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9)
+        return len(self.a) > 0 and look_due(self.looked_ns, stamp_ns, LOOK_EVERY_S)
 
     def load(self, x: np.ndarray) -> None:
         """Load the compiled look now, with what is watched unchanged (not on the first input).
@@ -240,8 +249,7 @@ class RestlessWatch:
 
         :param stamp_ns: the input's stamp, ns.
         """
-        last = self.looked_ns
-        return not (last is not None and 0 <= stamp_ns - last < LOOK_EVERY_S * 1e9)
+        return look_due(self.looked_ns, stamp_ns, LOOK_EVERY_S)
 
     def carry(self, hem_path: float) -> None:
         """Take an input's hem path where :meth:`looks_at` says no look is due.
@@ -317,8 +325,7 @@ class FloorWatch:
         :param under: says how far the body reaches under the floor and why, or ''.
         :param stamp_ns: the input's stamp, ns.
         """
-        last = self.looked_ns
-        if last is not None and 0 <= stamp_ns - last < FLOOR_LOOK_EVERY_S * 1e9:
+        if not look_due(self.looked_ns, stamp_ns, FLOOR_LOOK_EVERY_S):
             return ''
         self.looked_ns = stamp_ns
         line = under()

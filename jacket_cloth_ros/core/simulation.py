@@ -787,9 +787,7 @@ class JacketSimulation:
         if not report.reset and self.last is None:
             report.reset = 'first sample'
         elif not report.reset:
-            report.reset = self._jump(self.last, sample) or (
-                WORLD_BEGAN if sample.world_began and self._off_the_guess(self.last, sample)
-                else '')
+            report.reset = self._restart_reason(self.last, sample)
         if report.reset:
             first = report.reset == 'first sample'
             if first:
@@ -936,12 +934,12 @@ class JacketSimulation:
         No step and nothing to publish: its stamp is the last one's, or behind it.
         """
         last = self.last
-        merged = Sample(last.stamp_ns, sample.q, sample.root, sample.root_quat)
+        merged = Sample(last.stamp_ns, sample.q, sample.root, sample.root_quat,
+                        world_began=sample.world_began)
         report.merged = True
         report.warnings += sample.warnings
         # As prepare judges any input: its world pose may teleport or begin off the guess.
-        report.reset = self._jump(last, merged) or (
-            WORLD_BEGAN if sample.world_began and self._off_the_guess(last, merged) else '')
+        report.reset = self._restart_reason(last, merged)
         if report.reset:
             self._reset(merged)
         else:
@@ -968,6 +966,11 @@ class JacketSimulation:
     def teleport_m(self) -> float:
         """The world move between two inputs (m) treated as a teleport: set, or from the height."""
         return self.params.teleport_distance or AUTO_TELEPORT_PER_HEIGHT * self.rig.height_m
+
+    def _restart_reason(self, a, b):
+        """Why the cloth restarts from sample a to b, or '': a teleport, a world pose begun."""
+        return self._jump(a, b) or (
+            WORLD_BEGAN if b.world_began and self._off_the_guess(a, b) else '')
 
     def _jump(self, a, b):
         """Why the world move from sample a to b is too big to simulate through, or ''."""

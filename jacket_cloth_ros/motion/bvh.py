@@ -142,9 +142,9 @@ def read_bvh(path: str) -> tuple[Bvh, tuple]:
         raise BvhError(f'{path}: no such file')
     if os.path.getsize(path) == 0:
         raise BvhError(f'{path}: empty file')
-    links, opened, closed, spaced = _hierarchy_counts(path)
+    counts, spaced = _hierarchy_counts(path)
     if not spaced:
-        return _read(path, links, opened, closed), ()
+        return _read(path, *counts), ()
     with tempfile.TemporaryDirectory() as tmp:
         joined = os.path.join(tmp, os.path.basename(path))
         # Byte for byte but the names joined: latin-1 reads and writes every byte as it is.
@@ -157,14 +157,17 @@ def read_bvh(path: str) -> tuple[Bvh, tuple]:
                         '_'.join(words[1:]) + line[len(line.rstrip('\r\n')):]
                 out.write(line)
         try:
-            bvh = _read(joined, links, opened, closed)
+            bvh = _read(joined, *counts)
         except BvhError as e:
             raise BvhError(str(e).replace(joined, path)) from None
     return bvh, tuple(spaced.values())
 
 
-def _read(path, links, opened, closed):
-    """Read ``path`` with pybvh once its HIERARCHY was counted (_hierarchy_counts)."""
+def _read(path, links, opened, closed, given):
+    """Read ``path`` with pybvh once its HIERARCHY was counted (_hierarchy_counts).
+
+    ``given``: the number on its Frame Time line, or None.
+    """
     import pybvh
     if links > MAX_LINKS:           # before the reader spends seconds on it
         raise BvhError(f'{path}: its skeleton would be {links} links as a URDF, over the '
@@ -172,7 +175,6 @@ def _read(path, links, opened, closed):
     if opened != closed:            # the reader guesses where a brace was missing
         raise BvhError(f'{path}: its HIERARCHY opens {opened} braces and closes {closed}')
     low, high = FRAME_TIME_RANGE
-    given = _frame_time_given(path)
     if given is not None and not low <= given <= high:       # NaN too: the reader fails on it
         raise BvhError(f'{path}: Frame Time {given:g} is outside [{low:g}, {high:g}] s')
     try:
@@ -202,26 +204,16 @@ def _read(path, links, opened, closed):
     return bvh
 
 
-def _frame_time_given(path):
-    """Return the number on the file's ``Frame Time:`` line, or None if none reads as one."""
-    with open(path, encoding='latin-1') as f:
-        for line in f:
-            if line.strip().lower().startswith('frame time:'):
-                try:
-                    return float(line.split(':', 1)[1])
-                except ValueError:
-                    return None
-    return None
-
-
 def _hierarchy_counts(path):
-    """Read the file's HIERARCHY up to MOTION: (links as a URDF, braces opened, closed, names).
+    """Read the file's HIERARCHY and MOTION head: (counts for :func:`_read`, names).
 
-    The links: the root, one a rotation channel of every other joint, and one an End Site.
-    A file that is no BVH counts few, and the reader says what is wrong with it. Names:
-    {line index: (name, its words joined by '_')} of each ROOT or JOINT named with spaces.
+    The counts: links as a URDF (the root, one a rotation channel of every other joint, and
+    one an End Site), braces opened and closed, and the number on the Frame Time line or None
+    (the reader fails on a NaN there, saying only that). A file that is no BVH counts few, and
+    the reader says what is wrong with it. Names: {line index: (name, its words joined by
+    '_')} of each ROOT or JOINT named with spaces.
     """
-    links, channels_seen, opened, closed, spaced = 1, 0, 0, 0, {}
+    links, channels_seen, opened, closed, spaced, given = 1, 0, 0, 0, {}, None
     try:
         with open(path, encoding='utf-8', errors='replace') as f:
             for k, line in enumerate(f):
@@ -229,6 +221,7 @@ def _hierarchy_counts(path):
                 if not words:
                     continue
                 if words[0] == 'MOTION':
+                    given = _frame_time(f)
                     break
                 if words[0] in ('ROOT', 'JOINT') and len(words) > 2:
                     spaced[k] = (' '.join(words[1:]), '_'.join(words[1:]))
@@ -242,8 +235,19 @@ def _hierarchy_counts(path):
                     if channels_seen > 1:       # the root's are the world joint's
                         links += sum(w.endswith('rotation') for w in words[2:])
     except OSError:
-        return 0, 0, 0, {}          # the reader says so
-    return links, opened, closed, spaced
+        return (0, 0, 0, None), {}          # the reader says so
+    return (links, opened, closed, given), spaced
+
+
+def _frame_time(lines):
+    """Return the number on the Frame Time line of a MOTION head (its next lines), or None."""
+    for _, line in zip(range(2), lines):
+        if line.strip().lower().startswith('frame time:'):
+            try:
+                return float(line.split(':', 1)[1])
+            except ValueError:
+                return None
+    return None
 
 
 def rest_offsets(bvh: Bvh) -> np.ndarray:
