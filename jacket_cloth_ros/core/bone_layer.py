@@ -3,7 +3,8 @@
 
 - M1 sleeves: each arm link carries a main bone (the link's frame) and a twist bone halfway to
   the next link that takes a share of that link's twist about the segment, so a turned wrist
-  does not wring the sleeve at one point.
+  does not wring the sleeve at one point. The twist is followed from solve to solve (within
+  half a turn of the last), so a wrist rolled past a half turn does not flip the bone.
 - M2 upper jacket: a shoulder-pad bone on the torso aims (look-at) at a point on the upper arm,
   so a raised arm lifts the pad; the bone below hangs from the pad's end and is aimed straight
   down in the upper jacket's frame (undoing the pad's rotation); a left/right position
@@ -166,7 +167,8 @@ class BoneLayer:
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
-        solve_layer(links, self.model, full, rot, pos, tips, below)
+        solve_layer(links, self.model, full, rot, pos, tips, below,
+                    np.full(len(self.sleeves), np.nan))
         return LayerPose(self.names, self.parent_index, rot, pos, tips, below)
 
 

@@ -287,6 +287,9 @@ class StepOutput(NamedTuple):
     layer_tips: np.ndarray
     below: np.ndarray
     stats: np.ndarray
+    # (S,) each M1 sleeve's twist as the last full solve took it (unwrapped); NaN: none since
+    # the last reset.
+    sleeve_twist: np.ndarray
 
 
 class SteadyIntake(NamedTuple):

@@ -416,6 +416,7 @@ class JacketSimulation:
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.ready_bones = None
         self.watches.clear()
+        self.steps.slot.out.sleeve_twist[:] = np.nan     # M1: no twist to follow on from
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)
@@ -1000,7 +1001,8 @@ class JacketSimulation:
         k = len(layer.names) if layer else 0
         return StepOutput(np.empty(self.links.shape), np.empty((k, 3, 3)), np.empty((k, 3)),
                           np.empty((k, 3)), np.empty((len(layer.pads) if layer else 0, 4, 4)),
-                          np.zeros(step.STAT_SLOTS))
+                          np.zeros(step.STAT_SLOTS),
+                          np.full(len(layer.sleeves) if layer else 0, np.nan))
 
     def _take_output(self, out):
         """Take the last step's pose and layer bones as the steps left them in ``out``."""

@@ -280,11 +280,25 @@ def twist_angle(rotation, axis):
 
 
 @njit(cache=True)
-def solve_layer(links, layer, full, rot, pos, tips, below):
+def _followed(angle, last):
+    """Return ``angle`` (within half a turn of zero) taken within half a turn of ``last``.
+
+    A twist is known only up to whole turns: a wrist rolled on past a half turn must not flip
+    its sleeve's twist bone to the other side. NaN ``last``: ``angle`` as it is.
+    """
+    turns = np.floor((last - angle) / (2 * np.pi) + 0.5)
+    if turns != 0.0 and np.isfinite(turns):
+        return angle + 2 * np.pi * turns
+    return angle
+
+
+@njit(cache=True)
+def solve_layer(links, layer, full, rot, pos, tips, below, twist):
     """Solve M1 sleeves and M2 pads of a bundles.LayerModel (see bone_layer.BoneLayer.solve).
 
     Bones go into rot/pos/tips in the layer's order when ``full``, and the bones below the pads
-    always into ``below``.
+    always into ``below``. ``twist``: each sleeve's twist at the last full solve (NaN: none),
+    moved on to this one's.
     """
     sleeve_link, sleeve_end, sleeve_axis = layer.sleeve_link, layer.sleeve_end, layer.sleeve_axis
     sleeve_length, sleeve_share, upper = layer.sleeve_length, layer.sleeve_share, layer.upper
@@ -310,7 +324,9 @@ def solve_layer(links, layer, full, rot, pos, tips, below):
             # axes at rest do not count as twist.
             _matmul3(t[:3, :3].T, end[:3, :3], turn)
             _matmul3(turn, sleeve_rest[i], rel)
-            rodrigues(sleeve_axis[i], sleeve_share[i] * twist_angle(rel, sleeve_axis[i]), m)
+            angle = _followed(twist_angle(rel, sleeve_axis[i]), twist[i])
+            twist[i] = angle
+            rodrigues(sleeve_axis[i], sleeve_share[i] * angle, m)
             _matmul3(t[:3, :3], m, rot[b])
             for r in range(3):
                 pos[b, r] = t[r, 3] + 0.5 * sleeve_length[i] * (

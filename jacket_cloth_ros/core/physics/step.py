@@ -294,7 +294,7 @@ def _pin_top_row(model, tuning, root, last, work, out):
     """
     links, cloth, colliders, now = out.links, model.cloth, model.colliders, work.now
     solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
-                out.below)
+                out.below, out.sleeve_twist)
     skinned_pose(links, cloth, out.below, work.top, now.ref)
     hold_pinned_row(work.top, cloth, out.below.shape[0] > 0, tuning.horizontal_limit)
     collider_poses(links, colliders, now)
