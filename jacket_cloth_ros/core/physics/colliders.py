@@ -121,16 +121,17 @@ def _push_plane(x, i, plane_p, plane_n, k):
 MAX_COLLISION_PASSES = 4
 
 
-# Inlined: as a call per vertex inside the collision loop it made that loop several times slower.
-@njit(cache=True, inline='always')
-def push_out(x, i, body):
+# The Body's arrays one by one, not the Body: every array of a bundle a compiled function is
+# handed costs an atomic reference count in and out, per vertex here, where the loops over the
+# vertices unpack it once (an inlined function taking the Body cost that per call, too).
+@njit(cache=True)
+def push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
+                plane_n):
     """Push vertex i onto the surface of every collider of a bundles.Body it is inside.
 
-    In one pass. Returns the deepest push-out, or -1 if it was inside none.
+    In one pass; the Body's fields in its order. Returns the deepest push-out, or -1 if it was
+    inside none.
     """
-    centers, to_unit, from_unit, reach2 = body.centers, body.to_unit, body.from_unit, body.reach2
-    cap_a, cap_b, cap_r, plane_p, plane_n = (body.cap_a, body.cap_b, body.cap_r, body.plane_p,
-                                             body.plane_n)
     deepest = -1.0
     for e in range(centers.shape[0]):
         p0 = x[i, 0] - centers[e, 0]
@@ -164,18 +165,27 @@ def push_out(x, i, body):
     return deepest
 
 
+@njit(cache=True)
+def push_out(x, i, body):
+    """push_out_of a bundles.Body, for a single vertex (a loop unpacks the Body once)."""
+    return push_out_of(x, i, body.centers, body.to_unit, body.from_unit, body.reach2,
+                       body.cap_a, body.cap_b, body.cap_r, body.plane_p, body.plane_n)
+
+
 # Pushed out of one collider, a vertex can land in an overlapping one (a split ellipsoid, the
 # crease of pelvis and thigh): passes until one moves it less than ``settled`` (bounded:
 # corners may not settle).
-@njit(cache=True, inline='always')
-def push_out_passes(x, i, body, settled):
-    """Push vertex i out in up to MAX_COLLISION_PASSES passes.
+@njit(cache=True)
+def push_out_passes_of(x, i, settled, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                       plane_p, plane_n):
+    """Push vertex i out in up to MAX_COLLISION_PASSES passes of push_out_of.
 
     Returns (deepest push-out or -1 if it was inside none, the last pass's push-out).
     """
     deepest, depth = -1.0, -1.0
     for _ in range(MAX_COLLISION_PASSES):
-        depth = push_out(x, i, body)
+        depth = push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                            plane_p, plane_n)
         if depth < settled:
             break
         deepest = max(deepest, depth)
@@ -189,13 +199,22 @@ def collide(x, free, body, contact):
     Marks contact for M15. Returns the deepest penetration found (metres, in the simulation
     frame).
     """
+    centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n = body
     deepest = 0.0
     for i in range(x.shape[0]):
         if not free[i]:
             continue
-        depth, _ = push_out_passes(x, i, body, 0.0)
-        deepest = max(deepest, depth)
-        contact[i] = depth >= 0.0
+        # push_out_passes_of's passes, written out: called here per vertex, as a function of
+        # its own between, it made this loop several times slower.
+        passes_deepest = -1.0
+        for _ in range(MAX_COLLISION_PASSES):
+            depth = push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
+                                plane_p, plane_n)
+            if depth < 0.0:
+                break
+            passes_deepest = max(passes_deepest, depth)
+        deepest = max(deepest, passes_deepest)
+        contact[i] = passes_deepest >= 0.0
     return deepest
 
 
@@ -207,8 +226,5 @@ def push_out_points(points, body):
     against the jacket's front, a collider fitted a little wide) makes its column either
     stretched or inside; the body lifts the pinned row instead. Returns the deepest move.
     """
-    deepest = 0.0
-    for i in range(points.shape[0]):
-        depth, _ = push_out_passes(points, i, body, 0.0)
-        deepest = max(deepest, depth)
-    return deepest
+    return collide(points, np.ones(points.shape[0], dtype=np.bool_), body,
+                   np.empty(points.shape[0], dtype=np.bool_))

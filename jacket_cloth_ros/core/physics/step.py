@@ -98,10 +98,14 @@ def advance(model, tuning, state, before, motion, out):
     dt = dt_ns * 1e-9
     t_sim = motion.t_sim
     hem_before = np.empty((cols, 3))
+    # Each array of a bundle a compiled function is handed costs it an atomic reference count
+    # in and out, used or not: the helpers each step calls get only the arrays they use.
+    skeleton, colliders, links, top = model.skeleton, model.colliders, out.links, work.top
+    ha, hb, hr = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     for step in range(motion.steps):
         t_sim += dt_ns
         hem_before[:] = x[nv - cols:]
-        _pose_skeleton(model, motion, t_sim, work, out.links)
+        _pose_skeleton(skeleton, motion, t_sim, work.q, work.quat, work.new_root, links)
         # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
         # vertex's offset from its column's top before the world share moves it.
         skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
@@ -110,10 +114,13 @@ def advance(model, tuning, state, before, motion, out):
             for i in range(cols, nv):
                 for k in range(3):
                     work.ride[i, k] = x[i, k] - x[i % cols, k]
-        _follow_world(tuning, state, work)
-        _forces(cloth.up, tuning, state.root, t_sim, work)
-        _pin_top_row(model, tuning, state.root, step == motion.steps - 1, work, out)
-        substeps = _substeps_for(tuning, work.top, x, cols)
+        _follow_world(tuning.world_share, tuning.hood_world_share, state, work.new_root,
+                      work.delta, work.moved)
+        _forces(cloth.up, tuning, state.root, t_sim, work.gravity, work.wind, work.acc,
+                work.hood_acc)
+        _pin_top_row(model, tuning.horizontal_limit, state.root, step == motion.steps - 1,
+                     top, work.now, out)
+        substeps = _substeps_for(tuning.max_substeps, tuning.quality_tolerance, top, x, cols)
         work.x0[:] = x          # where the pinned row starts from, and a retry's start
         work.xp0[:] = xp
         work.contact0[:] = state.contact
@@ -134,22 +141,21 @@ def advance(model, tuning, state, before, motion, out):
             copy_posed(work.now, before)
             state.started[0] = True
         else:
-            damp_for, contact_damp = _damping_for(tuning, substeps, damp_for, contact_damp,
-                                                  work.damp)
+            if substeps != damp_for:
+                damp_for, contact_damp = _damping_for(tuning, substeps, work.damp)
             deepest, limited = out.stats[DEEPEST], out.stats[LIMITED]
-            _simulate(model, tuning, state, before, work.now,
+            _simulate(cloth, colliders, tuning, state, before, work.now,
                       StepControl(work.acc, work.damp, contact_damp, dt, substeps, work.x0),
                       out.stats)
-            if retry_over >= 0.0 and _overstretched(x, cloth, retry_over) \
-                    and not _overstretched(work.x0, cloth, retry_over):
+            if retry_over >= 0.0 and _overstretched(x, ha, hb, hr, retry_over) \
+                    and not _overstretched(work.x0, ha, hb, hr, retry_over):
                 # Faster than its substeps resolve (a thigh swept through a row): again from
                 # the step's start in finer ones, rather than a stretch no later step undoes.
                 # The pass thrown away counts in the cost (sweeps, substeps), not the figures.
                 _restart(state, work)
                 out.stats[DEEPEST], out.stats[LIMITED] = deepest, limited
-                damp_for, contact_damp = _damping_for(tuning, 2 * substeps, damp_for,
-                                                      contact_damp, work.damp)
-                _simulate(model, tuning, state, before, work.now,
+                damp_for, contact_damp = _damping_for(tuning, 2 * substeps, work.damp)
+                _simulate(cloth, colliders, tuning, state, before, work.now,
                           StepControl(work.acc, work.damp, contact_damp, dt, 2 * substeps,
                                       work.x0), out.stats)
                 out.stats[RETRIED] += 1
@@ -160,7 +166,7 @@ def advance(model, tuning, state, before, motion, out):
                 for i in range(cols, nv):
                     for k in range(3):
                         x[i, k] += skin * (work.ride[i, k] - x[i, k])
-        hood_step(out.links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp,
+        hood_step(links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp,
                   work.now.plane_p, work.now.plane_n)
         out.stats[HEM_PATH] += _mean_move(x[nv - cols:], hem_before)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
@@ -169,27 +175,25 @@ def advance(model, tuning, state, before, motion, out):
 
 
 @njit(cache=True)
-def _damping_for(tuning, substeps, damp_for, contact_damp, damp):
-    """Fill ``damp`` with the damping per substep of ``substeps`` unless it already holds it.
+def _damping_for(tuning, substeps, damp):
+    """Fill ``damp`` with the damping per substep of ``substeps``.
 
-    Returns (the substeps it holds now, the contact damping per substep).
+    Returns (the substeps it holds now, the contact damping per substep). The caller calls it
+    only when the substeps change.
     """
-    if substeps == damp_for:
-        return damp_for, contact_damp
     e = tuning.design_exponent / substeps
     lost_per_each(tuning.damping, e, damp)
     return substeps, lost_per(tuning.contact_damping, e)
 
 
 @njit(cache=True)
-def _overstretched(x, cloth, most):
-    """Tell whether a horizontal edge is over (1 + ``most``) times its rest length.
+def _overstretched(x, ha, hb, rest, most):
+    """Tell whether a horizontal edge (``ha``-``hb``) is over (1 + ``most``) times ``rest``.
 
     A negative ``most`` (the strain limit off) never is.
     """
     if most < 0.0:
         return False
-    ha, hb, rest = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     for j in range(ha.shape[0]):
         a, b = ha[j], hb[j]
         bound = (1.0 + most) * rest[j]
@@ -236,9 +240,11 @@ def _scratch(model, motion, nv, cols):
 
 
 @njit(cache=True)
-def _pose_skeleton(model, motion, t_sim, work, links):
-    """M7: the skeleton between the two samples at the step's time, and its links' poses."""
-    q, quat, new_root = work.q, work.quat, work.new_root
+def _pose_skeleton(skeleton, motion, t_sim, q, quat, new_root, links):
+    """M7: the skeleton between the two samples at the step's time, and its links' poses.
+
+    Into ``q``, ``quat`` and ``new_root`` (the step's _Scratch) and ``links``.
+    """
     w = min(1.0, max(0.0, (t_sim - motion.stamp_a) / motion.span))
     for k in range(q.shape[0]):
         q[k] = motion.q_a[k] + w * (motion.q_b[k] - motion.q_a[k])
@@ -246,31 +252,34 @@ def _pose_skeleton(model, motion, t_sim, work, links):
     quat_matrix(quat, new_root)
     for k in range(3):
         new_root[k, 3] = motion.pos_a[k] + w * (motion.pos_b[k] - motion.pos_a[k])
-    forward_kinematics(model.skeleton, q, links)
+    forward_kinematics(skeleton, q, links)
 
 
 @njit(cache=True)
-def _follow_world(tuning, state, work):
+def _follow_world(world_share, hood_world_share, state, new_root, delta, moved):
     """M14: the cloth and hood feel only their share of the root's move through the world.
 
-    The character moved by ``delta`` (old local -> new local); a world-space cloth would stay
-    behind by that much.
+    The character moved by ``delta`` (old local -> new local, from ``state.root`` to
+    ``new_root``); a world-space cloth would stay behind by that much.
     """
-    delta, moved, root = work.delta, work.moved, state.root
-    relative_move(work.new_root, root, delta)
-    share_world_motion(delta, state.x, tuning.world_share)
-    share_world_motion(delta, state.xp, tuning.world_share)
+    root = state.root
+    relative_move(new_root, root, delta)
+    share_world_motion(delta, state.x, world_share)
+    share_world_motion(delta, state.xp, world_share)
     for point in (state.hood_p, state.hood_pp):
         _transform_point(delta, point, moved)
         for k in range(3):
-            point[k] += tuning.hood_world_share * (moved[k] - point[k])
-    root[:] = work.new_root
+            point[k] += hood_world_share * (moved[k] - point[k])
+    root[:] = new_root
 
 
 @njit(cache=True)
-def _forces(up, tuning, root, t_sim, work):
-    """M4: gravity along the rig's -``up`` and wind (gusts by the step's time), local frame."""
-    gravity, wind_l, acc, wind = work.gravity, work.wind, work.acc, tuning.wind
+def _forces(up, tuning, root, t_sim, gravity, wind_l, acc, hood_acc):
+    """M4: gravity along the rig's -``up`` and wind (gusts by the step's time), local frame.
+
+    Into the step's _Scratch ``gravity``, ``wind_l`` (the wind), ``acc`` and ``hood_acc``.
+    """
+    wind = tuning.wind
     scale = gust_scale(t_sim, tuning.gust, tuning.gust_period)
     for k in range(3):
         gravity[k] = -tuning.gravity * (root[0, k] * up[0] + root[1, k] * up[1]
@@ -281,45 +290,46 @@ def _forces(up, tuning, root, t_sim, work):
         for k in range(3):
             acc[i, k] = gravity[k] + tuning.wind_scale[i] * wind_l[k]
     for k in range(3):
-        work.hood_acc[k] = gravity[k] + tuning.hood_wind_scale * wind_l[k]
+        hood_acc[k] = gravity[k] + tuning.hood_wind_scale * wind_l[k]
 
 
 @njit(cache=True)
-def _pin_top_row(model, tuning, root, last, work, out):
+def _pin_top_row(model, horizontal_limit, root, last, top, now, out):
     """M2 then M6, M11 and M10: where the pinned row, the references and the colliders are.
 
     The upper jacket is solved (in full at the ``last`` step), the pinned top row follows
-    it, then the colliders are posed where this step ends and the pinned row is put outside
-    them.
+    it into ``top``, then the colliders are posed where this step ends (``now``) and the
+    pinned row is put outside them.
     """
-    links, cloth, colliders, now = out.links, model.cloth, model.colliders, work.now
+    links, cloth, colliders = out.links, model.cloth, model.colliders
     solve_layer(links, model.layer, last, out.layer_rot, out.layer_pos, out.layer_tips,
                 out.below, out.sleeve_twist)
-    skinned_pose(links, cloth, out.below, work.top, now.ref)
-    hold_pinned_row(work.top, cloth, out.below.shape[0] > 0, tuning.horizontal_limit)
+    skinned_pose(links, cloth, out.below, top, now.ref)
+    hold_pinned_row(top, cloth, out.below.shape[0] > 0, horizontal_limit)
     collider_poses(links, colliders, now)
     plane_poses(links, root, colliders, now)
-    push_out_points(work.top, posed_body(colliders, now))
+    push_out_points(top, posed_body(colliders, now))
 
 
 @njit(cache=True)
-def _substeps_for(tuning, top, x, cols):
-    """Return the step's substeps: as set, or fewer in the automatic quality mode.
+def _substeps_for(max_substeps, tolerance, top, x, cols):
+    """Return the step's substeps: ``max_substeps``, or fewer in the automatic quality mode.
 
-    There, as few as keep the pinned row's move per substep under the tolerance.
+    There (a ``tolerance`` above 0), as few as keep the pinned row's move per substep under
+    it.
     """
-    substeps = tuning.max_substeps
-    if tuning.quality_tolerance > 0.0 and substeps > 1:
+    substeps = max_substeps
+    if tolerance > 0.0 and substeps > 1:
         move = 0.0
         for c in range(cols):
             for k in range(3):
                 move = max(move, abs(top[c, k] - x[c, k]))
-        substeps = int(min(substeps, max(1, np.ceil(move / tuning.quality_tolerance))))
+        substeps = int(min(substeps, max(1, np.ceil(move / tolerance))))
     return substeps
 
 
 @njit(cache=True)
-def _simulate(model, tuning, state, before, now, control, stats):
+def _simulate(cloth, colliders, tuning, state, before, now, control, stats):
     """One cloth step (cloth.cloth_step, the colliders already posed in ``now``), its stats.
 
     ``before`` is left where the step started (the caller moves it on), so a retry starts
@@ -327,8 +337,8 @@ def _simulate(model, tuning, state, before, now, control, stats):
     """
     if not state.started[0]:        # no step before: substeps start where this one ends
         copy_posed(now, before)
-    deepest, limited, sweeps = cloth_step(model.cloth, model.colliders, tuning, state, control,
-                                          now, before)
+    deepest, limited, sweeps = cloth_step(cloth, colliders, tuning, state, control, now,
+                                          before)
     stats[DEEPEST] = max(stats[DEEPEST], deepest)
     stats[LIMITED] += limited
     stats[SWEEPS] += sweeps
