@@ -16,7 +16,12 @@ FIXED, ROTATION, TRANSLATION = -1, 0, 1      # Skeleton.kind
 @njit(cache=True)
 def rodrigues(axis, angle, m):
     """Rotation by ``angle`` about the unit ``axis`` into ``m`` (3,3)."""
-    x, y, z = axis[0], axis[1], axis[2]
+    _rodrigues(axis[0], axis[1], axis[2], angle, m)
+
+
+@njit(cache=True)
+def _rodrigues(x, y, z, angle, m):
+    """Rotation by ``angle`` about the unit axis (``x``, ``y``, ``z``) into ``m`` (3,3)."""
     c, s = np.cos(angle), np.sin(angle)
     t = 1.0 - c
     m[0, 0], m[0, 1], m[0, 2] = c + x * x * t, x * y * t - z * s, x * z * t + y * s
@@ -51,15 +56,24 @@ def forward_kinematics(skeleton, q, world):
     """
     origin, axis, kind, var = skeleton.origin, skeleton.axis, skeleton.kind, skeleton.var
     mult, offset, parent = skeleton.mult, skeleton.offset, skeleton.parent
-    world[0] = np.eye(4)
     local = np.empty((4, 4))
     m = np.empty((3, 3))
+    # Indexed, not sliced: each view of a row is an atomic reference count in and out, per
+    # link and step.
+    for r in range(4):
+        for col in range(4):
+            world[0, r, col] = 1.0 if r == col else 0.0
     for k in range(1, origin.shape[0]):
-        local[:] = origin[k]
+        for r in range(4):
+            for col in range(4):
+                local[r, col] = origin[k, r, col]
         v = q[var[k]] * mult[k] + offset[k] if var[k] >= 0 else 0.0
         if kind[k] == ROTATION:
-            rodrigues(axis[k], v, m)
-            _matmul3(origin[k, :3, :3], m, local[:3, :3])
+            _rodrigues(axis[k, 0], axis[k, 1], axis[k, 2], v, m)
+            for r in range(3):      # origin's rotation times m (_matmul3)
+                for col in range(3):
+                    local[r, col] = (origin[k, r, 0] * m[0, col] + origin[k, r, 1] * m[1, col]
+                                     + origin[k, r, 2] * m[2, col])
         elif kind[k] == TRANSLATION:
             for r in range(3):
                 local[r, 3] += (origin[k, r, 0] * axis[k, 0] + origin[k, r, 1] * axis[k, 1]

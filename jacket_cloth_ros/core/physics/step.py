@@ -100,12 +100,14 @@ def advance(model, tuning, state, before, motion, out):
     hem_before = np.empty((cols, 3))
     # Each array of a bundle a compiled function is handed costs it an atomic reference count
     # in and out, used or not: the helpers each step calls get only the arrays they use.
-    skeleton, colliders, links, top = model.skeleton, model.colliders, out.links, work.top
+    skeleton, colliders, links = model.skeleton, model.colliders, out.links
     ha, hb, hr = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
+    (q, quat, new_root, delta, moved, gravity, wind, acc, hood_acc, top, now, damp, ride, x0,
+     xp0, contact0) = work
     for step in range(motion.steps):
         t_sim += dt_ns
         hem_before[:] = x[nv - cols:]
-        _pose_skeleton(skeleton, motion, t_sim, work.q, work.quat, work.new_root, links)
+        _pose_skeleton(skeleton, motion, t_sim, q, quat, new_root, links)
         # Level of detail: the share of the riding cloth (core/lod.py) and, riding, each
         # vertex's offset from its column's top before the world share moves it.
         skin = tuning.skin_from + (tuning.skin_to - tuning.skin_from) * (step + 1.0) \
@@ -113,61 +115,61 @@ def advance(model, tuning, state, before, motion, out):
         if skin > 0.0:
             for i in range(cols, nv):
                 for k in range(3):
-                    work.ride[i, k] = x[i, k] - x[i % cols, k]
-        _follow_world(tuning.world_share, tuning.hood_world_share, state, work.new_root,
-                      work.delta, work.moved)
-        _forces(cloth.up, tuning, state.root, t_sim, work.gravity, work.wind, work.acc,
-                work.hood_acc)
+                    ride[i, k] = x[i, k] - x[i % cols, k]
+        _follow_world(tuning.world_share, tuning.hood_world_share, state, new_root,
+                      delta, moved)
+        _forces(cloth.up, tuning, state.root, t_sim, gravity, wind, acc,
+                hood_acc)
         _pin_top_row(model, tuning.horizontal_limit, state.root, step == motion.steps - 1,
-                     top, work.now, out)
+                     top, now, out)
         substeps = _substeps_for(tuning.max_substeps, tuning.quality_tolerance, top, x, cols)
-        work.x0[:] = x          # where the pinned row starts from, and a retry's start
-        work.xp0[:] = xp
-        work.contact0[:] = state.contact
-        x[:cols] = work.top
-        xp[:cols] = work.top
+        x0[:] = x          # where the pinned row starts from, and a retry's start
+        xp0[:] = xp
+        contact0[:] = state.contact
+        x[:cols] = top
+        xp[:cols] = top
         # Beyond the far distance the cloth rides on its pinned top row with its last shape
         # and no cloth step runs; a change blends the simulated and the riding cloth over the
         # steps instead of popping.
         if skin > 0.0:
             for i in range(cols, nv):
                 for k in range(3):
-                    work.ride[i, k] += work.top[i % cols, k]
+                    ride[i, k] += top[i % cols, k]
         if skin >= 1.0:
             for i in range(cols, nv):
                 for k in range(3):
                     xp[i, k] = x[i, k]
-                    x[i, k] = work.ride[i, k]
-            copy_posed(work.now, before)
+                    x[i, k] = ride[i, k]
+            copy_posed(now, before)
             state.started[0] = True
         else:
             if substeps != damp_for:
-                damp_for, contact_damp = _damping_for(tuning, substeps, work.damp)
+                damp_for, contact_damp = _damping_for(tuning, substeps, damp)
             deepest, limited = out.stats[DEEPEST], out.stats[LIMITED]
-            _simulate(cloth, colliders, tuning, state, before, work.now,
-                      StepControl(work.acc, work.damp, contact_damp, dt, substeps, work.x0),
+            _simulate(cloth, colliders, tuning, state, before, now,
+                      StepControl(acc, damp, contact_damp, dt, substeps, x0),
                       out.stats)
             if retry_over >= 0.0 and _overstretched(x, ha, hb, hr, retry_over) \
-                    and not _overstretched(work.x0, ha, hb, hr, retry_over):
+                    and not _overstretched(x0, ha, hb, hr, retry_over):
                 # Faster than its substeps resolve (a thigh swept through a row): again from
                 # the step's start in finer ones, rather than a stretch no later step undoes.
                 # The pass thrown away counts in the cost (sweeps, substeps), not the figures.
                 _restart(state, work)
                 out.stats[DEEPEST], out.stats[LIMITED] = deepest, limited
-                damp_for, contact_damp = _damping_for(tuning, 2 * substeps, work.damp)
-                _simulate(cloth, colliders, tuning, state, before, work.now,
-                          StepControl(work.acc, work.damp, contact_damp, dt, 2 * substeps,
-                                      work.x0), out.stats)
+                damp_for, contact_damp = _damping_for(tuning, 2 * substeps, damp)
+                _simulate(cloth, colliders, tuning, state, before, now,
+                          StepControl(acc, damp, contact_damp, dt, 2 * substeps,
+                                      x0), out.stats)
                 out.stats[RETRIED] += 1
             # Where the next step's substeps start from: this step's end.
-            copy_posed(work.now, before)
+            copy_posed(now, before)
             state.started[0] = True
             if skin > 0.0:
                 for i in range(cols, nv):
                     for k in range(3):
-                        x[i, k] += skin * (work.ride[i, k] - x[i, k])
-        hood_step(links, cloth, hood_p, state.hood_pp, work.hood_acc, dt, hood_damp,
-                  work.now.plane_p, work.now.plane_n)
+                        x[i, k] += skin * (ride[i, k] - x[i, k])
+        hood_step(links, cloth, hood_p, state.hood_pp, hood_acc, dt, hood_damp,
+                  now.plane_p, now.plane_n)
         out.stats[HEM_PATH] += _mean_move(x[nv - cols:], hem_before)
     if motion.steps > 0 and not (np.isfinite(x).all() and np.isfinite(hood_p).all()):
         out.stats[NON_FINITE] = 1.0
