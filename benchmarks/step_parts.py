@@ -82,6 +82,7 @@ def _part(slot, which, posed, scratch, calls):
     world, top, ref, x, hood = scratch
     rot, pos, tips, below = (out.layer_rot.copy(), out.layer_pos.copy(), out.layer_tips.copy(),
                              out.below.copy())
+    twist = out.sleeve_twist.copy()
     bones = slot.bones.copy()
     delta = np.eye(4)
     for _ in range(calls):
@@ -91,9 +92,9 @@ def _part(slot, which, posed, scratch, calls):
             share_world_motion(delta, x, tuning.world_share)
             share_world_motion(delta, x, tuning.world_share)
         elif which == 2:
-            solve_layer(links, model.layer, False, rot, pos, tips, below)
+            solve_layer(links, model.layer, False, rot, pos, tips, below, twist)
         elif which == 3:
-            solve_layer(links, model.layer, True, rot, pos, tips, below)
+            solve_layer(links, model.layer, True, rot, pos, tips, below, twist)
         elif which == 4:
             skinned_pose(links, cloth, below, top, ref)
         elif which == 5:

@@ -3,8 +3,8 @@
 
 - M1 sleeves: each arm link carries a main bone (the link's frame) and a twist bone halfway to
   the next link that takes a share of that link's twist about the segment, so a turned wrist
-  does not wring the sleeve at one point. The twist is followed from solve to solve (within
-  half a turn of the last), so a wrist rolled past a half turn does not flip the bone.
+  does not wring the sleeve at one point. A simulation follows the twist from solve to solve
+  (within half a turn of the last), so a wrist rolled past a half turn does not flip the bone.
 - M2 upper jacket: a shoulder-pad bone on the torso aims (look-at) at a point on the upper arm,
   so a raised arm lifts the pad; the bone below hangs from the pad's end and is aimed straight
   down in the upper jacket's frame (undoing the pad's rotation); a left/right position
@@ -156,19 +156,23 @@ class BoneLayer:
         first = 2 * len(self.sleeves)
         return float(np.linalg.norm(pose.tips[first + 1] - pose.tips[first]))
 
-    def solve(self, links: np.ndarray, full: bool = True) -> LayerPose:
+    def solve(self, links: np.ndarray, full: bool = True,
+              twist: np.ndarray | None = None) -> LayerPose:
         """Every layer bone for one skeleton pose (M1 sleeves, M2 pads and bones below).
 
         Compiled: physics.pose.solve_layer.
 
         :param links: every link's world transform, (L, 4, 4).
         :param full: False solves only what the cloth needs each step: the bones below the pads.
+        :param twist: (S,) each sleeve's twist to follow, moved on to this pose's (a
+            simulation's StepOutput.sleeve_twist; NaN: none yet); None: the twist as it comes,
+            within half a turn of zero.
         """
         n = len(self.names) if full else 0
         rot, pos, tips = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
         below = np.empty((len(self.pads), 4, 4))
         solve_layer(links, self.model, full, rot, pos, tips, below,
-                    np.full(len(self.sleeves), np.nan))
+                    np.full(len(self.sleeves), np.nan) if twist is None else twist)
         return LayerPose(self.names, self.parent_index, rot, pos, tips, below)
 
 

@@ -15,7 +15,8 @@ longer be swapped by a caller:
   read them;
 - :class:`Motion` and :class:`StepControl`: what drives one input's steps or one cloth step;
   :class:`NamePlan` and :class:`JointSample`: where a message's names go, and a sample;
-- :class:`StepOutput`: what the steps leave for the bones and the report;
+- :class:`StepOutput`: what the steps leave for the bones and the report, and the sleeves'
+  twist the next solve follows;
 - :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call, and
   :class:`SteadyIntake`, the compiled check of its steady inputs.
 
@@ -279,7 +280,10 @@ class StepControl(NamedTuple):
 
 
 class StepOutput(NamedTuple):
-    """What advance leaves: the last step's pose, its layer bones, and the stats."""
+    """What advance leaves: the last step's pose, its layer bones, the stats, and the twist.
+
+    ``sleeve_twist`` is also read: each full solve of the layer follows it.
+    """
 
     links: np.ndarray
     layer_rot: np.ndarray

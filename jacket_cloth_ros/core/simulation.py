@@ -400,8 +400,10 @@ class JacketSimulation:
     def layer(self) -> LayerPose | None:
         """M1/M2 bones for the current skeleton pose (solved once per pose, on demand)."""
         if self._layer is None or self._layer[0] is not self.links:
-            self._layer = (self.links, self.rig.layer.solve(self.links) if self.rig.layer
-                           else None)
+            # The sleeves' twist followed as the steps follow it: a reset pose's bones must
+            # not take a wrist past a half turn the short way round.
+            self._layer = (self.links, self.rig.layer.solve(
+                self.links, twist=self.steps.slot.out.sleeve_twist) if self.rig.layer else None)
         return self._layer[1]
 
     def hood_anchor(self, links: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -416,7 +418,6 @@ class JacketSimulation:
         """Put the cloth and hood on the skinned pose of ``sample``."""
         self.ready_bones = None
         self.watches.clear()
-        self.steps.slot.out.sleeve_twist[:] = np.nan     # M1: no twist to follow on from
         self.links = self.skeleton.forward(sample.q)
         self.root = sample.root.copy()          # the steps move it in place
         top, ref = self._skinned_pose(self.links, self.layer)

@@ -15,7 +15,8 @@ import numpy as np
 
 from ..choices import Choice
 from ..compiled import njit
-from .colliders import collide, posed_body, push_out, push_out_of, push_out_passes_of
+from .colliders import (
+    body_parts, collide, posed_body, push_out, push_out_of, push_out_passes_of)
 
 # Fused multiply-add, reciprocals and signless zeros only: no 'nnan'/'ninf', which would let
 # LLVM drop the checks that keep a NaN from reaching /tf.
@@ -159,7 +160,7 @@ def hard_vertical_pass_outside(x, upper, lower, rest, contact, body):
 @njit(cache=True)
 def _verticals_outside(x, upper, lower, rest, contact, first, end, body):
     """hard_vertical_pass_outside over the vertical edges ``first`` to ``end`` - 1."""
-    centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n = body
+    ellipsoids, capsules, planes = body_parts(body)
     deepest = 0.0
     for j in range(first, end):
         a, b = upper[j], lower[j]
@@ -173,15 +174,13 @@ def _verticals_outside(x, upper, lower, rest, contact, first, end, body):
                 x[b, 0] += d0 * f
                 x[b, 1] += d1 * f
                 x[b, 2] += d2 * f
-            depth = push_out_of(x, b, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                                plane_p, plane_n)
+            depth = push_out_of(x, b, ellipsoids, capsules, planes)
             if depth < CONVERGED:       # outside (-1), or on the surface at its length
                 break
             contact[b] = True           # M15: it touched the body during this step
             deepest = max(deepest, depth)
         else:       # not converged, as in the crease of two colliders: outside wins
-            _, depth = push_out_passes_of(x, b, CONVERGED, centers, to_unit, from_unit, reach2,
-                                          cap_a, cap_b, cap_r, plane_p, plane_n)
+            _, depth = push_out_passes_of(x, b, CONVERGED, ellipsoids, capsules, planes)
             if depth >= CONVERGED:
                 _outside_towards(x, a, b, body)
     return deepest

@@ -121,17 +121,30 @@ def _push_plane(x, i, plane_p, plane_n, k):
 MAX_COLLISION_PASSES = 4
 
 
-# The Body's arrays one by one, not the Body: every array of a bundle a compiled function is
-# handed costs an atomic reference count in and out, per vertex here, where the loops over the
-# vertices unpack it once (an inlined function taking the Body cost that per call, too).
+# The Body as three plain tuples, not the Body: handed to a function called per vertex, the
+# Body's nine arrays were each counted in and out (atomically) per vertex and pass, several
+# times the push-out's arithmetic; the loops over the vertices make the tuples once.
 @njit(cache=True)
-def push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p,
-                plane_n):
+def body_parts(body):
+    """Return a bundles.Body as (ellipsoids, capsules, planes), the tuples push_out_of takes.
+
+    ``(centers, to_unit, from_unit, reach2)``, ``(cap_a, cap_b, cap_r)``, ``(plane_p,
+    plane_n)``.
+    """
+    return ((body.centers, body.to_unit, body.from_unit, body.reach2),
+            (body.cap_a, body.cap_b, body.cap_r), (body.plane_p, body.plane_n))
+
+
+@njit(cache=True)
+def push_out_of(x, i, ellipsoids, capsules, planes):
     """Push vertex i onto the surface of every collider of a bundles.Body it is inside.
 
-    In one pass; the Body's fields in its order. Returns the deepest push-out, or -1 if it was
-    inside none.
+    In one pass; the Body as body_parts gives it. Returns the deepest push-out, or -1 if it
+    was inside none.
     """
+    centers, to_unit, from_unit, reach2 = ellipsoids
+    cap_a, cap_b, cap_r = capsules
+    plane_p, plane_n = planes
     deepest = -1.0
     for e in range(centers.shape[0]):
         p0 = x[i, 0] - centers[e, 0]
@@ -167,25 +180,23 @@ def push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, 
 
 @njit(cache=True)
 def push_out(x, i, body):
-    """push_out_of a bundles.Body, for a single vertex (a loop unpacks the Body once)."""
-    return push_out_of(x, i, body.centers, body.to_unit, body.from_unit, body.reach2,
-                       body.cap_a, body.cap_b, body.cap_r, body.plane_p, body.plane_n)
+    """push_out_of a bundles.Body, for a single vertex (a loop makes body_parts once)."""
+    ellipsoids, capsules, planes = body_parts(body)
+    return push_out_of(x, i, ellipsoids, capsules, planes)
 
 
 # Pushed out of one collider, a vertex can land in an overlapping one (a split ellipsoid, the
 # crease of pelvis and thigh): passes until one moves it less than ``settled`` (bounded:
 # corners may not settle).
 @njit(cache=True)
-def push_out_passes_of(x, i, settled, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                       plane_p, plane_n):
+def push_out_passes_of(x, i, settled, ellipsoids, capsules, planes):
     """Push vertex i out in up to MAX_COLLISION_PASSES passes of push_out_of.
 
     Returns (deepest push-out or -1 if it was inside none, the last pass's push-out).
     """
     deepest, depth = -1.0, -1.0
     for _ in range(MAX_COLLISION_PASSES):
-        depth = push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                            plane_p, plane_n)
+        depth = push_out_of(x, i, ellipsoids, capsules, planes)
         if depth < settled:
             break
         deepest = max(deepest, depth)
@@ -199,7 +210,7 @@ def collide(x, free, body, contact):
     Marks contact for M15. Returns the deepest penetration found (metres, in the simulation
     frame).
     """
-    centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r, plane_p, plane_n = body
+    ellipsoids, capsules, planes = body_parts(body)
     deepest = 0.0
     for i in range(x.shape[0]):
         if not free[i]:
@@ -208,8 +219,7 @@ def collide(x, free, body, contact):
         # its own between, it made this loop several times slower.
         passes_deepest = -1.0
         for _ in range(MAX_COLLISION_PASSES):
-            depth = push_out_of(x, i, centers, to_unit, from_unit, reach2, cap_a, cap_b, cap_r,
-                                plane_p, plane_n)
+            depth = push_out_of(x, i, ellipsoids, capsules, planes)
             if depth < 0.0:
                 break
             passes_deepest = max(passes_deepest, depth)

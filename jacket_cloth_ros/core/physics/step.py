@@ -80,7 +80,8 @@ def advance(model, tuning, state, before, motion, out):
     Takes core.bundles: Model, Tuning, ClothState, Posed, Motion, StepOutput.
     ``state`` is moved in place; ``before`` holds the colliders and references where the
     last step ended and is moved on to this one's end; ``out.links`` and the layer arrays
-    end with the last step's pose (the layer solved in full at that step only).
+    end with the last step's pose (the layer solved in full at that step only, following
+    ``out.sleeve_twist``).
     ``out.stats`` accumulates the report's figures. Returns the time of the last step (ns).
     """
     cloth = model.cloth
@@ -99,7 +100,7 @@ def advance(model, tuning, state, before, motion, out):
     t_sim = motion.t_sim
     hem_before = np.empty((cols, 3))
     # Each array of a bundle a compiled function is handed costs it an atomic reference count
-    # in and out, used or not: the helpers each step calls get only the arrays they use.
+    # in and out, used or not: the small helpers each step calls get the arrays they use.
     skeleton, colliders, links = model.skeleton, model.colliders, out.links
     ha, hb, hr = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     (q, quat, new_root, delta, moved, gravity, wind, acc, hood_acc, top, now, damp, ride, x0,
