@@ -16,10 +16,10 @@ from urdf_parser_py import urdf
 
 from .bundles import SkeletonModel, floats, ints
 from .config import MAX_COORDINATE, ConfigError, MissingLink, read_text, shipped
-from .physics.pose import forward_kinematics
+from .physics.pose import ROTATION, TRANSLATION, forward_kinematics
 from .transforms import make_transform, rpy_matrix
 
-_MOVABLE = {'revolute': 0, 'continuous': 0, 'prismatic': 1}
+_MOVABLE = {'revolute': ROTATION, 'continuous': ROTATION, 'prismatic': TRANSLATION}
 
 
 # Bounds on a URDF, checked before it is parsed: the largest robots and characters known have
@@ -141,7 +141,7 @@ class Skeleton:
                            [self.mult[k], self.offset[k]], 100.0)
             # A whole turn of the source is none of a follower at another ratio, or sliding:
             # its angle is taken as given.
-            if self.kind[k] != 0 or self.mult[k] != round(self.mult[k]):
+            if self.kind[k] != ROTATION or self.mult[k] != round(self.mult[k]):
                 self.continuous[index[source]] = False
         self.joint_index = index
         # A mimic joint's value is its source's: a JointState naming it is not told it is

@@ -357,25 +357,17 @@ class SessionPipeline:
         else:
             self._matched_ns = stamp_ns
         self._latest_ns = stamp_ns
+        if report.reset:            # a merged input's too: its world pose may jump
+            self._note_reset(report.reset)
         if report.merged:           # another source's joints, in the last pose: nothing new
             self._window['merged'] += 1
-            if report.reset:        # its world pose jumped: the cloth is reset, said as any
-                self.last_reset_reason = report.reset
-                self._marker_reset = True
-                self._window['resets'] += 1
             return []
         if report.skipped_steps:
             self._window['skipped'] += report.skipped_steps
         self._window['steps'] += report.steps
         bones = self.sim.bones()        # checked where the steps ended (check_bones)
-        if report.reset:
-            self.last_reset_reason = report.reset
-            self._marker_reset = True
-        if report.reset and report.reset != 'first sample':
-            self._window['resets'] += 1
-            self._reset_streak += 1
-        else:
-            self._reset_streak = 0
+        self._reset_streak = self._reset_streak + 1 \
+            if report.reset and report.reset != 'first sample' else 0
         # The first input places the cloth, loading what it first needs: no step's cost.
         if report.reset != 'first sample':
             self._costs.append(report.step_cost_ns)
@@ -390,6 +382,13 @@ class SessionPipeline:
         self.published += 1
         self._window['published'] += 1
         return out
+
+    def _note_reset(self, reason):
+        """Count a reset of the cloth: said in diagnostics, the markers drawn anew."""
+        self.last_reset_reason = reason
+        self._marker_reset = True
+        if reason != 'first sample':
+            self._window['resets'] += 1
 
     def periodic_outputs(self, report: StepReport,
                          stamp_ns: int) -> list[tuple[str, bytes]]:
