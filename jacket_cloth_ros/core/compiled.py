@@ -1,14 +1,18 @@
 # Copyright 2026 jacket_cloth_ros maintainers. Licensed under the Apache License, Version 2.0.
-"""How the package's kernels are compiled: ``njit`` with one cache stamp for all, and FixedTypes.
+"""How the package's kernels are compiled: ``njit`` with one stamp, ``borrowed``, FixedTypes.
 
 numba marks a cached function with the hash of its own file only. Our kernels call each other
 across files (physics.step.advance compiles physics.cloth.cloth_step into itself), so after an
 edit of cloth.py the cached ``advance`` went on running the old cloth step: seen here, a
 replay's /tf differed in the last bits from a fresh build of the same source. Here each of the
 package's kernels is marked with the hashes of every file that holds kernels (any file of the
-package that compiles with ``@njit``) and of ``bundles.py``, whose field order they read, so an
-edit to any of them recompiles them all. The kernel modules take ``njit`` from here, so the
-marks are in place before their first ``@njit(cache=True)``.
+package that compiles with ``@njit``), of ``bundles.py``, whose field order they read, and of
+this file, whose ``borrowed`` they compile in, so an edit to any of them recompiles them all.
+The kernel modules take ``njit`` from here, so the marks are in place before their first
+``@njit(cache=True)``.
+
+``borrowed`` spares the steps numba's atomic reference counts on the arrays of their bundles;
+FixedTypes spares a kernel called from Python the typing of its arguments at every call.
 """
 
 import functools
@@ -16,14 +20,16 @@ import hashlib
 import os
 from typing import TYPE_CHECKING
 
-from numba import njit, typeof
-from numba.core import caching
+from numba import njit, typeof, types
+from numba.core import caching, cgutils
 from numba.core.typing.typeof import Purpose
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array
 
 if TYPE_CHECKING:           # for the annotations only
     from numba.core.dispatcher import Dispatcher
 
-__all__ = ['njit', 'kernel_files', 'kernels_stamp', 'FixedTypes']
+__all__ = ['njit', 'borrowed', 'kernel_files', 'kernels_stamp', 'FixedTypes']
 
 # Set (the tests set it) to type every call again and fail on a type that changed.
 CHECK_TYPES = os.environ.get('JACKET_CLOTH_CHECK_TYPES', '') not in ('', '0')
@@ -37,12 +43,12 @@ _THIS = os.path.abspath(__file__)
 
 @functools.lru_cache(maxsize=None)
 def kernel_files() -> tuple[str, ...]:
-    """Return every file of the package holding a kernel, and bundles.py, sorted."""
-    found = {_BUNDLES}
+    """Return every file of the package holding a kernel, bundles.py and this one, sorted."""
+    found = {_BUNDLES, _THIS}
     for folder, _, names in os.walk(_PACKAGE):
         for name in names:
             path = os.path.join(folder, name)
-            if name.endswith('.py') and path != _THIS:     # this file names njit, holds none
+            if name.endswith('.py'):
                 with open(path, 'rb') as f:
                     if _KERNEL_MARK in f.read():
                         found.add(path)
@@ -147,3 +153,37 @@ class FixedTypes:
             if not self._check:
                 self.entry = self._entry
         return result
+
+
+def _unowned(context, builder, ty, value):
+    """Return ``value`` of type ``ty`` with every array in it holding no reference."""
+    if isinstance(ty, types.Array):
+        array = make_array(ty)(context, builder, value=value)
+        array.meminfo = cgutils.get_null_value(array.meminfo.type)
+        array.parent = cgutils.get_null_value(array.parent.type)
+        return array._getvalue()
+    if isinstance(ty, types.BaseTuple):
+        for i, member in enumerate(ty.types):
+            value = builder.insert_value(
+                value, _unowned(context, builder, member, builder.extract_value(value, i)), i)
+    return value
+
+
+@intrinsic
+def borrowed(typingctx: object, value: types.Type) -> tuple:
+    """Return a bundle whose arrays count no references: for a call that outlives none of them.
+
+    Compiled code calls ``borrowed(bundle)``: a bundle (a tuple, nested or not) with the same
+    arrays and values. numba counts a reference, atomically, for every array of every bundle
+    each compiled function is handed, in and out; an array that holds no reference (as one
+    unboxed with numba's reference counting off) is skipped at a null test. Only for arrays
+    their owner keeps alive for the whole call, never stored or returned.
+
+    :param typingctx: numba's typing context (numba passes it).
+    :param value: the bundle's type.
+    :returns: the signature and the code that makes the borrowed bundle, as numba's
+        intrinsics do.
+    """
+    def codegen(context, builder, signature, args):
+        return _unowned(context, builder, signature.args[0], args[0])
+    return value(value), codegen

@@ -13,7 +13,7 @@ which say what is wrong.
 
 import numpy as np
 
-from ..core.compiled import njit
+from ..core.compiled import borrowed, njit
 from ..core.physics import step
 from ..core.physics.crowd import BONES_FINITE, NOT_STEADY, step_steady
 from .cdr import put_rows, put_stamp
@@ -85,7 +85,7 @@ def steady_tf(raw, names, lane, tf):
     out only for bones the simulation publishes as they are (finite, from a finite cloth):
     any other outcome is reset first, in Python, and its /tf made there.
     """
-    positions, positions_bytes, intake, slot = lane[0]
+    positions, positions_bytes, intake, slot = borrowed(lane[0])
     stamp = read_steady(raw, names, positions_bytes)
     if stamp < 0:
         return NOT_STEADY, stamp, False

@@ -14,7 +14,7 @@ then a strain limit on the horizontals and M12 once more.
 import numpy as np
 
 from ..choices import Choice
-from ..compiled import njit
+from ..compiled import borrowed, njit
 from .colliders import (
     body_parts, collide, posed_body, push_out, push_out_of, push_out_passes_of)
 
@@ -423,6 +423,8 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
     Small Steps).
     Returns (deepest push-out, vertices limited by M11, relaxation sweeps run).
     """
+    cloth, colliders, tuning, state, control, now, before = borrowed(
+        (cloth, colliders, tuning, state, control, now, before))
     x, xp, contact, lam = state.x, state.xp, state.contact, state.lam
     free, ca, cb, rest = cloth.free, cloth.con_a, cloth.con_b, cloth.con_rest
     upper, lower, vrest = cloth.vert_a, cloth.vert_b, cloth.vert_rest

@@ -12,7 +12,7 @@ from numba import prange
 from numba.typed import List
 
 from ..bundles import Motion
-from ..compiled import njit
+from ..compiled import borrowed, njit
 from .pose import kept_bone_poses
 from .sampling import FILLED, fill_sample, root_jump
 from .step import advance
@@ -52,6 +52,7 @@ def advance_slot(slot):
     character, as JacketSimulation.process does), else whether the bones are finite; the step
     clock's t_sim moves on to the last step.
     """
+    slot = borrowed(slot)
     c = slot.clock
     motion = Motion(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
                     c[0], c[1], c[2], c[3], c[4])
