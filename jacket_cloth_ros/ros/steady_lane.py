@@ -85,6 +85,7 @@ def steady_tf(raw, names, lane, tf):
     out only for bones the simulation publishes as they are (finite, from a finite cloth):
     any other outcome is reset first, in Python, and its /tf made there.
     """
+    # Borrowed: the lane holds every array for the call, and only this thread changes it.
     positions, positions_bytes, intake, slot = borrowed(lane[0])
     stamp = read_steady(raw, names, positions_bytes)
     if stamp < 0:

@@ -423,6 +423,7 @@ def cloth_step(cloth, colliders, tuning, state, control, now, before):
     Small Steps).
     Returns (deepest push-out, vertices limited by M11, relaxation sweeps run).
     """
+    # Its caller holds every array for the call: no reference counted on them within.
     cloth, colliders, tuning, state, control, now, before = borrowed(
         (cloth, colliders, tuning, state, control, now, before))
     x, xp, contact, lam = state.x, state.xp, state.contact, state.lam

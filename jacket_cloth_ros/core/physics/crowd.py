@@ -52,7 +52,7 @@ def advance_slot(slot):
     character, as JacketSimulation.process does), else whether the bones are finite; the step
     clock's t_sim moves on to the last step.
     """
-    slot = borrowed(slot)
+    slot = borrowed(slot)           # its caller holds every array for the call
     c = slot.clock
     motion = Motion(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
                     c[0], c[1], c[2], c[3], c[4])
