@@ -16,7 +16,7 @@ longer be swapped by a caller:
 - :class:`Motion` and :class:`StepControl`: what drives one input's steps or one cloth step;
   :class:`NamePlan` and :class:`JointSample`: where a message's names go, and a sample;
 - :class:`StepOutput`: what the steps leave for the bones and the report, and the sleeves'
-  twist the next solve follows;
+  twist the next solve follows; :class:`StepScratch`, their working arrays;
 - :class:`CrowdSlot`: one character of a crowd, for the crowd's one compiled call, and
   :class:`SteadyIntake`, the compiled check of its steady inputs.
 
@@ -364,6 +364,47 @@ def steady_intake(slot: 'CrowdSlot', plan: NamePlan | None = None,
                         slot.clock, slot.out.stats)
 
 
+class StepScratch(NamedTuple):
+    """A character's working arrays for its steps (physics.step.advance), made once.
+
+    What they hold is the steps' own, written before it is read in every step: made anew for
+    each input, they cost about thirty allocations an input and an atomic reference count
+    in and out of every call they were handed to.
+    """
+
+    q: np.ndarray                   # the skeleton at this step (M7)
+    quat: np.ndarray
+    new_root: np.ndarray            # the root's world pose at this step
+    delta: np.ndarray               # the root's move since the last step (M14)
+    moved: np.ndarray
+    gravity: np.ndarray             # gravity and wind in the local frame
+    wind: np.ndarray
+    acc: np.ndarray                 # (N,3) per vertex
+    hood_acc: np.ndarray
+    top: np.ndarray                 # (C,3) the pinned row (M6)
+    now: Posed                      # colliders and M11 references at this step
+    damp: np.ndarray                # (N,) damping per substep
+    ride: np.ndarray                # (N,3) the cloth riding its top row (level of detail)
+    x0: np.ndarray                  # (N,3) the cloth where the step starts, for a retry
+    xp0: np.ndarray
+    contact0: np.ndarray            # (N,) bool
+
+
+def step_scratch(colliders: ColliderModel, joints: int, n: int, cols: int) -> StepScratch:
+    """Return a character's StepScratch.
+
+    :param colliders: its colliders, which the steps pose.
+    :param joints: its skeleton's joints.
+    :param n: the cloth's vertices.
+    :param cols: the cloth's columns (its pinned row).
+    """
+    return StepScratch(np.zeros(joints), np.zeros(4), np.eye(4), np.zeros((4, 4)), np.zeros(3),
+                       np.zeros(3), np.zeros(3), np.zeros((n, 3)), np.zeros(3),
+                       np.zeros((cols, 3)), posed_like(colliders, n), np.zeros(n),
+                       np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+                       np.zeros(n, dtype=bool))
+
+
 class CrowdSlot(NamedTuple):
     """One character of a crowd as physics.crowd.advance_crowd takes it, kept between inputs.
 
@@ -376,6 +417,7 @@ class CrowdSlot(NamedTuple):
     tuning: Tuning
     state: ClothState
     before: Posed
+    work: StepScratch
     q_a: np.ndarray
     q_b: np.ndarray
     quat_a: np.ndarray

@@ -24,7 +24,7 @@ from .body_proxy import lowest_reach
 from .bone_layer import LayerPose
 from .bundles import (
     ClothState, Colliders, CrowdSlot, JointSample, StepControl, StepOutput, Tuning, copied,
-    floats, ints, posed_like)
+    floats, ints, posed_like, step_scratch)
 from .inputs import InputParser, InputRejected, Sample
 from .lod import LevelOfDetail
 from .measures import (COLLAPSED_FOR_S, RESTLESS_FOR_S, CollapseWatch, FloorWatch,
@@ -246,7 +246,9 @@ class JacketSimulation:
         layer = rig.layer
         q = len(skeleton.joint_names)
         self.steps = Stepper(CrowdSlot(
-            self.model, self.tuning, self.state, self._before, np.zeros(q), np.zeros(q),
+            self.model, self.tuning, self.state, self._before,
+            step_scratch(self.model.colliders, q, len(self.state.x),
+                         len(self.model.cloth.pin_local)), np.zeros(q), np.zeros(q),
             np.zeros(4), np.zeros(4), np.zeros(3), np.zeros(3), np.zeros(5, dtype=np.int64),
             self.step_output(), ints(self.bone_set.grid),
             ints(layer.parent_index if layer else []), identity_poses(len(self.bone_names))))

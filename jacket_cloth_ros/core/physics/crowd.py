@@ -57,7 +57,8 @@ def advance_slot(slot):
     motion = Motion(slot.q_a, slot.q_b, slot.quat_a, slot.quat_b, slot.pos_a, slot.pos_b,
                     c[0], c[1], c[2], c[3], c[4])
     try:
-        c[2] = advance(slot.model, slot.tuning, slot.state, slot.before, motion, slot.out)
+        c[2] = advance(slot.model, slot.tuning, slot.state, slot.before, motion, slot.out,
+                       slot.work)
     except Exception:  # noqa: BLE001 - numba names no exception object; only division raises
         return STEPS_FAILED
     out, state = slot.out, slot.state

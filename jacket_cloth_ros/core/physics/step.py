@@ -12,11 +12,9 @@ caches (docs/performance.md). Each step runs these stages:
   overstretched a row, or riding its top row far from the viewer) -> M8 hood.
 """
 
-from typing import NamedTuple
-
 import numpy as np
 
-from ..bundles import Posed, StepControl
+from ..bundles import StepControl
 from ..compiled import njit
 from .cloth import LIMIT_HARD_PASS, cloth_step, hold_pinned_row
 from .colliders import collider_poses, plane_poses, posed_body, push_out_points
@@ -36,27 +34,6 @@ STAT_SLOTS = RETRIED + 1
 RETRY_OVER_LIMIT = 2.0
 
 
-class _Scratch(NamedTuple):
-    """One input's working arrays, made once for all its steps."""
-
-    q: np.ndarray                   # the skeleton at this step (M7)
-    quat: np.ndarray
-    new_root: np.ndarray            # the root's world pose at this step
-    delta: np.ndarray               # the root's move since the last step (M14)
-    moved: np.ndarray
-    gravity: np.ndarray             # gravity and wind in the local frame
-    wind: np.ndarray
-    acc: np.ndarray                 # (N,3) per vertex
-    hood_acc: np.ndarray
-    top: np.ndarray                 # (C,3) the pinned row (M6)
-    now: Posed                      # colliders and M11 references at this step
-    damp: np.ndarray                # (N,) damping per substep
-    ride: np.ndarray                # (N,3) the cloth riding its top row (level of detail)
-    x0: np.ndarray                  # (N,3) the cloth where the step starts, for a retry
-    xp0: np.ndarray
-    contact0: np.ndarray
-
-
 @njit(cache=True)
 def lost_per(share, exponent):
     """Return a share lost per design step as the share lost in a step ``exponent`` times as long.
@@ -74,10 +51,10 @@ def lost_per_each(share, exponent, out):
 
 
 @njit(cache=True, nogil=True)       # the replay's writer thread runs meanwhile
-def advance(model, tuning, state, before, motion, out):
+def advance(model, tuning, state, before, motion, out, work):
     """Run ``motion.steps`` fixed steps from sample a towards sample b.
 
-    Takes core.bundles: Model, Tuning, ClothState, Posed, Motion, StepOutput.
+    Takes core.bundles: Model, Tuning, ClothState, Posed, Motion, StepOutput, StepScratch.
     ``state`` is moved in place; ``before`` holds the colliders and references where the
     last step ended and is moved on to this one's end; ``out.links`` and the layer arrays
     end with the last step's pose (the layer solved in full at that step only, following
@@ -88,7 +65,6 @@ def advance(model, tuning, state, before, motion, out):
     x, xp, hood_p = state.x, state.xp, state.hood_p
     cols = cloth.pin_local.shape[0]
     nv = x.shape[0]
-    work = _scratch(model, motion, nv, cols)
     damp_for = 0
     contact_damp = 0.0
     hood_damp = lost_per(tuning.hood_damping, tuning.design_exponent)
@@ -228,25 +204,10 @@ def _mean_move(now, before):
 
 
 @njit(cache=True)
-def _scratch(model, motion, nv, cols):
-    """Return new working arrays for one input's steps."""
-    colliders = model.colliders
-    k_caps = colliders.capsule_links.shape[0]
-    now = Posed(np.empty(colliders.centers.shape), np.empty(colliders.rotations.shape),
-                np.empty((k_caps, 3)), np.empty((k_caps, 3)),
-                np.empty(colliders.plane_points.shape), np.empty(colliders.plane_normals.shape),
-                np.empty((nv, 3)))
-    return _Scratch(np.empty(motion.q_a.shape[0]), np.empty(4), np.eye(4), np.empty((4, 4)),
-                    np.empty(3), np.empty(3), np.empty(3), np.empty((nv, 3)), np.empty(3),
-                    np.empty((cols, 3)), now, np.empty(nv), np.empty((nv, 3)),
-                    np.empty((nv, 3)), np.empty((nv, 3)), np.empty(nv, dtype=np.bool_))
-
-
-@njit(cache=True)
 def _pose_skeleton(skeleton, motion, t_sim, q, quat, new_root, links):
     """M7: the skeleton between the two samples at the step's time, and its links' poses.
 
-    Into ``q``, ``quat`` and ``new_root`` (the step's _Scratch) and ``links``.
+    Into ``q``, ``quat`` and ``new_root`` (the step's StepScratch) and ``links``.
     """
     w = min(1.0, max(0.0, (t_sim - motion.stamp_a) / motion.span))
     for k in range(q.shape[0]):
@@ -280,7 +241,7 @@ def _follow_world(world_share, hood_world_share, state, new_root, delta, moved):
 def _forces(up, tuning, root, t_sim, gravity, wind_l, acc, hood_acc):
     """M4: gravity along the rig's -``up`` and wind (gusts by the step's time), local frame.
 
-    Into the step's _Scratch ``gravity``, ``wind_l`` (the wind), ``acc`` and ``hood_acc``.
+    Into the step's StepScratch ``gravity``, ``wind_l`` (the wind), ``acc`` and ``hood_acc``.
     """
     wind = tuning.wind
     scale = gust_scale(t_sim, tuning.gust, tuning.gust_period)
