@@ -73,8 +73,8 @@ class CrowdSteps:
         self._my_intakes = []               # the same, read from Python
         # Writes into the typed lists (crowd_steps.put), rare: each checks the item's type,
         # as numba's typed.List did, so that an item of another type is refused, not misread.
-        self._put_slot = FixedTypes(crowd_steps.put, check=True)
-        self._put_intake = FixedTypes(crowd_steps.put, check=True)
+        self._put_slot = FixedTypes(crowd_steps.put_borrowed, check=True)
+        self._put_intake = FixedTypes(crowd_steps.put_borrowed, check=True)
         self._call = None
         self._steady = FixedTypes(crowd_steps.prepare_steady)
         self.calls = 0              # compiled calls made (one per round of inputs)
@@ -197,10 +197,11 @@ class CrowdSteps:
 def _put(items, mine, put, index, item):
     """Set ``item`` at ``index`` of a typed list and of its Python mirror (or append it).
 
-    Returns the typed list, made by crowd_steps.listed for the first item (``items`` None).
+    Returns the typed list, made by crowd_steps.borrowed_list for the first item (``items``
+    None). The list's items are borrowed: the mirror keeps each alive while the list holds it.
     """
     if items is None:
-        items = crowd_steps.listed(item)
+        items = crowd_steps.borrowed_list(item)
     else:
         put(items, index, item)
     if index == len(mine):

@@ -184,10 +184,11 @@ class Stepper:
         (positions, their bytes, intake, slot): numba unboxes a typed list as one pointer,
         where the bundles passed as they are cost a conversion of each of their arrays on
         every call, several times the lane's own reading and laying out. Made anew when the
-        intake is armed: an unarmed intake takes no input, whatever slot it holds.
+        intake is armed: an unarmed intake takes no input, whatever slot it holds. The list
+        holds them borrowed (physics.crowd.borrowed_list); ``_lent`` keeps them meanwhile.
         """
-        return slot_steps.listed((self.positions, self.positions_bytes, self.intake,
-                                  self.slot))
+        self._lent = (self.positions, self.positions_bytes, self.intake, self.slot)
+        return slot_steps.borrowed_list(self._lent)
 
 
 def identity_poses(n: int) -> np.ndarray:

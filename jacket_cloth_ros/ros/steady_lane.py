@@ -13,7 +13,7 @@ which say what is wrong.
 
 import numpy as np
 
-from ..core.compiled import borrowed, njit
+from ..core.compiled import njit
 from ..core.physics import step
 from ..core.physics.crowd import BONES_FINITE, NOT_STEADY, step_steady
 from .cdr import put_rows, put_stamp
@@ -85,8 +85,8 @@ def steady_tf(raw, names, lane, tf):
     out only for bones the simulation publishes as they are (finite, from a finite cloth):
     any other outcome is reset first, in Python, and its /tf made there.
     """
-    # Borrowed: the lane holds every array for the call, and only this thread changes it.
-    positions, positions_bytes, intake, slot = borrowed(lane[0])
+    # Borrowed (core.stepping.Stepper keeps the arrays): taken out with no reference counted.
+    positions, positions_bytes, intake, slot = lane[0]
     stamp = read_steady(raw, names, positions_bytes)
     if stamp < 0:
         return NOT_STEADY, stamp, False

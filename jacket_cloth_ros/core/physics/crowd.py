@@ -133,19 +133,24 @@ def step_steady(intake, slot, stamp, positions):
 
 # numba's typed.List, used from Python, compiles its append and item assignment for each item
 # type at first use and never caches them: most of a crowd node's start (docs/crowd.md).
-# Built and written here instead, where numba's cache keeps them.
+# Built and written here instead, where numba's cache keeps them. Their items are borrowed:
+# taking one out (a crowd's character each round, a lone character's lane each input) counted
+# an atomic reference on each of its hundred-odd arrays, in and out.
 @njit(cache=True)
-def listed(item):
-    """Return a typed list holding ``item``."""
+def borrowed_list(item):
+    """Return a typed list holding ``item`` borrowed; the caller keeps ``item`` while it does."""
     items = List()
-    items.append(item)
+    items.append(borrowed(item))
     return items
 
 
 @njit(cache=True)
-def put(items, index, item):
-    """Set ``items[index]`` to ``item``, or append it at ``index == len(items)``."""
+def put_borrowed(items, index, item):
+    """Set ``items[index]`` to ``item`` borrowed, or append it at ``index == len(items)``.
+
+    The caller keeps ``item`` while the list holds it.
+    """
     if index == len(items):
-        items.append(item)
+        items.append(borrowed(item))
     else:
-        items[index] = item
+        items[index] = borrowed(item)
