@@ -51,7 +51,7 @@ def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hoo
     for k in range(plane_p.shape[0]):
         n = plane_n[k]
         out[j, :3] = _dot(plane_p[k], n) * n
-        _z_to(n, out[j, 3:7])
+        _z_to(n[0], n[1], n[2], out[j, 3:7])
         out[j, 7], out[j, 8], out[j, 9] = PLANE_SIZE, PLANE_SIZE, PLANE_THICKNESS
         j += 1
     out[j, :3] = hood_p
@@ -65,23 +65,31 @@ def solid_poses(centers, axes, radii, cap_a, cap_b, cap_r, out):
 
     Returns the rows written.
     """
+    # Element by element: array arithmetic here made a temporary for each term, and each was
+    # an allocation and an atomic reference count.
     j = 0
     for k in range(centers.shape[0]):
-        out[j, :3] = centers[k]
+        for i in range(3):
+            out[j, i] = centers[k, i]
+            out[j, 7 + i] = 2.0 * radii[k, i]
         quat_from_matrix(axes[k], out[j, 3:7])
-        out[j, 7:] = 2.0 * radii[k]
         j += 1
     for k in range(cap_a.shape[0]):
-        a, b, d = cap_a[k], cap_b[k], 2.0 * cap_r[k]
-        axis = b - a
-        length = np.sqrt(_dot(axis, axis))
-        out[j, :3] = 0.5 * (a + b)
-        _z_to(axis / max(length, 1e-9), out[j, 3:7])
+        d = 2.0 * cap_r[k]
+        x0, x1, x2 = cap_b[k, 0] - cap_a[k, 0], cap_b[k, 1] - cap_a[k, 1], \
+            cap_b[k, 2] - cap_a[k, 2]
+        length = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        for i in range(3):
+            out[j, i] = 0.5 * (cap_a[k, i] + cap_b[k, i])
+        over = max(length, 1e-9)
+        _z_to(x0 / over, x1 / over, x2 / over, out[j, 3:7])
         out[j, 7], out[j, 8], out[j, 9] = d, d, length
         for e in range(2):
-            out[j + 1 + e, :3] = a if e == 0 else b
+            end = cap_a if e == 0 else cap_b
+            for i in range(3):
+                out[j + 1 + e, i] = end[k, i]
+                out[j + 1 + e, 7 + i] = d
             _identity(out[j + 1 + e, 3:7])
-            out[j + 1 + e, 7:] = d
         j += 3
     return j
 
@@ -97,19 +105,19 @@ def _identity(q):
 
 
 @njit(cache=True, nogil=True)
-def _z_to(d, q):
-    """Quaternion (x, y, z, w) turning +z onto the unit direction ``d``."""
+def _z_to(d0, d1, d2, q):
+    """Quaternion (x, y, z, w) turning +z onto the unit direction ``(d0, d1, d2)``."""
     # axis = z x d = (-d1, d0, 0); turn by atan2(|axis|, d2) about it.
-    s = np.sqrt(d[0] * d[0] + d[1] * d[1])
+    s = np.sqrt(d0 * d0 + d1 * d1)
     if s < 1e-9:
-        if d[2] < 0:
+        if d2 < 0:
             q[0], q[1], q[2], q[3] = 1.0, 0.0, 0.0, 0.0
         else:
             _identity(q)
         return
-    half = 0.5 * np.arctan2(s, d[2])
+    half = 0.5 * np.arctan2(s, d2)
     f = np.sin(half) / s
-    q[0], q[1], q[2], q[3] = -d[1] * f, d[0] * f, 0.0, np.cos(half)
+    q[0], q[1], q[2], q[3] = -d1 * f, d0 * f, 0.0, np.cos(half)
 
 
 @njit(cache=True, nogil=True)
