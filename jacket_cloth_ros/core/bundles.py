@@ -367,9 +367,10 @@ def steady_intake(slot: 'CrowdSlot', plan: NamePlan | None = None,
 class StepScratch(NamedTuple):
     """A character's working arrays for its steps (physics.step.advance), made once.
 
-    What they hold is the steps' own, written before it is read in every step: made anew for
-    each input, they cost about thirty allocations an input and an atomic reference count
-    in and out of every call they were handed to.
+    Made anew for each input, they cost about thirty allocations an input and an atomic
+    reference count in and out of every call they were handed to. The steps write each
+    before they read it, within the step, but ``damp`` at an input's first step and when its
+    substeps change, and ``new_root``'s last row, which :func:`step_scratch` sets once.
     """
 
     q: np.ndarray                   # the skeleton at this step (M7)
@@ -388,6 +389,7 @@ class StepScratch(NamedTuple):
     x0: np.ndarray                  # (N,3) the cloth where the step starts, for a retry
     xp0: np.ndarray
     contact0: np.ndarray            # (N,) bool
+    hem: np.ndarray                 # (C,3) the hem where the step starts (its path, HEM_PATH)
 
 
 def step_scratch(colliders: ColliderModel, joints: int, n: int, cols: int) -> StepScratch:
@@ -402,7 +404,7 @@ def step_scratch(colliders: ColliderModel, joints: int, n: int, cols: int) -> St
                        np.zeros(3), np.zeros(3), np.zeros((n, 3)), np.zeros(3),
                        np.zeros((cols, 3)), posed_like(colliders, n), np.zeros(n),
                        np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
-                       np.zeros(n, dtype=bool))
+                       np.zeros(n, dtype=bool), np.zeros((cols, 3)))
 
 
 class CrowdSlot(NamedTuple):

@@ -177,7 +177,9 @@ def borrowed(typingctx: object, value: types.Type) -> tuple:
     arrays and values. numba counts a reference, atomically, for every array of every bundle
     each compiled function is handed, in and out; an array that holds no reference (as one
     unboxed with numba's reference counting off) is skipped at a null test. Only for arrays
-    their owner keeps alive for the whole call, never stored or returned.
+    their owner keeps alive for the whole call, never returned, and stored only where their
+    owner outlives the store (physics.crowd.borrowed_list: a typed list with a Python mirror,
+    never read from Python, where numba would box an array that owns nothing).
 
     :param typingctx: numba's typing context (numba passes it).
     :param value: the bundle's type.

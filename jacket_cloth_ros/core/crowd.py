@@ -67,11 +67,13 @@ class CrowdSteps:
     def __init__(self, threads: int = 0):
         self.threads = threads_for(threads)
         self.sims = []
+        # The typed lists hold their items borrowed (crowd_steps.borrowed_list): never read
+        # them from Python; the mirrors keep each item alive while its list holds it.
         self._slots = None          # a typed list of each simulation's CrowdSlot, once one
-        self._mine = []             # the same slots, read from Python (the typed list boxes)
+        self._mine = []             # the same slots, read from Python
         self._intakes = None                # each slot's SteadyIntake (a typed list)
         self._my_intakes = []               # the same, read from Python
-        # Writes into the typed lists (crowd_steps.put), rare: each checks the item's type,
+        # Writes into the typed lists (crowd_steps.put_borrowed), rare: each checks the type,
         # as numba's typed.List did, so that an item of another type is refused, not misread.
         self._put_slot = FixedTypes(crowd_steps.put_borrowed, check=True)
         self._put_intake = FixedTypes(crowd_steps.put_borrowed, check=True)
@@ -97,7 +99,7 @@ class CrowdSteps:
             self._call(self._slots, none, none)
             self._steady(self._intakes, none, none, np.zeros(0), np.zeros(1, dtype=np.int64),
                          np.zeros(0, dtype=np.bool_))
-            self._set_slot(index, sim.steps.slot)         # crowd_steps.put loaded now too
+            self._set_slot(index, sim.steps.slot)  # crowd_steps.put_borrowed loaded now too
             self._set_intake(index, sim.steps.intake)
         return index
 

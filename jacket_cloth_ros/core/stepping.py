@@ -185,10 +185,13 @@ class Stepper:
         where the bundles passed as they are cost a conversion of each of their arrays on
         every call, several times the lane's own reading and laying out. Made anew when the
         intake is armed: an unarmed intake takes no input, whatever slot it holds. The list
-        holds them borrowed (physics.crowd.borrowed_list); ``_lent`` keeps them meanwhile.
+        holds them borrowed (physics.crowd.borrowed_list), so it is never read from Python;
+        ``_lent`` keeps them while the caller's ``lane`` is this list.
         """
-        self._lent = (self.positions, self.positions_bytes, self.intake, self.slot)
-        return slot_steps.borrowed_list(self._lent)
+        lent = (self.positions, self.positions_bytes, self.intake, self.slot)
+        lane = slot_steps.borrowed_list(lent)
+        self._lent = lent           # kept from here: the list's items hold no reference
+        return lane
 
 
 def identity_poses(n: int) -> np.ndarray:

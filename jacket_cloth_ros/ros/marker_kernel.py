@@ -50,7 +50,9 @@ def shape_poses(centers, axes, radii, cap_a, cap_b, cap_r, plane_p, plane_n, hoo
     j = solid_poses(centers, axes, radii, cap_a, cap_b, cap_r, out)
     for k in range(plane_p.shape[0]):
         n = plane_n[k]
-        out[j, :3] = _dot(plane_p[k], n) * n
+        along = _dot(plane_p[k], n)
+        for i in range(3):
+            out[j, i] = along * n[i]
         _z_to(n[0], n[1], n[2], out[j, 3:7])
         out[j, 7], out[j, 8], out[j, 9] = PLANE_SIZE, PLANE_SIZE, PLANE_THICKNESS
         j += 1

@@ -74,13 +74,12 @@ def advance(model, tuning, state, before, motion, out, work):
     dt_ns = motion.dt_ns
     dt = dt_ns * 1e-9
     t_sim = motion.t_sim
-    hem_before = np.empty((cols, 3))
     # Each array of a bundle a compiled function is handed costs it a reference count in and
     # out, used or not (a call, atomic unless borrowed): the small helpers get what they use.
     skeleton, colliders, links = model.skeleton, model.colliders, out.links
     ha, hb, hr = cloth.horiz_a, cloth.horiz_b, cloth.horiz_rest
     (q, quat, new_root, delta, moved, gravity, wind, acc, hood_acc, top, now, damp, ride, x0,
-     xp0, contact0) = work
+     xp0, contact0, hem_before) = work
     for step in range(motion.steps):
         t_sim += dt_ns
         hem_before[:] = x[nv - cols:]
