@@ -51,7 +51,7 @@ class Stepper:
         # The positions buffer as bytes: a caller that reads them straight from a message
         # (ros/steady_lane.py) copies them in without the alignment a float view needs.
         self.positions_bytes = self.positions.view(np.uint8)
-        self.lane = self._held()
+        self._lend_lane()
         self._tuned = slot          # the slot on the level of detail's tuning, while it lasts
         self._load = FixedTypes(slot_steps.load_motion)
         self.advance = FixedTypes(slot_steps.advance_slot)
@@ -175,23 +175,22 @@ class Stepper:
                                     (last.stamp_ns, *clock), limits)
         self.positions = np.zeros(len(key[0]))
         self.positions_bytes = self.positions.view(np.uint8)
-        self.lane = self._held()
+        self._lend_lane()
         self.armed = key
 
-    def _held(self):
-        """Return the steady lane's arrays in a typed list of one (ros/steady_lane.py).
+    def _lend_lane(self) -> None:
+        """Put the steady lane's arrays in a typed list of one: ``lane`` (ros/steady_lane.py).
 
         (positions, their bytes, intake, slot): numba unboxes a typed list as one pointer,
         where the bundles passed as they are cost a conversion of each of their arrays on
         every call, several times the lane's own reading and laying out. Made anew when the
         intake is armed: an unarmed intake takes no input, whatever slot it holds. The list
         holds them borrowed (physics.crowd.borrowed_list), so it is never read from Python;
-        ``_lent`` keeps them while the caller's ``lane`` is this list.
+        ``_lent`` keeps them while ``lane`` is this list.
         """
         lent = (self.positions, self.positions_bytes, self.intake, self.slot)
-        lane = slot_steps.borrowed_list(lent)
-        self._lent = lent           # kept from here: the list's items hold no reference
-        return lane
+        self.lane = slot_steps.borrowed_list(lent)
+        self._lent = lent
 
 
 def identity_poses(n: int) -> np.ndarray:
