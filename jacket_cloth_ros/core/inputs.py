@@ -102,6 +102,10 @@ class InputParser:
         # prefixed): the body then stays as it is, which looks like a working node.
         self.unmatched = ''
         self.names = None           # the name list of the last message parsed
+        # The joints some name list has carried: two sources on one topic (legs and arms)
+        # each leave out the other's, which is no joint missing.
+        self._given = np.zeros(len(skeleton.joint_names), dtype=bool)
+        self._missing = self._missing_line()
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -116,6 +120,8 @@ class InputParser:
         """Return where each name of a message goes, and the warnings its name list earns.
 
         Worked out once per distinct name list (a publisher sends the same list every time).
+        The joints no list has carried yet are said by :meth:`parse`: another source's list
+        may carry them.
 
         :param names: a message's joint name list.
         """
@@ -145,11 +151,9 @@ class InputParser:
         if unknown:
             warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
                              f'{_names_cut(unknown)}'))
-        missing = sorted(set(range(len(index))) - set(joint_to))
-        if missing:
-            text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])
-            warnings.append(('missing', f'{len(missing)} joint(s) missing, holding their last '
-                             f'value: {text}'))
+        if joint_to and not self._given[joint_to].all():
+            self._given[joint_to] = True
+            self._missing = self._missing_line()
         world = len(set(world_to))
         if 0 < world < len(WORLD_VARIABLES):
             warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
@@ -162,6 +166,14 @@ class InputParser:
             self._plans.clear()
         self._plans[names] = plan
         return plan
+
+    def _missing_line(self):
+        """Return the line naming the joints no name list has carried yet, or ''."""
+        missing = np.flatnonzero(~self._given)
+        if not len(missing):
+            return ''
+        text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])
+        return f'{len(missing)} joint(s) no message has given yet, held at zero: {text}'
 
     def parse(self, stamp_ns: int, names: Sequence[str], positions: npt.ArrayLike) -> Sample:
         """Return a message's skeleton sample; InputRejected if it cannot be used at all.
@@ -178,6 +190,8 @@ class InputParser:
             raise InputRejected('length', f'JointState has {len(names)} names but '
                                 f'{len(positions)} positions: message dropped')
         plan, warnings = self.plan(names)
+        if self._missing:
+            warnings = warnings + [('missing', self._missing)]
         new = JointSample(np.empty_like(self.last.q), np.empty((4, 4)), np.empty(4))
         found = fill_sample(positions, plan, self.last, new)
         if found == NON_FINITE_POSITION:
