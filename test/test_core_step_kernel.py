@@ -145,6 +145,58 @@ def test_a_borrowed_bundle_reads_and_writes_its_arrays_and_counts_no_reference()
     assert motion.q_b[1] == 1.0 + 9
 
 
+def test_the_borrowed_lists_hold_what_their_python_mirrors_keep_alive(skeleton, rig):
+    # A crowd's typed lists and a lone character's lane hold their bundles borrowed: each item
+    # must be the memory of the object its Python mirror holds, whatever was added, retuned,
+    # re-armed or collected since; an item whose mirror went would be freed memory.
+    import gc
+    from numba import njit
+    from jacket_cloth_ros.core.crowd import CrowdSteps, stepped
+    from jacket_cloth_ros.core.fabric import load_fabric
+    from jacket_cloth_ros.core.simulation import JacketSimulation
+
+    @njit
+    def slot_memory(items, i):
+        return items[i].state.x.ctypes.data, items[i].state.x[-1, 2]
+
+    @njit
+    def intake_memory(items, i):
+        return items[i].last.q.ctypes.data
+
+    @njit
+    def lane_memory(lane):
+        return lane[0][0].ctypes.data, lane[0][3].state.x.ctypes.data
+
+    crowd = CrowdSteps(threads=2)
+    sims = [JacketSimulation(skeleton, rig, load_fabric('tweed_jacket')) for _ in range(3)]
+
+    def check():
+        gc.collect()
+        for i in range(len(crowd.sims)):
+            mine = crowd._mine[i].state.x
+            assert slot_memory(crowd._slots, i) == (mine.ctypes.data, mine[-1, 2]), i
+            assert intake_memory(crowd._intakes, i) == crowd._my_intakes[i].last.q.ctypes.data
+        for sim in crowd.sims:
+            lent = sim.steps._lent
+            assert lane_memory(sim.steps.lane) == (lent[0].ctypes.data,
+                                                   lent[3].state.x.ctypes.data)
+            # An unarmed lane takes no input: it may hold the slot before a new tuning.
+            if sim.steps.armed is not None:
+                assert lent[2] is sim.steps.intake and lent[3] is sim.steps.slot
+                armed.add(id(sim))
+    armed = set()
+    crowd.add(sims[0])
+    for k, (stamp, names, pos) in enumerate(clip_inputs(skeleton, 'walk', 0.5)):
+        if k in (5, 12):
+            crowd.add(sims[1 if k == 5 else 2])
+        if k == 20:
+            sims[1].set_params(sims[1].params.with_values(substeps=2))     # a new tuning
+        names = tuple(names)            # a list could change: never steady
+        stepped(crowd, [(i, stamp, names, pos) for i in range(len(crowd.sims))])
+        check()
+    assert crowd.steady_inputs > 0 and len(crowd._mine) == 3 and len(armed) == 3
+
+
 def test_fixed_types_refuses_a_call_whose_types_changed():
     # The entry point of a kernel typed once would read a changed argument as the old type.
     from jacket_cloth_ros.core.compiled import CHECK_TYPES, FixedTypes
