@@ -9,6 +9,7 @@ import numpy as np
 
 from jacket_cloth_ros.core.body_proxy import body_proxy, sleeved_links
 from jacket_cloth_ros.core.measures import collider_labels, depth_inside
+from jacket_cloth_ros.ros import messages
 from jacket_cloth_ros.tools.session import run_session
 
 
@@ -17,7 +18,8 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
 
     Returns numpy arrays ``vertical_stretch``, ``horizontal_stretch``, ``inside_m`` (the rig's
     colliders), ``body_inside_m`` (the body proxy, every vertex, as analyze's),
-    ``hood_under_plane_m`` (the M8 hood particle's depth under the rig's planes) (and ``x``, the
+    ``hood_under_plane_m`` (the M8 hood particle's depth under the rig's planes),
+    ``drawn_under_floor_m`` (the markers' jacket's depth under the rig's floor) (and ``x``, the
     cloth per input, with ``keep_x``), the list ``resets`` (reasons), and the
     counts ``published`` (inputs that put bones on /tf) and ``inputs``, and ``rig_faults``:
     what the simulation said of the rig and the body at the start. Every input must be
@@ -27,8 +29,12 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     body = body_proxy(loaded.setup.skeleton, sleeved_links(loaded.setup.rig))
     everywhere = np.ones(loaded.setup.rig.n, dtype=bool)
     series = {'vertical_stretch': [], 'horizontal_stretch': [], 'inside_m': [],
-              'body_inside_m': [], 'hood_under_plane_m': [], 'x': []}
+              'body_inside_m': [], 'hood_under_plane_m': [], 'drawn_under_floor_m': [],
+              'x': []}
     resets, published = [], 0
+    outfit = messages.outfit(loaded.setup.rig)
+    corners = np.empty((outfit.marker_corners(), 3))
+    colors = np.empty((len(corners), 4), dtype=np.float32)
 
     def probe(pipeline, report, stamp, outputs):
         nonlocal published
@@ -46,6 +52,7 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
                                                     body.labels).value)
         series['hood_under_plane_m'].append(max(
             [0.0, *(-(sim.hood_p - frames.plane_points) * frames.plane_normals).sum(axis=1)]))
+        series['drawn_under_floor_m'].append(_drawn_under_floor(sim, outfit, corners, colors))
         if keep_x:
             series['x'].append(sim.x.copy())
 
@@ -55,3 +62,14 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
     out = {k: np.array(v) for k, v in series.items()}
     return out | {'resets': resets, 'published': published, 'inputs': pipeline.inputs,
                   'rig_faults': list(pipeline.sim.faults.rig)}
+
+
+def _drawn_under_floor(sim, outfit, corners, colors):
+    """How far the jacket the markers draw reaches under the rig's floor, m (0 without one)."""
+    floor = sim.rig.floor()
+    if floor is None:
+        return 0.0
+    up, height = floor
+    outfit.draw_jacket(sim.links, sim.bones().poses, corners, colors, messages.jacket_planes(sim))
+    lowest = (corners @ (sim.root[:3, :3].T @ up)).min() + sim.root[:3, 3] @ up
+    return max(height - float(lowest), 0.0)

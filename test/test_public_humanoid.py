@@ -258,5 +258,5 @@ def test_analyze_says_when_the_drawn_jacket_reaches_under_the_floor(tmp_path, ca
     report = json.loads((tmp_path / 'out' / 'report.json').read_text())
     under, inside = report['mesh_under_floor_m'], report['inside_m']
     assert under['max'] > 0.1 > inside['max'], (under, inside)
-    assert f', the drawn jacket {under["max"] * 1e3:.0f} mm under the floor at ' in \
+    assert f', the exported jacket {under["max"] * 1e3:.0f} mm under the floor at ' in \
         capsys.readouterr().out

@@ -53,6 +53,8 @@ SEAM = (0.2, 0.15, 0.1, 1.0)
 GHOST = (0.4, 0.6, 0.9, 0.25)
 HOOD = (0.55, 0.42, 0.3, 1.0)
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
+# No planes to hold the drawn jacket out of (Outfit.draw_jacket).
+NO_PLANES = (np.eye(4), np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3)))
 
 
 @dataclass
@@ -192,7 +194,7 @@ class Outfit:
         return points, colors
 
     def draw_jacket(self, links: np.ndarray, bone_poses: np.ndarray, points: np.ndarray,
-                    colors: np.ndarray) -> None:
+                    colors: np.ndarray, planes: tuple = NO_PLANES) -> None:
         """Pose the jacket's joints and :meth:`draw` its outer faces, in one compiled call.
 
         The markers' jacket: the outer faces of :meth:`triangles`, in their order.
@@ -201,9 +203,11 @@ class Outfit:
         :param bone_poses: (B,7) the published bones, each in its parent's frame.
         :param points: (:meth:`marker_corners`,3) written: the corners.
         :param colors: (:meth:`marker_corners`,4) float32 written: their shaded colours.
+        :param planes: the rig's planes the skinned jacket is held out of
+            (:func:`jacket_planes`); none: as an exported file's viewer skins it.
         """
         _DRAW_POSED(self._outer_model, floats(links), self.bone_parents,
-                    floats(bone_poses), self.light, AMBIENT, LINING_GAP, points, colors)
+                    floats(bone_poses), self.light, AMBIENT, LINING_GAP, planes, points, colors)
 
     def draw(self, name: str, joints: np.ndarray, points: np.ndarray,
              colors: np.ndarray) -> None:
@@ -216,6 +220,17 @@ class Outfit:
         """
         _DRAW(self._models[name], floats(joints), self.light, AMBIENT, LINING_GAP, points,
               colors)
+
+
+def jacket_planes(sim: 'JacketSimulation') -> tuple:
+    """Return the planes the drawn jacket is held out of: the rig's, seen from ``sim.root``.
+
+    As physics.skinning.above_planes takes them (posed on the links it draws on).
+
+    :param sim: the simulation, after its last step.
+    """
+    c = sim.model.colliders
+    return floats(sim.root), c.plane_links, c.plane_points, c.plane_normals
 
 
 def _mesh_model(mesh, keep):
@@ -337,7 +352,8 @@ def marker_specs(sim: 'JacketSimulation', reset: bool = False, debug: bool = Fal
         if m.mesh:
             corners = np.empty((m.mesh_points, 3))
             colors = np.empty((m.mesh_points, 4), dtype=np.float32)
-            meshes.draw_jacket(sim.links, sim.bones().poses, corners, colors)
+            meshes.draw_jacket(sim.links, sim.bones().poses, corners, colors,
+                               jacket_planes(sim))
             m = replace(m, points=corners, colors=colors)
         if m.pose_row >= 0:
             row = poses[m.pose_row].tolist()
@@ -369,7 +385,7 @@ def marker_array(sim: 'JacketSimulation', stamp_ns: int, frame: str,
     if template.meshes:
         points, colors = template.meshes['jacket']
         (draw_jacket or outfit(sim.rig).draw_jacket)(sim.links, sim.bones().poses, points,
-                                                     colors)
+                                                     colors, jacket_planes(sim))
     if debug:
         return template.encode(_FILL_MARKERS, _marker_arguments(sim), stamp_ns)
     return template.encode(_FILL_BODY, (floats(sim.links), outfit(sim.rig).body_shapes,

@@ -44,14 +44,24 @@ def plane_poses(links, root, colliders, posed):
     normals_local, points, normals = colliders.plane_normals, posed.plane_p, posed.plane_n
     frame = np.empty((4, 4))
     for k in range(points.shape[0]):
-        if plane_links[k] < 0:
-            relative_move(root, np.eye(4), frame)          # world -> the root's local frame
-        else:
-            frame[:] = links[plane_links[k]]
-        _transform_point(frame, points_local[k], points[k])
-        for r in range(3):
-            normals[k, r] = (frame[r, 0] * normals_local[k, 0] + frame[r, 1] * normals_local[k, 1]
-                             + frame[r, 2] * normals_local[k, 2])
+        plane_pose(links, root, plane_links[k], points_local[k], normals_local[k], frame,
+                   points[k], normals[k])
+
+
+@njit(cache=True)
+def plane_pose(links, root, link, point_local, normal_local, frame, point, normal):
+    """Pose one plane on its link (``link`` < 0: fixed in the world, seen from ``root``).
+
+    Into ``point`` and ``normal``; ``frame`` (4,4) is scratch.
+    """
+    if link < 0:
+        relative_move(root, np.eye(4), frame)          # world -> the root's local frame
+    else:
+        frame[:] = links[link]
+    _transform_point(frame, point_local, point)
+    for r in range(3):
+        normal[r] = (frame[r, 0] * normal_local[0] + frame[r, 1] * normal_local[1]
+                     + frame[r, 2] * normal_local[2])
 
 
 @njit(cache=True)

@@ -8,6 +8,7 @@ in numpy that is a dozen temporaries per call, several times the cost of one pas
 import numpy as np
 
 from ..compiled import njit
+from .colliders import plane_pose
 
 
 @njit(cache=True, nogil=True)
@@ -165,9 +166,22 @@ def draw(mesh, joints_now, light, ambient, lining_gap, out_points, out_colors):
     :param out_points: (3T,3) written: the corners in triangle-list order.
     :param out_colors: (3T,4) float32 written: each corner's shaded colour.
     """
+    _laid_out(mesh, _skinned(mesh, joints_now), light, ambient, lining_gap, out_points,
+              out_colors)
+
+
+@njit(cache=True, nogil=True)
+def _skinned(mesh, joints_now):
+    """Return a bundles.MeshModel's vertices skinned on ``joints_now``."""
     where = np.empty(mesh.rest.shape)
     skin(joints_now[:mesh.inverse_rest.shape[0]], mesh.inverse_rest, mesh.joints, mesh.weights,
          mesh.rest, where)
+    return where
+
+
+@njit(cache=True, nogil=True)
+def _laid_out(mesh, where, light, ambient, lining_gap, out_points, out_colors):
+    """Shade a mesh's skinned vertices ``where`` and lay them out as :func:`draw` does."""
     normals = np.empty(where.shape)
     vertex_normals(where, mesh.front, normals)
     shaded_triangles(where, normals, mesh.triangles, mesh.colors, mesh.back, light, ambient,
@@ -175,8 +189,35 @@ def draw(mesh, joints_now, light, ambient, lining_gap, out_points, out_colors):
 
 
 @njit(cache=True, nogil=True)
-def draw_posed(mesh, links, parents, poses, light, ambient, lining_gap, out_points, out_colors):
+def above_planes(points, links, planes):
+    """Move each point behind one of a rig's planes onto it, along the plane's normal.
+
+    The jacket a viewer sees is skinned between the cloth's particles and bones: where the
+    particles lie on the floor, the smoothed mesh between them reached under it.
+
+    :param points: (V,3) moved in place.
+    :param links: (L,4,4) the links the planes ride on.
+    :param planes: (root, plane_links, plane_points, plane_normals): the root's (4,4) pose in
+        the world and a bundles.ColliderModel's planes (link -1: fixed in the world).
+    """
+    root, plane_links, plane_points, plane_normals = planes
+    frame, p, n = np.empty((4, 4)), np.empty(3), np.empty(3)
+    for k in range(plane_links.shape[0]):
+        plane_pose(links, root, plane_links[k], plane_points[k], plane_normals[k], frame, p, n)
+        for v in range(points.shape[0]):
+            d = ((points[v, 0] - p[0]) * n[0] + (points[v, 1] - p[1]) * n[1]
+                 + (points[v, 2] - p[2]) * n[2])
+            if d < 0.0:
+                for i in range(3):
+                    points[v, i] -= d * n[i]
+
+
+@njit(cache=True, nogil=True)
+def draw_posed(mesh, links, parents, poses, light, ambient, lining_gap, planes, out_points,
+               out_colors):
     """:func:`draw` on the joints of ``links`` and bone ``poses`` (joint_matrices), one call.
+
+    The skinned vertices are held out of the rig's ``planes`` first (:func:`above_planes`).
 
     :param mesh: the mesh (a bundles.MeshModel).
     :param links: (L,4,4) link transforms.
@@ -185,9 +226,12 @@ def draw_posed(mesh, links, parents, poses, light, ambient, lining_gap, out_poin
     :param light: (3,) unit direction towards the light.
     :param ambient: the share of the colour lit from everywhere.
     :param lining_gap: how far a back face lies inside its front face.
+    :param planes: as :func:`above_planes` takes them; no planes: nothing held.
     :param out_points: (3T,3) written: the corners in triangle-list order.
     :param out_colors: (3T,4) float32 written: each corner's shaded colour.
     """
     joints_now = np.empty((links.shape[0] + parents.shape[0], 3, 4))
     joint_matrices(links, parents, poses, joints_now)
-    draw(mesh, joints_now, light, ambient, lining_gap, out_points, out_colors)
+    where = _skinned(mesh, joints_now)
+    above_planes(where, links, planes)
+    _laid_out(mesh, where, light, ambient, lining_gap, out_points, out_colors)
