@@ -26,7 +26,7 @@ from per_input import measure_every_input
 # Per clip: its inputs. Every humanoid clip of the data set (issue 47: all of them).
 CLIPS = {'walk': 39, 'run': 25, 'jump': 107, 'cartwheel': 164, 'dance_a': 98, 'spinkick': 78,
          'backflip': 29, 'crawl': 177, 'dance_b': 153, 'getup_facedown': 183,
-         'getup_faceup': 227, 'kick': 47, 'punch': 65, 'roll': 121, 'spin': 107}
+         'getup_faceup': 227, 'kick': 47, 'punch': 65, 'roll': 122, 'spin': 107}
 # The backflip's flip is faster than one 120 Hz step resolves: its horizontal stretch p99 was
 # 10.1 % (max 10.6 %) until a step that overstretches a row ran again in finer substeps. The
 # crawl and the get-up from face up put the hem 71 and 143 mm into a foot until the proposed
@@ -161,6 +161,27 @@ def test_uneven_frames_are_resampled_at_the_clips_rate():
     for values in (cap.positions[:, knee], cap.root[:, :3]):
         assert np.allclose(values[dropped], (values[dropped - 1] + values[dropped + 1]) / 2)
     assert not np.allclose(cap.positions[dropped], even.positions[dropped])
+
+
+def test_a_resampled_clip_ends_at_its_last_frame():
+    # The roll lasts 2.016 s in frames of 16.7 ms and 16 ms: resampled at the usual frame
+    # time it ended 16 ms short, its last pose never reached (a review).
+    from jacket_cloth_ros.motion.deepmimic import _quaternion_columns, _resample, frame_time
+    frames = read_frames(_clip('roll'))
+    times = np.cumsum(np.r_[0.0, frames[:-1, 0]])
+    dt = frame_time(frames[:, 0])
+    out = _resample(frames, dt)
+    assert len(out) == 122
+    linear = np.ones(frames.shape[1], dtype=bool)     # the quaternions come out unit
+    for i, _ in _quaternion_columns():
+        linear[i:i + 4] = False
+        q = frames[-1, i:i + 4]
+        assert np.allclose(out[-1, i:i + 4], q / np.linalg.norm(q), atol=1e-9)
+    linear[0] = False
+    assert np.allclose(out[-1, linear], frames[-1, linear], atol=1e-12)
+    # Before it, every usual frame time; the root's height linear between the clip's frames.
+    at = np.arange(len(out) - 1) * dt
+    assert np.allclose(out[:-1, 2], np.interp(at, times, frames[:, 2]), atol=1e-12)
 
 
 @pytest.mark.parametrize('content, words', [

@@ -213,13 +213,17 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
 
 
 def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
-    """Return frames at every multiple of ``dt`` over the clip (slerp for quaternions)."""
+    """Return frames at every multiple of ``dt`` over the clip (slerp for quaternions).
+
+    The last one is the clip's last frame: a clip whose length is no whole number of ``dt``
+    would otherwise end short of its last pose (the roll's last 16 ms).
+    """
     times = np.concatenate([[0.0], np.cumsum(frames[:-1, 0])])
-    count = int(math.floor(times[-1] / dt + 1e-6)) + 1
+    count = int(round(times[-1] / dt)) + 1
     out = np.empty((count, frames.shape[1]))
     quats = [i for i, _ in _quaternion_columns()]
     for j in range(count):
-        t = j * dt
+        t = min(j * dt, times[-1])
         k = min(int(np.searchsorted(times, t, side='right')) - 1, len(frames) - 2)
         w = (t - times[k]) / max(times[k + 1] - times[k], 1e-12)
         out[j] = frames[k] + w * (frames[k + 1] - frames[k])
