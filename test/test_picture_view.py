@@ -118,6 +118,26 @@ def test_the_front_view_faces_a_character_turned_in_the_world():
     assert np.array_equal(view_axes_of(straight, rig), rig.view_axes())
 
 
+def test_the_side_view_shows_a_body_lying_or_crawling_along_its_length():
+    # A crawl's chest faces the floor half turned to a side: the views turned to that side,
+    # so the side view saw the body end-on (a review). Now the views follow its head when its
+    # own up lies nearer the floor than its front; an upright body still faces its front.
+    from jacket_cloth_ros.core.transforms import rpy_matrix
+    rig = Rig(load_yaml(shipped('jacket_rig.yaml')), Skeleton(shipped_character_urdf()))
+    body = rig.world_axes                                   # forward, left, up in the root
+
+    def forward(world):
+        """The side view's forward for a body whose forward, left and up are ``world``."""
+        axes = rig.view_axes(root_rotation=np.column_stack(world) @ body.T)
+        return np.round(axes[:, 0], 9).tolist()
+    h = np.sqrt(0.5)
+    crawling = ([-h, 0.0, -h], [-h, 0.0, h], [0.0, 1.0, 0.0])     # chest down and to -x
+    assert forward(crawling) == [0.0, 1.0, 0.0]                  # where its head lies
+    assert forward(([0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0])) == [0.0, 1.0, 0.0]
+    assert forward(tuple(rpy_matrix([0.0, 0.0, np.pi / 2]).T)) == [0.0, 1.0, 0.0]  # facing +y
+    assert forward(tuple(np.eye(3))) == [1.0, 0.0, 0.0]
+
+
 def test_a_walk_by_the_urdfs_own_joints_stays_in_frame(tmp_path):
     urdf = shipped_character_urdf().replace('<link name="base_link"/>', RAIL, 1)
     data = load_yaml(shipped('jacket_rig.yaml'))
