@@ -179,6 +179,10 @@ def test_a_resampled_clip_ends_at_its_last_frame():
         assert np.allclose(out[-1, i:i + 4], q / np.linalg.norm(q), atol=1e-9)
     linear[0] = False
     assert np.allclose(out[-1, linear], frames[-1, linear], atol=1e-12)
+    # So does one whose last frame is short of a whole frame time: its last pose kept.
+    short = frames.copy()
+    short[-2, 0] = 0.3 * dt
+    assert np.allclose(_resample(short, dt)[-1, linear], short[-1, linear], atol=1e-12)
     # Before it, every usual frame time; the root's height linear between the clip's frames.
     at = np.arange(len(out) - 1) * dt
     assert np.allclose(out[:-1, 2], np.interp(at, times, frames[:, 2]), atol=1e-12)

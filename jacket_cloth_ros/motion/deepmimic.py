@@ -215,11 +215,11 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
 def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
     """Return frames at every multiple of ``dt`` over the clip (slerp for quaternions).
 
-    The last one is the clip's last frame: a clip whose length is no whole number of ``dt``
-    would otherwise end short of its last pose (the roll's last 16 ms).
+    The last one is the clip's last frame, even where the clip's length is no whole number of
+    ``dt``: ending short of it dropped the last pose (the roll's last 16 ms).
     """
     times = np.concatenate([[0.0], np.cumsum(frames[:-1, 0])])
-    count = int(round(times[-1] / dt)) + 1
+    count = int(math.ceil(times[-1] / dt - 1e-6)) + 1
     out = np.empty((count, frames.shape[1]))
     quats = [i for i, _ in _quaternion_columns()]
     for j in range(count):
