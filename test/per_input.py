@@ -32,9 +32,6 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
               'body_inside_m': [], 'hood_under_plane_m': [], 'drawn_under_floor_m': [],
               'x': []}
     resets, published = [], 0
-    outfit = messages.outfit(loaded.setup.rig)
-    corners = np.empty((outfit.marker_corners(), 3))
-    colors = np.empty((len(corners), 4), dtype=np.float32)
 
     def probe(pipeline, report, stamp, outputs):
         nonlocal published
@@ -52,7 +49,7 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
                                                     body.labels).value)
         series['hood_under_plane_m'].append(max(
             [0.0, *(-(sim.hood_p - frames.plane_points) * frames.plane_normals).sum(axis=1)]))
-        series['drawn_under_floor_m'].append(_drawn_under_floor(sim, outfit, corners, colors))
+        series['drawn_under_floor_m'].append(_drawn_under_floor(sim))
         if keep_x:
             series['x'].append(sim.x.copy())
 
@@ -64,12 +61,12 @@ def measure_every_input(loaded, keep_x: bool = False) -> dict:
                   'rig_faults': list(pipeline.sim.faults.rig)}
 
 
-def _drawn_under_floor(sim, outfit, corners, colors):
+def _drawn_under_floor(sim):
     """How far the jacket the markers draw reaches under the rig's floor, m (0 without one)."""
     floor = sim.rig.floor()
     if floor is None:
         return 0.0
     up, height = floor
-    outfit.draw_jacket(sim.links, sim.bones().poses, corners, colors, messages.jacket_planes(sim))
-    lowest = (corners @ (sim.root[:3, :3].T @ up)).min() + sim.root[:3, 3] @ up
+    [jacket] = [m.points for m in messages.marker_specs(sim, body=False) if m.ns == 'jacket']
+    lowest = (jacket @ (sim.root[:3, :3].T @ up)).min() + sim.root[:3, 3] @ up
     return max(height - float(lowest), 0.0)

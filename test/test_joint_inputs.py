@@ -4,6 +4,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from jacket_cloth_ros.core.config import shipped
 from jacket_cloth_ros.core.fabric import load_fabric
@@ -180,7 +181,7 @@ def test_a_joint_is_missing_until_some_source_gives_it():
     # The line named the joints the other source of a split topic gives, on every message
     # (a review). Now a joint is missing until some name list carries it; one that no source
     # gives is said on every message, held at zero.
-    from jacket_cloth_ros.core.inputs import InputParser
+    from jacket_cloth_ros.core.inputs import InputParser, InputRejected
     from jacket_cloth_ros.core.skeleton import load_shipped_character
     skeleton = load_shipped_character()
     names = skeleton.joint_names
@@ -198,7 +199,11 @@ def test_a_joint_is_missing_until_some_source_gives_it():
     assert missing(1, arms) == alone and missing(2, legs) == alone
     q = parser.last.q
     assert q[skeleton.joint_index[unsent]] == 0.0 and q[skeleton.joint_index[arms[0]]] == 0.2
-    assert missing(3, legs + arms + (unsent,)) == [] and missing(4, legs) == []
+    # A message dropped for a NaN gives nothing: its joints stay missing.
+    with pytest.raises(InputRejected):
+        parser.parse(3, (unsent,), [np.nan])
+    assert missing(3, legs) == alone
+    assert missing(4, legs + arms + (unsent,)) == [] and missing(5, legs) == []
 
 
 def test_a_stream_stamped_zero_says_the_stamp_is_not_set():

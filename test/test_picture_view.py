@@ -121,7 +121,7 @@ def test_the_front_view_faces_a_character_turned_in_the_world():
 def test_the_side_view_shows_a_body_lying_or_crawling_along_its_length():
     # A crawl's chest faces the floor half turned to a side: the views turned to that side,
     # so the side view saw the body end-on (a review). Now the views follow its head when its
-    # own up lies nearer the floor than its front; an upright body still faces its front.
+    # own up is tilted over half a right angle; an upright body still faces its front.
     from jacket_cloth_ros.core.transforms import rpy_matrix
     rig = Rig(load_yaml(shipped('jacket_rig.yaml')), Skeleton(shipped_character_urdf()))
     body = rig.world_axes                                   # forward, left, up in the root
@@ -134,6 +134,8 @@ def test_the_side_view_shows_a_body_lying_or_crawling_along_its_length():
     crawling = ([-h, 0.0, -h], [-h, 0.0, h], [0.0, 1.0, 0.0])     # chest down and to -x
     assert forward(crawling) == [0.0, 1.0, 0.0]                  # where its head lies
     assert forward(([0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0])) == [0.0, 1.0, 0.0]
+    c, s = np.cos(0.2), np.sin(0.2)         # on its right side, facing -x, head a little up
+    assert forward(([-1.0, 0.0, 0.0], [0.0, -s, c], [0.0, c, s])) == [0.0, 1.0, 0.0]
     assert forward(tuple(rpy_matrix([0.0, 0.0, np.pi / 2]).T)) == [0.0, 1.0, 0.0]  # facing +y
     assert forward(tuple(np.eye(3))) == [1.0, 0.0, 0.0]
 

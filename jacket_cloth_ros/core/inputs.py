@@ -102,7 +102,7 @@ class InputParser:
         # prefixed): the body then stays as it is, which looks like a working node.
         self.unmatched = ''
         self.names = None           # the name list of the last message parsed
-        # The joints some name list has carried: two sources on one topic (legs and arms)
+        # The joints a taken message has given: two sources on one topic (legs and arms)
         # each leave out the other's, which is no joint missing.
         self._given = np.zeros(len(skeleton.joint_names), dtype=bool)
         self._missing = self._missing_line()
@@ -120,8 +120,8 @@ class InputParser:
         """Return where each name of a message goes, and the warnings its name list earns.
 
         Worked out once per distinct name list (a publisher sends the same list every time).
-        The joints no list has carried yet are said by :meth:`parse`: another source's list
-        may carry them.
+        The joints no taken message has given yet are said by :meth:`parse`: another source's
+        list may give them.
 
         :param names: a message's joint name list.
         """
@@ -151,9 +151,6 @@ class InputParser:
         if unknown:
             warnings.append(('unknown', f'ignoring joint(s) not in the URDF: '
                              f'{_names_cut(unknown)}'))
-        if joint_to and not self._given[joint_to].all():
-            self._given[joint_to] = True
-            self._missing = self._missing_line()
         world = len(set(world_to))
         if 0 < world < len(WORLD_VARIABLES):
             warnings.append(('world', f'incomplete {self.world_joint}/* pose: '
@@ -167,9 +164,9 @@ class InputParser:
         self._plans[names] = plan
         return plan
 
-    def _missing_line(self):
-        """Return the line naming the joints no name list has carried yet, or ''."""
-        missing = np.flatnonzero(~self._given)
+    def _missing_line(self, given=None):
+        """Return the line naming the joints no taken message has given (``given`` False)."""
+        missing = np.flatnonzero(~(self._given if given is None else given))
         if not len(missing):
             return ''
         text = ', '.join(self.skeleton.joint_names[k] for k in missing[:5])
@@ -190,8 +187,13 @@ class InputParser:
             raise InputRejected('length', f'JointState has {len(names)} names but '
                                 f'{len(positions)} positions: message dropped')
         plan, warnings = self.plan(names)
-        if self._missing:
-            warnings = warnings + [('missing', self._missing)]
+        given, missing = self._given, self._missing
+        if missing:         # the joints this message gives count once it is taken
+            given = given.copy()
+            given[plan.joint_to] = True
+            missing = self._missing_line(given)
+            if missing:
+                warnings = warnings + [('missing', missing)]
         new = JointSample(np.empty_like(self.last.q), np.empty((4, 4)), np.empty(4))
         found = fill_sample(positions, plan, self.last, new)
         if found == NON_FINITE_POSITION:
@@ -205,6 +207,7 @@ class InputParser:
                                 'quaternion: message dropped')
         self.last = new
         self.names = names
+        self._given, self._missing = given, missing
         began = self.guessed and plan.whole_world
         self.world_incomplete = len(plan.world_to) > 0 and not plan.whole_world
         self.unmatched = _names_cut(set(names) - self.world_names.keys()) \

@@ -334,9 +334,9 @@ class Rig:
         Given the root's rotation in the world, they are turned about up by the quarter turns
         that bring forward nearest to where the body faces there: a character turned in the
         world (retargeted, a capture facing the other way) is seen from its front, not its
-        back, and the views stay on the world's axes. A body whose own up lies nearer the
-        floor than its front does (lying, crawling) is turned to where its head lies instead:
-        the side view shows it along its length, not end-on.
+        back, and the views stay on the world's axes. A body whose own up is tilted more than
+        half a right angle from the world's (lying, crawling) is turned to where its head lies
+        instead: the side view shows it along its length, not end-on.
 
         :param world_up: the world's up, (3,) unit; None: the rig's ``world_up``.
         :param root_rotation: the root's rotation in the world (3, 3) at the moment the views
@@ -349,11 +349,10 @@ class Rig:
             return axes
         turned = np.asarray(root_rotation, float) @ self.world_axes
         front, head = (v - (v @ up) * up for v in (turned[:, 0], turned[:, 2]))
-        if np.linalg.norm(head) > np.linalg.norm(front):
+        # Tilted more than half a right angle from upright: lying on its front, back or side,
+        # or crawling, where the body's length is what the side view should show.
+        if np.linalg.norm(head) > np.sqrt(0.5):
             front = head
-        # Facing the floor or the sky, head up or down: kept.
-        if np.linalg.norm(front) < 0.1:
-            return axes
         quarter = int(np.argmax([front @ axes[:, 0], front @ axes[:, 1], -front @ axes[:, 0],
                                  -front @ axes[:, 1]]))
         for _ in range(quarter):            # a quarter turn about up: forward to left

@@ -216,14 +216,15 @@ def _resample(frames: np.ndarray, dt: float) -> np.ndarray:
     """Return frames at every multiple of ``dt`` over the clip (slerp for quaternions).
 
     The last one is the clip's last frame, even where the clip's length is no whole number of
-    ``dt``: ending short of it dropped the last pose (the roll's last 16 ms).
+    ``dt``: ending short of it dropped the last pose. The whole number nearest the length
+    is kept, so the last frame's time is off by half a ``dt`` at most.
     """
     times = np.concatenate([[0.0], np.cumsum(frames[:-1, 0])])
-    count = int(math.ceil(times[-1] / dt - 1e-6)) + 1
+    count = max(int(round(times[-1] / dt)), 1) + 1
     out = np.empty((count, frames.shape[1]))
     quats = [i for i, _ in _quaternion_columns()]
     for j in range(count):
-        t = min(j * dt, times[-1])
+        t = j * dt if j < count - 1 else times[-1]
         k = min(int(np.searchsorted(times, t, side='right')) - 1, len(frames) - 2)
         w = (t - times[k]) / max(times[k + 1] - times[k], 1e-12)
         out[j] = frames[k] + w * (frames[k + 1] - frames[k])

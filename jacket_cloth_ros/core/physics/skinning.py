@@ -190,15 +190,17 @@ def _laid_out(mesh, where, light, ambient, lining_gap, out_points, out_colors):
 
 @njit(cache=True, nogil=True)
 def above_planes(points, links, planes):
-    """Move each point behind one of a rig's planes onto it, along the plane's normal.
+    """Move each point behind one of a rig's planes onto it, along the plane's unit normal.
 
     The jacket a viewer sees is skinned between the cloth's particles and bones: where the
-    particles lie on the floor, the smoothed mesh between them reached under it.
+    particles lie on the floor, the smoothed mesh between them reached under it. Every part
+    is held, the sleeves, yoke and hood too, as the cloth's particles and the hood's are.
 
     :param points: (V,3) moved in place.
     :param links: (L,4,4) the links the planes ride on.
     :param planes: (root, plane_links, plane_points, plane_normals): the root's (4,4) pose in
-        the world and a bundles.ColliderModel's planes (link -1: fixed in the world).
+        the world and a bundles.ColliderModel's planes (link -1: fixed in the world; normals
+        of unit length, as the rig makes them).
     """
     root, plane_links, plane_points, plane_normals = planes
     frame, p, n = np.empty((4, 4)), np.empty(3), np.empty(3)
