@@ -177,6 +177,48 @@ def test_two_sources_on_one_topic_are_merged_by_name_as_robot_state_publisher_do
         assert np.abs(split.sim.x - whole.sim.x).max() < 0.01, behind       # 8 mm
 
 
+def test_a_source_that_stops_while_another_goes_on_is_said():
+    # Legs and arms from two publishers; the arms' stops. Its joints hold their last values,
+    # as robot_state_publisher holds them, and nothing said so: every input was clean.
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from jacket_cloth_ros.core.fabric import load_fabrics
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    from jacket_cloth_ros.motion.clips import joint_state_content
+    from jacket_cloth_ros.ros import messages
+    from jacket_cloth_ros.ros.cdr import JointStateContent
+    from jacket_cloth_ros.ros.pipeline import SessionPipeline
+    from jacket_cloth_ros.ros.values import default_values
+    skeleton = load_shipped_character()
+    values = default_values(load_fabrics()['tweed_jacket'])
+    split, whole = (SessionPipeline(skeleton, load_rig(skeleton), values, timing=False)
+                    for _ in range(2))
+
+    def status(pipeline, stamp):
+        got = deserialize_message(pipeline.diagnostics_now(stamp), DiagnosticArray).status[0]
+        return got.level, got.message
+    said = []
+    for k in range(240):                # both for 1 s, then the legs alone for 3 s
+        stamp = 10 ** 10 + k * STEP_NS
+        names, positions = joint_state_content(skeleton.joint_names, 'walk', k / 60)
+        arms = [i for i, n in enumerate(names) if 'shoulder' in n or 'elbow' in n]
+        legs = [i for i in range(len(names)) if i not in arms]
+        for part in (legs, arms) if k < 60 else (legs,):
+            split.on_joint_state(JointStateContent(
+                stamp, tuple(names[i] for i in part), np.asarray(positions)[part]), stamp)
+        whole.on_joint_state(JointStateContent(stamp, tuple(names), positions), stamp)
+        if k in (59, 130, 239):
+            said.append(status(split, stamp))
+            assert status(whole, stamp) == (bytes([messages.OK]), 'ok'), k
+    assert said[0] == (bytes([messages.OK]), 'ok'), said
+    for level, message in said[1:]:
+        assert level == bytes([messages.WARN]) and 'held at their last values, their source ' \
+            'silent for' in message and 'l_shoulder' in message, message
+        assert 'knee' not in message, message            # the legs' source goes on
+    # Steady inputs (taken without the parser) keep their source from being silent.
+    assert split.sim.steps.steady_inputs > 100 and whole.sim.steps.steady_inputs > 200
+
+
 def test_a_joint_is_missing_until_some_source_gives_it():
     # The line named the joints the other source of a split topic gives, on every message
     # (a review). Now a joint is missing until some name list carries it; one that no source

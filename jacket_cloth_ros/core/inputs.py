@@ -23,6 +23,7 @@ if TYPE_CHECKING:           # for the annotations only
     from .skeleton import Skeleton
 
 WORLD_VARIABLES = ('trans_x', 'trans_y', 'trans_z', 'rot_x', 'rot_y', 'rot_z', 'rot_w')
+MAX_SOURCES = 16            # name lists whose last stamps are kept (InputParser.held)
 
 
 class InputRejected(ValueError):
@@ -106,6 +107,9 @@ class InputParser:
         # each leave out the other's, which is no joint missing.
         self._given = np.zeros(len(skeleton.joint_names), dtype=bool)
         self._missing = self._missing_line()
+        # Each name list's last taken stamp and the joints it gives: a source that stops
+        # leaves its joints held while another goes on, which no input's warning shows.
+        self._sources: dict = {}
 
     def set_world_joint(self, name: str) -> None:
         """Take the root's world pose from variables with another prefix; forget the plans.
@@ -208,6 +212,9 @@ class InputParser:
         self.last = new
         self.names = names
         self._given, self._missing = given, missing
+        self._sources[names] = (stamp_ns, plan.joint_to)
+        if len(self._sources) > MAX_SOURCES:       # a publisher that changes its list
+            del self._sources[min(self._sources, key=lambda k: self._sources[k][0])]
         began = self.guessed and plan.whole_world
         self.world_incomplete = len(plan.world_to) > 0 and not plan.whole_world
         self.unmatched = _names_cut(set(names) - self.world_names.keys()) \
@@ -216,6 +223,32 @@ class InputParser:
         self.world_given = self.world_given or plan.whole_world
         self.guessed = not self.world_given
         return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings), began)
+
+    def held(self, latest_ns: int, silent_ns: int) -> str:
+        """Say which joints only a source silent for over ``silent_ns`` gives, or ''.
+
+        Their last values hold while another source goes on, as robot_state_publisher holds
+        them. The last message's name list is never silent: steady inputs that repeat it are
+        taken without this parser.
+
+        :param latest_ns: the latest input's stamp, ns.
+        :param silent_ns: how long a source may be silent, ns of the stamps.
+        """
+        fresh = np.zeros(len(self._given), dtype=bool)
+        stale = np.zeros(len(self._given), dtype=bool)
+        last_ns = None
+        for names, (stamp_ns, joints) in self._sources.items():
+            if names == self.names or latest_ns - stamp_ns <= silent_ns:
+                fresh[joints] = True
+            else:
+                stale[joints] = True
+                last_ns = stamp_ns if last_ns is None else max(last_ns, stamp_ns)
+        held = np.flatnonzero(stale & ~fresh)
+        if not len(held):
+            return ''
+        text = ', '.join(self.skeleton.joint_names[k] for k in held[:5])
+        return (f'{len(held)} joint(s) held at their last values, their source silent for '
+                f'{(latest_ns - last_ns) * 1e-9:.1f} s of stamps while another goes on: {text}')
 
 
 def _names_cut(names: 'Iterable[str]') -> str:

@@ -517,6 +517,10 @@ class SessionPipeline:
                               or self._latest_ns - self._matched_ns > _UNMATCHED_NS):
             problems.append(f'no name of the JointState is a joint of the URDF '
                             f'({self._unmatched}): the body stays as it is')
+        held = self.sim.parser.held(self._latest_ns, _UNMATCHED_NS) \
+            if self._latest_ns is not None else ''
+        if held:
+            problems.append(held)
         if self.sim.parser.world_incomplete:
             problems.append(f'incomplete {self.sim.parser.world_joint}/* pose: the root keeps '
                             'its last world pose')
