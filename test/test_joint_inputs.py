@@ -219,6 +219,26 @@ def test_a_source_that_stops_while_another_goes_on_is_said():
     assert split.sim.steps.steady_inputs > 100 and whole.sim.steps.steady_inputs > 200
 
 
+def test_a_world_pose_from_a_source_that_stopped_is_said():
+    # The world pose from its own publisher, which stops: the body walks on the spot.
+    from jacket_cloth_ros.core.inputs import WORLD_VARIABLES, InputParser
+    from jacket_cloth_ros.core.skeleton import load_shipped_character
+    skeleton = load_shipped_character()
+    joints = tuple(skeleton.joint_names)
+    world = tuple(f'world_joint/{v}' for v in WORLD_VARIABLES)
+    parser = InputParser(skeleton)
+    for k in range(120):
+        stamp = 10 ** 10 + k * STEP_NS
+        parser.parse(stamp, joints, np.zeros(len(joints)))
+        if k < 30:
+            parser.parse(stamp, world, [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+        if k in (29, 80):
+            assert parser.held(stamp, 10 ** 9) == '', k
+    assert parser.held(stamp, 10 ** 9) == ('the world pose (world_joint/*) held at their '
+                                           'last values, their source silent for 1.5 s of '
+                                           'stamps while another goes on')
+
+
 def test_a_joint_is_missing_until_some_source_gives_it():
     # The line named the joints the other source of a split topic gives, on every message
     # (a review). Now a joint is missing until some name list carries it; one that no source

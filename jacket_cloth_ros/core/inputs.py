@@ -212,7 +212,7 @@ class InputParser:
         self.last = new
         self.names = names
         self._given, self._missing = given, missing
-        self._sources[names] = (stamp_ns, plan.joint_to)
+        self._sources[names] = (stamp_ns, plan.joint_to, plan.whole_world)
         if len(self._sources) > MAX_SOURCES:       # a publisher that changes its list
             del self._sources[min(self._sources, key=lambda k: self._sources[k][0])]
         began = self.guessed and plan.whole_world
@@ -225,7 +225,7 @@ class InputParser:
         return Sample(stamp_ns, new.q, new.root, new.quat, list(warnings), began)
 
     def held(self, latest_ns: int, silent_ns: int) -> str:
-        """Say which joints only a source silent for over ``silent_ns`` gives, or ''.
+        """Say which joints, or world pose, only a source silent for over ``silent_ns`` gives.
 
         Their last values hold while another source goes on, as robot_state_publisher holds
         them. The last message's name list is never silent: steady inputs that repeat it are
@@ -233,22 +233,29 @@ class InputParser:
 
         :param latest_ns: the latest input's stamp, ns.
         :param silent_ns: how long a source may be silent, ns of the stamps.
+        :returns: the line, or '' when nothing is held so.
         """
-        fresh = np.zeros(len(self._given), dtype=bool)
-        stale = np.zeros(len(self._given), dtype=bool)
+        # One flag more than the joints: the world pose (the world_joint/* variables).
+        fresh = np.zeros(len(self._given) + 1, dtype=bool)
+        stale = np.zeros(len(self._given) + 1, dtype=bool)
         last_ns = None
-        for names, (stamp_ns, joints) in self._sources.items():
-            if names == self.names or latest_ns - stamp_ns <= silent_ns:
-                fresh[joints] = True
-            else:
-                stale[joints] = True
+        for names, (stamp_ns, joints, world) in self._sources.items():
+            now = names == self.names or latest_ns - stamp_ns <= silent_ns
+            flags = fresh if now else stale
+            flags[joints] = True
+            flags[-1] |= world
+            if not now:
                 last_ns = stamp_ns if last_ns is None else max(last_ns, stamp_ns)
         held = np.flatnonzero(stale & ~fresh)
         if not len(held):
             return ''
-        text = ', '.join(self.skeleton.joint_names[k] for k in held[:5])
-        return (f'{len(held)} joint(s) held at their last values, their source silent for '
-                f'{(latest_ns - last_ns) * 1e-9:.1f} s of stamps while another goes on: {text}')
+        joints = held[held < len(self._given)]
+        what = [f'the world pose ({self.world_joint}/*)'] if len(joints) < len(held) else []
+        if len(joints):
+            what.append(f'{len(joints)} joint(s) ('
+                        + ', '.join(self.skeleton.joint_names[k] for k in joints[:5]) + ')')
+        return (f'{" and ".join(what)} held at their last values, their source silent for '
+                f'{(latest_ns - last_ns) * 1e-9:.1f} s of stamps while another goes on')
 
 
 def _names_cut(names: 'Iterable[str]') -> str:
