@@ -8,7 +8,7 @@ rigs (test_mocap_targets, test_rig_on_captures, test_public_humanoid, test_deepm
 import numpy as np
 
 from jacket_cloth_ros.core.body_proxy import body_proxy, sleeved_links
-from jacket_cloth_ros.core.measures import collider_labels, depth_inside
+from jacket_cloth_ros.core.measures import collider_labels, depth_inside, depth_under_floor
 from jacket_cloth_ros.ros import messages
 from jacket_cloth_ros.tools.session import run_session
 
@@ -66,7 +66,5 @@ def _drawn_under_floor(sim):
     floor = sim.rig.floor()
     if floor is None:
         return 0.0
-    up, height = floor
     [jacket] = [m.points for m in messages.marker_specs(sim, body=False) if m.ns == 'jacket']
-    lowest = (jacket @ (sim.root[:3, :3].T @ up)).min() + sim.root[:3, 3] @ up
-    return max(height - float(lowest), 0.0)
+    return depth_under_floor(jacket, sim.root, floor)

@@ -294,23 +294,23 @@ def test_the_live_markers_hold_the_jacket_on_the_floor(rig, tmp_path):
     # reached 0.17 m under the floor.
     from rclpy.serialization import deserialize_message
     from visualization_msgs.msg import MarkerArray
+    from jacket_cloth_ros.core.measures import depth_under_floor
     from jacket_cloth_ros.tools.session import run_session
     urdf, session = fetched('humanoid.urdf'), tmp_path / 'getup.mcap'
     assert main(['import', _clip('getup_facedown'), '--urdf', urdf, '-o', str(session)]) == 0
     loaded = load_session(str(session), urdf=urdf, rig=rig)
-    up, height = loaded.setup.rig.floor()
-    lowest = []
+    floor = loaded.setup.rig.floor()
+    under = []
 
     def probe(pipeline, report, stamp, outputs):
-        root = pipeline.sim.root
         for key, data in outputs:
             if key == 'markers':
                 [jacket] = [m for m in deserialize_message(data, MarkerArray).markers
                             if m.ns == 'jacket' and m.points]
                 points = np.array([[p.x, p.y, p.z] for p in jacket.points])
-                lowest.append((points @ (root[:3, :3].T @ up)).min() + root[:3, 3] @ up)
+                under.append(depth_under_floor(points, pipeline.sim.root, floor))
     run_session(loaded, probe=probe)
-    assert len(lowest) > 80 and min(lowest) >= height - 1e-9, (len(lowest), min(lowest))
+    assert len(under) > 80 and max(under) <= 1e-9, (len(under), max(under))
 
 
 def test_no_vertical_edge_of_a_clip_stretches_over_10_percent(measured):

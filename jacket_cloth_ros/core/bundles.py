@@ -367,8 +367,8 @@ def steady_intake(slot: 'CrowdSlot', plan: NamePlan | None = None,
 class StepScratch(NamedTuple):
     """A character's working arrays for its steps (physics.step.advance), made once.
 
-    Made anew for each input, they cost about thirty allocations an input and an atomic
-    reference count in and out of every call they were handed to. The steps write each
+    Made anew for each input, each was an allocation and an atomic reference count in and out
+    of every call it was handed to. The steps write each
     before they read it, within the step, but ``damp`` at an input's first step and when its
     substeps change, and ``new_root``'s last row, which :func:`step_scratch` sets once.
     """

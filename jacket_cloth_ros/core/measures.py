@@ -47,6 +47,19 @@ def edge_strain(x: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -
             Worst(max(0.0, float(1.0 - ratio[c])), int(b[c])))
 
 
+def depth_under_floor(points: np.ndarray, root: np.ndarray,
+                      floor: 'tuple[np.ndarray, float]') -> float:
+    """Return how far points reach under a rig's floor, m (0 where none is under it).
+
+    :param points: (N,3) in the simulation frame.
+    :param root: (4,4) that frame's pose in the world.
+    :param floor: the world's up and the floor's height along it (Rig.floor).
+    """
+    up, height = floor
+    lowest = (points @ (root[:3, :3].T @ up)).min() + root[:3, 3] @ up
+    return max(height - float(lowest), 0.0)
+
+
 def depth_inside(x: np.ndarray, free: np.ndarray, colliders: 'Colliders',
                  labels: Sequence[str]) -> Worst:
     """Find the deepest free vertex inside any collider (m), with the collider's label.

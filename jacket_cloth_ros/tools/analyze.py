@@ -19,7 +19,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..core.body_proxy import body_proxy, sleeved_links  # noqa: E402
-from ..core.measures import Worst, collider_labels, depth_inside  # noqa: E402
+from ..core.measures import (  # noqa: E402
+    Worst, collider_labels, depth_inside, depth_under_floor)
 from ..recording.reader import message_digest, message_digests  # noqa: E402
 from ..ros.messages import outfit  # noqa: E402
 from ..recording.writer import SESSION_CONFIG  # noqa: E402
@@ -192,12 +193,9 @@ class SessionFigures:
         floor = sim.rig.floor()
         if floor is None:
             return Worst(0.0, -1)
-        up, height = floor
         points, colors = self.mesh
         self.outfit.draw_jacket(sim.links, sim.bones().poses, points, colors)
-        root = sim.root
-        lowest = float((points @ (root[:3, :3].T @ up)).min() + root[:3, 3] @ up)
-        return Worst(max(height - lowest, 0.0), -1)
+        return Worst(depth_under_floor(points, sim.root, floor), -1)
 
     def _measure(self, name, cols):
         """{max, p99} over inputs, and when (s), which vertex (row, column) and collider."""
